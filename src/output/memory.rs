@@ -1,0 +1,57 @@
+//! An in-memory sink: keeps every snapshot and step record. Used by tests and by
+//! callers that post-process a run without touching the disk.
+
+use super::{GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord};
+
+/// One stored snapshot (owned copy of a [`SnapshotView`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    pub t: f64,
+    pub h: Vec<f64>,
+    /// Layer-major, α·nx + i.
+    pub u: Vec<f64>,
+    pub w: Option<Vec<f64>>,
+    pub p_nh: Option<Vec<f64>>,
+}
+
+#[derive(Debug, Default, Clone)]
+pub struct MemorySink {
+    pub info: Option<RunInfo>,
+    pub x: Vec<f64>,
+    pub b: Vec<f64>,
+    pub h_bed: Vec<f64>,
+    pub snapshots: Vec<Snapshot>,
+    pub steps: Vec<StepRecord>,
+    pub summary: Option<RunSummary>,
+}
+
+impl OutputSink for MemorySink {
+    fn begin(&mut self, info: &RunInfo, grid: &GridData) -> Result<(), OutputError> {
+        self.info = Some(info.clone());
+        self.x = grid.x.to_vec();
+        self.b = grid.b.to_vec();
+        self.h_bed = grid.h_bed.to_vec();
+        Ok(())
+    }
+
+    fn snapshot(&mut self, snap: &SnapshotView) -> Result<(), OutputError> {
+        self.snapshots.push(Snapshot {
+            t: snap.t,
+            h: snap.h.to_vec(),
+            u: snap.u.to_vec(),
+            w: snap.w.map(<[f64]>::to_vec),
+            p_nh: snap.p_nh.map(<[f64]>::to_vec),
+        });
+        Ok(())
+    }
+
+    fn step(&mut self, rec: &StepRecord) -> Result<(), OutputError> {
+        self.steps.push(*rec);
+        Ok(())
+    }
+
+    fn finish(&mut self, summary: &RunSummary) -> Result<(), OutputError> {
+        self.summary = Some(summary.clone());
+        Ok(())
+    }
+}

@@ -1,0 +1,105 @@
+//! Output sinks. The run loop talks to an [`OutputSink`] and never knows about HDF5.
+//!
+//! The on-disk layout is the contract of `docs/output-format.md` (format_version 1):
+//! root attributes, `/grid`, `/snapshots`, `/front`, `/diagnostics`, `/summary`.
+//! Sinks write progressively: a snapshot handed to [`OutputSink::snapshot`] is on disk
+//! when the call returns, so a run that dies later keeps it.
+
+pub mod csv;
+pub mod hdf5;
+pub mod memory;
+
+use thiserror::Error;
+
+/// Version of the HDF5 layout; bump on any rename.
+pub const FORMAT_VERSION: i64 = 1;
+
+#[derive(Debug, Error)]
+pub enum OutputError {
+    #[error("cannot write output file {path}: {message}")]
+    Io { path: String, message: String },
+}
+
+/// Run-level metadata, written as root attributes.
+#[derive(Debug, Clone)]
+pub struct RunInfo {
+    pub granflow_version: String,
+    /// `model.kind`, e.g. "granular".
+    pub model: String,
+    /// "hydrostatic" | "nonhydrostatic".
+    pub pressure: String,
+    pub layers: usize,
+    /// "local" | "cartesian".
+    pub coordinates: String,
+    pub slope_deg: f64,
+    /// The scenario TOML exactly as read, after overrides.
+    pub scenario_toml: String,
+    /// Front threshold (m), stored as `/front` attribute `threshold`.
+    pub front_threshold: f64,
+}
+
+/// Static grid data, `/grid`.
+#[derive(Debug, Clone, Copy)]
+pub struct GridData<'a> {
+    /// Cell centres (nx).
+    pub x: &'a [f64],
+    /// Bed elevation over the reference plane (nx).
+    pub b: &'a [f64],
+    /// Initial erodible-bed thickness (nx).
+    pub h_bed: &'a [f64],
+}
+
+/// One snapshot, `/snapshots/*[k]`. Layered arrays are layer-major: index α·nx + i.
+#[derive(Debug, Clone, Copy)]
+pub struct SnapshotView<'a> {
+    pub t: f64,
+    /// Flow thickness (nx).
+    pub h: &'a [f64],
+    /// Downslope velocity of each layer (nl·nx).
+    pub u: &'a [f64],
+    /// Normal velocity of each layer (nl·nx), when the model has it.
+    pub w: Option<&'a [f64]>,
+    /// Non-hydrostatic pressure at the interfaces ((nl+1)·(nx+1)), non-hydrostatic runs only.
+    pub p_nh: Option<&'a [f64]>,
+    pub layers: usize,
+}
+
+/// One row per time step: `/diagnostics/*` and `/front/*`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepRecord {
+    pub t: f64,
+    pub dt: f64,
+    /// ∫ h dx (m²).
+    pub mass: f64,
+    /// ∫ ½ h |u|² dx per unit density (m⁴/s²).
+    pub kinetic_energy: f64,
+    pub max_speed: f64,
+    /// Front position (largest x with h − h_bed > threshold); NaN if no such cell.
+    pub front_x: f64,
+}
+
+/// End-of-run summary, `/summary` attributes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSummary {
+    pub runout: f64,
+    /// First time the mass is at rest, NaN if never.
+    pub stop_time: f64,
+    pub h_max_final: f64,
+    pub t_end: f64,
+    pub steps: u64,
+    pub wall_time_s: f64,
+    /// "completed" | "stopped_at_rest" | "failed: …".
+    pub status: String,
+    /// (stage name, wall seconds), written as `time_<stage>_s`.
+    pub stage_times: Vec<(String, f64)>,
+}
+
+/// Where a run's results go.
+pub trait OutputSink {
+    fn begin(&mut self, info: &RunInfo, grid: &GridData) -> Result<(), OutputError>;
+    fn snapshot(&mut self, snap: &SnapshotView) -> Result<(), OutputError>;
+    /// Called after every time step (and once for t = 0).
+    fn step(&mut self, rec: &StepRecord) -> Result<(), OutputError>;
+    /// Called once, also after a failure, so what is valid stays readable.
+    fn finish(&mut self, summary: &RunSummary) -> Result<(), OutputError>;
+}
