@@ -1,9 +1,16 @@
 //! granflow: shallow-layer simulator for dry granular flows.
 //!
 //! Architecture (see `docs/numerics.md`): a validated [`scenario::Scenario`] builds a
-//! [`mesh::Mesh`], a layered [`state::State`] and a pipeline of sub-steps
+//! [`mesh::Mesh`], a layered [`state::State`] and a [`pipeline`] of sub-steps
 //! (hyperbolic → friction/viscous → projection, seed 000 §3 and seed 003 §4) that
 //! [`simulation::Simulation`] advances in time, reporting to an [`output::OutputSink`].
 
+pub mod diagnostics;
+pub mod mesh;
+pub mod numerics;
 pub mod output;
+pub mod physics;
+pub mod pipeline;
 pub mod scenario;
+pub mod simulation;
+pub mod state;

@@ -13,9 +13,7 @@ mod profile;
 mod raw;
 mod validate;
 
-pub use error::ScenarioError;
 pub use profile::Profile;
-pub use validate::{load_file, load_str};
 
 use std::path::PathBuf;
 

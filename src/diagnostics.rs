@@ -1,0 +1,54 @@
+//! Diagnostics of a state: mass ∫h dx, kinetic energy ∫½h|u|² dx, maximum speed, and
+//! the front position (largest cell centre where h − h_bed exceeds a threshold,
+//! output contract `/front`). One pass over the cells; it also detects non-finite
+//! values, so a NaN stops the run at the step that produced it.
+
+use crate::mesh::Mesh;
+use crate::physics::shallow::velocity;
+use crate::state::State;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Diagnostics {
+    pub mass: f64,
+    pub kinetic_energy: f64,
+    pub max_speed: f64,
+    /// NaN when no cell exceeds the threshold.
+    pub front_x: f64,
+    pub h_max: f64,
+    /// First cell (physical index) holding a non-finite value, if any.
+    pub non_finite_at: Option<usize>,
+}
+
+pub fn diagnose(mesh: &Mesh, state: &State, h_bed: &[f64], front_threshold: f64) -> Diagnostics {
+    let n = state.layers;
+    let mut d = Diagnostics {
+        mass: 0.0,
+        kinetic_energy: 0.0,
+        max_speed: 0.0,
+        front_x: f64::NAN,
+        h_max: 0.0,
+        non_finite_at: None,
+    };
+    for i in 0..mesh.nx {
+        let j = i + 1;
+        let h = state.h[j];
+        let q = &state.hu[j * n..(j + 1) * n];
+        if !h.is_finite() || q.iter().any(|v| !v.is_finite()) {
+            d.non_finite_at.get_or_insert(i);
+            continue;
+        }
+        d.mass += h;
+        d.h_max = d.h_max.max(h);
+        for (a, &qa) in q.iter().enumerate() {
+            let u = velocity(h, qa);
+            d.kinetic_energy += 0.5 * state.l[a] * h * u * u;
+            d.max_speed = d.max_speed.max(u.abs());
+        }
+        if h - h_bed[i] > front_threshold {
+            d.front_x = mesh.x[i];
+        }
+    }
+    d.mass *= mesh.dx;
+    d.kinetic_energy *= mesh.dx;
+    d
+}

@@ -1,0 +1,19 @@
+//! Constant Coulomb friction (classical Savage–Hutter): μ ≡ μ_c.
+
+use super::BasalFriction;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coulomb {
+    pub mu: f64,
+}
+
+impl BasalFriction for Coulomb {
+    #[inline(always)]
+    fn mu(&self, _speed: f64, _h: f64, _p_over_rho: f64) -> f64 {
+        self.mu
+    }
+
+    fn mu_static(&self) -> f64 {
+        self.mu
+    }
+}

@@ -1,0 +1,23 @@
+//! Basal friction laws, as pointwise functions of the local flow state.
+//!
+//! The friction force per unit area is μ p_b u/|u| with p_b the basal pressure
+//! (seed 000 eq. 5 and 15b). Each law implements [`BasalFriction`]; stages are generic
+//! over it, so a constant-Coulomb run is compiled without any μ(I) evaluation
+//! ("leave out what a scene does not need").
+
+mod coulomb;
+mod mu_i;
+
+pub use coulomb::Coulomb;
+pub use mu_i::{inertial_number, MuI};
+
+/// A basal friction law μ(state).
+pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
+    /// Friction coefficient for depth-averaged speed |u| (m/s), thickness h (m) and
+    /// basal pressure over density p_b/ρ (m²/s², g_n h for a hydrostatic layer).
+    fn mu(&self, speed: f64, h: f64, p_over_rho: f64) -> f64;
+
+    /// Static coefficient (the value at rest), which sets the repose angle
+    /// atan(μ_static) of the well-balanced states (seed 000 eq. 16).
+    fn mu_static(&self) -> f64;
+}
