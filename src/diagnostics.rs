@@ -29,7 +29,7 @@ pub fn diagnose(mesh: &Mesh, state: &State, h_bed: &[f64], front_threshold: f64)
         h_max: 0.0,
         non_finite_at: None,
     };
-    for i in 0..mesh.nx {
+    for (i, &bed) in h_bed.iter().enumerate().take(mesh.nx) {
         let j = i + 1;
         let h = state.h[j];
         let q = &state.hu[j * n..(j + 1) * n];
@@ -44,7 +44,7 @@ pub fn diagnose(mesh: &Mesh, state: &State, h_bed: &[f64], front_threshold: f64)
             d.kinetic_energy += 0.5 * state.l[a] * h * u * u;
             d.max_speed = d.max_speed.max(u.abs());
         }
-        if h - h_bed[i] > front_threshold {
+        if h - bed > front_threshold {
             d.front_x = mesh.x[i];
         }
     }
