@@ -5,12 +5,15 @@
 //! (hyperbolic → friction/viscous → projection, seed 000 §3 and seed 003 §4) that
 //! [`simulation::Simulation`] advances in time, reporting to an [`output::OutputSink`].
 
+pub mod cli;
 pub mod diagnostics;
 pub mod mesh;
 pub mod numerics;
 pub mod output;
 pub mod physics;
 pub mod pipeline;
+pub mod runner;
 pub mod scenario;
+pub mod setup;
 pub mod simulation;
 pub mod state;
