@@ -595,6 +595,9 @@ mod tests {
         assert_eq!(expr("7/2*2").eval(0.0, 0.0), 7.0);
         assert_eq!(expr("2^-1").eval(0.0, 0.0), 0.5);
         assert_eq!(expr("x/4").eval(1.0, 0.0), 0.25);
+        assert_eq!(expr("1e-3*x").eval(1000.0, 0.0), 1.0);
+        assert_eq!(expr("2.5e1 + 1E2").eval(0.0, 0.0), 125.0);
+        assert_eq!(expr("3 % 2 / 4").eval(0.0, 0.0), 0.25);
     }
 
     #[test]
@@ -624,6 +627,11 @@ mod tests {
         assert_eq!(p.eval(-1.0, 0.0), 0.14);
         assert_eq!(p.eval(0.0, 0.0), 0.14);
         assert_eq!(p.eval(0.1, 0.0), 0.0);
+        let r = expr("if(!(x < 1) || x == -1, 1, 0)");
+        assert_eq!(r.eval(0.5, 0.0), 0.0);
+        assert_eq!(r.eval(1.0, 0.0), 1.0);
+        assert_eq!(r.eval(-1.0, 0.0), 1.0);
+        assert_eq!(expr("x % 1").eval(2.25, 0.0), 0.25);
         let q = expr("if(x > 1 && x < 2, 1, 0)");
         assert_eq!(q.eval(1.5, 0.0), 1.0);
         assert_eq!(q.eval(2.5, 0.0), 0.0);

@@ -1049,6 +1049,17 @@ front_threshold = 2e-3
     }
 
     #[test]
+    fn documented_example_loads() {
+        let doc = include_str!("../../docs/scenario-format.md");
+        let start = doc.find("```toml\n").expect("an example") + "```toml\n".len();
+        let example = &doc[start..start + doc[start..].find("```").unwrap()];
+        let s = load(example).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.domain.cells, 600);
+        assert_eq!(s.boundary.right, BoundaryKind::Outflow);
+        assert!(matches!(s.friction, FrictionLaw::MuI { .. }));
+    }
+
+    #[test]
     fn scenario_is_send_sync() {
         fn check<T: Send + Sync + Clone>() {}
         check::<Scenario>();
