@@ -152,9 +152,8 @@ pub(crate) fn syntax_error(text: &str, e: &toml_edit::TomlError) -> ScenarioErro
     ScenarioError::new(format!("invalid TOML: {message}")).with_line(line)
 }
 
-/// Turns a deserialisation error into one naming the dotted key.
-///
-/// `text` is the document that was deserialised and `index` its key index.
+/// Turns a deserialisation error into one naming the dotted key; `index` is the key index
+/// of the text that was deserialised (the error's span points into it).
 pub(crate) fn serde_error(e: &toml::de::Error, index: &KeyIndex) -> ScenarioError {
     let raw = e.message().trim();
     let path = e
