@@ -7,13 +7,16 @@
 //! `--set key=value` overrides are applied to the document before deserialising
 //! (`overrides`), so a sweep is a list of override sets over one base file.
 
+mod document;
 mod error;
 mod overrides;
 mod profile;
 mod raw;
 mod validate;
 
+pub use error::ScenarioError;
 pub use profile::Profile;
+pub use validate::{load_file, load_str};
 
 use std::path::PathBuf;
 

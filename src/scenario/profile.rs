@@ -1,11 +1,789 @@
-// TEMPORARY stub until the scenario branch is merged.
+//! Spatial profiles: `bed.b`, `initial.h`, `initial.u`.
+//!
+//! A profile is written in the scenario as a number, as an expression in `x` (a string),
+//! or as a CSV table (`{ table = "file.csv" }`). Expressions are parsed once with
+//! `evalexpr` and evaluated per point through a small fixed context: the variables `x`,
+//! `b` (bed elevation, only where allowed), the constants `pi` and `deg`, and a fixed set
+//! of functions (see [`FUNCTIONS`]). Integer literals are turned into floats right after
+//! parsing, so `1/2` is 0.5.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use evalexpr::error::EvalexprResultValue;
+use evalexpr::{
+    build_operator_tree, Context, DefaultNumericTypes, EvalexprError, EvalexprResult, Node,
+    Operator, Value,
+};
+
+use super::error::ScenarioError;
+
+/// Function names an expression may call.
+pub(crate) const FUNCTIONS: &[&str] = &[
+    "exp", "ln", "log10", "sqrt", "abs", "sin", "cos", "tan", "asin", "acos", "atan", "atan2",
+    "sinh", "cosh", "tanh", "min", "max", "floor", "ceil", "round", "pow", "if", "noise",
+];
+
+/// A function of position: constant, expression or interpolated table.
+///
+/// Cheap to clone (expressions and tables are shared).
 #[derive(Debug, Clone)]
-pub struct Profile(f64);
+pub struct Profile {
+    kind: Kind,
+}
+
+#[derive(Debug, Clone)]
+enum Kind {
+    Constant(f64),
+    Expr(Arc<Expression>),
+    Table(Arc<Table>),
+}
+
 impl Profile {
+    /// The same value everywhere.
     pub fn constant(v: f64) -> Profile {
-        Profile(v)
+        Profile {
+            kind: Kind::Constant(v),
+        }
     }
-    pub fn eval(&self, _x: f64, _b: f64) -> f64 {
-        self.0
+
+    /// Compiles an expression in `x` that may also use the bed elevation `b`.
+    ///
+    /// Mostly for tests and tools; scenario files go through the loader, which also names
+    /// the key in its errors.
+    pub fn expression(source: &str) -> Result<Profile, ScenarioError> {
+        Expression::compile(source, true)
+            .map(|e| Profile {
+                kind: Kind::Expr(Arc::new(e)),
+            })
+            .map_err(ScenarioError::new)
+    }
+
+    /// Value at position `x`, where the bed elevation is `b` (ignored unless the profile is
+    /// an expression using `b`).
+    ///
+    /// Returns NaN if the expression fails to evaluate there; a loaded scenario has been
+    /// checked to give finite values at every cell centre.
+    pub fn eval(&self, x: f64, b: f64) -> f64 {
+        self.try_eval(x, b).unwrap_or(f64::NAN)
+    }
+
+    /// `Some(v)` for a constant profile.
+    pub fn as_constant(&self) -> Option<f64> {
+        match self.kind {
+            Kind::Constant(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// A short human description: `0.14`, `expression "max(0, 1 - x)"`,
+    /// `table "h.csv" (12 rows, x in [0, 1.1])`.
+    pub fn describe(&self) -> String {
+        match &self.kind {
+            Kind::Constant(v) => format!("{v}"),
+            Kind::Expr(e) => format!("expression \"{}\"", e.source),
+            Kind::Table(t) => format!(
+                "table \"{}\" ({} row{}, x in [{}, {}])",
+                t.path.display(),
+                t.xs.len(),
+                if t.xs.len() == 1 { "" } else { "s" },
+                t.xs[0],
+                t.xs[t.xs.len() - 1]
+            ),
+        }
+    }
+
+    /// Value at `x`, or a description of why it cannot be computed.
+    pub(crate) fn try_eval(&self, x: f64, b: f64) -> Result<f64, String> {
+        match &self.kind {
+            Kind::Constant(v) => Ok(*v),
+            Kind::Expr(e) => e.eval(x, b),
+            Kind::Table(t) => Ok(t.eval(x)),
+        }
+    }
+
+    /// Reads a profile from its TOML form. `key` is the dotted key (for errors), `base_dir`
+    /// resolves table paths, `allow_b` says whether expressions may use the variable `b`.
+    pub(crate) fn from_toml(
+        key: &str,
+        value: &toml::Value,
+        base_dir: &Path,
+        allow_b: bool,
+    ) -> Result<Profile, ScenarioError> {
+        match value {
+            toml::Value::Integer(i) => Ok(Profile::constant(*i as f64)),
+            toml::Value::Float(v) if v.is_finite() => Ok(Profile::constant(*v)),
+            toml::Value::Float(v) => Err(ScenarioError::at(
+                key,
+                format!("must be finite, got {v}"),
+            )),
+            toml::Value::String(s) => Expression::compile(s, allow_b)
+                .map(|e| Profile {
+                    kind: Kind::Expr(Arc::new(e)),
+                })
+                .map_err(|m| ScenarioError::at(key, m)),
+            toml::Value::Table(t) => {
+                if let Some(other) = t.keys().find(|k| k.as_str() != "table") {
+                    return Err(ScenarioError::at(
+                        format!("{key}.{other}"),
+                        format!("unknown key '{other}' in a table profile (only 'table' is allowed)"),
+                    ));
+                }
+                match t.get("table") {
+                    Some(toml::Value::String(file)) => Table::load(Path::new(file), base_dir)
+                        .map(|t| Profile {
+                            kind: Kind::Table(Arc::new(t)),
+                        })
+                        .map_err(|m| ScenarioError::at(key, m)),
+                    Some(other) => Err(ScenarioError::at(
+                        format!("{key}.table"),
+                        format!(
+                            "must be a file name (a string), found {}",
+                            other.type_str()
+                        ),
+                    )),
+                    None => Err(ScenarioError::at(
+                        key,
+                        "a table profile needs a file: { table = \"file.csv\" }",
+                    )),
+                }
+            }
+            other => Err(ScenarioError::at(
+                key,
+                format!(
+                    "must be a number, an expression in x (a string) or {{ table = \"file.csv\" }}, found {}",
+                    other.type_str()
+                ),
+            )),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Expressions
+
+struct Expression {
+    source: String,
+    node: Node<DefaultNumericTypes>,
+    allow_b: bool,
+}
+
+impl fmt::Debug for Expression {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Expression")
+            .field("source", &self.source)
+            .field("allow_b", &self.allow_b)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Expression {
+    /// Parses `source`; errors are messages (the caller adds the key).
+    fn compile(source: &str, allow_b: bool) -> Result<Expression, String> {
+        if source.trim().is_empty() {
+            return Err("empty expression".into());
+        }
+        let mut node = build_operator_tree::<DefaultNumericTypes>(source)
+            .map_err(|e| format!("cannot parse expression \"{source}\": {}", eval_message(&e)))?;
+        for op in node.iter_operators_mut() {
+            if let Operator::Const { value } = op {
+                if let Value::Int(i) = *value {
+                    *value = Value::Float(i as f64);
+                }
+            }
+        }
+        if let Some(w) = node.iter_write_variable_identifiers().next() {
+            return Err(format!(
+                "expression \"{source}\" assigns to '{w}'; assignments are not allowed"
+            ));
+        }
+        for var in node.iter_read_variable_identifiers() {
+            match var {
+                "x" | "pi" | "deg" => {}
+                "b" if allow_b => {}
+                "b" => {
+                    return Err(format!(
+                        "expression \"{source}\" uses the bed elevation b, which is only available in initial profiles"
+                    ))
+                }
+                _ => {
+                    return Err(format!(
+                        "unknown variable '{var}' in expression \"{source}\" (available: x, {}pi, deg)",
+                        if allow_b { "b, " } else { "" }
+                    ))
+                }
+            }
+        }
+        for fun in node.iter_function_identifiers() {
+            if !FUNCTIONS.contains(&fun) {
+                return Err(format!(
+                    "unknown function '{fun}' in expression \"{source}\" (available: {})",
+                    FUNCTIONS.join(", ")
+                ));
+            }
+        }
+        let expr = Expression {
+            source: source.to_owned(),
+            node,
+            allow_b,
+        };
+        // Some malformed input (`x +`, `sin(x, 1)`, `x < 1`) only shows when evaluated;
+        // one trial evaluation catches it here. Functions give NaN, not errors, outside
+        // their domain, so this does not reject e.g. `ln(x)`.
+        match expr
+            .node
+            .eval_with_context(&ExprContext::new(0.0, 0.0, allow_b))
+        {
+            Ok(Value::Float(_)) | Ok(Value::Int(_)) => Ok(expr),
+            Ok(other) => Err(format!(
+                "expression \"{source}\" gives {other}, not a number"
+            )),
+            Err(e) => Err(format!(
+                "invalid expression \"{source}\": {}",
+                eval_message(&e)
+            )),
+        }
+    }
+
+    fn eval(&self, x: f64, b: f64) -> Result<f64, String> {
+        match self
+            .node
+            .eval_with_context(&ExprContext::new(x, b, self.allow_b))
+        {
+            Ok(Value::Float(v)) => Ok(v),
+            Ok(Value::Int(i)) => Ok(i as f64),
+            Ok(other) => Err(format!(
+                "expression \"{}\" gives {other}, not a number",
+                self.source
+            )),
+            Err(e) => Err(format!(
+                "expression \"{}\" fails: {}",
+                self.source,
+                eval_message(&e)
+            )),
+        }
+    }
+}
+
+/// evalexpr prefixes custom messages with "Error: "; drop it.
+fn eval_message(e: &EvalexprError<DefaultNumericTypes>) -> String {
+    match e {
+        EvalexprError::CustomMessage(m) => m.clone(),
+        other => other.to_string(),
+    }
+}
+
+const PI: Value<DefaultNumericTypes> = Value::Float(std::f64::consts::PI);
+const DEG: Value<DefaultNumericTypes> = Value::Float(std::f64::consts::PI / 180.0);
+
+/// The evaluation context: position, bed elevation, constants and our functions only
+/// (evalexpr's own builtins are disabled).
+struct ExprContext {
+    x: Value<DefaultNumericTypes>,
+    b: Value<DefaultNumericTypes>,
+    allow_b: bool,
+}
+
+impl ExprContext {
+    fn new(x: f64, b: f64, allow_b: bool) -> Self {
+        ExprContext {
+            x: Value::Float(x),
+            b: Value::Float(b),
+            allow_b,
+        }
+    }
+}
+
+impl Context for ExprContext {
+    type NumericTypes = DefaultNumericTypes;
+
+    fn get_value(&self, identifier: &str) -> Option<&Value<DefaultNumericTypes>> {
+        match identifier {
+            "x" => Some(&self.x),
+            "b" if self.allow_b => Some(&self.b),
+            "pi" => Some(&PI),
+            "deg" => Some(&DEG),
+            _ => None,
+        }
+    }
+
+    fn call_function(
+        &self,
+        identifier: &str,
+        argument: &Value<DefaultNumericTypes>,
+    ) -> EvalexprResultValue<DefaultNumericTypes> {
+        call_function(identifier, argument)
+    }
+
+    fn are_builtin_functions_disabled(&self) -> bool {
+        true
+    }
+
+    fn set_builtin_functions_disabled(&mut self, _disabled: bool) -> EvalexprResult<()> {
+        Err(EvalexprError::CustomMessage(
+            "builtin functions cannot be enabled".into(),
+        ))
+    }
+}
+
+fn custom<T>(message: String) -> EvalexprResult<T> {
+    Err(EvalexprError::CustomMessage(message))
+}
+
+/// The arguments of a call, as a slice (one argument is not wrapped in a tuple).
+fn arguments(argument: &Value<DefaultNumericTypes>) -> &[Value<DefaultNumericTypes>] {
+    match argument {
+        Value::Tuple(items) => items,
+        Value::Empty => &[],
+        single => std::slice::from_ref(single),
+    }
+}
+
+fn number(function: &str, v: &Value<DefaultNumericTypes>) -> EvalexprResult<f64> {
+    match v {
+        Value::Float(f) => Ok(*f),
+        Value::Int(i) => Ok(*i as f64),
+        other => custom(format!("{function}: expected a number, got {other}")),
+    }
+}
+
+fn numbers<const N: usize>(
+    function: &str,
+    argument: &Value<DefaultNumericTypes>,
+) -> EvalexprResult<[f64; N]> {
+    let args = arguments(argument);
+    if args.len() != N {
+        return custom(format!(
+            "{function} takes {N} argument{}, got {}",
+            if N == 1 { "" } else { "s" },
+            args.len()
+        ));
+    }
+    let mut out = [0.0; N];
+    for (o, a) in out.iter_mut().zip(args) {
+        *o = number(function, a)?;
+    }
+    Ok(out)
+}
+
+fn call_function(
+    name: &str,
+    argument: &Value<DefaultNumericTypes>,
+) -> EvalexprResultValue<DefaultNumericTypes> {
+    let unary = |f: fn(f64) -> f64| -> EvalexprResultValue<DefaultNumericTypes> {
+        let [a] = numbers::<1>(name, argument)?;
+        Ok(Value::Float(f(a)))
+    };
+    match name {
+        "exp" => unary(f64::exp),
+        "ln" => unary(f64::ln),
+        "log10" => unary(f64::log10),
+        "sqrt" => unary(f64::sqrt),
+        "abs" => unary(f64::abs),
+        "sin" => unary(f64::sin),
+        "cos" => unary(f64::cos),
+        "tan" => unary(f64::tan),
+        "asin" => unary(f64::asin),
+        "acos" => unary(f64::acos),
+        "atan" => unary(f64::atan),
+        "sinh" => unary(f64::sinh),
+        "cosh" => unary(f64::cosh),
+        "tanh" => unary(f64::tanh),
+        "floor" => unary(f64::floor),
+        "ceil" => unary(f64::ceil),
+        "round" => unary(f64::round),
+        "pow" => {
+            let [a, p] = numbers::<2>(name, argument)?;
+            Ok(Value::Float(a.powf(p)))
+        }
+        "atan2" => {
+            let [y, x] = numbers::<2>(name, argument)?;
+            Ok(Value::Float(y.atan2(x)))
+        }
+        "min" | "max" => {
+            let args = arguments(argument);
+            if args.is_empty() {
+                return custom(format!("{name} needs at least one argument"));
+            }
+            let mut acc = number(name, &args[0])?;
+            for a in &args[1..] {
+                let v = number(name, a)?;
+                acc = if name == "min" {
+                    acc.min(v)
+                } else {
+                    acc.max(v)
+                };
+            }
+            Ok(Value::Float(acc))
+        }
+        "if" => {
+            let args = arguments(argument);
+            if args.len() != 3 {
+                return custom(format!(
+                    "if takes 3 arguments (condition, then, else), got {}",
+                    args.len()
+                ));
+            }
+            match &args[0] {
+                Value::Boolean(true) => Ok(args[1].clone()),
+                Value::Boolean(false) => Ok(args[2].clone()),
+                other => custom(format!(
+                    "if: the condition must be a comparison such as x < 1, got {other}"
+                )),
+            }
+        }
+        "noise" => {
+            let [x, seed] = numbers::<2>(name, argument)?;
+            if !seed.is_finite() || seed.fract() != 0.0 {
+                return custom(format!("noise: the seed must be an integer, got {seed}"));
+            }
+            Ok(Value::Float(noise(x, seed as i64)))
+        }
+        _ => Err(EvalexprError::FunctionIdentifierNotFound(name.to_owned())),
+    }
+}
+
+/// One SplitMix64 step (a strong 64-bit mixer).
+fn splitmix64(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Deterministic pseudo-random number in [0, 1) from the bits of `x` and a seed.
+pub(crate) fn noise(x: f64, seed: i64) -> f64 {
+    // +0.0 and -0.0 are the same position.
+    let x = if x == 0.0 { 0.0 } else { x };
+    let h = splitmix64(x.to_bits() ^ splitmix64(seed as u64));
+    // Top 53 bits → a double in [0, 1).
+    (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+// ---------------------------------------------------------------------------------------
+// Tables
+
+#[derive(Debug)]
+struct Table {
+    /// The path as written in the scenario (for messages).
+    path: PathBuf,
+    xs: Vec<f64>,
+    vs: Vec<f64>,
+}
+
+impl Table {
+    /// Reads a CSV table; errors are messages naming the file (the caller adds the key).
+    fn load(path: &Path, base_dir: &Path) -> Result<Table, String> {
+        let full = base_dir.join(path);
+        let text = std::fs::read_to_string(&full)
+            .map_err(|e| format!("cannot read table file '{}': {e}", full.display()))?;
+        Table::parse(&text, path).map_err(|m| format!("table file '{}': {m}", full.display()))
+    }
+
+    fn parse(text: &str, path: &Path) -> Result<Table, String> {
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| (i + 1, l.trim()))
+            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+        let split = |l: &str| -> Vec<String> {
+            l.split(',')
+                .map(|f| f.trim().trim_matches('"').trim().to_owned())
+                .collect()
+        };
+        let Some((header_line, header)) = lines.next() else {
+            return Err(
+                "empty file (expected a header line `x,value` and at least one row)".into(),
+            );
+        };
+        let names = split(header);
+        let numeric = |s: &String| s.parse::<f64>().is_ok();
+        let (ix, iv, first_row) = if names.len() >= 2 && numeric(&names[0]) && numeric(&names[1]) {
+            // No header: the first line is already data.
+            (0, 1, Some((header_line, header)))
+        } else {
+            if names.len() < 2 {
+                return Err(format!(
+                    "line {header_line}: the header needs two columns (x,value), found '{header}'"
+                ));
+            }
+            let find = |want: &str| names.iter().position(|n| n.eq_ignore_ascii_case(want));
+            match (find("x"), find("value")) {
+                (Some(ix), Some(iv)) => (ix, iv, None),
+                _ => (0, 1, None),
+            }
+        };
+        let mut xs = Vec::new();
+        let mut vs = Vec::new();
+        for (line, row) in first_row.into_iter().chain(lines) {
+            let fields = split(row);
+            let field = |i: usize, what: &str| -> Result<f64, String> {
+                let s = fields
+                    .get(i)
+                    .ok_or_else(|| format!("line {line}: missing the {what} column in '{row}'"))?;
+                let v: f64 = s
+                    .parse()
+                    .map_err(|_| format!("line {line}: {what} '{s}' is not a number"))?;
+                if v.is_finite() {
+                    Ok(v)
+                } else {
+                    Err(format!("line {line}: {what} must be finite, got {s}"))
+                }
+            };
+            let x = field(ix, "x")?;
+            let v = field(iv, "value")?;
+            if let Some(&last) = xs.last() {
+                if x <= last {
+                    return Err(format!(
+                        "line {line}: x must be strictly increasing ({x} after {last})"
+                    ));
+                }
+            }
+            xs.push(x);
+            vs.push(v);
+        }
+        if xs.is_empty() {
+            return Err(
+                "no data rows (expected at least one row `x,value` after the header)".into(),
+            );
+        }
+        Ok(Table {
+            path: path.to_owned(),
+            xs,
+            vs,
+        })
+    }
+
+    /// Linear interpolation, constant beyond the ends.
+    fn eval(&self, x: f64) -> f64 {
+        let n = self.xs.len();
+        if x.is_nan() {
+            return f64::NAN;
+        }
+        if x <= self.xs[0] {
+            return self.vs[0];
+        }
+        if x >= self.xs[n - 1] {
+            return self.vs[n - 1];
+        }
+        // First index with xs[k] > x; 1 <= k <= n-1 here.
+        let k = self.xs.partition_point(|&xk| xk <= x);
+        let (x0, x1) = (self.xs[k - 1], self.xs[k]);
+        let (v0, v1) = (self.vs[k - 1], self.vs[k]);
+        v0 + (v1 - v0) * (x - x0) / (x1 - x0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn expr(s: &str) -> Profile {
+        Profile::expression(s).unwrap_or_else(|e| panic!("{s}: {e}"))
+    }
+
+    #[test]
+    fn profile_is_send_sync_clone_debug() {
+        fn check<T: Send + Sync + Clone + fmt::Debug>() {}
+        check::<Profile>();
+    }
+
+    #[test]
+    fn integer_division_is_real_division() {
+        assert_eq!(expr("1/2").eval(0.0, 0.0), 0.5);
+        assert_eq!(expr("7/2*2").eval(0.0, 0.0), 7.0);
+        assert_eq!(expr("2^-1").eval(0.0, 0.0), 0.5);
+        assert_eq!(expr("x/4").eval(1.0, 0.0), 0.25);
+        assert_eq!(expr("1e-3*x").eval(1000.0, 0.0), 1.0);
+        assert_eq!(expr("2.5e1 + 1E2").eval(0.0, 0.0), 125.0);
+        assert_eq!(expr("3 % 2 / 4").eval(0.0, 0.0), 0.25);
+    }
+
+    #[test]
+    fn functions_and_constants() {
+        let t = expr("tan(20*deg)").eval(0.0, 0.0);
+        assert!((t - 20f64.to_radians().tan()).abs() < 1e-15);
+        assert!((expr("cos(pi)").eval(0.0, 0.0) + 1.0).abs() < 1e-15);
+        let m = expr("max(0, 0.14 - x)");
+        assert!((m.eval(0.04, 0.0) - 0.10).abs() < 1e-15);
+        assert_eq!(m.eval(0.5, 0.0), 0.0);
+        let e = expr("0.3*exp(-10*(x-1)^2)");
+        assert!((e.eval(1.0, 0.0) - 0.3).abs() < 1e-15);
+        assert!((e.eval(1.5, 0.0) - 0.3 * (-2.5f64).exp()).abs() < 1e-15);
+        assert_eq!(expr("-x^2").eval(3.0, 0.0), -9.0);
+        assert_eq!(expr("min(3, x, 5)").eval(1.0, 0.0), 1.0);
+        assert_eq!(expr("pow(2, 10)").eval(0.0, 0.0), 1024.0);
+        assert_eq!(
+            expr("sqrt(abs(-16)) + floor(1.7) + ceil(0.2)").eval(0.0, 0.0),
+            6.0
+        );
+        assert!((expr("ln(exp(2)) + log10(100)").eval(0.0, 0.0) - 4.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn if_with_comparisons() {
+        let p = expr("if(x <= 0, 0.14, 0)");
+        assert_eq!(p.eval(-1.0, 0.0), 0.14);
+        assert_eq!(p.eval(0.0, 0.0), 0.14);
+        assert_eq!(p.eval(0.1, 0.0), 0.0);
+        let r = expr("if(!(x < 1) || x == -1, 1, 0)");
+        assert_eq!(r.eval(0.5, 0.0), 0.0);
+        assert_eq!(r.eval(1.0, 0.0), 1.0);
+        assert_eq!(r.eval(-1.0, 0.0), 1.0);
+        assert_eq!(expr("x % 1").eval(2.25, 0.0), 0.25);
+        let q = expr("if(x > 1 && x < 2, 1, 0)");
+        assert_eq!(q.eval(1.5, 0.0), 1.0);
+        assert_eq!(q.eval(2.5, 0.0), 0.0);
+        // A condition that is not a comparison is an evaluation error.
+        assert!(Expression::compile("if(x, 1, 0)", true).is_err());
+    }
+
+    #[test]
+    fn noise_is_deterministic_in_unit_interval_and_varies() {
+        let p = expr("noise(x, 7)");
+        let a = p.eval(0.25, 0.0);
+        assert_eq!(a, p.eval(0.25, 0.0));
+        assert_eq!(a, noise(0.25, 7));
+        assert_ne!(a, p.eval(0.26, 0.0));
+        assert_ne!(a, expr("noise(x, 8)").eval(0.25, 0.0));
+        let mut sum = 0.0;
+        let n = 10_000;
+        for i in 0..n {
+            let v = p.eval(i as f64 * 1e-3, 0.0);
+            assert!((0.0..1.0).contains(&v), "{v}");
+            sum += v;
+        }
+        let mean = sum / n as f64;
+        assert!((mean - 0.5).abs() < 0.02, "mean {mean}");
+        assert!(Expression::compile("noise(x, 1.5)", true).is_err());
+    }
+
+    #[test]
+    fn bed_variable_in_initial_profiles() {
+        let p = expr("max(0, 0.5 - b)");
+        assert_eq!(p.eval(0.0, 0.2), 0.3);
+        assert_eq!(p.eval(0.0, 0.7), 0.0);
+    }
+
+    #[test]
+    fn compile_errors() {
+        assert!(Expression::compile("x +", true).is_err());
+        assert!(Expression::compile("", true).is_err());
+        let e = Expression::compile("y * 2", true).unwrap_err();
+        assert!(e.contains("unknown variable 'y'"), "{e}");
+        let e = Expression::compile("b + 1", false).unwrap_err();
+        assert!(e.contains("bed elevation b"), "{e}");
+        let e = Expression::compile("math::sin(x)", true).unwrap_err();
+        assert!(e.contains("unknown function 'math::sin'"), "{e}");
+        let e = Expression::compile("a = 2; a*x", true).unwrap_err();
+        assert!(e.contains("assign"), "{e}");
+    }
+
+    #[test]
+    fn evaluation_errors() {
+        let e = Expression::compile("sin(x, 1)", true).unwrap_err();
+        assert!(e.contains("sin takes 1 argument, got 2"), "{e}");
+        let e = Expression::compile("x < 1", true).unwrap_err();
+        assert!(e.contains("not a number"), "{e}");
+        // Outside a function's domain: NaN, found later when sampling, not a compile error.
+        assert!(expr("ln(x)").eval(-1.0, 0.0).is_nan());
+        // An error that depends on x.
+        let p = expr("if(x < 1, 0, 1 < 2)");
+        assert_eq!(p.try_eval(0.5, 0.0), Ok(0.0));
+        assert!(p.try_eval(1.5, 0.0).is_err());
+        assert!(p.eval(1.5, 0.0).is_nan());
+    }
+
+    #[test]
+    fn describe_forms() {
+        assert_eq!(Profile::constant(0.14).describe(), "0.14");
+        assert_eq!(expr("1 - x").describe(), "expression \"1 - x\"");
+        let t = Table::parse("x,value\n0,1\n1,2\n", Path::new("h.csv")).unwrap();
+        let p = Profile {
+            kind: Kind::Table(Arc::new(t)),
+        };
+        assert_eq!(p.describe(), "table \"h.csv\" (2 rows, x in [0, 1])");
+    }
+
+    #[test]
+    fn table_interpolates_and_extrapolates_constantly() {
+        let t = Table::parse(
+            "x,value\n0.0, 1.0\n1.0, 3.0\n# comment\n\n3.0, -1.0\n",
+            Path::new("t.csv"),
+        )
+        .unwrap();
+        assert_eq!(t.eval(-5.0), 1.0);
+        assert_eq!(t.eval(0.0), 1.0);
+        assert_eq!(t.eval(0.5), 2.0);
+        assert_eq!(t.eval(1.0), 3.0);
+        assert_eq!(t.eval(2.0), 1.0);
+        assert_eq!(t.eval(3.0), -1.0);
+        assert_eq!(t.eval(10.0), -1.0);
+    }
+
+    #[test]
+    fn table_columns_by_name_or_position() {
+        let t = Table::parse("value,x\n5,0\n7,1\n", Path::new("t.csv")).unwrap();
+        assert_eq!(t.eval(0.5), 6.0);
+        let t = Table::parse("pos,h,comment\n0,1,a\n2,3,b\n", Path::new("t.csv")).unwrap();
+        assert_eq!(t.eval(1.0), 2.0);
+        // A single row is a constant.
+        let t = Table::parse("x,value\n0.3,0.1\n", Path::new("t.csv")).unwrap();
+        assert_eq!(t.eval(-1.0), 0.1);
+        assert_eq!(t.eval(1.0), 0.1);
+        // Without a header line, the first line is data.
+        let t = Table::parse("0,1\n1,2\n", Path::new("t.csv")).unwrap();
+        assert_eq!(t.eval(0.5), 1.5);
+    }
+
+    #[test]
+    fn table_errors_name_the_line() {
+        let e = Table::parse("x,value\n0,1\n1,oops\n", Path::new("t.csv")).unwrap_err();
+        assert!(e.contains("line 3") && e.contains("oops"), "{e}");
+        let e = Table::parse("x,value\n0,1\n0,2\n", Path::new("t.csv")).unwrap_err();
+        assert!(
+            e.contains("line 3") && e.contains("strictly increasing"),
+            "{e}"
+        );
+        let e = Table::parse("x,value\n", Path::new("t.csv")).unwrap_err();
+        assert!(e.contains("no data rows"), "{e}");
+        let e = Table::parse("x,value\n0\n", Path::new("t.csv")).unwrap_err();
+        assert!(e.contains("line 2") && e.contains("value column"), "{e}");
+        let e = Table::parse("x,value\n0,nan\n", Path::new("t.csv")).unwrap_err();
+        assert!(e.contains("finite"), "{e}");
+    }
+
+    #[test]
+    fn from_toml_forms() {
+        let dir = Path::new(".");
+        let p = Profile::from_toml("initial.h", &toml::Value::Float(0.14), dir, true).unwrap();
+        assert_eq!(p.as_constant(), Some(0.14));
+        let p = Profile::from_toml("initial.h", &toml::Value::Integer(2), dir, true).unwrap();
+        assert_eq!(p.as_constant(), Some(2.0));
+        let p =
+            Profile::from_toml("bed.b", &toml::Value::String("2*x".into()), dir, false).unwrap();
+        assert_eq!(p.eval(1.5, 0.0), 3.0);
+        let e =
+            Profile::from_toml("bed.b", &toml::Value::String("b".into()), dir, false).unwrap_err();
+        assert_eq!(e.key(), Some("bed.b"));
+        let e =
+            Profile::from_toml("initial.u", &toml::Value::Boolean(true), dir, true).unwrap_err();
+        assert_eq!(e.key(), Some("initial.u"));
+        let e =
+            Profile::from_toml("initial.h", &toml::Value::Float(f64::NAN), dir, true).unwrap_err();
+        assert_eq!(e.key(), Some("initial.h"));
+        let mut t = toml::Table::new();
+        t.insert("tabel".into(), toml::Value::String("a.csv".into()));
+        let e = Profile::from_toml("initial.h", &toml::Value::Table(t), dir, true).unwrap_err();
+        assert_eq!(e.key(), Some("initial.h.tabel"));
+        let mut t = toml::Table::new();
+        t.insert(
+            "table".into(),
+            toml::Value::String("does-not-exist-5f2c.csv".into()),
+        );
+        let e = Profile::from_toml("initial.h", &toml::Value::Table(t), dir, true).unwrap_err();
+        assert_eq!(e.key(), Some("initial.h"));
+        assert!(e.message().contains("does-not-exist-5f2c.csv"), "{e}");
     }
 }

@@ -1,1 +1,101 @@
+//! Serde mirror of the scenario TOML: one struct per table, one field per key.
+//!
+//! No logic and no defaults here: every key is optional so that `validate` can tell
+//! "absent" from "given", fill in defaults and name the key in its errors. Names, enums
+//! and profiles stay loosely typed (`String`, `toml::Value`) for the same reason.
+//! Adding a key is adding a field here and its check in `validate`.
 
+use serde::Deserialize;
+
+/// A profile as written: a number, an expression string or `{ table = "file.csv" }`.
+pub(crate) type RawProfile = toml::Value;
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawScenario {
+    pub domain: Option<RawDomain>,
+    pub bed: Option<RawBed>,
+    pub material: Option<RawMaterial>,
+    pub rheology: Option<RawRheology>,
+    pub model: Option<RawModel>,
+    pub initial: Option<RawInitial>,
+    pub boundary: Option<RawBoundary>,
+    pub time: Option<RawTime>,
+    pub output: Option<RawOutput>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawDomain {
+    pub x_min: Option<f64>,
+    pub x_max: Option<f64>,
+    pub cells: Option<i64>,
+    pub slope_deg: Option<f64>,
+    pub coordinates: Option<String>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawBed {
+    pub b: Option<RawProfile>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawMaterial {
+    pub rho_s: Option<f64>,
+    pub phi: Option<f64>,
+    pub d_s: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawRheology {
+    pub law: Option<String>,
+    pub mu: Option<f64>,
+    pub mu_deg: Option<f64>,
+    pub mu_s: Option<f64>,
+    pub mu_s_deg: Option<f64>,
+    pub mu_2: Option<f64>,
+    pub mu_2_deg: Option<f64>,
+    pub i0: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawModel {
+    pub kind: Option<String>,
+    pub pressure: Option<String>,
+    pub layers: Option<i64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawInitial {
+    pub h: Option<RawProfile>,
+    pub u: Option<RawProfile>,
+    pub erodible_bed: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawBoundary {
+    pub left: Option<String>,
+    pub right: Option<String>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawTime {
+    pub t_end: Option<f64>,
+    pub cfl: Option<f64>,
+    pub stop_at_rest: Option<bool>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawOutput {
+    pub file: Option<String>,
+    pub every: Option<f64>,
+    pub front_threshold: Option<f64>,
+}

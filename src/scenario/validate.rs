@@ -1,1 +1,1067 @@
+//! Loading: text → (overrides) → raw serde mirror → checked [`Scenario`].
+//!
+//! Every check names its dotted key; the line is added afterwards by the
+//! [`Locator`](super::document::Locator) from the key, so this file never deals with spans.
 
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+
+use super::document::{line_of, serde_error, syntax_error, KeyIndex, Locator};
+use super::error::ScenarioError;
+use super::overrides::Override;
+use super::profile::Profile;
+use super::raw::{
+    RawBoundary, RawDomain, RawInitial, RawMaterial, RawModel, RawOutput, RawRheology, RawScenario,
+    RawTime,
+};
+use super::{
+    Boundaries, BoundaryKind, Coordinates, Domain, FrictionLaw, Initial, Material, ModelKind,
+    ModelSpec, OutputSpec, Pressure, Scenario, TimeSpec,
+};
+
+/// Largest accepted `domain.cells`.
+pub(crate) const MAX_CELLS: i64 = 10_000_000;
+/// Largest accepted `model.layers`.
+pub(crate) const MAX_LAYERS: i64 = 1000;
+
+/// Reads and validates a scenario file. Tables are resolved against the file's directory
+/// and the default output file is `<file stem>.h5`.
+pub fn load_file(path: &Path, overrides: &[String]) -> Result<Scenario, ScenarioError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        ScenarioError::new(format!(
+            "cannot read scenario file '{}': {e}",
+            path.display()
+        ))
+    })?;
+    let base_dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "granflow".to_owned());
+    load(&text, &base_dir, overrides, &format!("{stem}.h5"))
+}
+
+/// Validates scenario text; tables are resolved against `base_dir` and the default output
+/// file is `granflow.h5`.
+pub fn load_str(
+    text: &str,
+    base_dir: &Path,
+    overrides: &[String],
+) -> Result<Scenario, ScenarioError> {
+    load(text, base_dir, overrides, "granflow.h5")
+}
+
+fn load(
+    text: &str,
+    base_dir: &Path,
+    overrides: &[String],
+    default_output: &str,
+) -> Result<Scenario, ScenarioError> {
+    let doc = toml_edit::Document::parse(text).map_err(|e| syntax_error(text, &e))?;
+    let sets = overrides
+        .iter()
+        .map(|s| Override::parse(s))
+        .collect::<Result<Vec<_>, _>>()?;
+    let locator = Locator {
+        file: KeyIndex::build(text, &doc),
+        overridden: sets.iter().map(|s| s.key.clone()).collect(),
+    };
+    let source = if sets.is_empty() {
+        text.to_owned()
+    } else {
+        let mut edited = doc.into_mut();
+        for s in &sets {
+            s.apply(&mut edited)?;
+        }
+        edited.to_string()
+    };
+
+    let raw: RawScenario = match toml::from_str(&source) {
+        Ok(raw) => raw,
+        Err(e) => {
+            let err = if sets.is_empty() {
+                let err = serde_error(&e, &locator.file);
+                match (err.key(), e.span()) {
+                    (None, Some(span)) => {
+                        let line = line_of(text, span.start);
+                        err.with_line(Some(line))
+                    }
+                    _ => err,
+                }
+            } else {
+                match toml_edit::Document::parse(source.as_str()) {
+                    Ok(edited) => serde_error(&e, &KeyIndex::build(&source, &edited)),
+                    Err(_) => ScenarioError::new(e.message().trim().to_owned()),
+                }
+            };
+            return Err(locator.locate(err));
+        }
+    };
+    validate(raw, source, base_dir, default_output).map_err(|e| locator.locate(e))
+}
+
+// ---------------------------------------------------------------------------------------
+// Small checks, all naming the key.
+
+type Res<T> = Result<T, ScenarioError>;
+
+fn err<T>(key: &str, message: impl Into<String>) -> Res<T> {
+    Err(ScenarioError::at(key, message))
+}
+
+fn section<T>(name: &str, s: Option<T>) -> Res<T> {
+    s.ok_or_else(|| ScenarioError::at(name, format!("missing required table [{name}]")))
+}
+
+fn required<T>(key: &str, v: Option<T>) -> Res<T> {
+    v.ok_or_else(|| ScenarioError::at(key, "missing required key"))
+}
+
+fn finite(key: &str, v: f64) -> Res<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        err(key, format!("must be a finite number, got {v}"))
+    }
+}
+
+fn positive(key: &str, v: f64) -> Res<f64> {
+    finite(key, v)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        err(key, format!("must be greater than 0, got {v}"))
+    }
+}
+
+fn non_negative(key: &str, v: f64) -> Res<f64> {
+    finite(key, v)?;
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        err(key, format!("must be at least 0, got {v}"))
+    }
+}
+
+fn int_in(key: &str, v: i64, min: i64, max: i64) -> Res<usize> {
+    if v < min {
+        err(key, format!("must be at least {min}, got {v}"))
+    } else if v > max {
+        err(key, format!("must be at most {max}, got {v}"))
+    } else {
+        Ok(v as usize)
+    }
+}
+
+/// One of a fixed set of names.
+fn choice<T: Copy>(key: &str, v: Option<&str>, default: T, options: &[(&str, T)]) -> Res<T> {
+    let Some(v) = v else { return Ok(default) };
+    match options.iter().find(|(name, _)| *name == v) {
+        Some(&(_, t)) => Ok(t),
+        None => {
+            let names: Vec<String> = options.iter().map(|(n, _)| format!("\"{n}\"")).collect();
+            err(
+                key,
+                format!("unknown value \"{v}\" (expected {})", names.join(" or ")),
+            )
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Sections
+
+fn validate(
+    raw: RawScenario,
+    source_toml: String,
+    base_dir: &Path,
+    default_output: &str,
+) -> Res<Scenario> {
+    let domain = domain(section("domain", raw.domain)?)?;
+    let bed = match raw.bed.and_then(|b| b.b) {
+        Some(v) => Profile::from_toml("bed.b", &v, base_dir, false)?,
+        None => Profile::constant(0.0),
+    };
+    let material = material(raw.material.unwrap_or_default())?;
+    let friction = rheology(section("rheology", raw.rheology)?)?;
+    let model = model(raw.model.unwrap_or_default())?;
+    let initial = initial(section("initial", raw.initial)?, base_dir)?;
+    let boundary = boundary(raw.boundary.unwrap_or_default())?;
+    let time = time(section("time", raw.time)?)?;
+    let output = output(raw.output.unwrap_or_default(), &time, default_output)?;
+    sample_profiles(&domain, &bed, &initial)?;
+    Ok(Scenario {
+        source_toml,
+        base_dir: base_dir.to_path_buf(),
+        domain,
+        bed,
+        material,
+        friction,
+        model,
+        initial,
+        boundary,
+        time,
+        output,
+    })
+}
+
+fn domain(d: RawDomain) -> Res<Domain> {
+    let x_min = finite("domain.x_min", required("domain.x_min", d.x_min)?)?;
+    let x_max = finite("domain.x_max", required("domain.x_max", d.x_max)?)?;
+    if x_max <= x_min {
+        return err(
+            "domain.x_max",
+            format!("must be greater than domain.x_min = {x_min}, got {x_max}"),
+        );
+    }
+    if !(x_max - x_min).is_finite() {
+        return err("domain.x_max", "domain length x_max - x_min overflows");
+    }
+    let cells = int_in(
+        "domain.cells",
+        required("domain.cells", d.cells)?,
+        1,
+        MAX_CELLS,
+    )?;
+    let coordinates = choice(
+        "domain.coordinates",
+        d.coordinates.as_deref(),
+        Coordinates::Local,
+        &[
+            ("local", Coordinates::Local),
+            ("cartesian", Coordinates::Cartesian),
+        ],
+    )?;
+    let slope_deg = finite("domain.slope_deg", d.slope_deg.unwrap_or(0.0))?;
+    if slope_deg <= -90.0 || slope_deg >= 90.0 {
+        return err(
+            "domain.slope_deg",
+            format!("must be strictly between -90 and 90 degrees, got {slope_deg}"),
+        );
+    }
+    if coordinates == Coordinates::Cartesian && slope_deg != 0.0 {
+        return err(
+            "domain.slope_deg",
+            format!(
+                "must be 0 with domain.coordinates = \"cartesian\" (put the slope in bed.b), got {slope_deg}"
+            ),
+        );
+    }
+    Ok(Domain {
+        x_min,
+        x_max,
+        cells,
+        slope_deg,
+        coordinates,
+    })
+}
+
+fn material(m: RawMaterial) -> Res<Material> {
+    let rho_s = positive("material.rho_s", m.rho_s.unwrap_or(2500.0))?;
+    let phi = positive("material.phi", m.phi.unwrap_or(0.62))?;
+    if phi > 1.0 {
+        return err("material.phi", format!("must be in (0, 1], got {phi}"));
+    }
+    let d_s = positive("material.d_s", m.d_s.unwrap_or(0.7e-3))?;
+    Ok(Material { rho_s, phi, d_s })
+}
+
+/// A friction coefficient given either plainly (`mu`) or as an angle (`mu_deg`).
+/// Returns the coefficient and the key it came from.
+fn coefficient(name: &str, plain: Option<f64>, degrees: Option<f64>) -> Res<Option<(f64, String)>> {
+    let key = format!("rheology.{name}");
+    let key_deg = format!("rheology.{name}_deg");
+    match (plain, degrees) {
+        (Some(_), Some(_)) => err(
+            &key_deg,
+            format!("give either {key} or {key_deg}, not both"),
+        ),
+        (Some(v), None) => Ok(Some((non_negative(&key, v)?, key))),
+        (None, Some(a)) => {
+            finite(&key_deg, a)?;
+            if !(0.0..90.0).contains(&a) {
+                return err(
+                    &key_deg,
+                    format!("must be an angle in [0, 90) degrees, got {a}"),
+                );
+            }
+            Ok(Some((a.to_radians().tan(), key_deg)))
+        }
+        (None, None) => Ok(None),
+    }
+}
+
+fn rheology(r: RawRheology) -> Res<FrictionLaw> {
+    let law = required("rheology.law", r.law.as_deref())?;
+    #[derive(Clone, Copy, PartialEq)]
+    enum Law {
+        Coulomb,
+        MuI,
+    }
+    let law = choice(
+        "rheology.law",
+        Some(law),
+        Law::Coulomb,
+        &[("coulomb", Law::Coulomb), ("mu_i", Law::MuI)],
+    )?;
+    let coulomb_keys = [("mu", r.mu.is_some()), ("mu_deg", r.mu_deg.is_some())];
+    let mu_i_keys = [
+        ("mu_s", r.mu_s.is_some()),
+        ("mu_s_deg", r.mu_s_deg.is_some()),
+        ("mu_2", r.mu_2.is_some()),
+        ("mu_2_deg", r.mu_2_deg.is_some()),
+        ("i0", r.i0.is_some()),
+    ];
+    let (foreign, this, other): (&[(&str, bool)], &str, &str) = match law {
+        Law::Coulomb => (&mu_i_keys, "coulomb", "mu_i"),
+        Law::MuI => (&coulomb_keys, "mu_i", "coulomb"),
+    };
+    if let Some((name, _)) = foreign.iter().find(|(_, given)| *given) {
+        return err(
+            &format!("rheology.{name}"),
+            format!("only used by law = \"{other}\" (rheology.law is \"{this}\"); remove it"),
+        );
+    }
+    match law {
+        Law::Coulomb => {
+            let (mu, _) = coefficient("mu", r.mu, r.mu_deg)?.ok_or_else(|| {
+                ScenarioError::at(
+                    "rheology.mu",
+                    "missing required key (law = \"coulomb\" needs mu or mu_deg)",
+                )
+            })?;
+            Ok(FrictionLaw::Coulomb { mu })
+        }
+        Law::MuI => {
+            let need = |name: &str| {
+                ScenarioError::at(
+                    format!("rheology.{name}"),
+                    format!("missing required key (law = \"mu_i\" needs {name} or {name}_deg)"),
+                )
+            };
+            let (mu_s, _) = coefficient("mu_s", r.mu_s, r.mu_s_deg)?.ok_or_else(|| need("mu_s"))?;
+            let (mu_2, key_2) =
+                coefficient("mu_2", r.mu_2, r.mu_2_deg)?.ok_or_else(|| need("mu_2"))?;
+            if mu_2 < mu_s {
+                return err(
+                    &key_2,
+                    format!("mu_2 = {mu_2} must be at least mu_s = {mu_s}"),
+                );
+            }
+            let i0 = positive("rheology.i0", required("rheology.i0", r.i0)?)?;
+            Ok(FrictionLaw::MuI { mu_s, mu_2, i0 })
+        }
+    }
+}
+
+fn model(m: RawModel) -> Res<ModelSpec> {
+    let kind = choice(
+        "model.kind",
+        m.kind.as_deref(),
+        ModelKind::Granular,
+        &[("granular", ModelKind::Granular)],
+    )?;
+    let pressure = choice(
+        "model.pressure",
+        m.pressure.as_deref(),
+        Pressure::Hydrostatic,
+        &[
+            ("hydrostatic", Pressure::Hydrostatic),
+            ("nonhydrostatic", Pressure::NonHydrostatic),
+        ],
+    )?;
+    let layers = int_in("model.layers", m.layers.unwrap_or(1), 1, MAX_LAYERS)?;
+    Ok(ModelSpec {
+        kind,
+        pressure,
+        layers,
+    })
+}
+
+fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
+    let h = Profile::from_toml("initial.h", &required("initial.h", i.h)?, base_dir, true)?;
+    let u = match i.u {
+        Some(v) => Profile::from_toml("initial.u", &v, base_dir, true)?,
+        None => Profile::constant(0.0),
+    };
+    let erodible_bed = non_negative("initial.erodible_bed", i.erodible_bed.unwrap_or(0.0))?;
+    Ok(Initial { h, u, erodible_bed })
+}
+
+fn boundary(b: RawBoundary) -> Res<Boundaries> {
+    let kinds = [
+        ("wall", BoundaryKind::Wall),
+        ("outflow", BoundaryKind::Outflow),
+    ];
+    Ok(Boundaries {
+        left: choice(
+            "boundary.left",
+            b.left.as_deref(),
+            BoundaryKind::Wall,
+            &kinds,
+        )?,
+        right: choice(
+            "boundary.right",
+            b.right.as_deref(),
+            BoundaryKind::Wall,
+            &kinds,
+        )?,
+    })
+}
+
+fn time(t: RawTime) -> Res<TimeSpec> {
+    let t_end = positive("time.t_end", required("time.t_end", t.t_end)?)?;
+    let cfl = positive("time.cfl", t.cfl.unwrap_or(0.5))?;
+    if cfl > 1.0 {
+        return err("time.cfl", format!("must be in (0, 1], got {cfl}"));
+    }
+    Ok(TimeSpec {
+        t_end,
+        cfl,
+        stop_at_rest: t.stop_at_rest.unwrap_or(false),
+    })
+}
+
+fn output(o: RawOutput, time: &TimeSpec, default_file: &str) -> Res<OutputSpec> {
+    let file = o.file.unwrap_or_else(|| default_file.to_owned());
+    if file.trim().is_empty() {
+        return err("output.file", "must not be empty");
+    }
+    let every = positive("output.every", o.every.unwrap_or(time.t_end / 20.0))?;
+    let front_threshold = positive("output.front_threshold", o.front_threshold.unwrap_or(1e-3))?;
+    Ok(OutputSpec {
+        file: PathBuf::from(file),
+        every,
+        front_threshold,
+    })
+}
+
+/// Evaluates `bed.b`, then `initial.h` and `initial.u` at every cell centre: all must be
+/// finite and the thickness non-negative. The first offending centre is reported.
+fn sample_profiles(domain: &Domain, bed: &Profile, initial: &Initial) -> Res<()> {
+    let n = domain.cells;
+    let dx = (domain.x_max - domain.x_min) / n as f64;
+    let x_min = domain.x_min;
+    let centre = move |i: usize| x_min + (i as f64 + 0.5) * dx;
+    let first_bad = |bad: &(dyn Fn(usize) -> bool + Sync)| -> Option<usize> {
+        (0..n).into_par_iter().position_first(bad)
+    };
+    let not_finite = |key: &str, p: &Profile, x: f64, b: f64| -> ScenarioError {
+        let message = match p.try_eval(x, b) {
+            Err(m) => format!("{m} at x = {x}"),
+            Ok(v) => format!("evaluates to {v} at x = {x}"),
+        };
+        ScenarioError::at(key, message)
+    };
+
+    // The bed is needed by both initial profiles: evaluate it once (unless constant).
+    let bed_values: Option<Vec<f64>> = match bed.as_constant() {
+        Some(_) => None,
+        None => Some(
+            (0..n)
+                .into_par_iter()
+                .map(|i| bed.eval(centre(i), 0.0))
+                .collect(),
+        ),
+    };
+    let bed_const = bed.as_constant().unwrap_or(0.0);
+    let bed_at = |i: usize| bed_values.as_ref().map_or(bed_const, |v| v[i]);
+    if let Some(i) = first_bad(&|i| !bed_at(i).is_finite()) {
+        return Err(not_finite("bed.b", bed, centre(i), 0.0));
+    }
+    if let Some(i) = first_bad(&|i| {
+        let h = initial.h.eval(centre(i), bed_at(i));
+        !(h.is_finite() && h >= 0.0)
+    }) {
+        let (x, b) = (centre(i), bed_at(i));
+        return match initial.h.try_eval(x, b) {
+            Ok(h) if h.is_finite() => {
+                err("initial.h", format!("negative thickness {h} at x = {x}"))
+            }
+            _ => Err(not_finite("initial.h", &initial.h, x, b)),
+        };
+    }
+    if let Some(i) = first_bad(&|i| !initial.u.eval(centre(i), bed_at(i)).is_finite()) {
+        return Err(not_finite("initial.u", &initial.u, centre(i), bed_at(i)));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::fs;
+
+    const MINIMAL: &str = r#"[domain]
+x_min = 0.0
+x_max = 1.0
+cells = 10
+
+[rheology]
+law = "coulomb"
+mu = 0.5
+
+[initial]
+h = 0.1
+
+[time]
+t_end = 2.0
+"#;
+
+    fn load(text: &str) -> Res<Scenario> {
+        load_str(text, Path::new("."), &[])
+    }
+
+    fn load_set(text: &str, sets: &[&str]) -> Res<Scenario> {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        load_str(text, Path::new("."), &sets)
+    }
+
+    /// Loads `text`, expects an error at `key` on `line`, returns it.
+    #[track_caller]
+    fn fails_at(text: &str, key: &str, line: Option<usize>) -> ScenarioError {
+        match load(text) {
+            Ok(_) => panic!("expected an error at {key}, scenario loaded"),
+            Err(e) => {
+                assert_eq!(e.key(), Some(key), "{e}");
+                assert_eq!(e.line(), line, "{e}");
+                e
+            }
+        }
+    }
+
+    fn replace(text: &str, from: &str, to: &str) -> String {
+        assert!(text.contains(from), "{from}");
+        text.replacen(from, to, 1)
+    }
+
+    #[test]
+    fn minimal_scenario_gets_defaults() {
+        let s = load(MINIMAL).unwrap();
+        assert_eq!(s.source_toml, MINIMAL);
+        assert_eq!(
+            s.domain,
+            Domain {
+                x_min: 0.0,
+                x_max: 1.0,
+                cells: 10,
+                slope_deg: 0.0,
+                coordinates: Coordinates::Local
+            }
+        );
+        assert_eq!(s.bed.as_constant(), Some(0.0));
+        assert_eq!(
+            s.material,
+            Material {
+                rho_s: 2500.0,
+                phi: 0.62,
+                d_s: 0.7e-3
+            }
+        );
+        assert_eq!(s.friction, FrictionLaw::Coulomb { mu: 0.5 });
+        assert_eq!(
+            s.model,
+            ModelSpec {
+                kind: ModelKind::Granular,
+                pressure: Pressure::Hydrostatic,
+                layers: 1
+            }
+        );
+        assert_eq!(s.initial.h.as_constant(), Some(0.1));
+        assert_eq!(s.initial.u.as_constant(), Some(0.0));
+        assert_eq!(s.initial.erodible_bed, 0.0);
+        assert_eq!(
+            s.boundary,
+            Boundaries {
+                left: BoundaryKind::Wall,
+                right: BoundaryKind::Wall
+            }
+        );
+        assert_eq!(
+            s.time,
+            TimeSpec {
+                t_end: 2.0,
+                cfl: 0.5,
+                stop_at_rest: false
+            }
+        );
+        assert_eq!(
+            s.output,
+            OutputSpec {
+                file: PathBuf::from("granflow.h5"),
+                every: 0.1,
+                front_threshold: 1e-3
+            }
+        );
+        assert_eq!(s.base_dir, PathBuf::from("."));
+    }
+
+    #[test]
+    fn full_scenario_reads_every_key() {
+        let text = r#"
+[domain]
+x_min = -1
+x_max = 3
+cells = 400
+slope_deg = 25.5
+coordinates = "local"
+
+[bed]
+b = "0.01*noise(x, 3)"
+
+[material]
+rho_s = 2600
+phi = 0.6
+d_s = 1e-3
+
+[rheology]
+law = "mu_i"
+mu_s_deg = 20.9
+mu_2 = 0.64
+i0 = 0.279
+
+[model]
+kind = "granular"
+pressure = "nonhydrostatic"
+layers = 4
+
+[initial]
+h = "if(x <= 0, 0.14, 0)"
+u = -0.5
+erodible_bed = 0.01
+
+[boundary]
+left = "wall"
+right = "outflow"
+
+[time]
+t_end = 1.5
+cfl = 0.45
+stop_at_rest = true
+
+[output]
+file = "out/run.h5"
+every = 0.05
+front_threshold = 2e-3
+"#;
+        let s = load(text).unwrap();
+        assert_eq!(s.domain.cells, 400);
+        assert_eq!(s.domain.slope_deg, 25.5);
+        let FrictionLaw::MuI { mu_s, mu_2, i0 } = s.friction else {
+            panic!("{:?}", s.friction)
+        };
+        assert!((mu_s - 20.9f64.to_radians().tan()).abs() < 1e-15);
+        assert_eq!((mu_2, i0), (0.64, 0.279));
+        assert_eq!(s.model.pressure, Pressure::NonHydrostatic);
+        assert_eq!(s.model.layers, 4);
+        assert_eq!(s.initial.h.eval(-0.5, 0.0), 0.14);
+        assert_eq!(s.initial.h.eval(0.5, 0.0), 0.0);
+        assert_eq!(s.initial.u.as_constant(), Some(-0.5));
+        assert_eq!(s.initial.erodible_bed, 0.01);
+        assert_eq!(s.boundary.right, BoundaryKind::Outflow);
+        assert!(s.time.stop_at_rest);
+        assert_eq!(s.time.cfl, 0.45);
+        assert_eq!(s.output.file, PathBuf::from("out/run.h5"));
+        assert_eq!(s.output.every, 0.05);
+        assert_eq!(s.output.front_threshold, 2e-3);
+        let b = s.bed.eval(0.3, 0.0);
+        assert!((0.0..0.01).contains(&b));
+    }
+
+    #[test]
+    fn unknown_key_names_the_dotted_key_and_line() {
+        let text = replace(MINIMAL, "cells = 10", "cels = 10");
+        let e = fails_at(&text, "domain.cels", Some(4));
+        assert!(e.message().contains("unknown key 'cels'"), "{e}");
+        assert!(e.message().contains("cells"), "{e}");
+        let e = fails_at(
+            &format!("{MINIMAL}\n[outptu]\nfile = \"a\"\n"),
+            "outptu",
+            Some(16),
+        );
+        assert!(e.to_string().contains("unknown key 'outptu'"), "{e}");
+    }
+
+    #[test]
+    fn wrong_type_names_key_and_line() {
+        let text = replace(MINIMAL, "cells = 10", "cells = \"ten\"");
+        let e = fails_at(&text, "domain.cells", Some(4));
+        assert!(e.message().contains("expected an integer"), "{e}");
+        let text = replace(MINIMAL, "t_end = 2.0", "t_end = true");
+        let e = fails_at(&text, "time.t_end", Some(14));
+        assert!(e.message().contains("expected a number"), "{e}");
+    }
+
+    #[test]
+    fn zero_cells() {
+        let text = replace(MINIMAL, "cells = 10", "cells = 0");
+        let e = fails_at(&text, "domain.cells", Some(4));
+        assert_eq!(
+            e.to_string(),
+            "scenario error at line 4, key 'domain.cells': must be at least 1, got 0"
+        );
+        let text = replace(MINIMAL, "cells = 10", "cells = 20_000_000");
+        fails_at(&text, "domain.cells", Some(4));
+    }
+
+    #[test]
+    fn x_max_not_above_x_min() {
+        let text = replace(MINIMAL, "x_max = 1.0", "x_max = 0.0");
+        fails_at(&text, "domain.x_max", Some(3));
+        let text = replace(MINIMAL, "x_max = 1.0", "x_max = -1");
+        fails_at(&text, "domain.x_max", Some(3));
+    }
+
+    #[test]
+    fn missing_keys_point_at_their_table() {
+        let text = replace(MINIMAL, "x_max = 1.0\n", "");
+        let e = fails_at(&text, "domain.x_max", Some(1));
+        assert!(e.message().contains("missing"), "{e}");
+        let text = replace(MINIMAL, "[time]\nt_end = 2.0\n", "");
+        let e = fails_at(&text, "time", None);
+        assert!(e.message().contains("[time]"), "{e}");
+    }
+
+    #[test]
+    fn missing_table_file() {
+        let text = replace(
+            MINIMAL,
+            "h = 0.1",
+            "h = { table = \"no-such-file-91.csv\" }",
+        );
+        let e = fails_at(&text, "initial.h", Some(11));
+        assert!(e.message().contains("no-such-file-91.csv"), "{e}");
+    }
+
+    #[test]
+    fn csv_table_profiles_resolve_against_base_dir() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::write(dir.path().join("h.csv"), "x,value\n0,0.2\n1,0.0\n").unwrap();
+        fs::write(dir.path().join("bad.csv"), "x,value\n0,0.2\n0.5,zz\n").unwrap();
+        let text = replace(MINIMAL, "h = 0.1", "h = { table = \"h.csv\" }");
+        let s = load_str(&text, dir.path(), &[]).unwrap();
+        assert!((s.initial.h.eval(0.25, 0.0) - 0.15).abs() < 1e-15);
+        assert_eq!(s.initial.h.eval(-3.0, 0.0), 0.2);
+        assert_eq!(s.initial.h.eval(3.0, 0.0), 0.0);
+        let text = replace(MINIMAL, "h = 0.1", "h = { table = \"bad.csv\" }");
+        let e = load_str(&text, dir.path(), &[]).unwrap_err();
+        assert_eq!(e.key(), Some("initial.h"));
+        assert_eq!(e.line(), Some(11));
+        assert!(
+            e.message().contains("bad.csv") && e.message().contains("line 3"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn load_file_uses_parent_dir_and_stem() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::write(dir.path().join("bed.csv"), "x,value\n0,0.0\n1,0.5\n").unwrap();
+        let text = format!("{MINIMAL}\n[bed]\nb = {{ table = \"bed.csv\" }}\n");
+        let path = dir.path().join("slide.toml");
+        fs::write(&path, &text).unwrap();
+        let s = load_file(&path, &[]).unwrap();
+        assert_eq!(s.source_toml, text);
+        assert_eq!(s.base_dir, dir.path());
+        assert_eq!(s.output.file, PathBuf::from("slide.h5"));
+        assert_eq!(s.bed.eval(0.5, 0.0), 0.25);
+
+        let missing = dir.path().join("nope.toml");
+        let e = load_file(&missing, &[]).unwrap_err();
+        assert!(e.to_string().contains("nope.toml"), "{e}");
+        assert_eq!(e.key(), None);
+    }
+
+    #[test]
+    fn mu_2_below_mu_s() {
+        let text = replace(
+            MINIMAL,
+            "law = \"coulomb\"\nmu = 0.5",
+            "law = \"mu_i\"\nmu_s = 0.4\nmu_2 = 0.3\ni0 = 0.3",
+        );
+        let e = fails_at(&text, "rheology.mu_2", Some(9));
+        assert!(e.message().contains("mu_s"), "{e}");
+    }
+
+    #[test]
+    fn rheology_key_combinations() {
+        // Coulomb with a μ(I) key.
+        let text = replace(MINIMAL, "mu = 0.5", "mu = 0.5\ni0 = 0.3");
+        let e = fails_at(&text, "rheology.i0", Some(9));
+        assert!(e.message().contains("only used by law = \"mu_i\""), "{e}");
+        // μ(I) with mu.
+        let text = replace(
+            MINIMAL,
+            "law = \"coulomb\"\nmu = 0.5",
+            "law = \"mu_i\"\nmu = 0.5\nmu_s = 0.4\nmu_2 = 0.6\ni0 = 0.3",
+        );
+        let e = fails_at(&text, "rheology.mu", Some(8));
+        assert!(
+            e.message().contains("only used by law = \"coulomb\""),
+            "{e}"
+        );
+        // Both forms.
+        let text = replace(MINIMAL, "mu = 0.5", "mu = 0.5\nmu_deg = 20");
+        let e = fails_at(&text, "rheology.mu_deg", Some(9));
+        assert!(e.message().contains("not both"), "{e}");
+        // Degrees.
+        let text = replace(MINIMAL, "mu = 0.5", "mu_deg = 45");
+        let s = load(&text).unwrap();
+        let FrictionLaw::Coulomb { mu } = s.friction else {
+            panic!()
+        };
+        assert!((mu - 1.0).abs() < 1e-12);
+        // Missing μ, unknown law, negative μ, μ_2 below μ_s in degrees.
+        let text = replace(MINIMAL, "mu = 0.5\n", "");
+        fails_at(&text, "rheology.mu", Some(6));
+        let text = replace(MINIMAL, "law = \"coulomb\"", "law = \"colomb\"");
+        let e = fails_at(&text, "rheology.law", Some(7));
+        assert!(e.message().contains("\"coulomb\" or \"mu_i\""), "{e}");
+        let text = replace(MINIMAL, "mu = 0.5", "mu = -0.1");
+        fails_at(&text, "rheology.mu", Some(8));
+        let text = replace(
+            MINIMAL,
+            "law = \"coulomb\"\nmu = 0.5",
+            "law = \"mu_i\"\nmu_s = 0.4\nmu_2_deg = 10\ni0 = 0.3",
+        );
+        fails_at(&text, "rheology.mu_2_deg", Some(9));
+        let text = replace(
+            MINIMAL,
+            "law = \"coulomb\"\nmu = 0.5",
+            "law = \"mu_i\"\nmu_s = 0.4\nmu_2 = 0.5\ni0 = 0",
+        );
+        fails_at(&text, "rheology.i0", Some(10));
+    }
+
+    #[test]
+    fn negative_thickness() {
+        let text = replace(MINIMAL, "h = 0.1", "h = \"-0.1\"");
+        let e = fails_at(&text, "initial.h", Some(11));
+        assert!(e.message().contains("negative thickness"), "{e}");
+        // Negative only beyond x = 0.5: the first bad centre is 0.55.
+        let text = replace(MINIMAL, "h = 0.1", "h = \"0.5 - x\"");
+        let e = fails_at(&text, "initial.h", Some(11));
+        assert!(e.message().contains("at x = 0.55"), "{e}");
+        let text = replace(MINIMAL, "h = 0.1", "h = -1");
+        fails_at(&text, "initial.h", Some(11));
+    }
+
+    #[test]
+    fn non_finite_values() {
+        let text = replace(MINIMAL, "x_min = 0.0", "x_min = nan");
+        let e = fails_at(&text, "domain.x_min", Some(2));
+        assert!(e.message().contains("finite"), "{e}");
+        let text = replace(MINIMAL, "t_end = 2.0", "t_end = inf");
+        fails_at(&text, "time.t_end", Some(14));
+        let text = replace(MINIMAL, "h = 0.1", "h = nan");
+        fails_at(&text, "initial.h", Some(11));
+        let text = replace(MINIMAL, "mu = 0.5", "mu = -inf");
+        fails_at(&text, "rheology.mu", Some(8));
+        // An expression that is infinite at a cell centre.
+        let text = replace(MINIMAL, "h = 0.1", "h = 0.1\nu = \"1/(x - 0.05)\"");
+        let e = fails_at(&text, "initial.u", Some(12));
+        assert!(e.message().contains("x = 0.05"), "{e}");
+    }
+
+    #[test]
+    fn expression_errors_name_key_and_line() {
+        let text = format!("{MINIMAL}[bed]\nb = \"0.1*x +\"\n");
+        fails_at(&text, "bed.b", Some(16));
+        let text = format!("{MINIMAL}[bed]\nb = \"b + x\"\n");
+        let e = fails_at(&text, "bed.b", Some(16));
+        assert!(e.message().contains("bed elevation b"), "{e}");
+        let text = format!("{MINIMAL}[bed]\nb = \"sin(x, 2)\"\n");
+        let e = fails_at(&text, "bed.b", Some(16));
+        assert!(e.message().contains("sin takes 1 argument"), "{e}");
+        // An evaluation error at one cell centre only.
+        let text = format!("{MINIMAL}[bed]\nb = \"if(x < 0.5, 0, x < 2)\"\n");
+        let e = fails_at(&text, "bed.b", Some(16));
+        assert!(e.message().contains("at x = 0.55"), "{e}");
+    }
+
+    #[test]
+    fn bed_variable_in_initial_thickness() {
+        let text = format!(
+            "{}[bed]\nb = \"0.2*x\"\n",
+            replace(MINIMAL, "h = 0.1", "h = \"max(0, 0.1 - b)\"")
+        );
+        let s = load(&text).unwrap();
+        let b = s.bed.eval(0.25, 0.0);
+        assert!((b - 0.05).abs() < 1e-15);
+        assert!((s.initial.h.eval(0.25, b) - 0.05).abs() < 1e-15);
+    }
+
+    #[test]
+    fn other_ranges() {
+        let cases = [
+            (
+                "cells = 10",
+                "cells = 10\nslope_deg = 90",
+                "domain.slope_deg",
+                5,
+            ),
+            (
+                "cells = 10",
+                "cells = 10\nslope_deg = 10\ncoordinates = \"cartesian\"",
+                "domain.slope_deg",
+                5,
+            ),
+            (
+                "cells = 10",
+                "cells = 10\ncoordinates = \"polar\"",
+                "domain.coordinates",
+                5,
+            ),
+            ("t_end = 2.0", "t_end = 2.0\ncfl = 1.5", "time.cfl", 15),
+            ("t_end = 2.0", "t_end = 0", "time.t_end", 14),
+            (
+                "h = 0.1",
+                "h = 0.1\nerodible_bed = -1",
+                "initial.erodible_bed",
+                12,
+            ),
+        ];
+        for (from, to, key, line) in cases {
+            fails_at(&replace(MINIMAL, from, to), key, Some(line));
+        }
+        let tail = [
+            ("[material]\nphi = 1.2\n", "material.phi"),
+            ("[material]\nrho_s = 0\n", "material.rho_s"),
+            ("[material]\nd_s = -1e-3\n", "material.d_s"),
+            ("[model]\nlayers = 0\n", "model.layers"),
+            ("[model]\nlayers = 1001\n", "model.layers"),
+            ("[model]\npressure = \"nh\"\n", "model.pressure"),
+            ("[model]\nkind = \"fluid\"\n", "model.kind"),
+            ("[boundary]\nleft = \"periodic\"\n", "boundary.left"),
+            ("[output]\nevery = 0\n", "output.every"),
+            ("[output]\nfront_threshold = -1\n", "output.front_threshold"),
+            ("[output]\nfile = \"\"\n", "output.file"),
+        ];
+        for (extra, key) in tail {
+            fails_at(&format!("{MINIMAL}{extra}"), key, Some(16));
+        }
+    }
+
+    #[test]
+    fn every_larger_than_t_end_is_allowed() {
+        let s = load(&format!("{MINIMAL}[output]\nevery = 10\n")).unwrap();
+        assert_eq!(s.output.every, 10.0);
+    }
+
+    #[test]
+    fn syntax_error_has_line() {
+        let text = replace(MINIMAL, "cells = 10", "cells = ");
+        let e = load(&text).unwrap_err();
+        assert_eq!(e.line(), Some(4), "{e}");
+        assert!(e.message().contains("invalid TOML"), "{e}");
+        // A table defined twice: the parser points at the second header.
+        let e = load(&format!("{MINIMAL}[domain]\ncells = 3\n")).unwrap_err();
+        assert_eq!(e.line(), Some(15), "{e}");
+    }
+
+    #[test]
+    fn override_changes_value_and_source() {
+        let s = load_set(MINIMAL, &["domain.slope_deg=16"]).unwrap();
+        assert_eq!(s.domain.slope_deg, 16.0);
+        assert!(
+            s.source_toml.contains("slope_deg = 16"),
+            "{}",
+            s.source_toml
+        );
+        assert!(s.source_toml.starts_with("[domain]\nx_min = 0.0\n"));
+        let s = load_set(MINIMAL, &["initial.erodible_bed=0.02", "time.t_end=4"]).unwrap();
+        assert_eq!(s.initial.erodible_bed, 0.02);
+        assert_eq!(s.time.t_end, 4.0);
+        assert_eq!(s.output.every, 0.2);
+        let s = load_set(MINIMAL, &["initial.h=\"max(0, 0.14 - x)\""]).unwrap();
+        assert!((s.initial.h.eval(0.04, 0.0) - 0.1).abs() < 1e-15);
+        let s = load_set(MINIMAL, &["output.file=sweep/run1.h5"]).unwrap();
+        assert_eq!(s.output.file, PathBuf::from("sweep/run1.h5"));
+    }
+
+    #[test]
+    fn override_switching_law() {
+        let mu_i = replace(
+            MINIMAL,
+            "law = \"coulomb\"\nmu = 0.5",
+            "law = \"mu_i\"\nmu_s = 0.4\nmu_2 = 0.6\ni0 = 0.3",
+        );
+        // Leftover μ(I) keys in the file: a clear error on the first of them, with its line.
+        let e = load_set(&mu_i, &["rheology.law=coulomb", "rheology.mu=0.5"]).unwrap_err();
+        assert_eq!(e.key(), Some("rheology.mu_s"));
+        assert_eq!(e.line(), Some(8));
+        assert!(e.message().contains("only used by law = \"mu_i\""), "{e}");
+        // From a Coulomb file the switch works (mu set from the file).
+        let s = load_set(MINIMAL, &["rheology.law=coulomb", "rheology.mu=0.25"]).unwrap();
+        assert_eq!(s.friction, FrictionLaw::Coulomb { mu: 0.25 });
+    }
+
+    #[test]
+    fn override_errors_are_marked() {
+        let e = load_set(MINIMAL, &["domain.slope_dg=16"]).unwrap_err();
+        assert_eq!(e.key(), Some("domain.slope_dg"));
+        assert!(e.is_from_set());
+        assert_eq!(e.line(), None);
+        assert!(e.to_string().contains("(from --set)"), "{e}");
+        assert!(e.message().contains("unknown key 'slope_dg'"), "{e}");
+
+        let e = load_set(MINIMAL, &["physics.g=9.81"]).unwrap_err();
+        assert_eq!(e.key(), Some("physics.g"));
+        assert!(e.is_from_set());
+
+        let e = load_set(MINIMAL, &["domain.cells=0"]).unwrap_err();
+        assert_eq!(e.key(), Some("domain.cells"));
+        assert!(e.is_from_set());
+
+        let e = load_set(MINIMAL, &["domain.cells=ten"]).unwrap_err();
+        assert_eq!(e.key(), Some("domain.cells"));
+        assert!(e.is_from_set());
+        assert!(e.message().contains("expected an integer"), "{e}");
+
+        let e = load_set(MINIMAL, &["initial.h.table=missing-77.csv"]).unwrap_err();
+        assert_eq!(e.key(), Some("initial.h"));
+        assert!(e.is_from_set());
+        assert!(e.message().contains("missing-77.csv"), "{e}");
+
+        let e = load_set(MINIMAL, &["domain.cells.n=3"]).unwrap_err();
+        assert_eq!(e.key(), Some("domain.cells"));
+        assert!(e.is_from_set());
+
+        // An error elsewhere in the file keeps its line despite the override shifting text.
+        let text = replace(MINIMAL, "t_end = 2.0", "t_end = -2.0");
+        let e = load_set(&text, &["domain.slope_deg=16", "model.layers=2"]).unwrap_err();
+        assert_eq!(e.key(), Some("time.t_end"));
+        assert_eq!(e.line(), Some(14));
+
+        let e = load_set(MINIMAL, &["no_equals_sign"]).unwrap_err();
+        assert!(e.message().contains("key=value"), "{e}");
+    }
+
+    #[test]
+    fn no_overrides_keeps_text_verbatim() {
+        let text = format!("# a comment\n{MINIMAL}\n\n# trailing\n");
+        assert_eq!(load(&text).unwrap().source_toml, text);
+    }
+
+    #[test]
+    fn documented_example_loads() {
+        let doc = include_str!("../../docs/scenario-format.md");
+        let start = doc.find("```toml\n").expect("an example") + "```toml\n".len();
+        let example = &doc[start..start + doc[start..].find("```").unwrap()];
+        let s = load(example).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.domain.cells, 600);
+        assert_eq!(s.boundary.right, BoundaryKind::Outflow);
+        assert!(matches!(s.friction, FrictionLaw::MuI { .. }));
+    }
+
+    #[test]
+    fn scenario_is_send_sync() {
+        fn check<T: Send + Sync + Clone>() {}
+        check::<Scenario>();
+    }
+}
