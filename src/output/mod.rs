@@ -8,8 +8,15 @@
 pub mod csv;
 pub mod hdf5;
 pub mod memory;
+pub mod tee;
+
+use std::path::Path;
 
 use thiserror::Error;
+
+pub use csv::{front_csv_path, FrontCsvSink};
+pub use hdf5::Hdf5Sink;
+pub use tee::Tee;
 
 /// Version of the HDF5 layout; bump on any rename.
 pub const FORMAT_VERSION: i64 = 1;
@@ -102,4 +109,13 @@ pub trait OutputSink {
     fn step(&mut self, rec: &StepRecord) -> Result<(), OutputError>;
     /// Called once, also after a failure, so what is valid stays readable.
     fn finish(&mut self, summary: &RunSummary) -> Result<(), OutputError>;
+}
+
+/// The outputs of one `granflow run`: the HDF5 file at `h5` and the front series
+/// next to it ([`front_csv_path`]).
+pub fn create_run_sinks(h5: &Path) -> Result<Tee<Hdf5Sink, FrontCsvSink>, OutputError> {
+    Ok(Tee::new(
+        Hdf5Sink::create(h5)?,
+        FrontCsvSink::create(&front_csv_path(h5))?,
+    ))
 }

@@ -1,0 +1,262 @@
+#!/usr/bin/env python3
+"""Validate a granflow HDF5 file against the output contract (docs/output-format.md).
+
+    python scripts/check_output.py FILE.h5 [--expect-layers N] [--unfinished]
+
+Prints one line starting with "OK" and exits 0 when the file conforms; otherwise
+prints every problem found, one per line on stderr, and exits 1.
+--unfinished accepts a file whose run has not reached finish() yet (no /summary
+attributes), e.g. one read while the run is going or after it was killed.
+"""
+
+import argparse
+import sys
+
+import h5py
+import numpy as np
+
+FORMAT_VERSION = 1
+
+ROOT_ATTRS = {
+    "format_version": "int",
+    "granflow_version": "str",
+    "model": "str",
+    "pressure": "str",
+    "layers": "int",
+    "coordinates": "str",
+    "slope_deg": "float",
+    "scenario_toml": "str",
+}
+SUMMARY_ATTRS = {
+    "runout": "float",
+    "stop_time": "float",
+    "h_max_final": "float",
+    "t_end": "float",
+    "steps": "int",
+    "wall_time_s": "float",
+    "status": "str",
+}
+UNITS = {
+    "grid/x": "m",
+    "grid/b": "m",
+    "grid/h_bed": "m",
+    "snapshots/t": "s",
+    "snapshots/h": "m",
+    "snapshots/u": "m/s",
+    "snapshots/w": "m/s",
+    "snapshots/p_nh": "m^2/s^2",
+    "front/t": "s",
+    "front/x": "m",
+    "diagnostics/t": "s",
+    "diagnostics/dt": "s",
+    "diagnostics/mass": "m^2",
+    "diagnostics/kinetic_energy": "m^4/s^2",
+    "diagnostics/max_speed": "m/s",
+}
+REQUIRED = [name for name in UNITS if name not in ("snapshots/w", "snapshots/p_nh")]
+DIAGNOSTICS = ["t", "dt", "mass", "kinetic_energy", "max_speed"]
+
+
+class Problems(Exception):
+    pass
+
+
+class Checker:
+    def __init__(self, f, expect_layers, unfinished):
+        self.f = f
+        self.expect_layers = expect_layers
+        self.unfinished = unfinished
+        self.problems = []
+
+    def fail(self, message):
+        self.problems.append(message)
+
+    def typed(self, where, name, value, kind):
+        ok = {
+            "int": isinstance(value, (int, np.integer)),
+            "float": isinstance(value, (float, np.floating)),
+            "str": isinstance(value, (str, bytes)),
+        }[kind]
+        if not ok:
+            self.fail(f"{where} attribute {name!r} should be {kind}, is {type(value).__name__}")
+
+    def attrs(self, where, obj, spec):
+        for name, kind in spec.items():
+            if name not in obj.attrs:
+                self.fail(f"{where} attribute {name!r} is missing")
+            else:
+                self.typed(where, name, obj.attrs[name], kind)
+
+    def datasets(self):
+        """Required datasets exist, are float64 and carry the right units."""
+        for name, unit in UNITS.items():
+            if name not in self.f:
+                if name in REQUIRED:
+                    self.fail(f"dataset /{name} is missing")
+                continue
+            ds = self.f[name]
+            if not isinstance(ds, h5py.Dataset):
+                self.fail(f"/{name} is not a dataset")
+                continue
+            if ds.dtype != np.float64:
+                self.fail(f"/{name} has dtype {ds.dtype}, expected float64")
+            got = ds.attrs.get("units")
+            if isinstance(got, bytes):
+                got = got.decode()
+            if got != unit:
+                self.fail(f"/{name} units attribute is {got!r}, expected {unit!r}")
+
+    def shapes(self):
+        """Returns (nx, nl, nt, dx) from consistent shapes, or raises Problems."""
+        f = self.f
+        nx = f["grid/x"].shape[0] if f["grid/x"].ndim == 1 else -1
+        for name in ("grid/x", "grid/b", "grid/h_bed"):
+            if f[name].shape != (nx,):
+                self.fail(f"/{name} has shape {f[name].shape}, expected ({nx},)")
+        nl = int(f.attrs.get("layers", 0))
+        if self.expect_layers is not None and nl != self.expect_layers:
+            self.fail(f"layers attribute is {nl}, expected {self.expect_layers}")
+        nt = f["snapshots/t"].shape[0] if f["snapshots/t"].ndim == 1 else -1
+        expected = {
+            "snapshots/t": (nt,),
+            "snapshots/h": (nt, nx),
+            "snapshots/u": (nt, nl, nx),
+            "snapshots/w": (nt, nl, nx),
+            "snapshots/p_nh": (nt, nl + 1, nx + 1),
+        }
+        for name, shape in expected.items():
+            if name in f and f[name].shape != shape:
+                self.fail(f"/{name} has shape {f[name].shape}, expected {shape}")
+        pressure = f.attrs.get("pressure")
+        if nt > 0 and (pressure == "nonhydrostatic") != ("snapshots/p_nh" in f):
+            self.fail(f"pressure is {pressure!r} but /snapshots/p_nh is "
+                      f"{'present' if 'snapshots/p_nh' in f else 'absent'}")
+        n_diag = {f[f"diagnostics/{d}"].shape for d in DIAGNOSTICS}
+        if len(n_diag) != 1 or len(next(iter(n_diag))) != 1:
+            self.fail(f"/diagnostics arrays differ in shape: {sorted(n_diag)}")
+        if f["front/t"].shape != f["front/x"].shape or f["front/t"].ndim != 1:
+            self.fail(f"/front/t {f['front/t'].shape} and /front/x {f['front/x'].shape} differ")
+        if "threshold" not in f["front"].attrs:
+            self.fail("/front attribute 'threshold' is missing")
+        if self.problems:
+            raise Problems
+        return nx, nl, nt
+
+    def values(self, nx):
+        f = self.f
+        x = f["grid/x"][:]
+        if nx > 1 and not np.all(np.diff(x) > 0):
+            self.fail("/grid/x is not strictly increasing")
+        h = f["snapshots/h"][:]
+        u = f["snapshots/u"][:]
+        for name, a in (("h", h), ("u", u)):
+            if np.isnan(a).any():
+                k = int(np.argwhere(np.isnan(a))[0][0])
+                self.fail(f"/snapshots/{name} has NaN (first in snapshot {k})")
+        if (h < 0).any():
+            self.fail(f"/snapshots/h has negative values (min {np.nanmin(h):.3g})")
+        for name in ("snapshots/t", "diagnostics/t", "front/t"):
+            t = f[name][:]
+            if np.isnan(t).any() or (np.diff(t) < 0).any():
+                self.fail(f"/{name} is not a non-decreasing time series")
+        return x, h
+
+    def mass(self, x, h, nx):
+        """Mass = sum(h) dx at snapshot times that are also diagnostics times."""
+        f = self.f
+        if f.attrs.get("model") == "dilatant" or nx < 2:
+            return 0  # dilatant mass is the integral of phi*h, not of h
+        dx = np.diff(x)
+        if not np.allclose(dx, dx[0], rtol=1e-9, atol=0):
+            return 0  # the check assumes a uniform grid
+        dx = (x[-1] - x[0]) / (nx - 1)
+        td = f["diagnostics/t"][:]
+        mass = f["diagnostics/mass"][:]
+        checked = 0
+        for k, t in enumerate(f["snapshots/t"][:]):
+            hits = np.flatnonzero(np.abs(td - t) <= 1e-12 * max(1.0, abs(t)))
+            if hits.size == 0:
+                continue
+            want = h[k].sum() * dx
+            got = mass[hits[-1]]
+            checked += 1
+            if abs(got - want) > 1e-9 * max(abs(want), abs(got), np.finfo(float).tiny):
+                self.fail(f"/diagnostics/mass at t = {t:g} is {got:.15g}, "
+                          f"but sum(h)*dx of the snapshot is {want:.15g}")
+        return checked
+
+    def summary(self, nt):
+        f = self.f
+        if "summary" not in f:
+            self.fail("group /summary is missing")
+            return None
+        status = f["summary"].attrs.get("status")
+        if isinstance(status, bytes):
+            status = status.decode()
+        if status is None and self.unfinished:
+            return "unfinished"
+        if status is None:
+            self.fail("/summary has no attributes: the run did not reach finish() "
+                      "(pass --unfinished to check such a file)")
+            return None
+        self.attrs("/summary", f["summary"], SUMMARY_ATTRS)
+        if status is not None and not (status in ("completed", "stopped_at_rest")
+                                       or status.startswith("failed")):
+            self.fail(f"/summary status {status!r} is not completed | stopped_at_rest | failed: ...")
+        if status in ("completed", "stopped_at_rest") and nt == 0:
+            self.fail(f"status is {status!r} but there are no snapshots")
+        for name in f["summary"].attrs:
+            if name.startswith("time_") and not name.endswith("_s"):
+                self.fail(f"/summary stage time {name!r} should be named time_<stage>_s")
+        return status
+
+    def run(self):
+        f = self.f
+        self.attrs("root", f, ROOT_ATTRS)
+        version = f.attrs.get("format_version")
+        if version is not None and version != FORMAT_VERSION:
+            self.fail(f"format_version is {version}, this checker knows {FORMAT_VERSION}")
+        for group in ("grid", "snapshots", "front", "diagnostics", "summary"):
+            if group not in f:
+                self.fail(f"group /{group} is missing")
+        self.datasets()
+        if self.problems:
+            raise Problems
+        nx, nl, nt = self.shapes()
+        x, h = self.values(nx)
+        checked = self.mass(x, h, nx)
+        status = self.summary(nt)
+        if self.problems:
+            raise Problems
+        steps = f["diagnostics/t"].shape[0]
+        return (f"model {f.attrs['model']} ({f.attrs['pressure']}, {f.attrs['coordinates']}), "
+                f"nl={nl}, nx={nx}, nt={nt} snapshots, {steps} step records, "
+                f"mass checked at {checked} snapshot(s), status {status}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("file")
+    parser.add_argument("--expect-layers", type=int, default=None)
+    parser.add_argument("--unfinished", action="store_true",
+                        help="accept a file without /summary attributes")
+    args = parser.parse_args()
+    try:
+        f = h5py.File(args.file, "r")
+    except OSError as e:
+        print(f"FAIL {args.file}: cannot open as HDF5: {e}", file=sys.stderr)
+        return 1
+    with f:
+        checker = Checker(f, args.expect_layers, args.unfinished)
+        try:
+            line = checker.run()
+        except Problems:
+            for problem in checker.problems:
+                print(f"FAIL {args.file}: {problem}", file=sys.stderr)
+            return 1
+    print(f"OK {args.file}: {line}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,219 @@
+//! The HDF5 layout itself: which group, dataset and attribute holds what, in which
+//! units and chunking. Each function works on an open file; [`super::Hdf5Sink`] opens
+//! and closes it and turns errors into [`crate::output::OutputError`].
+
+use rust_hdf5::{H5Dataset, H5File, H5Group, VarLenUnicode};
+
+use crate::output::{GridData, RunInfo, RunSummary, SnapshotView, StepRecord, FORMAT_VERSION};
+
+/// Rows per chunk of the per-step series (`/diagnostics/*`, `/front/*`): 64 KiB.
+const STEP_CHUNK: usize = 8192;
+/// Rows per chunk of `/snapshots/t`.
+const SNAP_T_CHUNK: usize = 256;
+
+/// Per-step datasets, in the order of [`step_columns`]: (path, units).
+const STEP_DATASETS: [(&str, &str); 7] = [
+    ("diagnostics/t", "s"),
+    ("diagnostics/dt", "s"),
+    ("diagnostics/mass", "m^2"),
+    ("diagnostics/kinetic_energy", "m^4/s^2"),
+    ("diagnostics/max_speed", "m/s"),
+    ("front/t", "s"),
+    ("front/x", "m"),
+];
+
+/// Root attributes, `/grid`, and the datasets every run has, empty.
+pub(super) fn write_layout(
+    file: &H5File,
+    info: &RunInfo,
+    grid: &GridData,
+) -> rust_hdf5::Result<()> {
+    file.set_attr_numeric("format_version", &FORMAT_VERSION)?;
+    file.set_attr_string("granflow_version", &info.granflow_version)?;
+    file.set_attr_string("model", &info.model)?;
+    file.set_attr_string("pressure", &info.pressure)?;
+    file.set_attr_numeric("layers", &(info.layers as i64))?;
+    file.set_attr_string("coordinates", &info.coordinates)?;
+    file.set_attr_numeric("slope_deg", &info.slope_deg)?;
+    file.set_attr_string("scenario_toml", &info.scenario_toml)?;
+
+    let g = file.create_group("grid")?;
+    for (name, data) in [("x", grid.x), ("b", grid.b), ("h_bed", grid.h_bed)] {
+        let ds = g.new_dataset::<f64>().shape([data.len()]).create(name)?;
+        ds.write_raw(data)?;
+        units(&ds, "m")?;
+    }
+
+    let nx = grid.x.len();
+    let s = file.create_group("snapshots")?;
+    let t = series(&s, "t", SNAP_T_CHUNK)?;
+    units(&t, "s")?;
+    frames(&s, "h", &[nx], "m")?;
+    frames(&s, "u", &[info.layers, nx], "m/s")?;
+
+    let front = file.create_group("front")?;
+    front.set_attr_numeric("threshold", &info.front_threshold)?;
+    file.create_group("diagnostics")?;
+    for (path, unit) in STEP_DATASETS {
+        let (group, name) = path.split_once('/').expect("group/name");
+        let ds = series(&file.root_group().group(group)?, name, STEP_CHUNK)?;
+        units(&ds, unit)?;
+        if path == "front/x" {
+            let attr = ds.new_attr::<f64>().shape(()).create("threshold")?;
+            attr.write_numeric(&info.front_threshold)?;
+        }
+    }
+    file.create_group("summary")?;
+    Ok(())
+}
+
+/// Creates `/snapshots/w` and `/snapshots/p_nh`, which exist only when the first
+/// snapshot carries them.
+pub(super) fn create_optional(
+    file: &H5File,
+    (nx, nl): (usize, usize),
+    (w, p_nh): (bool, bool),
+) -> rust_hdf5::Result<()> {
+    let group = file.root_group().group("snapshots")?;
+    if w {
+        frames(&group, "w", &[nl, nx], "m/s")?;
+    }
+    if p_nh {
+        frames(&group, "p_nh", &[nl + 1, nx + 1], "m^2/s^2")?;
+    }
+    Ok(())
+}
+
+/// Appends step records to `/diagnostics/*` and `/front/*`.
+pub(super) fn append_steps(file: &H5File, recs: &[StepRecord]) -> rust_hdf5::Result<()> {
+    if recs.is_empty() {
+        return Ok(());
+    }
+    for ((name, _), column) in STEP_DATASETS.iter().zip(step_columns(recs)) {
+        file.dataset_writer(name)?.append(&column)?;
+    }
+    Ok(())
+}
+
+/// Appends one snapshot; its lengths have been checked against the datasets.
+pub(super) fn append_snapshot(file: &H5File, snap: &SnapshotView) -> rust_hdf5::Result<()> {
+    let fields = [
+        ("snapshots/t", Some(std::slice::from_ref(&snap.t))),
+        ("snapshots/h", Some(snap.h)),
+        ("snapshots/u", Some(snap.u)),
+        ("snapshots/w", snap.w),
+        ("snapshots/p_nh", snap.p_nh),
+    ];
+    for (name, data) in fields {
+        if let Some(data) = data {
+            file.dataset_writer(name)?.append(data)?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes the `/summary` attributes. Without `begun` the file is the empty one
+/// `Hdf5Sink::create` made: it gets the format version and the group too, so a run
+/// that failed before `begin` still records its status.
+pub(super) fn write_summary(
+    file: &H5File,
+    summary: &RunSummary,
+    begun: bool,
+) -> rust_hdf5::Result<()> {
+    let group = if begun {
+        file.root_group().group("summary")?
+    } else {
+        file.set_attr_numeric("format_version", &FORMAT_VERSION)?;
+        file.create_group("summary")?
+    };
+    let set = |name: &str, value: f64| group.set_attr_numeric(name, &value);
+    set("runout", summary.runout)?;
+    set("stop_time", summary.stop_time)?;
+    set("h_max_final", summary.h_max_final)?;
+    set("t_end", summary.t_end)?;
+    set("wall_time_s", summary.wall_time_s)?;
+    group.set_attr_numeric("steps", &(summary.steps as i64))?;
+    group.set_attr_string("status", &summary.status)?;
+    for (stage, seconds) in &summary.stage_times {
+        set(&stage_attr_name(stage), *seconds)?;
+    }
+    Ok(())
+}
+
+/// `time_<stage>_s`, with anything but ASCII letters, digits and `_` replaced by `_`
+/// so the name is a plain identifier in Python.
+pub fn stage_attr_name(stage: &str) -> String {
+    let clean: String = stage
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("time_{clean}_s")
+}
+
+/// An empty 1-D series growing without bound.
+fn series(group: &H5Group, name: &str, chunk: usize) -> rust_hdf5::Result<H5Dataset> {
+    group
+        .new_dataset::<f64>()
+        .shape([0])
+        .chunk(&[chunk])
+        .max_shape(&[None])
+        .create(name)
+}
+
+/// An empty dataset of frames of shape `frame`, one chunk per frame, growing along
+/// an unlimited first axis.
+fn frames(group: &H5Group, name: &str, frame: &[usize], unit: &str) -> rust_hdf5::Result<()> {
+    let dims: Vec<usize> = std::iter::once(0).chain(frame.iter().copied()).collect();
+    let chunk: Vec<usize> = std::iter::once(1).chain(frame.iter().copied()).collect();
+    let max: Vec<Option<usize>> = std::iter::once(None)
+        .chain(frame.iter().map(|&n| Some(n)))
+        .collect();
+    let ds = group
+        .new_dataset::<f64>()
+        .shape(dims)
+        .chunk(&chunk)
+        .max_shape(&max)
+        .create(name)?;
+    units(&ds, unit)
+}
+
+fn units(ds: &H5Dataset, unit: &str) -> rust_hdf5::Result<()> {
+    ds.new_attr::<VarLenUnicode>()
+        .shape(())
+        .create("units")?
+        .write_string(unit)
+}
+
+/// The step records as the columns of [`STEP_DATASETS`].
+fn step_columns(recs: &[StepRecord]) -> [Vec<f64>; 7] {
+    let col = |f: fn(&StepRecord) -> f64| recs.iter().map(f).collect::<Vec<f64>>();
+    [
+        col(|r| r.t),
+        col(|r| r.dt),
+        col(|r| r.mass),
+        col(|r| r.kinetic_energy),
+        col(|r| r.max_speed),
+        col(|r| r.t),
+        col(|r| r.front_x),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::stage_attr_name;
+
+    #[test]
+    fn stage_names_become_identifiers() {
+        assert_eq!(stage_attr_name("hyperbolic"), "time_hyperbolic_s");
+        assert_eq!(
+            stage_attr_name("friction/viscous"),
+            "time_friction_viscous_s"
+        );
+    }
+}
