@@ -59,7 +59,10 @@ fn run(args: &RunArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let output = args.output.clone().unwrap_or_else(|| scn.output.file.clone());
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| scn.output.file.clone());
     let bar = progress_bar(args.quiet);
     let mut last_draw = 0u64;
     let result = runner::run_to_files(&scn, &output, &mut |p| {
@@ -67,7 +70,10 @@ fn run(args: &RunArgs) -> ExitCode {
         if p.steps - last_draw >= 64 {
             last_draw = p.steps;
             bar.set_position((1000.0 * p.t / p.t_end) as u64);
-            bar.set_message(format!("t = {:.4} s / {} s, {} steps", p.t, p.t_end, p.steps));
+            bar.set_message(format!(
+                "t = {:.4} s / {} s, {} steps",
+                p.t, p.t_end, p.steps
+            ));
         }
     });
     bar.finish_and_clear();

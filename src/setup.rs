@@ -95,5 +95,12 @@ pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
         scenario_toml: scn.source_toml.clone(),
         front_threshold: scn.output.front_threshold,
     };
-    Ok(Simulation::new(mesh, state, vec![h_i; d.cells], stages, config, info))
+    Ok(Simulation::new(
+        mesh,
+        state,
+        vec![h_i; d.cells],
+        stages,
+        config,
+        info,
+    ))
 }
