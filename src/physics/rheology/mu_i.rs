@@ -34,9 +34,11 @@ pub fn inertial_number(d_s: f64, phi: f64, speed: f64, h: f64, p_over_rho: f64) 
 }
 
 impl MuI {
+    /// μ(I), written as μ_s + (μ_2 − μ_s)/(1 + I_0/I) so that I = ∞ gives μ_2 and
+    /// I = 0 gives μ_s without a 0/0 or ∞/∞.
     #[inline(always)]
     pub fn mu_of_i(&self, i: f64) -> f64 {
-        self.mu_s + (self.mu_2 - self.mu_s) * i / (self.i0 + i)
+        self.mu_s + (self.mu_2 - self.mu_s) / (1.0 + self.i0 / i)
     }
 }
 
@@ -72,6 +74,8 @@ mod tests {
         assert_eq!(law.mu(0.0, 0.1, 9.81 * 0.1), law.mu_s);
         assert_relative_eq!(law.mu_of_i(1e12), law.mu_2, max_relative = 1e-10);
         assert_relative_eq!(law.mu_of_i(law.i0), 0.5 * (law.mu_s + law.mu_2));
+        assert_eq!(law.mu_of_i(f64::INFINITY), law.mu_2);
+        assert_eq!(law.mu_of_i(0.0), law.mu_s);
     }
 
     #[test]

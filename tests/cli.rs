@@ -1,0 +1,223 @@
+//! The command line as a user meets it: exit codes 0 / 1 / 2 and error messages that
+//! name the offending key (and its line).
+
+use std::fs;
+use std::path::Path;
+
+use assert_cmd::Command;
+
+const MINIMAL: &str = r#"[domain]
+x_min = -0.2
+x_max = 1.0
+cells = 60
+slope_deg = 22
+
+[rheology]
+law = "mu_i"
+mu_s_deg = 25.5
+mu_2_deg = 36
+i0 = 0.279
+
+[initial]
+h = "if(x <= 0, 0.14, 0)"
+
+[time]
+t_end = 0.05
+"#;
+
+fn granflow() -> Command {
+    Command::cargo_bin("granflow").unwrap()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let path = dir.join(name);
+    fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+/// Runs `check` on `text` and asserts exit code 2 with `needle` in stderr.
+fn rejects(text: &str, needle: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "bad.toml", text);
+    let out = granflow().args(["check", &path]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.contains(needle), "expected '{needle}' in: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn valid_scenario_checks_ok() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "ok.toml", MINIMAL);
+    let out = granflow().args(["check", &path]).output().unwrap();
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("hyperbolic → friction"), "{stdout}");
+}
+
+#[test]
+fn unknown_key_is_named_with_its_line() {
+    rejects(&MINIMAL.replace("cells = 60", "cels = 60"), "line 4");
+    rejects(&MINIMAL.replace("cells = 60", "cels = 60"), "cels");
+}
+
+#[test]
+fn wrong_type_is_named() {
+    rejects(
+        &MINIMAL.replace("cells = 60", "cells = \"sixty\""),
+        "domain.cells",
+    );
+}
+
+#[test]
+fn zero_cells_is_named() {
+    rejects(&MINIMAL.replace("cells = 60", "cells = 0"), "domain.cells");
+}
+
+#[test]
+fn inverted_domain_is_named() {
+    rejects(
+        &MINIMAL.replace("x_max = 1.0", "x_max = -0.5"),
+        "domain.x_max",
+    );
+}
+
+#[test]
+fn missing_table_file_is_named() {
+    rejects(
+        &MINIMAL.replace(
+            "h = \"if(x <= 0, 0.14, 0)\"",
+            "h = { table = \"nowhere.csv\" }",
+        ),
+        "initial.h",
+    );
+}
+
+#[test]
+fn mu2_below_mu_s_is_named() {
+    rejects(
+        &MINIMAL.replace("mu_2_deg = 36", "mu_2_deg = 20"),
+        "rheology.mu_2",
+    );
+}
+
+#[test]
+fn negative_thickness_is_named() {
+    rejects(&MINIMAL.replace("0.14, 0)", "0.14, -0.01)"), "initial.h");
+}
+
+#[test]
+fn nan_is_named() {
+    rejects(
+        &MINIMAL.replace("slope_deg = 22", "slope_deg = nan"),
+        "domain.slope_deg",
+    );
+}
+
+#[test]
+fn unknown_override_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "ok.toml", MINIMAL);
+    let out = granflow()
+        .args(["check", &path, "--set", "domain.slope=3"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("domain.slope"));
+}
+
+#[test]
+fn missing_file_is_bad_input() {
+    let out = granflow()
+        .args(["check", "no/such/file.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/file.toml"));
+}
+
+#[test]
+fn run_writes_hdf5_and_front_csv_and_prints_a_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "ok.toml", MINIMAL);
+    let h5 = dir.path().join("out/run.h5");
+    let out = granflow()
+        .args(["run", &path, "--output", h5.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("runout"), "{stdout}");
+    assert!(stdout.contains("stage times   hyperbolic"), "{stdout}");
+    assert!(h5.exists());
+    let csv = fs::read_to_string(dir.path().join("out/run_front.csv")).unwrap();
+    assert!(csv.starts_with("t,x\n"));
+    assert!(csv.lines().count() > 10);
+}
+
+#[test]
+fn quiet_run_prints_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "ok.toml", MINIMAL);
+    let h5 = dir.path().join("q.h5");
+    let out = granflow()
+        .args(["run", &path, "-q", "-o", h5.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert!(out.stdout.is_empty() && out.stderr.is_empty());
+}
+
+#[test]
+fn solver_blow_up_exits_1_naming_where_and_when_and_keeps_the_file() {
+    // Finite but absurd input: u² overflows to infinity in the first flux.
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "ok.toml", MINIMAL);
+    let h5 = dir.path().join("blowup.h5");
+    let out = granflow()
+        .args([
+            "run",
+            &path,
+            "-o",
+            h5.to_str().unwrap(),
+            "--set",
+            "initial.u=1e200",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("non-finite value at x ="), "{stderr}");
+    assert!(stderr.contains("t ="), "{stderr}");
+    let f = rust_hdf5::H5File::open(&h5).unwrap();
+    let t = f.dataset("snapshots/t").unwrap().read_raw::<f64>().unwrap();
+    assert_eq!(t, vec![0.0], "only the valid initial snapshot");
+    let h = f.dataset("snapshots/h").unwrap().read_raw::<f64>().unwrap();
+    assert!(h.iter().all(|v| v.is_finite()));
+}
+
+#[test]
+fn set_overrides_change_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "ok.toml", MINIMAL);
+    let h5 = dir.path().join("s.h5");
+    let out = granflow()
+        .args([
+            "run",
+            &path,
+            "-o",
+            h5.to_str().unwrap(),
+            "--set",
+            "domain.cells=30",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let f = rust_hdf5::H5File::open(&h5).unwrap();
+    assert_eq!(f.dataset("grid/x").unwrap().shape(), vec![30]);
+}
