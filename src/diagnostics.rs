@@ -21,34 +21,40 @@ pub struct Diagnostics {
 
 pub fn diagnose(mesh: &Mesh, state: &State, h_bed: &[f64], front_threshold: f64) -> Diagnostics {
     let n = state.layers;
-    let mut d = Diagnostics {
-        mass: 0.0,
-        kinetic_energy: 0.0,
-        max_speed: 0.0,
-        front_x: f64::NAN,
-        h_max: 0.0,
-        non_finite_at: None,
-    };
-    for (i, &bed) in h_bed.iter().enumerate().take(mesh.nx) {
-        let j = i + 1;
-        let h = state.h[j];
-        let q = &state.hu[j * n..(j + 1) * n];
-        if !h.is_finite() || q.iter().any(|v| !v.is_finite()) {
-            d.non_finite_at.get_or_insert(i);
-            continue;
-        }
-        d.mass += h;
-        d.h_max = d.h_max.max(h);
-        for (a, &qa) in q.iter().enumerate() {
+    let nx = mesh.nx;
+    let h = &state.h[1..=nx];
+    let hu = &state.hu[n..(nx + 1) * n];
+    let (mut mass, mut ke, mut q_sum, mut max_speed, mut h_max) = (0.0, 0.0, 0.0, 0.0f64, 0.0f64);
+    let mut front = None;
+    for (i, ((&h, q), &bed)) in h.iter().zip(hu.chunks_exact(n)).zip(h_bed).enumerate() {
+        mass += h;
+        h_max = h_max.max(h);
+        for (&qa, &la) in q.iter().zip(&state.l) {
+            q_sum += qa;
             let u = velocity(h, qa);
-            d.kinetic_energy += 0.5 * state.l[a] * h * u * u;
-            d.max_speed = d.max_speed.max(u.abs());
+            ke += la * h * u * u;
+            max_speed = max_speed.max(u.abs());
         }
         if h - bed > front_threshold {
-            d.front_x = mesh.x[i];
+            front = Some(i);
         }
     }
-    d.mass *= mesh.dx;
-    d.kinetic_energy *= mesh.dx;
-    d
+    // A non-finite h or discharge poisons these sums; only then search for the cell.
+    // (The kinetic energy may overflow for finite, absurd states: not a failure.)
+    let non_finite_at = if (mass + q_sum).is_finite() {
+        None
+    } else {
+        h.iter()
+            .zip(hu.chunks_exact(n))
+            .position(|(h, q)| !h.is_finite() || q.iter().any(|v| !v.is_finite()))
+            .or(Some(0))
+    };
+    Diagnostics {
+        mass: mass * mesh.dx,
+        kinetic_energy: 0.5 * ke * mesh.dx,
+        max_speed,
+        front_x: front.map_or(f64::NAN, |i| mesh.x[i]),
+        h_max,
+        non_finite_at,
+    }
 }

@@ -15,6 +15,7 @@ use crate::numerics::{Stage, StageError};
 use crate::output::{
     GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
 };
+use crate::physics::shallow::celerity;
 use crate::state::State;
 
 /// Time-loop settings.
@@ -54,6 +55,9 @@ pub struct Simulation {
     stage_times: Vec<Duration>,
     pub t: f64,
     pub steps: u64,
+    /// max|u| + √(g_n h_max) of the current state when the run loop has already
+    /// computed it with the diagnostics (saves the CFL pass); None when stale.
+    signal_speed: Option<f64>,
 }
 
 /// Largest number of Δt halvings before a step is declared failed.
@@ -79,6 +83,7 @@ impl Simulation {
             stage_times,
             t: 0.0,
             steps: 0,
+            signal_speed: None,
         }
     }
 
@@ -96,12 +101,20 @@ impl Simulation {
         )
     }
 
+    /// Diagnostics of the current state, remembering its signal speed for the next Δt.
+    fn diagnose_for_next_step(&mut self) -> Diagnostics {
+        let d = self.diagnostics();
+        self.signal_speed = Some(d.max_speed + celerity(self.mesh.g_n, d.h_max));
+        d
+    }
+
     /// Advances one step of at most `dt_max`; returns the Δt taken.
     pub fn step(&mut self, dt_max: f64) -> Result<f64, RunError> {
-        let mut dt = match cfl_dt(&self.mesh, &self.state, self.config.cfl) {
-            Some(dt) => dt.min(dt_max),
-            None => dt_max,
+        let cfl_dt = match self.signal_speed.take() {
+            Some(s) => (s > 0.0).then(|| self.config.cfl * self.mesh.dx / s),
+            None => cfl_dt(&self.mesh, &self.state, self.config.cfl),
         };
+        let mut dt = cfl_dt.map_or(dt_max, |dt| dt.min(dt_max));
         for _ in 0..=MAX_RETRIES {
             match self.apply_pipeline(dt) {
                 Ok(()) => {
@@ -171,7 +184,7 @@ impl Simulation {
             h_bed: &self.h_bed,
         };
         sink.begin(&self.info, &grid)?;
-        let d0 = self.diagnostics();
+        let d0 = self.diagnose_for_next_step();
         if let Some(i) = d0.non_finite_at {
             let msg = format!("non-finite initial state at x = {}", self.mesh.x[i]);
             return Err(self.fail(sink, wall, &d0, d0.front_x, None, msg));
@@ -194,7 +207,7 @@ impl Simulation {
             };
             let at_output = self.t + dt >= next_output * (1.0 - 1e-14);
             self.t = if at_output { next_output } else { self.t + dt };
-            let d = self.diagnostics();
+            let d = self.diagnose_for_next_step();
             if let Some(i) = d.non_finite_at {
                 let msg = format!(
                     "non-finite value at x = {} m, t = {} s (step {})",

@@ -21,10 +21,20 @@ fn collapse_output_honours_the_contract() {
     let h5 = dir.path().join("collapse.h5");
     let out = Command::cargo_bin("granflow")
         .unwrap()
-        .args(["run", scenario.to_str().unwrap(), "-q", "-o", h5.to_str().unwrap()])
+        .args([
+            "run",
+            scenario.to_str().unwrap(),
+            "-q",
+            "-o",
+            h5.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let f = H5File::open(&h5).unwrap();
 
     // Root attributes.
@@ -59,7 +69,10 @@ fn collapse_output_honours_the_contract() {
     let h = read(&f, "snapshots/h");
     let u = read(&f, "snapshots/u");
     assert!(h.iter().all(|&v| v >= 0.0 && v.is_finite()));
-    assert!(u[(nt - 1) * nx..].iter().all(|&v| v == 0.0), "final state at rest");
+    assert!(
+        u[(nt - 1) * nx..].iter().all(|&v| v == 0.0),
+        "final state at rest"
+    );
 
     // Diagnostics: one row per step plus t = 0; mass conserved (nothing reaches the
     // outflow) and equal to ∫h dx of the snapshots.
@@ -72,13 +85,19 @@ fn collapse_output_honours_the_contract() {
     let mass = read(&f, "diagnostics/mass");
     assert!(mass.iter().all(|m| (m - 0.028).abs() < 1e-13));
     for (k, tk) in t.iter().enumerate() {
-        let row = td.iter().position(|v| v == tk).expect("snapshot time is a step time");
+        let row = td
+            .iter()
+            .position(|v| v == tk)
+            .expect("snapshot time is a step time");
         let integral: f64 = h[k * nx..(k + 1) * nx].iter().sum::<f64>() * dx;
         assert!((integral - mass[row]).abs() < 1e-14);
     }
     let dt = read(&f, "diagnostics/dt");
     for k in 1..n {
-        assert!((td[k] - td[k - 1] - dt[k]).abs() < 1e-12, "t and dt agree at {k}");
+        assert!(
+            (td[k] - td[k - 1] - dt[k]).abs() < 1e-12,
+            "t and dt agree at {k}"
+        );
     }
     let ke = read(&f, "diagnostics/kinetic_energy");
     assert_eq!(ke[0], 0.0);

@@ -51,6 +51,8 @@ struct Side {
     h: f64,
     u: f64,
     z: f64,
+    /// √h, computed once per cell (it serves both interfaces of the cell).
+    sqrt_h: f64,
 }
 
 /// Interface contribution: (mass flux, momentum flux, pressure source 𝓢).
@@ -80,12 +82,13 @@ fn interface<L: BasalFriction>(
     let h_plus = (r.h - (-dz).max(0.0)).max(0.0);
 
     // Roe averages and HLL wave-speed bounds.
-    let (sl, sr) = (l.h.max(0.0).sqrt(), r.h.max(0.0).sqrt());
+    let (sl, sr) = (l.sqrt_h, r.sqrt_h);
     let u_roe = (sl * l.u + sr * r.u) / (sl + sr);
     let h_roe = 0.5 * (l.h + r.h);
     let c_roe = celerity(g_n, h_roe);
-    let s_left = (l.u - celerity(g_n, l.h)).min(u_roe - c_roe);
-    let s_right = (r.u + celerity(g_n, r.h)).max(u_roe + c_roe);
+    let sqrt_g = g_n.sqrt();
+    let s_left = (l.u - sqrt_g * sl).min(u_roe - c_roe);
+    let s_right = (r.u + sqrt_g * sr).max(u_roe + c_roe);
     let spread = s_right - s_left;
     if spread <= 0.0 {
         return (0.0, 0.0, 0.0);
@@ -139,6 +142,7 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
             h: state.h[j],
             u: velocity(state.h[j], state.hu[j]),
             z: mesh.z[j],
+            sqrt_h: state.h[j].max(0.0).sqrt(),
         };
         let mut left = side(0);
         for k in 0..=nx {
