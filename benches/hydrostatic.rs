@@ -21,9 +21,12 @@ fn collapse(overrides: &[&str]) -> Scenario {
     load_file(&path, &overrides).expect("valid scenario")
 }
 
-/// Best of `repeats` runs: (wall seconds, steps, per-stage seconds).
-fn best_run(scn: &Scenario, repeats: usize) -> (f64, u64, Vec<(String, f64)>) {
-    let mut best: Option<(f64, u64, Vec<(String, f64)>)> = None;
+/// Wall seconds, steps and per-stage seconds of one run.
+type Timing = (f64, u64, Vec<(String, f64)>);
+
+/// Best of `repeats` runs.
+fn best_run(scn: &Scenario, repeats: usize) -> Timing {
+    let mut best: Option<Timing> = None;
     for _ in 0..repeats {
         let mut sim = build_simulation(scn).unwrap();
         let mut sink = MemorySink::default();
