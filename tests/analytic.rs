@@ -181,3 +181,32 @@ fn coulomb_friction_below_slope_accelerates_as_the_ode() {
         }
     }
 }
+
+#[test]
+fn cartesian_layer_on_a_sloped_bed_accelerates_at_g_tan_theta_minus_mu() {
+    // Cartesian form (seed 000 §4.1): vertical thickness, gravity g, slope inside b.
+    let (theta, mu): (f64, f64) = (25.0, 0.2);
+    let mut case = Case::new(0.0, 4.0, 80);
+    case.coordinates = granflow::scenario::Coordinates::Cartesian;
+    case.left = BoundaryKind::Outflow;
+    case.right = BoundaryKind::Outflow;
+    case.law = FrictionLaw::Coulomb { mu };
+    case.t_end = 0.3;
+    case.every = 0.05;
+    let tan = theta.to_radians().tan();
+    let mut sim = case.build(move |x| -x * tan, |_, _| 0.1, |_| 0.0);
+    let (sink, _) = run(&mut sim);
+    let a = G * (tan - mu);
+    for snap in &sink.snapshots {
+        // Boundary disturbances travel at most (|u| + c) t ≈ 1.2 m in 0.3 s.
+        for (x, u) in sink.x.iter().zip(&snap.u) {
+            if (1.5..=2.5).contains(x) {
+                assert!(
+                    (u - a * snap.t).abs() < 1e-11,
+                    "t = {}, x = {x}: {u}",
+                    snap.t
+                );
+            }
+        }
+    }
+}

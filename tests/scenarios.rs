@@ -95,3 +95,29 @@ fn collapse_regression_norms() {
     assert!((summary.h_max_final - 0.041230873).abs() < 2e-9);
     assert_eq!(summary.steps, 995);
 }
+
+#[test]
+fn erodible_bed_is_added_under_the_column_and_recorded() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/collapse.toml");
+    let h_i = 2e-3;
+    let scn = load_file(
+        &path,
+        &[
+            format!("initial.erodible_bed={h_i}"),
+            "time.t_end=0.2".into(),
+        ],
+    )
+    .unwrap();
+    let mut sim = build_simulation(&scn).unwrap();
+    let mut sink = MemorySink::default();
+    sim.run(&mut sink, &mut |_| {}).unwrap();
+    assert!(sink.h_bed.iter().all(|&v| v == h_i));
+    let h0 = &sink.snapshots[0].h;
+    for (x, h) in sink.x.iter().zip(h0) {
+        let want = if *x <= 0.0 { 0.14 + h_i } else { h_i };
+        assert!((h - want).abs() < 1e-15, "x = {x}: {h}");
+    }
+    // The front ignores the bed layer: it starts at the column's edge.
+    assert_eq!(sink.steps[0].front_x, sink.x[39]);
+    assert!(sink.steps.last().unwrap().front_x > 0.2);
+}
