@@ -22,6 +22,9 @@ pub struct Mesh {
     pub x: Vec<f64>,
     /// Bed elevation over the reference plane at the centres (nx).
     pub b: Vec<f64>,
+    /// Bed over the reference plane with ghosts (nx + 2): the jumps that the
+    /// hydrostatic reconstruction sees (seed 003 eq. 20).
+    pub b_ghost: Vec<f64>,
     /// Potential elevation z = b + b̃ with ghosts (nx + 2).
     pub z: Vec<f64>,
     /// Gravity normal to the reference plane.
@@ -82,12 +85,17 @@ impl Mesh {
             BoundaryKind::Wall => z[nx],
             BoundaryKind::Outflow => b[nx - 1] + plane(x[nx - 1] + dx),
         };
+        let mut b_ghost = Vec::with_capacity(nx + 2);
+        b_ghost.push(b[0]);
+        b_ghost.extend_from_slice(&b);
+        b_ghost.push(b[nx - 1]);
         Mesh {
             nx,
             x_min: spec.x_min,
             dx,
             x,
             b,
+            b_ghost,
             z,
             g_n,
             theta,

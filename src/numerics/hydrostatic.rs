@@ -9,9 +9,21 @@
 //!   𝓕 = ½(F_c(U_L) + F_c(U_R)) − ½[α_0 (Ũ⁺ − Ũ⁻) + α_1 (F_c(U_R) − F_c(U_L) + 𝓢̃)],
 //!   𝓢 = (0, g_n ½(h_L + h_R)(h⁺ − h⁻)),
 //!
-//! with the hydrostatic reconstruction h⁻ = max(0, h_L − (Δz)_+),
-//! h⁺ = max(0, h_R − (−Δz)_+) (seed 000 eq. 19). The source enters with a minus sign:
-//! seed 000 eq. (20) prints "+", which contradicts ∂_t(hu) = −g_n h ∂_X(h + z).
+//! with the hydrostatic reconstruction h⁻ = max(0, h_L − (Δb)_+), h⁺ = max(0, h_R − (−Δb)_+)
+//! over the bed b relative to the reference plane (seed 003 eq. 20), the plane's own
+//! slope entering 𝓢 as the jump Δb̃ of the potential (zero across a wall). The source
+//! enters with a minus sign: seed 000 eq. (20) prints "+", which contradicts
+//! ∂_t(hu) = −g_n h ∂_X(h + z).
+//!
+//! Two deliberate departures from the printed flux, both for positivity and both
+//! tested (`tests/properties.rs`, `tests/analytic.rs`):
+//! - F_c is evaluated at the reconstructed states U^± = (h^±, h^± u) (as in Audusse
+//!   et al.'s hydrostatic reconstruction), not at the cell states: with cell states a
+//!   wet cell moving away from a dry step drains the dry cell, for any Δt.
+//! - Reconstructing over b only (not b + b̃) keeps thin layers on steep planes
+//!   visible: over b + b̃ every layer thinner than tan θ Δx (2 mm at 22° with
+//!   Δx = 5 mm, thicker than the erodible beds of seed 001 §4.2) would be clipped
+//!   to h⁺ = 0 and feel a reduced gravity.
 //!
 //! Granular masses at rest with |∂_X(h + z)| ≤ μ_s are kept exactly at rest by the
 //! Coulomb-aware reconstruction Ũ^± (seed 000 eq. 22–24, seed 003 §4 step 1): the
@@ -23,6 +35,13 @@
 //! (seed 003 eq. 21). We follow seed 003's sign of u/Δt (seed 000 eq. 23 has the
 //! opposite sign, which would make friction accelerate a moving mass) and its
 //! division by g_n (without it ΔC is not a length).
+//!
+//! Positivity: if a step would empty a cell (possible at wet/dry fronts, where the
+//! Coulomb-aware diffusion and the HLL bounds stop matching, e.g. a thin layer
+//! leaving a dry cell on a slope), the outgoing mass and momentum fluxes of that cell
+//! are scaled to what it holds (the "draining time" limiter of Bollermann, Chen,
+//! Kurganov & Noelle 2013). Each interface flux is used by both neighbours, so mass
+//! stays exactly conserved; steps that need no limiting are untouched.
 //!
 //! Wave speeds S_L, S_R: Einfeldt-type bounds with Roe averages (seed 000 after eq. 21).
 //! Wet/dry fronts: an emerging bed (h_L > 0, h_R dry, h_L + z_L < z_R, and its mirror)
@@ -43,6 +62,8 @@ pub struct HydrostaticStep<L: BasalFriction> {
     flux_hu: Vec<f64>,
     source: Vec<f64>,
     h_new: Vec<f64>,
+    /// Draining factors θ_j ∈ [0, 1] (nx + 2), used only when a cell would empty.
+    drain: Vec<f64>,
 }
 
 /// Left or right state of an interface.
@@ -50,6 +71,9 @@ pub struct HydrostaticStep<L: BasalFriction> {
 struct Side {
     h: f64,
     u: f64,
+    /// Bed over the reference plane.
+    b: f64,
+    /// Potential elevation b + b̃.
     z: f64,
     /// √h, computed once per cell (it serves both interfaces of the cell).
     sqrt_h: f64,
@@ -71,15 +95,17 @@ fn interface<L: BasalFriction>(
         return (0.0, 0.0, 0.0);
     }
     // Emerging bed: the wet side cannot push mass up a dry step it does not overtop.
-    if r_dry && l.h + l.z < r.z {
+    if r_dry && l.h + l.b < r.b {
         l.u = 0.0;
     }
-    if l_dry && r.h + r.z < l.z {
+    if l_dry && r.h + r.b < l.b {
         r.u = 0.0;
     }
+    let db = r.b - l.b;
     let dz = r.z - l.z;
-    let h_minus = (l.h - dz.max(0.0)).max(0.0);
-    let h_plus = (r.h - (-dz).max(0.0)).max(0.0);
+    let d_plane = dz - db;
+    let h_minus = (l.h - db.max(0.0)).max(0.0);
+    let h_plus = (r.h - (-db).max(0.0)).max(0.0);
 
     // Roe averages and HLL wave-speed bounds.
     let (sl, sr) = (l.sqrt_h, r.sqrt_h);
@@ -105,10 +131,10 @@ fn interface<L: BasalFriction>(
     let hc_minus = (l.h - dz_c.max(0.0)).max(0.0);
     let hc_plus = (r.h - (-dz_c).max(0.0)).max(0.0);
 
-    let (q_l, q_r) = (l.h * l.u, r.h * r.u);
+    let (q_l, q_r) = (h_minus * l.u, h_plus * r.u);
     let (m_l, m_r) = (q_l * l.u, q_r * r.u);
     let g_hbar = g_n * h_roe;
-    let source = g_hbar * (h_plus - h_minus);
+    let source = g_hbar * (h_plus - h_minus + d_plane);
     let source_c = g_hbar * (hc_plus - hc_minus);
 
     let flux_h = 0.5 * (q_l + q_r) - 0.5 * (alpha0 * (hc_plus - hc_minus) + alpha1 * (q_r - q_l));
@@ -125,7 +151,42 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             flux_hu: vec![0.0; nx + 1],
             source: vec![0.0; nx + 1],
             h_new: vec![0.0; nx + 2],
+            drain: vec![1.0; nx + 2],
         }
+    }
+}
+
+impl<L: BasalFriction> HydrostaticStep<L> {
+    /// h_new = h − r (F_{i+1/2} − F_{i−1/2}); returns the smallest value and its cell.
+    fn update_mass(&mut self, h: &[f64], r: f64) -> (f64, usize) {
+        let mut worst = (f64::INFINITY, 1usize);
+        let interior = &h[1..h.len() - 1];
+        for (k, (hi, f)) in interior.iter().zip(self.flux_h.windows(2)).enumerate() {
+            let hn = hi - r * (f[1] - f[0]);
+            self.h_new[k + 1] = hn;
+            if hn < worst.0 {
+                worst = (hn, k + 1);
+            }
+        }
+        worst
+    }
+
+    /// Scales every interface flux by the draining factor of its donor cell,
+    /// θ_j = min(1, h_j / (r · outflow_j)).
+    fn limit_draining(&mut self, h: &[f64], r: f64) {
+        let nx = h.len() - 2;
+        let interior = &h[1..=nx];
+        for (k, (hj, f)) in interior.iter().zip(self.flux_h.windows(2)).enumerate() {
+            let need = r * (f[1].max(0.0) + (-f[0]).max(0.0));
+            self.drain[k + 1] = if need > *hj { hj.max(0.0) / need } else { 1.0 };
+        }
+        for k in 0..=nx {
+            let donor = if self.flux_h[k] > 0.0 { k } else { k + 1 };
+            let theta = self.drain[donor];
+            self.flux_h[k] *= theta;
+            self.flux_hu[k] *= theta;
+        }
+        self.drain[1..=nx].fill(1.0);
     }
 }
 
@@ -141,6 +202,7 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
         let side = |j: usize| Side {
             h: state.h[j],
             u: velocity(state.h[j], state.hu[j]),
+            b: mesh.b_ghost[j],
             z: mesh.z[j],
             sqrt_h: state.h[j].max(0.0).sqrt(),
         };
@@ -154,17 +216,14 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
             left = right;
         }
 
-        // Mass first: refuse the step (state untouched) if it would empty a cell.
+        // Mass first; limit the fluxes of cells that would empty, then refuse the step
+        // (state untouched) if anything is still negative beyond round-off.
         let r = dt / dx;
-        let mut worst = (f64::INFINITY, 0usize);
-        for i in 1..=nx {
-            let h = state.h[i] - r * (self.flux_h[i] - self.flux_h[i - 1]);
-            self.h_new[i] = h;
-            if h < worst.0 {
-                worst = (h, i);
-            }
+        let mut worst = self.update_mass(&state.h, r);
+        if worst.0 < 0.0 {
+            self.limit_draining(&state.h, r);
+            worst = self.update_mass(&state.h, r);
         }
-        // Round-off below zero is clipped; anything larger is a CFL violation.
         let tolerance = -1e-14 * (1.0 + state.h[worst.1].abs());
         if worst.0 < tolerance {
             return Err(StageError::NegativeThickness {
