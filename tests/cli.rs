@@ -221,3 +221,32 @@ fn set_overrides_change_the_run() {
     let f = rust_hdf5::H5File::open(&h5).unwrap();
     assert_eq!(f.dataset("grid/x").unwrap().shape(), vec![30]);
 }
+
+#[test]
+fn bed_from_a_csv_table_is_interpolated_relative_to_the_scenario_file() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::create_dir(dir.path().join("data")).unwrap();
+    write(dir.path(), "data/bed.csv", "x,value\n-0.2,0.0\n1.0,0.12\n");
+    let text = MINIMAL.replace(
+        "[rheology]",
+        "[bed]\nb = { table = \"data/bed.csv\" }\n\n[rheology]",
+    );
+    let path = write(dir.path(), "table.toml", &text);
+    let h5 = dir.path().join("t.h5");
+    let out = granflow()
+        .args(["run", &path, "-q", "-o", h5.to_str().unwrap()])
+        .current_dir("/")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let f = rust_hdf5::H5File::open(&h5).unwrap();
+    let x = f.dataset("grid/x").unwrap().read_raw::<f64>().unwrap();
+    let b = f.dataset("grid/b").unwrap().read_raw::<f64>().unwrap();
+    for (x, b) in x.iter().zip(&b) {
+        assert!((b - 0.1 * (x + 0.2)).abs() < 1e-12, "x = {x}: b = {b}");
+    }
+}
