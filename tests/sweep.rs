@@ -267,7 +267,26 @@ fn invalid_generated_scenario_stops_everything_before_any_run() {
     let (code, _, stderr) = sweep(&file, &out, &["--set", "domain.cells=0"]);
     assert_eq!(code, 2);
     assert!(stderr.contains("6 of 6 runs"), "{stderr}");
-    assert!(stderr.contains("domain.cells"), "{stderr}");
+    assert!(
+        stderr.contains("key 'domain.cells' from --set: must be at least 1"),
+        "{stderr}"
+    );
+    // The same mistake in the sweep file's `set` points at its line.
+    let file = tmp.path().join("set.toml");
+    fs::write(
+        &file,
+        format!(
+            "scenario = {:?}\n\nset = [\"domain.cells=0\"]\n[axes]\ndomain.slope_deg = [16]\n",
+            collapse().display().to_string()
+        ),
+    )
+    .unwrap();
+    let (code, _, stderr) = sweep(&file, &out, &[]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("key 'domain.cells' from set = [...] (line 3"),
+        "{stderr}"
+    );
     assert!(!out.exists());
 }
 

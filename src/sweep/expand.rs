@@ -5,6 +5,7 @@
 //! axes advance together. Run `index` is the position in that order: the sweep order,
 //! used for shards and for the rows of the summary.
 
+use std::collections::HashMap;
 use std::fmt;
 use std::str::FromStr;
 
@@ -62,7 +63,8 @@ pub fn expand(dims: &[Dimension]) -> Result<Vec<RunPoint>, String> {
         .collect();
     let short = short_names(&keys);
     let lens: Vec<usize> = dims.iter().map(Dimension::len).collect();
-    let mut runs = Vec::new();
+    let mut runs: Vec<RunPoint> = Vec::new();
+    let mut seen: HashMap<String, usize> = HashMap::new();
     for (index, choice) in product_indices(&lens).into_iter().enumerate() {
         let params: Vec<(String, AxisValue)> = dims
             .iter()
@@ -79,10 +81,9 @@ pub fn expand(dims: &[Dimension]) -> Result<Vec<RunPoint>, String> {
             .map(|(s, (_, v))| (s.as_str(), v.display.as_str()))
             .collect();
         let name = run_name(&parts);
-        if let Some(other) = runs.iter().find(|r: &&RunPoint| r.name == name) {
+        if let Some(other) = seen.insert(name.clone(), index) {
             return Err(format!(
-                "runs {} and {index} would both be written to '{name}': make the values differ in letters or digits",
-                other.index
+                "runs {other} and {index} would both be written to '{name}': make the values differ in letters or digits"
             ));
         }
         runs.push(RunPoint {

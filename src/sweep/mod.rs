@@ -121,8 +121,9 @@ fn base_overrides(spec: &SweepSpec, cli: &[String]) -> Result<Vec<String>, Sweep
     Ok(spec.set.iter().chain(cli).cloned().collect())
 }
 
-/// Explains a scenario error of one run, pointing at the axis when its value is the cause.
-fn run_error(spec: &SweepSpec, point: &RunPoint, e: &ScenarioError) -> String {
+/// Explains a scenario error of one run, pointing at the axis when its value is the cause,
+/// else at the override (`base`: sweep-file `set`, then `--set`) or the base scenario.
+fn run_error(spec: &SweepSpec, base: &[String], point: &RunPoint, e: &ScenarioError) -> String {
     let run = format!("run {} ({})", point.index, point.name);
     let axis = e
         .key()
@@ -144,7 +145,23 @@ fn run_error(spec: &SweepSpec, point: &RunPoint, e: &ScenarioError) -> String {
                 e.message()
             )
         }
-        None if e.is_from_set() => format!("{run}: {e} (from the sweep's set or --set)"),
+        None if e.is_from_set() => {
+            let key = e.key().unwrap_or("?");
+            // The last override of the key wins: sweep-file `set` first, then `--set`.
+            let last = base
+                .iter()
+                .rposition(|o| spec::is_under(key, &normalized_key(o)));
+            let from = if last.is_some_and(|i| i < spec.set.len()) {
+                format!(
+                    "set = [...] (line {} of '{}')",
+                    spec.set_line.map_or("?".into(), |l| l.to_string()),
+                    spec.path.display()
+                )
+            } else {
+                "--set".to_string()
+            };
+            format!("{run}: key '{key}' from {from}: {}", e.message())
+        }
         None => format!("{run}: in '{}': {e}", spec.scenario.display()),
     }
 }
@@ -178,7 +195,7 @@ fn prepare(
                 let mut overrides = base.to_vec();
                 overrides.extend(point.overrides());
                 let scenario = scenario::load_str(&text, &base_dir, &overrides)
-                    .map_err(|e| run_error(spec, point, &e))?;
+                    .map_err(|e| run_error(spec, base, point, &e))?;
                 crate::runner::check(&scenario).map_err(|e| {
                     let from_axis = spec.axis_touching(&e.key).map_or(String::new(), |a| {
                         format!(" (varied by the axis '{}')", a.key)
@@ -257,7 +274,8 @@ pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
     let base = base_overrides(&spec, &opts.set)?;
     let points = expand::expand_spec(&spec)
         .map_err(|m| SweepError::file(&spec.path, None, Some("axes"), m))?;
-    let jobs = opts.jobs.max(1);
+    // No more workers than runs (a pool thread per worker, see `run`'s loop below).
+    let jobs = opts.jobs.clamp(1, points.len().max(1));
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .thread_name(|i| format!("granflow-sweep-{i}"))
