@@ -1,4 +1,4 @@
-//! Command-line interface (clap): `granflow run | check`.
+//! Command-line interface (clap): `granflow run | check | sweep`.
 
 use std::path::PathBuf;
 
@@ -22,6 +22,8 @@ pub enum Command {
     Run(RunArgs),
     /// Validate a scenario without running it.
     Check(ScenarioArgs),
+    /// Run a parameter sweep in parallel (see docs/sweeps.md), or `sweep merge DIR`.
+    Sweep(crate::sweep::SweepArgs),
 }
 
 #[derive(Debug, Args)]

@@ -17,3 +17,4 @@ pub mod scenario;
 pub mod setup;
 pub mod simulation;
 pub mod state;
+pub mod sweep;

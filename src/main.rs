@@ -100,5 +100,6 @@ fn main() -> ExitCode {
     match &cli.command {
         Command::Run(args) => run(args),
         Command::Check(args) => check(args),
+        Command::Sweep(args) => ExitCode::from(granflow::sweep::main(args)),
     }
 }

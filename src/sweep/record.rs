@@ -1,0 +1,212 @@
+//! The per-run result file, `<run>.result.toml`, and what "already done" means.
+//!
+//! The HDF5 file holds a run's `/summary`, but the HDF5 crate reads back only string
+//! attributes, and a plain-text record is handy for scripts anyway. So each run, when it
+//! ends (completed, at rest or failed), also writes this small TOML file next to its
+//! HDF5 file: the parameters, runout, stop time, h_max_final, end time, steps, wall
+//! time, status, and a hash of the exact scenario text that was run. It is written to a
+//! temporary name, synced and renamed, so it is either absent or complete, and it is
+//! removed before a run starts, so it never describes an older run of the same name.
+//! Floats are written in the shortest form that reads back bit for bit (`nan` for a run
+//! that never came to rest), so a summary rebuilt from these files (`sweep merge`) has
+//! the same numbers as the one written by the sweep itself.
+//!
+//! A run counts as done (and is skipped on a re-run) when its result file says
+//! `completed` or `stopped_at_rest`, its scenario hash matches the scenario the sweep
+//! would run now (same base file, `set`, `--set` and axis values), and its HDF5 file
+//! exists with the same status in `/summary`.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+/// Version of the result-file layout.
+pub const RECORD_FORMAT: u32 = 1;
+
+/// What one run produced, as stored in `<run>.result.toml`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RunRecord {
+    pub format: u32,
+    /// Position in sweep order.
+    pub index: usize,
+    pub name: String,
+    /// FNV-1a of the scenario text that was run, 16 hex digits.
+    pub scenario_hash: String,
+    /// "completed" | "stopped_at_rest" | "failed: …".
+    pub status: String,
+    /// Front advance (m); NaN when unknown.
+    pub runout: f64,
+    /// First time the mass was at rest (s); NaN if never.
+    pub stop_time: f64,
+    pub h_max_final: f64,
+    /// Time reached (s).
+    pub t_end: f64,
+    pub steps: u64,
+    pub wall_time_s: f64,
+    /// The HDF5 file, relative to the sweep directory.
+    pub h5: String,
+    /// Axis key → value, as in the summary.
+    pub parameters: BTreeMap<String, String>,
+}
+
+impl RunRecord {
+    /// A run that ended normally.
+    pub fn is_ok(&self) -> bool {
+        status_is_ok(&self.status)
+    }
+
+    /// The numbers and status, ignoring the wall time (which differs between runs).
+    pub fn same_result(&self, other: &RunRecord) -> bool {
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        self.status == other.status
+            && self.steps == other.steps
+            && same(self.runout, other.runout)
+            && same(self.stop_time, other.stop_time)
+            && same(self.h_max_final, other.h_max_final)
+            && same(self.t_end, other.t_end)
+    }
+}
+
+/// `completed` and `stopped_at_rest` are successes; anything else is a failure.
+pub fn status_is_ok(status: &str) -> bool {
+    status == "completed" || status == "stopped_at_rest"
+}
+
+pub fn h5_path(dir: &Path, name: &str) -> PathBuf {
+    dir.join(format!("{name}.h5"))
+}
+
+pub fn record_path(dir: &Path, name: &str) -> PathBuf {
+    dir.join(format!("{name}.result.toml"))
+}
+
+/// Writes `text` to `path` atomically: a temporary file in the same directory, synced,
+/// then renamed over `path`.
+pub fn write_atomic(path: &Path, text: &str) -> std::io::Result<()> {
+    let file_name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{file_name}.tmp{}", std::process::id()));
+    let result = (|| {
+        let mut f = fs::File::create(&tmp)?;
+        f.write_all(text.as_bytes())?;
+        f.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+pub fn write(dir: &Path, record: &RunRecord) -> std::io::Result<()> {
+    let body = toml::to_string(record)
+        .map_err(|e| std::io::Error::other(format!("cannot encode the result: {e}")))?;
+    let text =
+        format!("# Result of one run of a granflow sweep, written when the run ended.\n{body}");
+    write_atomic(&record_path(dir, &record.name), &text)
+}
+
+/// Reads a result file; `Ok(None)` when there is none.
+pub fn read(dir: &Path, name: &str) -> Result<Option<RunRecord>, String> {
+    let path = record_path(dir, name);
+    let text = match fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(format!("cannot read {}: {e}", path.display())),
+    };
+    toml::from_str(&text)
+        .map(Some)
+        .map_err(|e| format!("cannot read {}: {}", path.display(), e.message()))
+}
+
+/// Removes a run's result file (before the run is redone).
+pub fn remove(dir: &Path, name: &str) -> std::io::Result<()> {
+    match fs::remove_file(record_path(dir, name)) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(e),
+        _ => Ok(()),
+    }
+}
+
+/// The `/summary` `status` attribute of an HDF5 file, if it can be read.
+pub fn h5_status(path: &Path) -> Option<String> {
+    let file = rust_hdf5::H5File::options().no_locking().open(path).ok()?;
+    let status = file
+        .root_group()
+        .group("summary")
+        .ok()?
+        .attr_string("status");
+    status.ok()
+}
+
+/// The stored result of run `name`, if it is done and was run with the scenario whose
+/// hash is `hash` (see the module docs).
+pub fn done(dir: &Path, name: &str, hash: &str) -> Option<RunRecord> {
+    let record = read(dir, name).ok()??;
+    if !record.is_ok() || record.name != name || record.scenario_hash != hash {
+        return None;
+    }
+    let status = h5_status(&dir.join(&record.h5))?;
+    (status == record.status).then_some(record)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record() -> RunRecord {
+        RunRecord {
+            format: RECORD_FORMAT,
+            index: 3,
+            name: "slope_deg=16".into(),
+            scenario_hash: "0123456789abcdef".into(),
+            status: "failed: x, \"y\"".into(),
+            runout: 0.1 + 0.2,
+            stop_time: f64::NAN,
+            h_max_final: 1.0 / 3.0,
+            t_end: 1e300,
+            steps: 12,
+            wall_time_s: 2.5e-7,
+            h5: "slope_deg=16.h5".into(),
+            parameters: [("domain.slope_deg".to_string(), "16".to_string())].into(),
+        }
+    }
+
+    #[test]
+    fn round_trips_bit_for_bit() {
+        let dir = tempfile::tempdir().unwrap();
+        let r = record();
+        write(dir.path(), &r).unwrap();
+        let back = read(dir.path(), &r.name).unwrap().unwrap();
+        assert!(back.same_result(&r), "{back:?}");
+        assert_eq!(back.wall_time_s.to_bits(), r.wall_time_s.to_bits());
+        assert_eq!(back.parameters, r.parameters);
+        assert!(!back.is_ok());
+        // No temporary file left behind.
+        let names: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(names.len(), 1);
+        assert_eq!(read(dir.path(), "other").unwrap().map(|r| r.name), None);
+        remove(dir.path(), &r.name).unwrap();
+        remove(dir.path(), &r.name).unwrap();
+        assert!(read(dir.path(), &r.name).unwrap().is_none());
+    }
+
+    #[test]
+    fn done_needs_ok_status_matching_hash_and_h5() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut r = record();
+        r.status = "completed".into();
+        write(dir.path(), &r).unwrap();
+        // No HDF5 file: not done.
+        assert!(done(dir.path(), &r.name, &r.scenario_hash).is_none());
+        fs::write(h5_path(dir.path(), &r.name), b"not hdf5").unwrap();
+        assert!(done(dir.path(), &r.name, &r.scenario_hash).is_none());
+        fs::write(record_path(dir.path(), &r.name), "garbage").unwrap();
+        assert!(read(dir.path(), &r.name).is_err());
+        assert!(done(dir.path(), &r.name, &r.scenario_hash).is_none());
+    }
+}

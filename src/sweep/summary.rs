@@ -1,0 +1,265 @@
+//! The summary table: `summary.csv` and the table printed at the end of a sweep.
+//!
+//! One row per run in sweep order. Columns: `index`, `run` (the file stem), one column
+//! per axis (named by its dotted key, canonical values), then `runout`, `stop_time`,
+//! `h_max_final`, `t_end`, `steps`, `wall_time_s`, `status`. Floats are written in their
+//! shortest exact form (`nan` when not at rest); a run without a result has empty
+//! numbers and a status that says why (`pending`, `missing`, `stale: …`). Fields are
+//! quoted as in RFC 4180 when they hold a comma, a quote or a line break.
+
+use std::fmt::Write;
+
+use super::naming::{format_float, short_names};
+use super::record::RunRecord;
+
+pub const SUMMARY_FILE: &str = "summary.csv";
+
+/// One line of the summary.
+#[derive(Debug, Clone)]
+pub struct Row {
+    pub index: usize,
+    pub name: String,
+    /// Value per axis.
+    pub values: Vec<String>,
+    /// The run's result, when there is one.
+    pub record: Option<RunRecord>,
+    /// Status shown when there is no result.
+    pub note: String,
+}
+
+impl Row {
+    pub fn status(&self) -> &str {
+        self.record.as_ref().map_or(&self.note, |r| &r.status)
+    }
+
+    /// Completed or stopped at rest.
+    pub fn is_ok(&self) -> bool {
+        self.record.as_ref().is_some_and(RunRecord::is_ok)
+    }
+}
+
+fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_owned()
+    }
+}
+
+/// Name of the file a (possibly partial) sweep writes its summary to.
+pub fn summary_file_name(shard: super::Shard) -> String {
+    if shard.is_partial() {
+        format!("summary.shard-{}-of-{}.csv", shard.k, shard.n)
+    } else {
+        SUMMARY_FILE.to_owned()
+    }
+}
+
+pub const METRICS: [&str; 7] = [
+    "runout",
+    "stop_time",
+    "h_max_final",
+    "t_end",
+    "steps",
+    "wall_time_s",
+    "status",
+];
+
+/// The CSV text of `rows` for a sweep over `axes`.
+pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
+    let mut out = String::new();
+    let header: Vec<String> = ["index", "run"]
+        .iter()
+        .map(|s| s.to_string())
+        .chain(axes.iter().map(|a| csv_field(a)))
+        .chain(METRICS.iter().map(|s| s.to_string()))
+        .collect();
+    out.push_str(&header.join(","));
+    out.push('\n');
+    for row in rows {
+        let mut fields = vec![row.index.to_string(), csv_field(&row.name)];
+        fields.extend(row.values.iter().map(|v| csv_field(v)));
+        match &row.record {
+            Some(r) => {
+                fields.extend(
+                    [r.runout, r.stop_time, r.h_max_final, r.t_end]
+                        .iter()
+                        .map(|&v| format_float(v)),
+                );
+                fields.push(r.steps.to_string());
+                fields.push(format_float(r.wall_time_s));
+            }
+            None => fields.extend(std::iter::repeat_n(String::new(), 6)),
+        }
+        fields.push(csv_field(row.status()));
+        out.push_str(&fields.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// A table for the terminal: parameters by short name, 4 significant decimals.
+pub fn to_table(axes: &[String], rows: &[Row]) -> String {
+    let keys: Vec<&str> = axes.iter().map(String::as_str).collect();
+    let mut header: Vec<String> = short_names(&keys);
+    header.extend(
+        [
+            "runout_m",
+            "stop_time_s",
+            "h_max_final_m",
+            "steps",
+            "wall_s",
+            "status",
+        ]
+        .iter()
+        .map(|s| s.to_string()),
+    );
+    let num = |v: f64| {
+        if v.is_nan() {
+            "-".to_string()
+        } else if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
+            format!("{v:.4e}")
+        } else {
+            format!("{v:.4}")
+        }
+    };
+    let mut cells: Vec<Vec<String>> = vec![header];
+    for row in rows {
+        let mut line = row.values.clone();
+        match &row.record {
+            Some(r) => line.extend([
+                num(r.runout),
+                num(r.stop_time),
+                num(r.h_max_final),
+                r.steps.to_string(),
+                format!("{:.2}", r.wall_time_s),
+            ]),
+            None => line.extend(std::iter::repeat_n(String::new(), 5)),
+        }
+        let status: String = row.status().chars().take(70).collect();
+        line.push(status.replace('\n', " "));
+        cells.push(line);
+    }
+    let ncol = cells[0].len();
+    let width: Vec<usize> = (0..ncol)
+        .map(|c| {
+            cells
+                .iter()
+                .map(|l| l[c].chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut out = String::new();
+    for line in &cells {
+        let mut text = String::new();
+        for (c, cell) in line.iter().enumerate() {
+            if c + 1 == ncol {
+                text.push_str(cell);
+            } else {
+                let _ = write!(text, "{cell:>w$}  ", w = width[c]);
+            }
+        }
+        out.push_str(text.trim_end());
+        out.push('\n');
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::record::RECORD_FORMAT;
+
+    fn rows() -> Vec<Row> {
+        let record = RunRecord {
+            format: RECORD_FORMAT,
+            index: 0,
+            name: "slope_deg=16".into(),
+            scenario_hash: "x".into(),
+            status: "stopped_at_rest".into(),
+            runout: 0.832,
+            stop_time: f64::NAN,
+            h_max_final: 0.0417,
+            t_end: 1.4258,
+            steps: 125,
+            wall_time_s: 0.019,
+            h5: "slope_deg=16.h5".into(),
+            parameters: Default::default(),
+        };
+        let failed = RunRecord {
+            status: "failed: a, \"b\"".into(),
+            ..record.clone()
+        };
+        vec![
+            Row {
+                index: 0,
+                name: "slope_deg=16".into(),
+                values: vec!["16".into()],
+                record: Some(record),
+                note: String::new(),
+            },
+            Row {
+                index: 1,
+                name: "slope_deg=19".into(),
+                values: vec!["19".into()],
+                record: None,
+                note: "missing".into(),
+            },
+            Row {
+                index: 2,
+                name: "slope_deg=22".into(),
+                values: vec!["22".into()],
+                record: Some(failed),
+                note: String::new(),
+            },
+        ]
+    }
+
+    #[test]
+    fn csv_layout() {
+        let csv = to_csv(&["domain.slope_deg".into()], &rows());
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(
+            lines[0],
+            "index,run,domain.slope_deg,runout,stop_time,h_max_final,t_end,steps,wall_time_s,status"
+        );
+        assert_eq!(
+            lines[1],
+            "0,slope_deg=16,16,0.832,nan,0.0417,1.4258,125,0.019,stopped_at_rest"
+        );
+        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,missing");
+        assert!(
+            lines[3].ends_with(",\"failed: a, \"\"b\"\"\""),
+            "{}",
+            lines[3]
+        );
+        assert!(rows()[0].is_ok() && !rows()[1].is_ok() && !rows()[2].is_ok());
+    }
+
+    #[test]
+    fn table_is_aligned() {
+        let t = to_table(&["domain.slope_deg".into()], &rows());
+        let lines: Vec<&str> = t.lines().collect();
+        assert!(lines[0].starts_with("slope_deg  runout_m"), "{t}");
+        assert!(
+            lines[1].contains("0.8320") && lines[1].contains(" - "),
+            "{t}"
+        );
+        assert!(lines[2].ends_with("missing"), "{t}");
+        let mut big = rows();
+        big[0].record.as_mut().unwrap().h_max_final = 1e300;
+        let t = to_table(&["domain.slope_deg".into()], &big);
+        assert!(t.lines().nth(1).unwrap().contains(" 1.0000e300 "), "{t}");
+    }
+
+    #[test]
+    fn shard_file_names() {
+        use crate::sweep::Shard;
+        assert_eq!(summary_file_name(Shard::ALL), "summary.csv");
+        assert_eq!(
+            summary_file_name(Shard { k: 1, n: 3 }),
+            "summary.shard-1-of-3.csv"
+        );
+    }
+}
