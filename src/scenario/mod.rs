@@ -83,6 +83,8 @@ pub struct Initial {
     pub h: Profile,
     /// Depth-averaged downslope velocity u(x).
     pub u: Profile,
+    /// Normal velocity w(x) (non-hydrostatic model only; seed 000 eq. 30).
+    pub w: Profile,
     /// Uniform erodible-bed thickness h_i ≥ 0 (seed 001 §4.2).
     pub erodible_bed: f64,
 }

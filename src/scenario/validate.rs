@@ -389,8 +389,17 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
         Some(v) => Profile::from_toml("initial.u", &v, base_dir, true)?,
         None => Profile::constant(0.0),
     };
+    let w = match i.w {
+        Some(v) => Profile::from_toml("initial.w", &v, base_dir, true)?,
+        None => Profile::constant(0.0),
+    };
     let erodible_bed = non_negative("initial.erodible_bed", i.erodible_bed.unwrap_or(0.0))?;
-    Ok(Initial { h, u, erodible_bed })
+    Ok(Initial {
+        h,
+        u,
+        w,
+        erodible_bed,
+    })
 }
 
 fn boundary(b: RawBoundary) -> Res<Boundaries> {
@@ -488,6 +497,9 @@ fn sample_profiles(domain: &Domain, bed: &Profile, initial: &Initial) -> Res<()>
     }
     if let Some(i) = first_bad(&|i| !initial.u.eval(centre(i), bed_at(i)).is_finite()) {
         return Err(not_finite("initial.u", &initial.u, centre(i), bed_at(i)));
+    }
+    if let Some(i) = first_bad(&|i| !initial.w.eval(centre(i), bed_at(i)).is_finite()) {
+        return Err(not_finite("initial.w", &initial.w, centre(i), bed_at(i)));
     }
     Ok(())
 }

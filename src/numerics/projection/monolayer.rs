@@ -1,0 +1,251 @@
+//! The projection of the weakly non-hydrostatic monolayer model (seed 000 eq. 15,
+//! §3 step 3).
+//!
+//! Unknown: the basal non-hydrostatic pressure p = p_{1/2} = 2q̄ at the faces (seed 000
+//! writes the depth average q̄; the profile is linear and vanishes at the surface). With
+//! G = 2b + h (b the bed over the reference plane: 0 on a plane in local coordinates,
+//! the whole topography in Cartesian ones, seed 000 §4.1) the model's pressure terms are
+//!
+//!   ∂_t(hu) = −(∂_X(h q̄) + 2q̄ ∂_X b) = −(h ∂_X q̄ + q̄ ∂_X G),   ∂_t(hw) = 2q̄,
+//!
+//! and the constraint (15d) times 2 reads 𝒞 = 2hw − hu ∂_X G + h ∂_X(hu) = 0.
+//!
+//! Discretisation (seed 000 after eq. 28). Cell corrections from the face impulses
+//! Π = Δt p̃ (basal; Π̄ = Π/2 is the depth-mean impulse):
+//!
+//!   δ(hw)_i = Π_i,   δ(hu)_i = −(h_i (Π̄_{i+1/2} − Π̄_{i−1/2})/Δx + Π̄_i (∂_X G)_i),
+//!   Π_i = (Π_{i−1/2} + Π_{i+1/2})/2,   (∂_X G)_i = (G_{i+1} − G_{i−1})/(2Δx)
+//!
+//! (eq. 25–26 with the cell values of the paper), and the constraint at face i+1/2
+//! with the averages and differences of the paper:
+//!
+//!   𝒞_{i+1/2} = 2 (hw)_{i+1/2} − (hu)_{i+1/2} (G_{i+1} − G_i)/Δx
+//!               + h_{i+1/2} ((hu)_{i+1} − (hu)_i)/Δx.
+//!
+//! Composing the two gives, for every face, a row in Π_{i−1/2}, Π_{i+1/2}, Π_{i+3/2}:
+//! a tridiagonal system whose solution makes 𝒞_{i+1/2}(U^{n+1}) vanish to round-off.
+//! Its continuous limit is eq. (28): h² q̃'' + h h' q̃' + (h G'' − G'² − 4) q̃ =
+//! 𝒞/Δt (with the mass term 4q̃ appearing as (q̃_{i−1/2} + 2q̃_{i+1/2} + q̃_{i+3/2})).
+//!
+//! Faces and boundaries:
+//! - a face is *wet* when both neighbouring cells hold mass (h > [`H_DRY`]); at other
+//!   faces (the dry region and the edge of the mass, a free surface) p = 0: identity
+//!   row Π = 0, and p is reset to 0 there after the correction;
+//! - a wall face carries the constraint, with the ghost cell the mirror image of the
+//!   edge cell (the pressure extended evenly: homogeneous Neumann, seed 003 Remark 6);
+//! - an outflow face carries the Neumann row Π_{1/2} − Π_{3/2} = 0 (seed 003 eq. 37)
+//!   instead of a constraint.
+
+use super::ProjectionOperator;
+use crate::mesh::Mesh;
+use crate::numerics::linalg::BlockTridiagonal;
+
+/// A face carries the constraint only when both neighbouring cells are thicker than
+/// this fraction of Δx (see the module documentation).
+pub const NH_FILM_FRACTION: f64 = 0.05;
+use crate::scenario::BoundaryKind;
+use crate::state::State;
+
+/// 2b with one ghost on each side (the ghost bed repeats the edge bed, for walls and
+/// outflows alike; `mesh.z` does the same for its bed part).
+pub fn doubled_bed(mesh: &Mesh) -> Vec<f64> {
+    let nx = mesh.nx;
+    let mut two_b = vec![0.0; nx + 2];
+    for i in 0..nx {
+        two_b[i + 1] = 2.0 * mesh.b[i];
+    }
+    two_b[0] = two_b[1];
+    two_b[nx + 1] = two_b[nx];
+    two_b
+}
+
+/// (∂_X G)_i = (G_{i+1} − G_{i−1})/(2Δx), G = 2b + h, for a ghost-inclusive index i.
+#[inline(always)]
+pub fn centred_gradient(two_b: &[f64], h: &[f64], i: usize, inv_2dx: f64) -> f64 {
+    ((two_b[i + 1] + h[i + 1]) - (two_b[i - 1] + h[i - 1])) * inv_2dx
+}
+
+/// Coefficients (α, β) of the momentum correction of a cell per unit basal impulse on
+/// its left and right faces: δ(hu) = α Π_left + β Π_right.
+#[inline(always)]
+pub fn correction_coefficients(h: f64, grad_g: f64, inv_dx: f64) -> (f64, f64) {
+    let a = 0.5 * h * inv_dx;
+    let c = 0.25 * grad_g;
+    (a - c, -a - c)
+}
+
+/// The seed 000 projection operator (m = 1).
+#[derive(Debug)]
+pub struct MonolayerOperator {
+    two_b: Vec<f64>,
+    /// Per cell (ghost-inclusive, nx + 2): correction coefficients (α, β).
+    alpha: Vec<f64>,
+    beta: Vec<f64>,
+    /// Per face (nx + 1): both neighbours wet.
+    wet: Vec<bool>,
+    h_min: f64,
+}
+
+impl MonolayerOperator {
+    pub fn new(mesh: &Mesh) -> Self {
+        let nx = mesh.nx;
+        MonolayerOperator {
+            two_b: doubled_bed(mesh),
+            alpha: vec![0.0; nx + 2],
+            beta: vec![0.0; nx + 2],
+            wet: vec![false; nx + 1],
+            h_min: NH_FILM_FRACTION * mesh.dx,
+        }
+    }
+}
+
+/// 𝒞 at the face between cells l and r = l + 1 (ghost-inclusive indices), with its
+/// three terms' magnitudes for scaling.
+#[inline(always)]
+fn constraint_at(two_b: &[f64], state: &State, hw: &[f64], l: usize, inv_dx: f64) -> (f64, f64) {
+    let r = l + 1;
+    let (h, hu) = (&state.h, &state.hu);
+    let grad_g = ((two_b[r] + h[r]) - (two_b[l] + h[l])) * inv_dx;
+    let t_w = hw[l] + hw[r];
+    let t_g = 0.5 * (hu[l] + hu[r]) * grad_g;
+    let t_d = 0.5 * (h[l] + h[r]) * (hu[r] - hu[l]) * inv_dx;
+    (t_w - t_g + t_d, t_w.abs().max(t_g.abs()).max(t_d.abs()))
+}
+
+impl ProjectionOperator for MonolayerOperator {
+    fn block(&self) -> usize {
+        1
+    }
+
+    fn assemble(&mut self, mesh: &Mesh, state: &State, sys: &mut BlockTridiagonal) {
+        debug_assert_eq!(state.layers, 1);
+        let nx = mesh.nx;
+        let nh = state
+            .nh
+            .as_ref()
+            .expect("non-hydrostatic stage on a hydrostatic state");
+        let h = &state.h;
+        let inv_dx = 1.0 / mesh.dx;
+        let inv_2dx = 0.5 * inv_dx;
+        let two_b = &self.two_b;
+        for i in 1..=nx {
+            let g = centred_gradient(two_b, h, i, inv_2dx);
+            (self.alpha[i], self.beta[i]) = correction_coefficients(h[i], g, inv_dx);
+        }
+        // Ghost cells of walls are mirror images: same h, opposite ∂_X G.
+        let g1 = centred_gradient(two_b, h, 1, inv_2dx);
+        let gn = centred_gradient(two_b, h, nx, inv_2dx);
+        (self.alpha[0], self.beta[0]) = correction_coefficients(h[1], -g1, inv_dx);
+        (self.alpha[nx + 1], self.beta[nx + 1]) = correction_coefficients(h[nx], -gn, inv_dx);
+
+        for k in 0..=nx {
+            let (l, r) = (k, k + 1);
+            let wet = h[l] > self.h_min && h[r] > self.h_min;
+            self.wet[k] = wet;
+            let (mut lower, mut diag, mut upper, mut rhs) = (0.0, 1.0, 0.0, 0.0);
+            let outflow = (k == 0 && mesh.left == BoundaryKind::Outflow)
+                || (k == nx && mesh.right == BoundaryKind::Outflow);
+            if wet && outflow {
+                // Homogeneous Neumann: Π equals its inner neighbour.
+                if k == 0 {
+                    upper = -1.0;
+                } else {
+                    lower = -1.0;
+                }
+            } else if wet {
+                let grad_g = ((two_b[r] + h[r]) - (two_b[l] + h[l])) * inv_dx;
+                let c1 = 0.5 * grad_g;
+                let c2 = 0.5 * (h[l] + h[r]) * inv_dx;
+                // d𝒞/dδ(hu)_l = −c1 − c2, d𝒞/dδ(hu)_r = −c1 + c2, d𝒞/dδ(hw) = 1 each,
+                // δ(hw) = (Π_left + Π_right)/2.
+                let (dl, dr) = (-c1 - c2, -c1 + c2);
+                lower = 0.5 + dl * self.alpha[l];
+                diag = 1.0 + dl * self.beta[l] + dr * self.alpha[r];
+                upper = 0.5 + dr * self.beta[r];
+                let (c, _) = constraint_at(two_b, state, &nh.hw, l, inv_dx);
+                rhs = -c;
+                // Walls: the mirrored pressure Π_{−1/2} = Π_{3/2} (and at the right end).
+                if k == 0 {
+                    upper += lower;
+                    lower = 0.0;
+                }
+                if k == nx {
+                    lower += upper;
+                    upper = 0.0;
+                }
+            }
+            sys.lower[k] = lower;
+            sys.diag[k] = diag;
+            sys.upper[k] = upper;
+            sys.rhs[k] = rhs;
+        }
+    }
+
+    fn correct(&mut self, mesh: &Mesh, state: &mut State, pi: &[f64], dt: f64) {
+        let nx = mesh.nx;
+        let nh = state
+            .nh
+            .as_mut()
+            .expect("non-hydrostatic stage on a hydrostatic state");
+        for i in 1..=nx {
+            let (pl, pr) = (pi[i - 1], pi[i]);
+            state.hu[i] += self.alpha[i] * pl + self.beta[i] * pr;
+            nh.hw[i] += 0.5 * (pl + pr);
+        }
+        nh.fill_ghosts(nx, 1);
+        let inv_dt = 1.0 / dt;
+        for ((p, &pi), &wet) in nh.p.iter_mut().zip(pi).zip(&self.wet) {
+            *p = if wet { *p + pi * inv_dt } else { 0.0 };
+        }
+        state.fill_ghosts(mesh);
+    }
+}
+
+/// Size of the discrete constraint (27) over the faces that carry it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConstraintResidual {
+    /// max |𝒞_{i+1/2}| over wet faces (outflow boundary faces excluded).
+    pub max_abs: f64,
+    /// Largest magnitude of the three terms of 𝒞 over the same faces.
+    pub scale: f64,
+    /// Number of faces checked.
+    pub faces: usize,
+}
+
+impl ConstraintResidual {
+    /// max |𝒞| relative to the size of its terms (0 when nothing is constrained).
+    pub fn relative(&self) -> f64 {
+        if self.scale > 0.0 {
+            self.max_abs / self.scale
+        } else {
+            self.max_abs
+        }
+    }
+}
+
+/// Evaluates the discrete constraint 𝒞 = 2hw − hu ∂_X G + h ∂_X(hu) (seed 000 eq. 27,
+/// discretised at the faces as in the projection) on the current state.
+pub fn constraint_residual(mesh: &Mesh, state: &State) -> ConstraintResidual {
+    let nx = mesh.nx;
+    let nh = state.nh.as_ref().expect("a non-hydrostatic state");
+    let two_b = doubled_bed(mesh);
+    let inv_dx = 1.0 / mesh.dx;
+    let h_min = NH_FILM_FRACTION * mesh.dx;
+    let mut res = ConstraintResidual {
+        max_abs: 0.0,
+        scale: 0.0,
+        faces: 0,
+    };
+    for k in 0..=nx {
+        let outflow = (k == 0 && mesh.left == BoundaryKind::Outflow)
+            || (k == nx && mesh.right == BoundaryKind::Outflow);
+        if outflow || !(state.h[k] > h_min && state.h[k + 1] > h_min) {
+            continue;
+        }
+        let (c, scale) = constraint_at(&two_b, state, &nh.hw, k, inv_dx);
+        res.max_abs = res.max_abs.max(c.abs());
+        res.scale = res.scale.max(scale);
+        res.faces += 1;
+    }
+    res
+}
