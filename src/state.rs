@@ -122,6 +122,26 @@ impl NonHydrostatic {
         nh
     }
 
+    /// Output fields (see docs/output-format.md): w = hw/h per layer (layer-major,
+    /// α·nx + i, 0 in dry cells) and p at the nl + 1 layer interfaces and nx + 1 faces
+    /// (layer-major, bed first; the surface row is 0).
+    pub fn snapshot_fields(&self, state: &State) -> (Vec<f64>, Vec<f64>) {
+        let (nx, n) = (state.nx, state.layers);
+        let mut w = vec![0.0; n * nx];
+        for i in 0..nx {
+            for a in 0..n {
+                w[a * nx + i] = velocity(state.h[i + 1], self.hw[(i + 1) * n + a]);
+            }
+        }
+        let mut p = vec![0.0; (n + 1) * (nx + 1)];
+        for k in 0..=nx {
+            for a in 0..n {
+                p[a * (nx + 1) + k] = self.p[k * n + a];
+            }
+        }
+        (w, p)
+    }
+
     /// Ghost normal discharges: copied at both walls and outflows (w is even under the
     /// mirror of a wall, and continued by an outflow).
     pub fn fill_ghosts(&mut self, nx: usize, n: usize) {
