@@ -20,6 +20,10 @@ pub struct BlockTridiagonal {
     pub upper: Vec<f64>,
     /// Right-hand side (rows·m).
     pub rhs: Vec<f64>,
+    /// Rows outside this range are identity rows with a zero right-hand side, so the
+    /// solution is 0 there and nothing outside needs to be assembled or eliminated
+    /// (e.g. the dry part of the domain).
+    pub active: std::ops::Range<usize>,
 }
 
 impl BlockTridiagonal {
@@ -32,6 +36,7 @@ impl BlockTridiagonal {
             diag: vec![0.0; rows * m2],
             upper: vec![0.0; rows * m2],
             rhs: vec![0.0; rows * block],
+            active: 0..rows,
         }
     }
 
@@ -41,6 +46,9 @@ impl BlockTridiagonal {
         let n = self.rows;
         (0..n)
             .map(|k| {
+                if !self.active.contains(&k) {
+                    return x[k];
+                }
                 let mut r = self.diag[k] * x[k] - self.rhs[k];
                 if k > 0 {
                     r += self.lower[k] * x[k - 1];
@@ -82,6 +90,62 @@ pub fn thomas(
     }
     for k in (0..n - 1).rev() {
         x[k] -= scratch[k] * x[k + 1];
+    }
+}
+
+/// The Thomas algorithm run from both ends at once ("twisted" factorisation): rows
+/// 0..m are eliminated downwards and rows m+1..n upwards, the two sweeps meet at row
+/// m = n/2 and the back-substitution runs outwards from it. Same operation count as
+/// [`thomas`], but the two independent recurrences overlap in the processor, which
+/// nearly halves the time of this latency-bound loop (one division per row on the
+/// critical path). Same stability as [`thomas`] for diagonally dominant systems.
+pub fn thomas_two_sided(
+    lower: &[f64],
+    diag: &[f64],
+    upper: &[f64],
+    rhs: &[f64],
+    x: &mut [f64],
+    scratch: &mut [f64],
+) {
+    let n = diag.len();
+    assert!(lower.len() == n && upper.len() == n && rhs.len() == n);
+    assert!(x.len() == n && scratch.len() == n);
+    if n < 4 {
+        return thomas(lower, diag, upper, rhs, x, scratch);
+    }
+    let m = n / 2;
+    // scratch[k]: upper[k]/pivot for the downward rows, lower[k]/pivot for the upward.
+    let inv = 1.0 / diag[0];
+    scratch[0] = upper[0] * inv;
+    x[0] = rhs[0] * inv;
+    let inv = 1.0 / diag[n - 1];
+    scratch[n - 1] = lower[n - 1] * inv;
+    x[n - 1] = rhs[n - 1] * inv;
+    let pairs = (n - 1 - m).min(m);
+    for j in 1..pairs {
+        let (k, kb) = (j, n - 1 - j);
+        let inv = 1.0 / (diag[k] - lower[k] * scratch[k - 1]);
+        let inv_b = 1.0 / (diag[kb] - upper[kb] * scratch[kb + 1]);
+        scratch[k] = upper[k] * inv;
+        x[k] = (rhs[k] - lower[k] * x[k - 1]) * inv;
+        scratch[kb] = lower[kb] * inv_b;
+        x[kb] = (rhs[kb] - upper[kb] * x[kb + 1]) * inv_b;
+    }
+    // n odd leaves one more downward row than upward rows.
+    for k in pairs.max(1)..m {
+        let inv = 1.0 / (diag[k] - lower[k] * scratch[k - 1]);
+        scratch[k] = upper[k] * inv;
+        x[k] = (rhs[k] - lower[k] * x[k - 1]) * inv;
+    }
+    let den = diag[m] - lower[m] * scratch[m - 1] - upper[m] * scratch[m + 1];
+    x[m] = (rhs[m] - lower[m] * x[m - 1] - upper[m] * x[m + 1]) / den;
+    for j in 1..=m {
+        let k = m - j;
+        x[k] -= scratch[k] * x[k + 1];
+        let kb = m + j;
+        if kb < n {
+            x[kb] -= scratch[kb] * x[kb - 1];
+        }
     }
 }
 
@@ -159,6 +223,43 @@ mod tests {
             assert!((a - b).abs() <= 1e-13 * (1.0 + b.abs()), "{a} vs {b}");
         }
         assert!(sys.residual(&x).iter().all(|r| r.abs() < 1e-13));
+    }
+
+    #[test]
+    fn two_sided_thomas_matches_thomas_for_every_size() {
+        for n in 1..40 {
+            let mut sys = BlockTridiagonal::new(n, 1);
+            for k in 0..n {
+                let t = k as f64;
+                sys.lower[k] = -1.0 - 0.3 * (t * 0.7).sin();
+                sys.upper[k] = 0.8 - 0.2 * (t * 1.3).cos();
+                sys.diag[k] = 2.5 + 0.5 * (t * 0.4).sin();
+                sys.rhs[k] = (t * 0.9).cos() + 0.1 * t;
+            }
+            let (mut a, mut b, mut scratch) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            thomas(
+                &sys.lower,
+                &sys.diag,
+                &sys.upper,
+                &sys.rhs,
+                &mut a,
+                &mut scratch,
+            );
+            thomas_two_sided(
+                &sys.lower,
+                &sys.diag,
+                &sys.upper,
+                &sys.rhs,
+                &mut b,
+                &mut scratch,
+            );
+            for (a, b) in a.iter().zip(&b) {
+                assert!(
+                    (a - b).abs() <= 1e-13 * (1.0 + a.abs()),
+                    "n = {n}: {a} vs {b}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -39,6 +39,8 @@ pub struct NhHyperbolicStep<L: BasalFriction> {
     inner: HydrostaticStep<L>,
     /// w^n per cell with ghosts, kept from before the hydrostatic update.
     w: Vec<f64>,
+    /// Upwinded fluxes of hw at the faces.
+    flux_hw: Vec<f64>,
 }
 
 impl<L: BasalFriction> NhHyperbolicStep<L> {
@@ -46,6 +48,7 @@ impl<L: BasalFriction> NhHyperbolicStep<L> {
         NhHyperbolicStep {
             inner: HydrostaticStep::new(law, nx),
             w: vec![0.0; nx + 2],
+            flux_hw: vec![0.0; nx + 1],
         }
     }
 }
@@ -57,36 +60,30 @@ impl<L: BasalFriction> Stage for NhHyperbolicStep<L> {
 
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, 1);
+        // The loops below are branch-free (selects) so that they vectorise.
         {
             let nh = state.nh.as_ref().expect("non-hydrostatic state");
             for ((w, &h), &hw) in self.w.iter_mut().zip(&state.h).zip(&nh.hw) {
-                *w = velocity(h, hw);
+                let v = hw / h.max(H_DRY);
+                *w = if h > H_DRY { v } else { 0.0 };
             }
         }
         self.inner.apply(mesh, dt, state)?;
         let nx = mesh.nx;
         let r = dt / mesh.dx;
         let flux = self.inner.mass_flux();
+        let (w_left, w_right) = (&self.w[..nx + 1], &self.w[1..]);
+        for (((f_hw, &f), &wl), &wr) in self.flux_hw.iter_mut().zip(flux).zip(w_left).zip(w_right) {
+            *f_hw = f * if f > 0.0 { wl } else { wr };
+        }
         let nh = state.nh.as_mut().expect("non-hydrostatic state");
-        let upwind = |k: usize| {
-            let f = flux[k];
-            if f > 0.0 {
-                f * self.w[k]
-            } else if f < 0.0 {
-                f * self.w[k + 1]
-            } else {
-                0.0
-            }
-        };
-        let mut left = upwind(0);
-        for i in 1..=nx {
-            let right = upwind(i);
-            nh.hw[i] = if state.h[i] <= H_DRY {
-                0.0
-            } else {
-                nh.hw[i] - r * (right - left)
-            };
-            left = right;
+        let cells = nh.hw[1..=nx]
+            .iter_mut()
+            .zip(&state.h[1..=nx])
+            .zip(self.flux_hw.windows(2));
+        for ((hw, &h), f) in cells {
+            let v = *hw - r * (f[1] - f[0]);
+            *hw = if h > H_DRY { v } else { 0.0 };
         }
         nh.fill_ghosts(nx, 1);
         Ok(())

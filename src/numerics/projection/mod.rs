@@ -26,7 +26,7 @@
 
 pub mod monolayer;
 
-use super::linalg::{thomas, BlockTridiagonal};
+use super::linalg::{thomas_two_sided, BlockTridiagonal};
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
 use crate::state::State;
@@ -34,11 +34,12 @@ use crate::state::State;
 /// Solves the (block-)tridiagonal pressure system of one projection.
 pub trait PressureSolver: Send + std::fmt::Debug {
     /// Writes the solution of `system · x = system.rhs` into `x`
-    /// (`system.rows · system.block` entries).
+    /// (`system.rows · system.block` entries; 0 outside `system.active`).
     fn solve(&mut self, system: &BlockTridiagonal, x: &mut [f64]);
 }
 
-/// Exact O(n) solve of a scalar tridiagonal system (Thomas algorithm).
+/// Exact O(n) solve of a scalar tridiagonal system (Thomas algorithm, run from both
+/// ends, on the active rows only).
 #[derive(Debug, Default)]
 pub struct ThomasSolver {
     scratch: Vec<f64>,
@@ -47,14 +48,17 @@ pub struct ThomasSolver {
 impl PressureSolver for ThomasSolver {
     fn solve(&mut self, system: &BlockTridiagonal, x: &mut [f64]) {
         assert_eq!(system.block, 1, "the Thomas solver needs scalar blocks");
+        let r = system.active.clone();
         self.scratch.resize(system.rows, 0.0);
-        thomas(
-            &system.lower,
-            &system.diag,
-            &system.upper,
-            &system.rhs,
-            x,
-            &mut self.scratch,
+        x[..r.start].fill(0.0);
+        x[r.end..].fill(0.0);
+        thomas_two_sided(
+            &system.lower[r.clone()],
+            &system.diag[r.clone()],
+            &system.upper[r.clone()],
+            &system.rhs[r.clone()],
+            &mut x[r.clone()],
+            &mut self.scratch[r],
         );
     }
 }

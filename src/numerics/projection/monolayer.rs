@@ -36,6 +36,8 @@
 //! - an outflow face carries the Neumann row Π_{1/2} − Π_{3/2} = 0 (seed 003 eq. 37)
 //!   instead of a constraint.
 
+use std::ops::Range;
+
 use super::ProjectionOperator;
 use crate::mesh::Mesh;
 use crate::numerics::linalg::BlockTridiagonal;
@@ -78,11 +80,15 @@ pub fn correction_coefficients(h: f64, grad_g: f64, inv_dx: f64) -> (f64, f64) {
 #[derive(Debug)]
 pub struct MonolayerOperator {
     two_b: Vec<f64>,
-    /// Per cell (ghost-inclusive, nx + 2): correction coefficients (α, β).
+    /// Per cell (ghost-inclusive, nx + 2): G = 2b + h and the correction coefficients
+    /// (α, β) of the last assembly.
+    g: Vec<f64>,
     alpha: Vec<f64>,
     beta: Vec<f64>,
     /// Per face (nx + 1): both neighbours wet.
     wet: Vec<bool>,
+    /// Faces that may be wet (the span of the mass); all others are dry.
+    span: Range<usize>,
     h_min: f64,
 }
 
@@ -91,9 +97,11 @@ impl MonolayerOperator {
         let nx = mesh.nx;
         MonolayerOperator {
             two_b: doubled_bed(mesh),
+            g: vec![0.0; nx + 2],
             alpha: vec![0.0; nx + 2],
             beta: vec![0.0; nx + 2],
             wet: vec![false; nx + 1],
+            span: 0..0,
             h_min: NH_FILM_FRACTION * mesh.dx,
         }
     }
@@ -124,60 +132,117 @@ impl ProjectionOperator for MonolayerOperator {
             .nh
             .as_ref()
             .expect("non-hydrostatic stage on a hydrostatic state");
-        let h = &state.h;
+        let (h, hu, hw) = (&state.h[..], &state.hu[..], &nh.hw[..]);
+        let h_min = self.h_min;
+        // The span of the mass: faces outside it are dry (identity rows, not stored).
+        let first = h.iter().position(|&h| h > h_min);
+        let last = h.iter().rposition(|&h| h > h_min);
+        let (first, last) = match (first, last) {
+            (Some(f), Some(l)) if l > f => (f, l),
+            _ => {
+                self.span = 0..0;
+                sys.active = 0..0;
+                return;
+            }
+        };
+        // Faces first..last touch cells first..=last (ghost-inclusive, ≤ nx + 1).
+        self.span = first..last;
+        sys.active = first..last;
         let inv_dx = 1.0 / mesh.dx;
         let inv_2dx = 0.5 * inv_dx;
-        let two_b = &self.two_b;
-        for i in 1..=nx {
-            let g = centred_gradient(two_b, h, i, inv_2dx);
-            (self.alpha[i], self.beta[i]) = correction_coefficients(h[i], g, inv_dx);
+        let (lo, hi) = (first.saturating_sub(1), (last + 1).min(nx + 1));
+        let g_span = self.g[lo..=hi].iter_mut();
+        for ((g, &b2), &h) in g_span.zip(&self.two_b[lo..=hi]).zip(&h[lo..=hi]) {
+            *g = b2 + h;
+        }
+        let g = &self.g[..];
+        let (c0, c1) = (first.max(1), last.min(nx));
+        {
+            let n = c1 + 1 - c0;
+            let (gm, gp, hc) = (&g[c0 - 1..c1], &g[c0 + 1..c1 + 2], &h[c0..=c1]);
+            let (a, b) = (&mut self.alpha[c0..=c1], &mut self.beta[c0..=c1]);
+            assert!(gm.len() == n && gp.len() == n && hc.len() == n);
+            assert!(a.len() == n && b.len() == n);
+            // Indexing equal-length slices: bounds checks vanish and the loop vectorises.
+            #[allow(clippy::needless_range_loop)]
+            for j in 0..n {
+                let grad = (gp[j] - gm[j]) * inv_2dx;
+                (a[j], b[j]) = correction_coefficients(hc[j], grad, inv_dx);
+            }
         }
         // Ghost cells of walls are mirror images: same h, opposite ∂_X G.
-        let g1 = centred_gradient(two_b, h, 1, inv_2dx);
-        let gn = centred_gradient(two_b, h, nx, inv_2dx);
-        (self.alpha[0], self.beta[0]) = correction_coefficients(h[1], -g1, inv_dx);
-        (self.alpha[nx + 1], self.beta[nx + 1]) = correction_coefficients(h[nx], -gn, inv_dx);
+        if first == 0 {
+            let grad = (g[2] - g[0]) * inv_2dx;
+            (self.alpha[0], self.beta[0]) = correction_coefficients(h[1], -grad, inv_dx);
+        }
+        if last == nx + 1 {
+            let grad = (g[nx + 1] - g[nx - 1]) * inv_2dx;
+            (self.alpha[nx + 1], self.beta[nx + 1]) = correction_coefficients(h[nx], -grad, inv_dx);
+        }
 
-        for k in 0..=nx {
-            let (l, r) = (k, k + 1);
-            let wet = h[l] > self.h_min && h[r] > self.h_min;
-            self.wet[k] = wet;
-            let (mut lower, mut diag, mut upper, mut rhs) = (0.0, 1.0, 0.0, 0.0);
-            let outflow = (k == 0 && mesh.left == BoundaryKind::Outflow)
-                || (k == nx && mesh.right == BoundaryKind::Outflow);
-            if wet && outflow {
-                // Homogeneous Neumann: Π equals its inner neighbour.
-                if k == 0 {
-                    upper = -1.0;
-                } else {
-                    lower = -1.0;
-                }
-            } else if wet {
-                let grad_g = ((two_b[r] + h[r]) - (two_b[l] + h[l])) * inv_dx;
-                let c1 = 0.5 * grad_g;
-                let c2 = 0.5 * (h[l] + h[r]) * inv_dx;
-                // d𝒞/dδ(hu)_l = −c1 − c2, d𝒞/dδ(hu)_r = −c1 + c2, d𝒞/dδ(hw) = 1 each,
-                // δ(hw) = (Π_left + Π_right)/2.
+        // One row per face, branch-free so that it vectorises: wet faces carry the
+        // constraint, the others the identity. d𝒞/dδ(hu)_l = −c1 − c2,
+        // d𝒞/dδ(hu)_r = −c1 + c2, d𝒞/dδ(hw) = 1 for each cell, δ(hw) = (Π_l + Π_r)/2.
+        {
+            let (f, e) = (first, last);
+            let n = e - f;
+            let (hl, hr) = (&h[f..e], &h[f + 1..=e]);
+            let (gl, gr) = (&g[f..e], &g[f + 1..=e]);
+            let (ul, ur) = (&hu[f..e], &hu[f + 1..=e]);
+            let (wl, wr) = (&hw[f..e], &hw[f + 1..=e]);
+            let (al, bl) = (&self.alpha[f..e], &self.beta[f..e]);
+            let (ar, br) = (&self.alpha[f + 1..=e], &self.beta[f + 1..=e]);
+            let wet = &mut self.wet[f..e];
+            let (lower, diag) = (&mut sys.lower[f..e], &mut sys.diag[f..e]);
+            let (upper, rhs) = (&mut sys.upper[f..e], &mut sys.rhs[f..e]);
+            assert!(hl.len() == n && hr.len() == n && gl.len() == n && gr.len() == n);
+            assert!(ul.len() == n && ur.len() == n && wl.len() == n && wr.len() == n);
+            assert!(al.len() == n && bl.len() == n && ar.len() == n && br.len() == n);
+            assert!(wet.len() == n && lower.len() == n && diag.len() == n);
+            assert!(upper.len() == n && rhs.len() == n);
+            #[allow(clippy::needless_range_loop)]
+            for k in 0..n {
+                let is_wet = hl[k] > h_min && hr[k] > h_min;
+                let grad = (gr[k] - gl[k]) * inv_dx;
+                let c1 = 0.5 * grad;
+                let c2 = 0.5 * (hl[k] + hr[k]) * inv_dx;
                 let (dl, dr) = (-c1 - c2, -c1 + c2);
-                lower = 0.5 + dl * self.alpha[l];
-                diag = 1.0 + dl * self.beta[l] + dr * self.alpha[r];
-                upper = 0.5 + dr * self.beta[r];
-                let (c, _) = constraint_at(two_b, state, &nh.hw, l, inv_dx);
-                rhs = -c;
-                // Walls: the mirrored pressure Π_{−1/2} = Π_{3/2} (and at the right end).
-                if k == 0 {
-                    upper += lower;
-                    lower = 0.0;
+                let c = (wl[k] + wr[k]) - 0.5 * (ul[k] + ur[k]) * grad + c2 * (ur[k] - ul[k]);
+                wet[k] = is_wet;
+                lower[k] = if is_wet { 0.5 + dl * al[k] } else { 0.0 };
+                diag[k] = if is_wet {
+                    1.0 + dl * bl[k] + dr * ar[k]
+                } else {
+                    1.0
+                };
+                upper[k] = if is_wet { 0.5 + dr * br[k] } else { 0.0 };
+                rhs[k] = if is_wet { -c } else { 0.0 };
+            }
+        }
+
+        // Boundary faces: walls mirror the pressure (Π_{−1/2} = Π_{3/2}); outflows
+        // carry the Neumann row Π_{1/2} = Π_{3/2} instead of the constraint.
+        if first == 0 && self.wet[0] {
+            match mesh.left {
+                BoundaryKind::Wall => {
+                    sys.upper[0] += sys.lower[0];
                 }
-                if k == nx {
-                    lower += upper;
-                    upper = 0.0;
+                BoundaryKind::Outflow => {
+                    (sys.diag[0], sys.upper[0], sys.rhs[0]) = (1.0, -1.0, 0.0);
                 }
             }
-            sys.lower[k] = lower;
-            sys.diag[k] = diag;
-            sys.upper[k] = upper;
-            sys.rhs[k] = rhs;
+            sys.lower[0] = 0.0;
+        }
+        if last == nx + 1 && self.wet[nx] {
+            match mesh.right {
+                BoundaryKind::Wall => {
+                    sys.lower[nx] += sys.upper[nx];
+                }
+                BoundaryKind::Outflow => {
+                    (sys.lower[nx], sys.diag[nx], sys.rhs[nx]) = (-1.0, 1.0, 0.0);
+                }
+            }
+            sys.upper[nx] = 0.0;
         }
     }
 
@@ -187,16 +252,23 @@ impl ProjectionOperator for MonolayerOperator {
             .nh
             .as_mut()
             .expect("non-hydrostatic stage on a hydrostatic state");
-        for i in 1..=nx {
-            let (pl, pr) = (pi[i - 1], pi[i]);
-            state.hu[i] += self.alpha[i] * pl + self.beta[i] * pr;
-            nh.hw[i] += 0.5 * (pl + pr);
-        }
-        nh.fill_ghosts(nx, 1);
+        let span = self.span.clone();
         let inv_dt = 1.0 / dt;
-        for ((p, &pi), &wet) in nh.p.iter_mut().zip(pi).zip(&self.wet) {
-            *p = if wet { *p + pi * inv_dt } else { 0.0 };
+        if !span.is_empty() {
+            // Cells touching a face of the span.
+            for i in span.start.max(1)..=span.end.min(nx) {
+                let (pl, pr) = (pi[i - 1], pi[i]);
+                state.hu[i] += self.alpha[i] * pl + self.beta[i] * pr;
+                nh.hw[i] += 0.5 * (pl + pr);
+            }
+            let (p, wet) = (&mut nh.p[span.clone()], &self.wet[span.clone()]);
+            for ((p, &pi), &wet) in p.iter_mut().zip(&pi[span.clone()]).zip(wet) {
+                *p = if wet { *p + pi * inv_dt } else { 0.0 };
+            }
         }
+        nh.p[..span.start].fill(0.0);
+        nh.p[span.end..].fill(0.0);
+        nh.fill_ghosts(nx, 1);
         state.fill_ghosts(mesh);
     }
 }
