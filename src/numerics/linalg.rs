@@ -1,13 +1,50 @@
 //! Banded linear algebra for the implicit sub-steps.
 //!
-//! [`BlockTridiagonal`] stores a system whose row k couples the unknown blocks k − 1,
-//! k and k + 1 (blocks of `block` unknowns, m×m coefficient blocks, row-major). The
-//! monolayer pressure projection (seed 000 §3 step 3) has m = 1: a scalar tridiagonal
-//! system solved by [`thomas`] in O(n). The multilayer projection (seed 003 eq. 31–32)
-//! has m = N unknowns per face; ordered face-major it is block-tridiagonal with the
-//! same storage.
+//! The pressure systems of the projection (seed 000 §3 step 3, seed 003 eq. 31–32) are
+//! (block-)tridiagonal: row k couples the unknowns of faces k − 1, k and k + 1. A
+//! system is seen through [`PressureRows`], which hands out one row at a time, so a
+//! solver can eliminate each row as soon as it is formed ("matrix-free" assembly: the
+//! coefficients are never stored, and forming a row overlaps with the division of the
+//! previous one). [`BlockTridiagonal`] is the stored form, for systems assembled ahead
+//! (and for tests). The monolayer system has scalar rows ([`ScalarRow`]) and is solved
+//! exactly in O(n) by [`thomas_rows`]; an N-layer system has N×N blocks per row
+//! (seed 003 eq. 32, ordered face-major) and its own row type.
 
-/// A (block-)tridiagonal system A x = rhs with `rows` block rows of size `block`.
+use std::ops::Range;
+
+/// A (block-)tridiagonal system, one row at a time.
+pub trait PressureRows {
+    /// One row: its couplings to the unknowns k − 1, k, k + 1 and its right-hand side.
+    type Row;
+    /// Rows outside this range are identity rows with a zero right-hand side: the
+    /// solution is 0 there (e.g. the dry part of the domain) and they are never formed.
+    fn active(&self) -> Range<usize>;
+    /// Row k, for k in [`active`](Self::active). The coupling of the first active row
+    /// to k − 1 and of the last to k + 1 are ignored (those unknowns are 0).
+    fn row(&self, k: usize) -> Self::Row;
+}
+
+/// A row of a scalar tridiagonal system: lower x_{k−1} + diag x_k + upper x_{k+1} = rhs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScalarRow {
+    pub lower: f64,
+    pub diag: f64,
+    pub upper: f64,
+    pub rhs: f64,
+}
+
+impl ScalarRow {
+    /// x_k = 0.
+    pub const IDENTITY: ScalarRow = ScalarRow {
+        lower: 0.0,
+        diag: 1.0,
+        upper: 0.0,
+        rhs: 0.0,
+    };
+}
+
+/// A stored (block-)tridiagonal system A x = rhs with `rows` block rows of size `block`
+/// (m×m coefficient blocks, row-major).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BlockTridiagonal {
     pub rows: usize,
@@ -20,10 +57,8 @@ pub struct BlockTridiagonal {
     pub upper: Vec<f64>,
     /// Right-hand side (rows·m).
     pub rhs: Vec<f64>,
-    /// Rows outside this range are identity rows with a zero right-hand side, so the
-    /// solution is 0 there and nothing outside needs to be assembled or eliminated
-    /// (e.g. the dry part of the domain).
-    pub active: std::ops::Range<usize>,
+    /// See [`PressureRows::active`].
+    pub active: Range<usize>,
 }
 
 impl BlockTridiagonal {
@@ -40,25 +75,59 @@ impl BlockTridiagonal {
         }
     }
 
+    /// Stores the rows of a scalar system.
+    pub fn from_rows<R: PressureRows<Row = ScalarRow>>(rows: &R, n: usize) -> Self {
+        let mut sys = BlockTridiagonal::new(n, 1);
+        sys.active = rows.active();
+        for k in 0..n {
+            let row = if sys.active.contains(&k) {
+                rows.row(k)
+            } else {
+                ScalarRow::IDENTITY
+            };
+            (sys.lower[k], sys.diag[k], sys.upper[k], sys.rhs[k]) =
+                (row.lower, row.diag, row.upper, row.rhs);
+        }
+        sys
+    }
+
     /// A x − rhs for a scalar system (block = 1), e.g. to check a solve.
     pub fn residual(&self, x: &[f64]) -> Vec<f64> {
         assert_eq!(self.block, 1);
-        let n = self.rows;
+        let (n, a) = (self.rows, &self.active);
         (0..n)
             .map(|k| {
-                if !self.active.contains(&k) {
+                if !a.contains(&k) {
                     return x[k];
                 }
                 let mut r = self.diag[k] * x[k] - self.rhs[k];
-                if k > 0 {
+                if k > a.start {
                     r += self.lower[k] * x[k - 1];
                 }
-                if k + 1 < n {
+                if k + 1 < a.end {
                     r += self.upper[k] * x[k + 1];
                 }
                 r
             })
             .collect()
+    }
+}
+
+impl PressureRows for BlockTridiagonal {
+    type Row = ScalarRow;
+
+    fn active(&self) -> Range<usize> {
+        self.active.clone()
+    }
+
+    fn row(&self, k: usize) -> ScalarRow {
+        debug_assert_eq!(self.block, 1, "scalar rows of a block system");
+        ScalarRow {
+            lower: self.lower[k],
+            diag: self.diag[k],
+            upper: self.upper[k],
+            rhs: self.rhs[k],
+        }
     }
 }
 
@@ -75,8 +144,8 @@ pub fn thomas(
     scratch: &mut [f64],
 ) {
     let n = diag.len();
-    debug_assert!(lower.len() == n && upper.len() == n && rhs.len() == n);
-    debug_assert!(x.len() == n && scratch.len() == n);
+    assert!(lower.len() == n && upper.len() == n && rhs.len() == n);
+    assert!(x.len() == n && scratch.len() == n);
     if n == 0 {
         return;
     }
@@ -93,58 +162,84 @@ pub fn thomas(
     }
 }
 
-/// The Thomas algorithm run from both ends at once ("twisted" factorisation): rows
-/// 0..m are eliminated downwards and rows m+1..n upwards, the two sweeps meet at row
-/// m = n/2 and the back-substitution runs outwards from it. Same operation count as
-/// [`thomas`], but the two independent recurrences overlap in the processor, which
-/// nearly halves the time of this latency-bound loop (one division per row on the
-/// critical path). Same stability as [`thomas`] for diagonally dominant systems.
-pub fn thomas_two_sided(
-    lower: &[f64],
-    diag: &[f64],
-    upper: &[f64],
-    rhs: &[f64],
-    x: &mut [f64],
-    scratch: &mut [f64],
-) {
-    let n = diag.len();
-    assert!(lower.len() == n && upper.len() == n && rhs.len() == n);
-    assert!(x.len() == n && scratch.len() == n);
-    if n < 4 {
-        return thomas(lower, diag, upper, rhs, x, scratch);
+/// Magnitude below which [`thomas_rows`] sets a value to zero. Away from its sources
+/// the solution of the pressure system decays exponentially (by e^(−2Δx/h) per face in
+/// a layer at rest), down to subnormal numbers, whose arithmetic is up to a hundred
+/// times slower, in the solve and later in every stage that reads the state. 1e-100 is
+/// far below any physical value in SI units and keeps squares and cubes normal.
+pub const FLUSH_TO_ZERO: f64 = 1e-100;
+
+#[inline(always)]
+fn flush(v: f64) -> f64 {
+    if v.abs() < FLUSH_TO_ZERO {
+        0.0
+    } else {
+        v
     }
+}
+
+/// The Thomas algorithm run from both ends at once ("twisted" factorisation) on the
+/// active rows of `rows`, x = 0 elsewhere: rows are eliminated downwards from the first
+/// and upwards from the last, the two sweeps meet in the middle row and the
+/// back-substitution runs outwards from it. Same operations as [`thomas`] (and the same
+/// stability for diagonally dominant systems), but the two independent recurrences
+/// overlap in the processor, which nearly halves the time of this latency-bound loop
+/// (a division per row on the critical path); forming each row (`rows.row(k)`) overlaps
+/// with it too. Values below [`FLUSH_TO_ZERO`] are set to 0. `x` and `scratch` cover
+/// all rows.
+pub fn thomas_rows<R: PressureRows<Row = ScalarRow>>(rows: &R, x: &mut [f64], scratch: &mut [f64]) {
+    let active = rows.active();
+    assert!(active.end <= x.len() && scratch.len() >= x.len());
+    x[..active.start].fill(0.0);
+    x[active.end..].fill(0.0);
+    let (s, n) = (active.start, active.len());
+    let (x, c) = (&mut x[active.clone()], &mut scratch[active]);
+    let row = |k: usize| rows.row(s + k);
+    match n {
+        0 => return,
+        1 => {
+            x[0] = row(0).rhs / row(0).diag;
+            return;
+        }
+        _ => {}
+    }
+    // c[k]: upper/pivot for the downward rows, lower/pivot for the upward ones; x holds
+    // the eliminated right-hand sides until the back-substitution.
     let m = n / 2;
-    // scratch[k]: upper[k]/pivot for the downward rows, lower[k]/pivot for the upward.
-    let inv = 1.0 / diag[0];
-    scratch[0] = upper[0] * inv;
-    x[0] = rhs[0] * inv;
-    let inv = 1.0 / diag[n - 1];
-    scratch[n - 1] = lower[n - 1] * inv;
-    x[n - 1] = rhs[n - 1] * inv;
-    let pairs = (n - 1 - m).min(m);
-    for j in 1..pairs {
-        let (k, kb) = (j, n - 1 - j);
-        let inv = 1.0 / (diag[k] - lower[k] * scratch[k - 1]);
-        let inv_b = 1.0 / (diag[kb] - upper[kb] * scratch[kb + 1]);
-        scratch[k] = upper[k] * inv;
-        x[k] = (rhs[k] - lower[k] * x[k - 1]) * inv;
-        scratch[kb] = lower[kb] * inv_b;
-        x[kb] = (rhs[kb] - upper[kb] * x[kb + 1]) * inv_b;
+    let (top, bottom) = (row(0), row(n - 1));
+    let inv = 1.0 / top.diag;
+    (c[0], x[0]) = (top.upper * inv, top.rhs * inv);
+    let inv = 1.0 / bottom.diag;
+    (c[n - 1], x[n - 1]) = (bottom.lower * inv, bottom.rhs * inv);
+    // Rows 1..m downwards and n−2..m upwards (one more downward row when n is even).
+    let upward = n - 1 - m;
+    for j in 1..m {
+        let (k, r) = (j, row(j));
+        let inv = 1.0 / (r.diag - r.lower * c[k - 1]);
+        c[k] = r.upper * inv;
+        x[k] = flush((r.rhs - r.lower * x[k - 1]) * inv);
+        if j < upward {
+            let (k, r) = (n - 1 - j, row(n - 1 - j));
+            let inv = 1.0 / (r.diag - r.upper * c[k + 1]);
+            c[k] = r.lower * inv;
+            x[k] = flush((r.rhs - r.upper * x[k + 1]) * inv);
+        }
     }
-    // n odd leaves one more downward row than upward rows.
-    for k in pairs.max(1)..m {
-        let inv = 1.0 / (diag[k] - lower[k] * scratch[k - 1]);
-        scratch[k] = upper[k] * inv;
-        x[k] = (rhs[k] - lower[k] * x[k - 1]) * inv;
+    if m == n - 1 {
+        // n = 2: the meeting row is the last row, already eliminated upwards.
+        let r = row(m);
+        x[m] = (r.rhs - r.lower * x[m - 1]) / (r.diag - r.lower * c[m - 1]);
+    } else {
+        let r = row(m);
+        let den = r.diag - r.lower * c[m - 1] - r.upper * c[m + 1];
+        x[m] = (r.rhs - r.lower * x[m - 1] - r.upper * x[m + 1]) / den;
     }
-    let den = diag[m] - lower[m] * scratch[m - 1] - upper[m] * scratch[m + 1];
-    x[m] = (rhs[m] - lower[m] * x[m - 1] - upper[m] * x[m + 1]) / den;
     for j in 1..=m {
         let k = m - j;
-        x[k] -= scratch[k] * x[k + 1];
-        let kb = m + j;
-        if kb < n {
-            x[kb] -= scratch[kb] * x[kb - 1];
+        x[k] = flush(x[k] - c[k] * x[k + 1]);
+        let k = m + j;
+        if k < n {
+            x[k] = flush(x[k] - c[k] * x[k - 1]);
         }
     }
 }
@@ -226,7 +321,7 @@ mod tests {
     }
 
     #[test]
-    fn two_sided_thomas_matches_thomas_for_every_size() {
+    fn two_sided_thomas_on_rows_matches_thomas_for_every_size() {
         for n in 1..40 {
             let mut sys = BlockTridiagonal::new(n, 1);
             for k in 0..n {
@@ -245,14 +340,7 @@ mod tests {
                 &mut a,
                 &mut scratch,
             );
-            thomas_two_sided(
-                &sys.lower,
-                &sys.diag,
-                &sys.upper,
-                &sys.rhs,
-                &mut b,
-                &mut scratch,
-            );
+            thomas_rows(&sys, &mut b, &mut scratch);
             for (a, b) in a.iter().zip(&b) {
                 assert!(
                     (a - b).abs() <= 1e-13 * (1.0 + a.abs()),
@@ -280,5 +368,24 @@ mod tests {
             &mut scratch,
         );
         assert!(x.iter().all(|&v| v == 0.0));
+    }
+}
+
+#[cfg(test)]
+mod active_range_tests {
+    use super::*;
+
+    #[test]
+    fn rows_outside_the_active_range_are_zero() {
+        let n = 12;
+        let mut sys = BlockTridiagonal::new(n, 1);
+        for k in 0..n {
+            (sys.lower[k], sys.diag[k], sys.upper[k], sys.rhs[k]) = (-1.0, 3.0, -0.5, k as f64);
+        }
+        sys.active = 3..9;
+        let (mut x, mut scratch) = (vec![7.0; n], vec![0.0; n]);
+        thomas_rows(&sys, &mut x, &mut scratch);
+        assert!(x[..3].iter().chain(&x[9..]).all(|&v| v == 0.0));
+        assert!(sys.residual(&x).iter().all(|r| r.abs() < 1e-13));
     }
 }

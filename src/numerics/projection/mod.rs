@@ -11,13 +11,14 @@
 //! is generic over two parts, so the multilayer model (seed 003) reuses it:
 //!
 //! - a [`ProjectionOperator`]: the discrete constraint and the discrete correction of
-//!   one model. It assembles A Π = −𝒞(U^{n+2/3}) as a [`BlockTridiagonal`] system with
-//!   one block of unknowns per face (m = 1 for the monolayer of seed 000, m = N for the
-//!   N-layer model, whose matrix (32) is block-tridiagonal when ordered face-major), and
-//!   applies the correction of a solution;
-//! - a [`PressureSolver`] for that system: [`ThomasSolver`] for m = 1 (exact, O(nx));
-//!   a block-Thomas or block Gauss–Seidel solver (seed 003 §4) implements the same trait
-//!   for m > 1.
+//!   one model. It forms A Π = −𝒞(U^{n+2/3}), one block of unknowns per face (m = 1 for
+//!   the monolayer of seed 000, m = N for the N-layer model, whose matrix (32) is
+//!   block-tridiagonal when ordered face-major), hands it row by row
+//!   ([`PressureRows`]) to the solver, and applies the correction of the solution;
+//! - a [`PressureSolver`] for that row type: [`ThomasSolver`] for scalar rows (exact,
+//!   O(nx)); a block-Thomas or the block Gauss–Seidel solver of seed 003 §4 implements
+//!   the same trait for N×N blocks (it may store the rows first, e.g. in a
+//!   [`BlockTridiagonal`](super::linalg::BlockTridiagonal), to sweep them repeatedly).
 //!
 //! A is assembled as the product of the discrete constraint and the discrete correction
 //! ("discrete projection"), so after the correction the discrete constraint holds to
@@ -26,76 +27,74 @@
 
 pub mod monolayer;
 
-use super::linalg::{thomas_two_sided, BlockTridiagonal};
+use super::linalg::{thomas_rows, PressureRows, ScalarRow};
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
 use crate::state::State;
 
-/// Solves the (block-)tridiagonal pressure system of one projection.
+/// Solves the (block-)tridiagonal pressure system of one projection, given row by row.
 pub trait PressureSolver: Send + std::fmt::Debug {
-    /// Writes the solution of `system · x = system.rhs` into `x`
-    /// (`system.rows · system.block` entries; 0 outside `system.active`).
-    fn solve(&mut self, system: &BlockTridiagonal, x: &mut [f64]);
+    /// The row type it solves ([`ScalarRow`] for one unknown per face).
+    type Row;
+    /// Writes the solution into `x` (one block per face, 0 outside `rows.active()`).
+    fn solve<R: PressureRows<Row = Self::Row>>(&mut self, rows: &R, x: &mut [f64]);
 }
 
-/// Exact O(n) solve of a scalar tridiagonal system (Thomas algorithm, run from both
-/// ends, on the active rows only).
+/// Exact O(n) solve of a scalar tridiagonal system: the Thomas algorithm run from both
+/// ends, on the active rows only, forming each row as it eliminates it.
 #[derive(Debug, Default)]
 pub struct ThomasSolver {
     scratch: Vec<f64>,
 }
 
 impl PressureSolver for ThomasSolver {
-    fn solve(&mut self, system: &BlockTridiagonal, x: &mut [f64]) {
-        assert_eq!(system.block, 1, "the Thomas solver needs scalar blocks");
-        let r = system.active.clone();
-        self.scratch.resize(system.rows, 0.0);
-        x[..r.start].fill(0.0);
-        x[r.end..].fill(0.0);
-        thomas_two_sided(
-            &system.lower[r.clone()],
-            &system.diag[r.clone()],
-            &system.upper[r.clone()],
-            &system.rhs[r.clone()],
-            &mut x[r.clone()],
-            &mut self.scratch[r],
-        );
+    type Row = ScalarRow;
+
+    fn solve<R: PressureRows<Row = ScalarRow>>(&mut self, rows: &R, x: &mut [f64]) {
+        self.scratch.resize(x.len(), 0.0);
+        thomas_rows(rows, x, &mut self.scratch);
     }
 }
 
 /// The discrete constraint and correction of one non-hydrostatic model.
 pub trait ProjectionOperator: Send + std::fmt::Debug {
+    /// Row type of its system (what its [`PressureSolver`] must solve).
+    type Row;
+
     /// Unknowns per face (the number of layers whose base pressure is unknown).
     fn block(&self) -> usize;
 
-    /// Assembles A Π = −𝒞(U) for the impulses Π = Δt p̃ at the nx + 1 faces from the
-    /// state after friction. Rows that carry no constraint (dry faces, outflow
-    /// boundaries) are replaced by conditions on Π.
-    fn assemble(&mut self, mesh: &Mesh, state: &State, system: &mut BlockTridiagonal);
+    /// Forms the system A Π = −𝒞(U) for the impulses Π = Δt p̃ at the nx + 1 faces
+    /// from the state after friction, and solves it with `solver` into `pi`. Rows that
+    /// carry no constraint (dry faces, outflow boundaries) are conditions on Π instead.
+    fn solve<S: PressureSolver<Row = Self::Row>>(
+        &mut self,
+        mesh: &Mesh,
+        state: &State,
+        solver: &mut S,
+        pi: &mut [f64],
+    );
 
     /// Applies the correction of the impulses `pi` to the discharges (hu, hw) of
-    /// `state`, with the coefficients of the last [`assemble`](Self::assemble) (h has
-    /// not changed in between), and advances the pressure, p ← p + Π/Δt, resetting it
-    /// to 0 on faces without a constraint.
+    /// `state` (h has not changed since [`solve`](Self::solve)), and advances the
+    /// pressure, p ← p + Π/Δt, resetting it to 0 on faces without a constraint.
     fn correct(&mut self, mesh: &Mesh, state: &mut State, pi: &[f64], dt: f64);
 }
 
-/// The "projection" stage: assemble, solve, correct.
+/// The "projection" stage: form and solve the pressure system, correct.
 #[derive(Debug)]
-pub struct ProjectionStage<O: ProjectionOperator, S: PressureSolver> {
+pub struct ProjectionStage<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> {
     operator: O,
     solver: S,
-    system: BlockTridiagonal,
     pi: Vec<f64>,
 }
 
-impl<O: ProjectionOperator, S: PressureSolver> ProjectionStage<O, S> {
+impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> ProjectionStage<O, S> {
     pub fn new(operator: O, solver: S, nx: usize) -> Self {
         let m = operator.block();
         ProjectionStage {
             operator,
             solver,
-            system: BlockTridiagonal::new(nx + 1, m),
             pi: vec![0.0; (nx + 1) * m],
         }
     }
@@ -106,14 +105,14 @@ impl<O: ProjectionOperator, S: PressureSolver> ProjectionStage<O, S> {
     }
 }
 
-impl<O: ProjectionOperator, S: PressureSolver> Stage for ProjectionStage<O, S> {
+impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> Stage for ProjectionStage<O, S> {
     fn name(&self) -> &'static str {
         "projection"
     }
 
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
-        self.operator.assemble(mesh, state, &mut self.system);
-        self.solver.solve(&self.system, &mut self.pi);
+        self.operator
+            .solve(mesh, state, &mut self.solver, &mut self.pi);
         self.operator.correct(mesh, state, &self.pi, dt);
         Ok(())
     }

@@ -38,9 +38,9 @@
 
 use std::ops::Range;
 
-use super::ProjectionOperator;
+use super::{PressureSolver, ProjectionOperator};
 use crate::mesh::Mesh;
-use crate::numerics::linalg::BlockTridiagonal;
+use crate::numerics::linalg::{PressureRows, ScalarRow};
 
 /// A face carries the constraint only when both neighbouring cells are thicker than
 /// this fraction of Δx (see the module documentation).
@@ -80,27 +80,16 @@ pub fn correction_coefficients(h: f64, grad_g: f64, inv_dx: f64) -> (f64, f64) {
 #[derive(Debug)]
 pub struct MonolayerOperator {
     two_b: Vec<f64>,
-    /// Per cell (ghost-inclusive, nx + 2): G = 2b + h and the correction coefficients
-    /// (α, β) of the last assembly.
-    g: Vec<f64>,
-    alpha: Vec<f64>,
-    beta: Vec<f64>,
-    /// Per face (nx + 1): both neighbours wet.
-    wet: Vec<bool>,
-    /// Faces that may be wet (the span of the mass); all others are dry.
+    /// Faces that may be wet (the span of the mass) at the last solve; all other faces
+    /// are dry.
     span: Range<usize>,
     h_min: f64,
 }
 
 impl MonolayerOperator {
     pub fn new(mesh: &Mesh) -> Self {
-        let nx = mesh.nx;
         MonolayerOperator {
             two_b: doubled_bed(mesh),
-            g: vec![0.0; nx + 2],
-            alpha: vec![0.0; nx + 2],
-            beta: vec![0.0; nx + 2],
-            wet: vec![false; nx + 1],
             span: 0..0,
             h_min: NH_FILM_FRACTION * mesh.dx,
         }
@@ -120,130 +109,133 @@ fn constraint_at(two_b: &[f64], state: &State, hw: &[f64], l: usize, inv_dx: f64
     (t_w - t_g + t_d, t_w.abs().max(t_g.abs()).max(t_d.abs()))
 }
 
+/// The rows of the monolayer system, formed on demand from the state.
+struct MonolayerRows<'a> {
+    h: &'a [f64],
+    hu: &'a [f64],
+    hw: &'a [f64],
+    two_b: &'a [f64],
+    nx: usize,
+    inv_dx: f64,
+    h_min: f64,
+    left: BoundaryKind,
+    right: BoundaryKind,
+    active: Range<usize>,
+}
+
+impl PressureRows for MonolayerRows<'_> {
+    type Row = ScalarRow;
+
+    fn active(&self) -> Range<usize> {
+        self.active.clone()
+    }
+
+    /// The row of face k, between cells l = k and r = k + 1 (ghost-inclusive).
+    #[inline(always)]
+    fn row(&self, k: usize) -> ScalarRow {
+        let (h, hu, hw, two_b) = (self.h, self.hu, self.hw, self.two_b);
+        let (nx, inv_dx) = (self.nx, self.inv_dx);
+        let (l, r) = (k, k + 1);
+        let (hl, hr) = (h[l], h[r]);
+        if !(hl > self.h_min && hr > self.h_min) {
+            return ScalarRow::IDENTITY; // a dry face: p = 0
+        }
+        // Outflow boundaries: homogeneous Neumann, Π equals its inner neighbour.
+        if k == 0 && self.left == BoundaryKind::Outflow {
+            return ScalarRow {
+                upper: -1.0,
+                ..ScalarRow::IDENTITY
+            };
+        }
+        if k == nx && self.right == BoundaryKind::Outflow {
+            return ScalarRow {
+                lower: -1.0,
+                ..ScalarRow::IDENTITY
+            };
+        }
+        let g = |j: usize| two_b[j] + h[j];
+        let (gl, gr) = (g(l), g(r));
+        let inv_2dx = 0.5 * inv_dx;
+        // (∂_X G) at the two cells; a wall's ghost cell mirrors its neighbour.
+        let grad_l = if l == 0 {
+            -(g(2) - gl) * inv_2dx
+        } else {
+            (gr - g(l - 1)) * inv_2dx
+        };
+        let grad_r = if r == nx + 1 {
+            -(gr - g(nx - 1)) * inv_2dx
+        } else {
+            (g(r + 1) - gl) * inv_2dx
+        };
+        let (al, bl) = correction_coefficients(hl, grad_l, inv_dx);
+        let (ar, br) = correction_coefficients(hr, grad_r, inv_dx);
+        // d𝒞/dδ(hu)_l = −c1 − c2, d𝒞/dδ(hu)_r = −c1 + c2, d𝒞/dδ(hw) = 1 for each cell,
+        // δ(hw) = (Π_left + Π_right)/2.
+        let grad = (gr - gl) * inv_dx;
+        let c1 = 0.5 * grad;
+        let c2 = 0.5 * (hl + hr) * inv_dx;
+        let (dl, dr) = (-c1 - c2, -c1 + c2);
+        let c = (hw[l] + hw[r]) - 0.5 * (hu[l] + hu[r]) * grad + c2 * (hu[r] - hu[l]);
+        let mut row = ScalarRow {
+            lower: 0.5 + dl * al,
+            diag: 1.0 + dl * bl + dr * ar,
+            upper: 0.5 + dr * br,
+            rhs: -c,
+        };
+        // Walls: the mirrored pressure, Π_{−1/2} = Π_{3/2} (and at the right end).
+        if k == 0 {
+            row.upper += row.lower;
+            row.lower = 0.0;
+        }
+        if k == nx {
+            row.lower += row.upper;
+            row.upper = 0.0;
+        }
+        row
+    }
+}
+
 impl ProjectionOperator for MonolayerOperator {
+    type Row = ScalarRow;
+
     fn block(&self) -> usize {
         1
     }
 
-    fn assemble(&mut self, mesh: &Mesh, state: &State, sys: &mut BlockTridiagonal) {
+    fn solve<S: PressureSolver<Row = ScalarRow>>(
+        &mut self,
+        mesh: &Mesh,
+        state: &State,
+        solver: &mut S,
+        pi: &mut [f64],
+    ) {
         debug_assert_eq!(state.layers, 1);
-        let nx = mesh.nx;
         let nh = state
             .nh
             .as_ref()
             .expect("non-hydrostatic stage on a hydrostatic state");
-        let (h, hu, hw) = (&state.h[..], &state.hu[..], &nh.hw[..]);
-        let h_min = self.h_min;
-        // The span of the mass: faces outside it are dry (identity rows, not stored).
-        let first = h.iter().position(|&h| h > h_min);
-        let last = h.iter().rposition(|&h| h > h_min);
-        let (first, last) = match (first, last) {
-            (Some(f), Some(l)) if l > f => (f, l),
-            _ => {
-                self.span = 0..0;
-                sys.active = 0..0;
-                return;
-            }
+        let h = &state.h[..];
+        // The span of the mass: faces outside it are dry (never formed).
+        let first = h.iter().position(|&h| h > self.h_min);
+        let last = h.iter().rposition(|&h| h > self.h_min);
+        self.span = match (first, last) {
+            // Faces first..last touch cells first..=last (ghost-inclusive).
+            (Some(f), Some(l)) if l > f => f..l,
+            _ => 0..0,
         };
-        // Faces first..last touch cells first..=last (ghost-inclusive, ≤ nx + 1).
-        self.span = first..last;
-        sys.active = first..last;
-        let inv_dx = 1.0 / mesh.dx;
-        let inv_2dx = 0.5 * inv_dx;
-        let (lo, hi) = (first.saturating_sub(1), (last + 1).min(nx + 1));
-        let g_span = self.g[lo..=hi].iter_mut();
-        for ((g, &b2), &h) in g_span.zip(&self.two_b[lo..=hi]).zip(&h[lo..=hi]) {
-            *g = b2 + h;
-        }
-        let g = &self.g[..];
-        let (c0, c1) = (first.max(1), last.min(nx));
-        {
-            let n = c1 + 1 - c0;
-            let (gm, gp, hc) = (&g[c0 - 1..c1], &g[c0 + 1..c1 + 2], &h[c0..=c1]);
-            let (a, b) = (&mut self.alpha[c0..=c1], &mut self.beta[c0..=c1]);
-            assert!(gm.len() == n && gp.len() == n && hc.len() == n);
-            assert!(a.len() == n && b.len() == n);
-            // Indexing equal-length slices: bounds checks vanish and the loop vectorises.
-            #[allow(clippy::needless_range_loop)]
-            for j in 0..n {
-                let grad = (gp[j] - gm[j]) * inv_2dx;
-                (a[j], b[j]) = correction_coefficients(hc[j], grad, inv_dx);
-            }
-        }
-        // Ghost cells of walls are mirror images: same h, opposite ∂_X G.
-        if first == 0 {
-            let grad = (g[2] - g[0]) * inv_2dx;
-            (self.alpha[0], self.beta[0]) = correction_coefficients(h[1], -grad, inv_dx);
-        }
-        if last == nx + 1 {
-            let grad = (g[nx + 1] - g[nx - 1]) * inv_2dx;
-            (self.alpha[nx + 1], self.beta[nx + 1]) = correction_coefficients(h[nx], -grad, inv_dx);
-        }
-
-        // One row per face, branch-free so that it vectorises: wet faces carry the
-        // constraint, the others the identity. d𝒞/dδ(hu)_l = −c1 − c2,
-        // d𝒞/dδ(hu)_r = −c1 + c2, d𝒞/dδ(hw) = 1 for each cell, δ(hw) = (Π_l + Π_r)/2.
-        {
-            let (f, e) = (first, last);
-            let n = e - f;
-            let (hl, hr) = (&h[f..e], &h[f + 1..=e]);
-            let (gl, gr) = (&g[f..e], &g[f + 1..=e]);
-            let (ul, ur) = (&hu[f..e], &hu[f + 1..=e]);
-            let (wl, wr) = (&hw[f..e], &hw[f + 1..=e]);
-            let (al, bl) = (&self.alpha[f..e], &self.beta[f..e]);
-            let (ar, br) = (&self.alpha[f + 1..=e], &self.beta[f + 1..=e]);
-            let wet = &mut self.wet[f..e];
-            let (lower, diag) = (&mut sys.lower[f..e], &mut sys.diag[f..e]);
-            let (upper, rhs) = (&mut sys.upper[f..e], &mut sys.rhs[f..e]);
-            assert!(hl.len() == n && hr.len() == n && gl.len() == n && gr.len() == n);
-            assert!(ul.len() == n && ur.len() == n && wl.len() == n && wr.len() == n);
-            assert!(al.len() == n && bl.len() == n && ar.len() == n && br.len() == n);
-            assert!(wet.len() == n && lower.len() == n && diag.len() == n);
-            assert!(upper.len() == n && rhs.len() == n);
-            #[allow(clippy::needless_range_loop)]
-            for k in 0..n {
-                let is_wet = hl[k] > h_min && hr[k] > h_min;
-                let grad = (gr[k] - gl[k]) * inv_dx;
-                let c1 = 0.5 * grad;
-                let c2 = 0.5 * (hl[k] + hr[k]) * inv_dx;
-                let (dl, dr) = (-c1 - c2, -c1 + c2);
-                let c = (wl[k] + wr[k]) - 0.5 * (ul[k] + ur[k]) * grad + c2 * (ur[k] - ul[k]);
-                wet[k] = is_wet;
-                lower[k] = if is_wet { 0.5 + dl * al[k] } else { 0.0 };
-                diag[k] = if is_wet {
-                    1.0 + dl * bl[k] + dr * ar[k]
-                } else {
-                    1.0
-                };
-                upper[k] = if is_wet { 0.5 + dr * br[k] } else { 0.0 };
-                rhs[k] = if is_wet { -c } else { 0.0 };
-            }
-        }
-
-        // Boundary faces: walls mirror the pressure (Π_{−1/2} = Π_{3/2}); outflows
-        // carry the Neumann row Π_{1/2} = Π_{3/2} instead of the constraint.
-        if first == 0 && self.wet[0] {
-            match mesh.left {
-                BoundaryKind::Wall => {
-                    sys.upper[0] += sys.lower[0];
-                }
-                BoundaryKind::Outflow => {
-                    (sys.diag[0], sys.upper[0], sys.rhs[0]) = (1.0, -1.0, 0.0);
-                }
-            }
-            sys.lower[0] = 0.0;
-        }
-        if last == nx + 1 && self.wet[nx] {
-            match mesh.right {
-                BoundaryKind::Wall => {
-                    sys.lower[nx] += sys.upper[nx];
-                }
-                BoundaryKind::Outflow => {
-                    (sys.lower[nx], sys.diag[nx], sys.rhs[nx]) = (-1.0, 1.0, 0.0);
-                }
-            }
-            sys.upper[nx] = 0.0;
-        }
+        let rows = MonolayerRows {
+            h,
+            hu: &state.hu,
+            hw: &nh.hw,
+            two_b: &self.two_b,
+            nx: mesh.nx,
+            inv_dx: 1.0 / mesh.dx,
+            h_min: self.h_min,
+            left: mesh.left,
+            right: mesh.right,
+            active: self.span.clone(),
+        };
+        solver.solve(&rows, pi);
     }
 
     fn correct(&mut self, mesh: &Mesh, state: &mut State, pi: &[f64], dt: f64) {
@@ -253,16 +245,37 @@ impl ProjectionOperator for MonolayerOperator {
             .as_mut()
             .expect("non-hydrostatic stage on a hydrostatic state");
         let span = self.span.clone();
-        let inv_dt = 1.0 / dt;
+        let (h, two_b) = (&state.h[..], &self.two_b[..]);
+        let inv_dx = 1.0 / mesh.dx;
+        let inv_2dx = 0.5 * inv_dx;
         if !span.is_empty() {
-            // Cells touching a face of the span.
-            for i in span.start.max(1)..=span.end.min(nx) {
-                let (pl, pr) = (pi[i - 1], pi[i]);
-                state.hu[i] += self.alpha[i] * pl + self.beta[i] * pr;
-                nh.hw[i] += 0.5 * (pl + pr);
+            // The cells touching a face of the span; slices of equal length so that
+            // the loop vectorises.
+            let (c0, c1) = (span.start.max(1), span.end.min(nx));
+            let n = c1 + 1 - c0;
+            let (hc, bm, bp) = (&h[c0..=c1], &two_b[c0 - 1..c1], &two_b[c0 + 1..=c1 + 1]);
+            let (hm, hp) = (&h[c0 - 1..c1], &h[c0 + 1..=c1 + 1]);
+            let (pl, pr) = (&pi[c0 - 1..c1], &pi[c0..=c1]);
+            let (hu, hw) = (&mut state.hu[c0..=c1], &mut nh.hw[c0..=c1]);
+            assert!(hc.len() == n && bm.len() == n && bp.len() == n);
+            assert!(hm.len() == n && hp.len() == n && pl.len() == n && pr.len() == n);
+            assert!(hu.len() == n && hw.len() == n);
+            #[allow(clippy::needless_range_loop)]
+            for j in 0..n {
+                let grad = ((bp[j] + hp[j]) - (bm[j] + hm[j])) * inv_2dx;
+                let (a, b) = correction_coefficients(hc[j], grad, inv_dx);
+                hu[j] += a * pl[j] + b * pr[j];
+                hw[j] += 0.5 * (pl[j] + pr[j]);
             }
-            let (p, wet) = (&mut nh.p[span.clone()], &self.wet[span.clone()]);
-            for ((p, &pi), &wet) in p.iter_mut().zip(&pi[span.clone()]).zip(wet) {
+            let inv_dt = 1.0 / dt;
+            let (p, hl, hr) = (
+                &mut nh.p[span.clone()],
+                &h[span.clone()],
+                &h[span.start + 1..=span.end],
+            );
+            let h_min = self.h_min;
+            for (((p, &pi), &hl), &hr) in p.iter_mut().zip(&pi[span.clone()]).zip(hl).zip(hr) {
+                let wet = hl > h_min && hr > h_min;
                 *p = if wet { *p + pi * inv_dt } else { 0.0 };
             }
         }
