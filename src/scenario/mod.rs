@@ -3,7 +3,7 @@
 //! Two layers, as in ripgrep's LowArgs → HiArgs: `raw` is a serde mirror of the TOML
 //! (`deny_unknown_fields`, no logic); `validate` turns it into the [`Scenario`] below,
 //! checking every key and naming it (with its line) in the error. Profiles (`bed.b`,
-//! `initial.h`, `initial.u`) are expressions in `x` or CSV tables (`profile`).
+//! `initial.h`, `initial.u`, `initial.w`) are expressions in `x` or CSV tables (`profile`).
 //! `--set key=value` overrides are applied to the document before deserialising
 //! (`overrides`), so a sweep is a list of override sets over one base file.
 

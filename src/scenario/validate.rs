@@ -881,6 +881,18 @@ front_threshold = 2e-3
     }
 
     #[test]
+    fn normal_velocity_defaults_to_zero_and_is_checked() {
+        assert_eq!(load(MINIMAL).unwrap().initial.w.as_constant(), Some(0.0));
+        let text = replace(MINIMAL, "h = 0.1", "h = 0.1\nw = \"if(x < 0.5, 2.3, b)\"");
+        let s = load(&text).unwrap();
+        assert_eq!(s.initial.w.eval(0.25, 0.0), 2.3);
+        assert_eq!(s.initial.w.eval(0.75, 0.1), 0.1);
+        let text = replace(MINIMAL, "h = 0.1", "h = 0.1\nw = \"1/(x - 0.05)\"");
+        let e = fails_at(&text, "initial.w", Some(12));
+        assert!(e.message().contains("x = 0.05"), "{e}");
+    }
+
+    #[test]
     fn expression_errors_name_key_and_line() {
         let text = format!("{MINIMAL}[bed]\nb = \"0.1*x +\"\n");
         fails_at(&text, "bed.b", Some(16));
