@@ -91,9 +91,10 @@ impl State {
 /// `model.pressure = "nonhydrostatic"`.
 ///
 /// - `hw`: normal discharges h w_α, (nx + 2)·N with ghosts, cell-major like `hu`.
-/// - `p`: non-hydrostatic pressure over density at the staggered faces x_{k−1/2},
-///   k = 0..=nx, and at the layer interfaces Z_{α−1/2}, α = 1..N (the bed is α = 1),
-///   face-major: `p[k * N + α − 1]`. The free-surface value p_{N+1/2} is 0 and is not
+/// - `p`: non-hydrostatic pressure over density at the nx + 1 staggered faces (face k
+///   lies between the ghost-inclusive cells k and k + 1, at x_min + kΔx) and at the
+///   layer interfaces Z_{α−1/2}, α = 1..N (the bed is α = 1), face-major:
+///   `p[k * N + α − 1]`. The free-surface value p_{N+1/2} is 0 and is not
 ///   stored. For the monolayer, p_{1/2} is the basal value 2q̄ of seed 000 (a linear
 ///   profile vanishing at the surface; q̄ = p_{1/2}/2 is the depth average).
 #[derive(Debug, Clone, PartialEq)]
@@ -103,8 +104,8 @@ pub struct NonHydrostatic {
 }
 
 impl NonHydrostatic {
-    /// Normal velocities `w` (physical cells, layer-major like `u`) given with the
-    /// state's thickness: hw = h w. The pressure starts at 0.
+    /// hw = h w from a normal velocity `w` per physical cell (the same in every layer);
+    /// the pressure starts at 0.
     pub fn from_profile(state: &State, w: &[f64]) -> NonHydrostatic {
         let (nx, n) = (state.nx, state.layers);
         assert_eq!(w.len(), nx);
