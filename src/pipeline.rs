@@ -8,6 +8,11 @@ use crate::numerics::hydrostatic::HydrostaticStep;
 use crate::numerics::Stage;
 use crate::physics::rheology::{BasalFriction, Coulomb, MuI};
 use crate::scenario::{FrictionLaw, Material};
+// Non-hydrostatic pipeline (issue 3).
+use crate::mesh::Mesh;
+use crate::numerics::nonhydrostatic::{NhFrictionStep, NhHyperbolicStep};
+use crate::numerics::projection::monolayer::MonolayerOperator;
+use crate::numerics::projection::{ProjectionStage, ThomasSolver};
 
 fn monolayer<L: BasalFriction + 'static>(law: L, nx: usize) -> Vec<Box<dyn Stage>> {
     vec![
@@ -33,6 +38,43 @@ pub fn hydrostatic_monolayer(
                 phi: material.phi,
             },
             nx,
+        ),
+    }
+}
+
+// Non-hydrostatic monolayer (issue 3, seed 000 §3): only these scenarios build the
+// projection stage.
+
+fn nh_monolayer<L: BasalFriction + 'static>(law: L, mesh: &Mesh) -> Vec<Box<dyn Stage>> {
+    vec![
+        Box::new(NhHyperbolicStep::new(law, mesh.nx)),
+        Box::new(NhFrictionStep::new(law, mesh)),
+        Box::new(ProjectionStage::new(
+            MonolayerOperator::new(mesh),
+            ThomasSolver::default(),
+            mesh.nx,
+        )),
+    ]
+}
+
+/// The non-hydrostatic monolayer pipeline: hyperbolic (with hw transport) → friction
+/// (with the total pressure) → projection.
+pub fn nonhydrostatic_monolayer(
+    law: &FrictionLaw,
+    material: &Material,
+    mesh: &Mesh,
+) -> Vec<Box<dyn Stage>> {
+    match *law {
+        FrictionLaw::Coulomb { mu } => nh_monolayer(Coulomb { mu }, mesh),
+        FrictionLaw::MuI { mu_s, mu_2, i0 } => nh_monolayer(
+            MuI {
+                mu_s,
+                mu_2,
+                i0,
+                d_s: material.d_s,
+                phi: material.phi,
+            },
+            mesh,
         ),
     }
 }

@@ -8,7 +8,7 @@ use crate::output::RunInfo;
 use crate::pipeline;
 use crate::scenario::{Coordinates, Pressure, Scenario};
 use crate::simulation::{RunConfig, Simulation};
-use crate::state::State;
+use crate::state::{NonHydrostatic, State};
 
 /// A scenario that is valid TOML but asks for something this build cannot run.
 #[derive(Debug, thiserror::Error)]
@@ -30,12 +30,6 @@ pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
         return Err(setup_error(
             "model.layers",
             "the multilayer model (layers > 1) is not available yet; use layers = 1",
-        ));
-    }
-    if scn.model.pressure == Pressure::NonHydrostatic {
-        return Err(setup_error(
-            "model.pressure",
-            "the non-hydrostatic model is not available yet; use \"hydrostatic\"",
         ));
     }
     if scn.domain.coordinates == Coordinates::Cartesian && scn.domain.slope_deg != 0.0 {
@@ -67,9 +61,21 @@ pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
         .zip(&b)
         .map(|(&x, &b)| scn.initial.u.eval(x, b))
         .collect();
+    let w = sample_normal_velocity(scn, &x, &b);
     let mesh = Mesh::new(&spec, b);
-    let state = State::from_profiles(&mesh, &[1.0], &h, &u);
-    let stages = pipeline::hydrostatic_monolayer(&scn.friction, &scn.material, d.cells);
+    let mut state = State::from_profiles(&mesh, &[1.0], &h, &u);
+    let stages = match scn.model.pressure {
+        Pressure::Hydrostatic => {
+            if w.is_some() {
+                return Err(setup_error(
+                    "initial.w",
+                    "a normal velocity needs model.pressure = \"nonhydrostatic\"",
+                ));
+            }
+            pipeline::hydrostatic_monolayer(&scn.friction, &scn.material, d.cells)
+        }
+        Pressure::NonHydrostatic => nonhydrostatic(scn, &mesh, &mut state, w),
+    };
     let config = RunConfig {
         t_end: scn.time.t_end,
         cfl: scn.time.cfl,
@@ -103,4 +109,33 @@ pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
         config,
         info,
     ))
+}
+
+// Non-hydrostatic set-up (issue 3, seed 000).
+
+/// `initial.w` at the cell centres, or `None` when it is zero everywhere.
+fn sample_normal_velocity(scn: &Scenario, x: &[f64], b: &[f64]) -> Option<Vec<f64>> {
+    if scn.initial.w.as_constant() == Some(0.0) {
+        return None;
+    }
+    let w: Vec<f64> = x
+        .iter()
+        .zip(b)
+        .map(|(&x, &b)| scn.initial.w.eval(x, b))
+        .collect();
+    w.iter().any(|&w| w != 0.0).then_some(w)
+}
+
+/// Adds the non-hydrostatic unknowns (hw = h w, p = 0) to the state and builds the
+/// pipeline. An imposed normal velocity (the gate, seed 000 eq. 30) enters the first
+/// step as it is, as in the paper (docs/numerics.md, "Initial normal velocity").
+fn nonhydrostatic(
+    scn: &Scenario,
+    mesh: &Mesh,
+    state: &mut State,
+    w: Option<Vec<f64>>,
+) -> Vec<Box<dyn crate::numerics::Stage>> {
+    let w = w.unwrap_or_else(|| vec![0.0; mesh.nx]);
+    state.nh = Some(NonHydrostatic::from_profile(state, &w));
+    pipeline::nonhydrostatic_monolayer(&scn.friction, &scn.material, mesh)
 }

@@ -149,12 +149,17 @@ impl Simulation {
                     crate::physics::shallow::velocity(h, self.state.hu[(i + 1) * n + a]);
             }
         }
+        let nh = self
+            .state
+            .nh
+            .as_ref()
+            .map(|nh| nh.snapshot_fields(&self.state));
         sink.snapshot(&SnapshotView {
             t: self.t,
             h: self.state.h_interior(),
             u: &u,
-            w: None,
-            p_nh: None,
+            w: nh.as_ref().map(|(w, _)| w.as_slice()),
+            p_nh: nh.as_ref().map(|(_, p)| p.as_slice()),
             layers: n,
         })
     }

@@ -20,6 +20,8 @@ pub struct State {
     pub h: Vec<f64>,
     /// Layer discharges, (nx + 2)·N, cell-major.
     pub hu: Vec<f64>,
+    /// Non-hydrostatic unknowns; `None` for hydrostatic runs, which carry nothing.
+    pub nh: Option<NonHydrostatic>,
 }
 
 impl State {
@@ -35,6 +37,7 @@ impl State {
             l: l.to_vec(),
             h: vec![0.0; nx + 2],
             hu: vec![0.0; (nx + 2) * layers],
+            nh: None,
         };
         for i in 0..nx {
             s.h[i + 1] = h[i];
@@ -81,5 +84,71 @@ impl State {
     /// Physical-cell thickness (without ghosts).
     pub fn h_interior(&self) -> &[f64] {
         &self.h[1..=self.nx]
+    }
+}
+
+/// Non-hydrostatic unknowns (seed 000 eq. 15, seed 003 §3–4), present only when
+/// `model.pressure = "nonhydrostatic"`.
+///
+/// - `hw`: normal discharges h w_α, (nx + 2)·N with ghosts, cell-major like `hu`.
+/// - `p`: non-hydrostatic pressure over density at the nx + 1 staggered faces (face k
+///   lies between the ghost-inclusive cells k and k + 1, at x_min + kΔx) and at the
+///   layer interfaces Z_{α−1/2}, α = 1..N (the bed is α = 1), face-major:
+///   `p[k * N + α − 1]`. The free-surface value p_{N+1/2} is 0 and is not
+///   stored. For the monolayer, p_{1/2} is the basal value 2q̄ of seed 000 (a linear
+///   profile vanishing at the surface; q̄ = p_{1/2}/2 is the depth average).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NonHydrostatic {
+    pub hw: Vec<f64>,
+    pub p: Vec<f64>,
+}
+
+impl NonHydrostatic {
+    /// hw = h w from a normal velocity `w` per physical cell (the same in every layer);
+    /// the pressure starts at 0.
+    pub fn from_profile(state: &State, w: &[f64]) -> NonHydrostatic {
+        let (nx, n) = (state.nx, state.layers);
+        assert_eq!(w.len(), nx);
+        let mut hw = vec![0.0; (nx + 2) * n];
+        for i in 0..nx {
+            for a in 0..n {
+                hw[(i + 1) * n + a] = state.h[i + 1] * w[i];
+            }
+        }
+        let mut nh = NonHydrostatic {
+            hw,
+            p: vec![0.0; (nx + 1) * n],
+        };
+        nh.fill_ghosts(nx, n);
+        nh
+    }
+
+    /// Output fields (see docs/output-format.md): w = hw/h per layer (layer-major,
+    /// α·nx + i, 0 in dry cells) and p at the nl + 1 layer interfaces and nx + 1 faces
+    /// (layer-major, bed first; the surface row is 0).
+    pub fn snapshot_fields(&self, state: &State) -> (Vec<f64>, Vec<f64>) {
+        let (nx, n) = (state.nx, state.layers);
+        let mut w = vec![0.0; n * nx];
+        for i in 0..nx {
+            for a in 0..n {
+                w[a * nx + i] = velocity(state.h[i + 1], self.hw[(i + 1) * n + a]);
+            }
+        }
+        let mut p = vec![0.0; (n + 1) * (nx + 1)];
+        for k in 0..=nx {
+            for a in 0..n {
+                p[a * (nx + 1) + k] = self.p[k * n + a];
+            }
+        }
+        (w, p)
+    }
+
+    /// Ghost normal discharges: copied at both walls and outflows (w is even under the
+    /// mirror of a wall, and continued by an outflow).
+    pub fn fill_ghosts(&mut self, nx: usize, n: usize) {
+        for a in 0..n {
+            self.hw[a] = self.hw[n + a];
+            self.hw[(nx + 1) * n + a] = self.hw[nx * n + a];
+        }
     }
 }

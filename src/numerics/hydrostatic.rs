@@ -244,3 +244,13 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
         Ok(())
     }
 }
+
+// Non-hydrostatic extension (issue 3): the mass fluxes of the last step transport the
+// normal discharge hw as a passive scalar (src/numerics/nonhydrostatic.rs).
+impl<L: BasalFriction> HydrostaticStep<L> {
+    /// Mass fluxes 𝓕^h of the last step at the faces k = 0..=nx (face k lies between
+    /// the ghost-inclusive cells k and k + 1).
+    pub fn mass_flux(&self) -> &[f64] {
+        &self.flux_h
+    }
+}

@@ -4,6 +4,9 @@
 pub mod cfl;
 pub mod friction;
 pub mod hydrostatic;
+pub mod linalg;
+pub mod nonhydrostatic;
+pub mod projection;
 
 use crate::mesh::Mesh;
 use crate::state::State;

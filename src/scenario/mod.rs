@@ -3,7 +3,7 @@
 //! Two layers, as in ripgrep's LowArgs → HiArgs: `raw` is a serde mirror of the TOML
 //! (`deny_unknown_fields`, no logic); `validate` turns it into the [`Scenario`] below,
 //! checking every key and naming it (with its line) in the error. Profiles (`bed.b`,
-//! `initial.h`, `initial.u`) are expressions in `x` or CSV tables (`profile`).
+//! `initial.h`, `initial.u`, `initial.w`) are expressions in `x` or CSV tables (`profile`).
 //! `--set key=value` overrides are applied to the document before deserialising
 //! (`overrides`), so a sweep is a list of override sets over one base file.
 
@@ -83,6 +83,8 @@ pub struct Initial {
     pub h: Profile,
     /// Depth-averaged downslope velocity u(x).
     pub u: Profile,
+    /// Normal velocity w(x) (non-hydrostatic model only; seed 000 eq. 30).
+    pub w: Profile,
     /// Uniform erodible-bed thickness h_i ≥ 0 (seed 001 §4.2).
     pub erodible_bed: f64,
 }

@@ -1,4 +1,4 @@
-//! Spatial profiles: `bed.b`, `initial.h`, `initial.u`.
+//! Spatial profiles: `bed.b`, `initial.h`, `initial.u`, `initial.w`.
 //!
 //! A profile is written in the scenario as a number, as an expression in `x` (a string),
 //! or as a CSV table (`{ table = "file.csv" }`). Expressions are parsed once with

@@ -74,6 +74,7 @@ pub(crate) struct RawModel {
 pub(crate) struct RawInitial {
     pub h: Option<RawProfile>,
     pub u: Option<RawProfile>,
+    pub w: Option<RawProfile>,
     pub erodible_bed: Option<f64>,
 }
 

@@ -389,8 +389,17 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
         Some(v) => Profile::from_toml("initial.u", &v, base_dir, true)?,
         None => Profile::constant(0.0),
     };
+    let w = match i.w {
+        Some(v) => Profile::from_toml("initial.w", &v, base_dir, true)?,
+        None => Profile::constant(0.0),
+    };
     let erodible_bed = non_negative("initial.erodible_bed", i.erodible_bed.unwrap_or(0.0))?;
-    Ok(Initial { h, u, erodible_bed })
+    Ok(Initial {
+        h,
+        u,
+        w,
+        erodible_bed,
+    })
 }
 
 fn boundary(b: RawBoundary) -> Res<Boundaries> {
@@ -488,6 +497,9 @@ fn sample_profiles(domain: &Domain, bed: &Profile, initial: &Initial) -> Res<()>
     }
     if let Some(i) = first_bad(&|i| !initial.u.eval(centre(i), bed_at(i)).is_finite()) {
         return Err(not_finite("initial.u", &initial.u, centre(i), bed_at(i)));
+    }
+    if let Some(i) = first_bad(&|i| !initial.w.eval(centre(i), bed_at(i)).is_finite()) {
+        return Err(not_finite("initial.w", &initial.w, centre(i), bed_at(i)));
     }
     Ok(())
 }
@@ -865,6 +877,18 @@ front_threshold = 2e-3
         // An expression that is infinite at a cell centre.
         let text = replace(MINIMAL, "h = 0.1", "h = 0.1\nu = \"1/(x - 0.05)\"");
         let e = fails_at(&text, "initial.u", Some(12));
+        assert!(e.message().contains("x = 0.05"), "{e}");
+    }
+
+    #[test]
+    fn normal_velocity_defaults_to_zero_and_is_checked() {
+        assert_eq!(load(MINIMAL).unwrap().initial.w.as_constant(), Some(0.0));
+        let text = replace(MINIMAL, "h = 0.1", "h = 0.1\nw = \"if(x < 0.5, 2.3, b)\"");
+        let s = load(&text).unwrap();
+        assert_eq!(s.initial.w.eval(0.25, 0.0), 2.3);
+        assert_eq!(s.initial.w.eval(0.75, 0.1), 0.1);
+        let text = replace(MINIMAL, "h = 0.1", "h = 0.1\nw = \"1/(x - 0.05)\"");
+        let e = fails_at(&text, "initial.w", Some(12));
         assert!(e.message().contains("x = 0.05"), "{e}");
     }
 
