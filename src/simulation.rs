@@ -215,7 +215,7 @@ impl Simulation {
             let d = self.diagnose_for_next_step();
             if let Some(i) = d.non_finite_at {
                 let msg = format!(
-                    "non-finite value at x = {} m, t = {} s (step {})",
+                    "non-finite value at x = {} m, t = {:.6e} s (step {})",
                     self.mesh.x[i], self.t, self.steps
                 );
                 return Err(self.fail(sink, wall, &last, d0.front_x, rest_since, msg));

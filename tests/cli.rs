@@ -250,3 +250,20 @@ fn bed_from_a_csv_table_is_interpolated_relative_to_the_scenario_file() {
         assert!((b - 0.1 * (x + 0.2)).abs() < 1e-12, "x = {x}: b = {b}");
     }
 }
+
+#[test]
+fn overflowing_column_fails_instead_of_vanishing() {
+    // Regression: a NaN produced by overflow was clipped to h = 0 and the run
+    // "completed" with the mass gone.
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "ok.toml", MINIMAL);
+    let h5 = dir.path().join("huge.h5");
+    let out = granflow()
+        .args(["run", &path, "-o", h5.to_str().unwrap()])
+        .args(["--set", "initial.h=\"if(x <= 0, 1e300, 0)\""])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("non-finite value at x ="), "{stderr}");
+}

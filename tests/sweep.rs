@@ -410,7 +410,7 @@ fn a_failing_run_is_recorded_and_the_others_go_on() {
         "{status:?}"
     );
     assert!(
-        status[1].starts_with("failed: solver failure"),
+        status[1].starts_with("failed: non-finite value at x ="),
         "{status:?}"
     );
     assert!(
@@ -420,7 +420,7 @@ fn a_failing_run_is_recorded_and_the_others_go_on() {
     let failed = column(&out.join("summary.csv"), "run")[1].clone();
     let record = fs::read_to_string(out.join(format!("{failed}.result.toml"))).unwrap();
     assert!(
-        record.contains("status = \"failed: solver failure"),
+        record.contains("status = \"failed: non-finite value"),
         "{record}"
     );
 

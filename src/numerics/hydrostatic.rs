@@ -232,7 +232,10 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
             });
         }
         for i in 1..=nx {
-            state.h[i] = self.h_new[i].max(0.0);
+            // Clip round-off below zero; `f64::max` would also turn a NaN into 0 and
+            // hide a blow-up from the run's NaN check.
+            let hn = self.h_new[i];
+            state.h[i] = if hn < 0.0 { 0.0 } else { hn };
             state.hu[i] -= r
                 * (self.flux_hu[i] - self.flux_hu[i - 1]
                     + 0.5 * (self.source[i] + self.source[i - 1]));
