@@ -1,13 +1,27 @@
 //! Step 1 of the splitting: the hyperbolic (hydrostatic) problem (seed 000 eq. 17–24,
-//! seed 003 eq. 19–21), for the total mass and the discharge of a monolayer:
+//! seed 003 eq. 19–21), for the total mass and the discharge of each of the N layers
+//! (N = 1: the monolayer; seed 003 §4 step 1 with p_nh = 0):
 //!
-//!   ∂_t h + ∂_X(hu) = 0,   ∂_t(hu) + ∂_X(hu²) + g_n h ∂_X(h + z) = 0.
+//!   ∂_t h + ∂_X(hū) = 0,
+//!   ∂_t(hu_α) + ∂_X(hu_α²) + g_n h ∂_X(h + z) = (u_{α+1/2} G_{α+1/2} − u_{α−1/2} G_{α−1/2})/l_α,
+//!
+//! with ū = Σ l_α u_α, the mass exchange G_{α+1/2} = Σ_{β≤α} l_β ∂_X(h(u_β − ū))
+//! (seed 003 eq. 5, seed 001 eq. 19), G_{1/2} = G_{N+1/2} = 0, and the centred interface
+//! velocity u_{α+1/2} = ½(u_α + u_{α+1}). The right-hand side is the non-conservative
+//! product −𝓑(U)∂_X U of seed 003 eq. (18); it vanishes for N = 1.
 //!
 //! Path-conservative finite volumes with the HLL-type PVM diffusion:
 //!
-//!   U_i ← U_i − Δt/Δx (𝓕_{i+1/2} − 𝓕_{i−1/2} + ½(𝓢_{i+1/2} + 𝓢_{i−1/2})),
-//!   𝓕 = ½(F_c(U_L) + F_c(U_R)) − ½[α_0 (Ũ⁺ − Ũ⁻) + α_1 (F_c(U_R) − F_c(U_L) + 𝓢̃)],
-//!   𝓢 = (0, g_n ½(h_L + h_R)(h⁺ − h⁻)),
+//!   U_i ← U_i − Δt/Δx (𝓕_{i+1/2} − 𝓕_{i−1/2} + ½(𝓑_{i+1/2} + 𝓑_{i−1/2} + 𝓢_{i+1/2} + 𝓢_{i−1/2})),
+//!   𝓕 = ½(F_c(U_L) + F_c(U_R)) − ½[α_0 (Ũ⁺ − Ũ⁻) + α_1 (F_c(U_R) − F_c(U_L) + 𝓑 + 𝓢̃)],
+//!   𝓢 = (0, g_n ½(h_L + h_R)(h⁺ − h⁻), …),
+//!   𝓑_α = −(ũ_{α+1/2} ΔG_{α+1/2} − ũ_{α−1/2} ΔG_{α−1/2})/l_α,
+//!
+//! where ΔG_{α+1/2} = Σ_{β≤α} l_β (Δq_β − Δq̄) is the jump of the exchange across the
+//! interface (q_β = h u_β) and ũ_{α+1/2} the mean of u_{α+1/2} on both sides, i.e.
+//! 𝓑 = ½(B(U_L) + B(U_R))(U_R − U_L) (seed 003 eq. 19). Each layer's momentum is
+//! upwinded with its own velocity through Ũ^± = (ĥ^±, ĥ^± u_α); the wave speeds use ū
+//! (seed 003 after eq. 21).
 //!
 //! with the hydrostatic reconstruction h⁻ = max(0, h_L − (Δz)_+),
 //! h⁺ = max(0, h_R − (−Δz)_+) (seed 000 eq. 19). The source enters with a minus sign:
@@ -26,7 +40,10 @@
 //!
 //! Wave speeds S_L, S_R: Einfeldt-type bounds with Roe averages (seed 000 after eq. 21).
 //! Wet/dry fronts: an emerging bed (h_L > 0, h_R dry, h_L + z_L < z_R, and its mirror)
-//! is seen with the wet state's velocity set to zero (seed 003 Remark 2).
+//! is seen with the wet state's velocities set to zero (seed 003 Remark 2).
+//!
+//! A state at rest has u_α = 0, so ΔG = 0 and 𝓑 = 0: the exchange terms keep granular
+//! masses at rest exactly at rest, like the monolayer.
 
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
@@ -34,18 +51,25 @@ use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{celerity, velocity, H_DRY};
 use crate::state::State;
 
-/// The hydrostatic step for N = 1, generic over the basal friction law (used in ΔC).
+/// The hydrostatic step for N ≥ 1 layers, generic over the basal friction law (used in ΔC).
 #[derive(Debug)]
 pub struct HydrostaticStep<L: BasalFriction> {
     law: L,
-    /// Per interface (nx + 1): mass flux, momentum flux, pressure source 𝓢.
+    layers: usize,
+    /// Per cell with ghosts (nx + 2): mean velocity ū; per cell and layer: u_α.
+    u_mean: Vec<f64>,
+    u: Vec<f64>,
+    /// Per interface (nx + 1): mass flux, pressure source 𝓢.
     flux_h: Vec<f64>,
-    flux_hu: Vec<f64>,
     source: Vec<f64>,
+    /// Per interface and layer ((nx + 1)·N, interface-major): momentum flux and, for
+    /// N > 1, the exchange term 𝓑.
+    flux_hu: Vec<f64>,
+    exchange: Vec<f64>,
     h_new: Vec<f64>,
 }
 
-/// Left or right state of an interface.
+/// Left or right state of an interface (ū for the velocity).
 #[derive(Debug, Clone, Copy)]
 struct Side {
     h: f64,
@@ -53,7 +77,23 @@ struct Side {
     z: f64,
 }
 
-/// Interface contribution: (mass flux, momentum flux, pressure source 𝓢).
+/// What an interface contributes independently of the layers: HLL coefficients, the
+/// Coulomb-aware reconstruction ĥ^±, the pressure sources 𝓢, 𝓢̃, and whether a side
+/// is seen at rest (emerging bed).
+#[derive(Debug, Clone, Copy)]
+struct Interface {
+    alpha0: f64,
+    alpha1: f64,
+    hc_minus: f64,
+    hc_plus: f64,
+    source: f64,
+    source_c: f64,
+    left_at_rest: bool,
+    right_at_rest: bool,
+}
+
+/// The interface coefficients, or `None` where nothing crosses (both sides dry, or no
+/// wave). The returned sides carry the velocity the fluxes see.
 #[inline(always)]
 fn interface<L: BasalFriction>(
     law: &L,
@@ -62,17 +102,19 @@ fn interface<L: BasalFriction>(
     g_n: f64,
     dx: f64,
     dt: f64,
-) -> (f64, f64, f64) {
+) -> Option<(Interface, Side, Side)> {
     let l_dry = l.h <= H_DRY;
     let r_dry = r.h <= H_DRY;
     if l_dry && r_dry {
-        return (0.0, 0.0, 0.0);
+        return None;
     }
     // Emerging bed: the wet side cannot push mass up a dry step it does not overtop.
-    if r_dry && l.h + l.z < r.z {
+    let left_at_rest = r_dry && l.h + l.z < r.z;
+    if left_at_rest {
         l.u = 0.0;
     }
-    if l_dry && r.h + r.z < l.z {
+    let right_at_rest = l_dry && r.h + r.z < l.z;
+    if right_at_rest {
         r.u = 0.0;
     }
     let dz = r.z - l.z;
@@ -88,7 +130,7 @@ fn interface<L: BasalFriction>(
     let s_right = (r.u + celerity(g_n, r.h)).max(u_roe + c_roe);
     let spread = s_right - s_left;
     if spread <= 0.0 {
-        return (0.0, 0.0, 0.0);
+        return None;
     }
     let alpha0 = (s_right * s_left.abs() - s_left * s_right.abs()) / spread;
     let alpha1 = (s_right.abs() - s_left.abs()) / spread;
@@ -102,26 +144,159 @@ fn interface<L: BasalFriction>(
     let hc_minus = (l.h - dz_c.max(0.0)).max(0.0);
     let hc_plus = (r.h - (-dz_c).max(0.0)).max(0.0);
 
-    let (q_l, q_r) = (l.h * l.u, r.h * r.u);
-    let (m_l, m_r) = (q_l * l.u, q_r * r.u);
     let g_hbar = g_n * h_roe;
-    let source = g_hbar * (h_plus - h_minus);
-    let source_c = g_hbar * (hc_plus - hc_minus);
+    let coefficients = Interface {
+        alpha0,
+        alpha1,
+        hc_minus,
+        hc_plus,
+        source: g_hbar * (h_plus - h_minus),
+        source_c: g_hbar * (hc_plus - hc_minus),
+        left_at_rest,
+        right_at_rest,
+    };
+    Some((coefficients, l, r))
+}
 
-    let flux_h = 0.5 * (q_l + q_r) - 0.5 * (alpha0 * (hc_plus - hc_minus) + alpha1 * (q_r - q_l));
-    let flux_hu = 0.5 * (m_l + m_r)
-        - 0.5 * (alpha0 * (hc_plus * r.u - hc_minus * l.u) + alpha1 * (m_r - m_l + source_c));
-    (flux_h, flux_hu, source)
+/// Total mass flux through the interface (the sides carry ū).
+#[inline(always)]
+fn mass_flux(c: &Interface, l: Side, r: Side) -> f64 {
+    let (q_l, q_r) = (l.h * l.u, r.h * r.u);
+    0.5 * (q_l + q_r) - 0.5 * (c.alpha0 * (c.hc_plus - c.hc_minus) + c.alpha1 * (q_r - q_l))
+}
+
+/// Momentum flux of one layer with velocities `u_l`, `u_r` on the two sides (already
+/// zero on a side seen at rest); `exchange` is the layer's 𝓑 term (N > 1) or `None`.
+#[inline(always)]
+fn layer_momentum_flux(
+    c: &Interface,
+    h_l: f64,
+    h_r: f64,
+    u_l: f64,
+    u_r: f64,
+    exchange: Option<f64>,
+) -> f64 {
+    let (q_l, q_r) = (h_l * u_l, h_r * u_r);
+    let (m_l, m_r) = (q_l * u_l, q_r * u_r);
+    let jump = match exchange {
+        None => m_r - m_l + c.source_c,
+        Some(b) => m_r - m_l + b + c.source_c,
+    };
+    0.5 * (m_l + m_r) - 0.5 * (c.alpha0 * (c.hc_plus * u_r - c.hc_minus * u_l) + c.alpha1 * jump)
+}
+
+/// The exchange terms 𝓑_α of one interface (N > 1), written into `out` (N values).
+/// `u_l`, `u_r` are the layer velocities the fluxes see on each side, `l` the fractions.
+#[inline(always)]
+fn exchange_terms(l: &[f64], h_l: f64, h_r: f64, u_l: &[f64], u_r: &[f64], out: &mut [f64]) {
+    let n = l.len();
+    let mut dq_mean = 0.0;
+    for a in 0..n {
+        dq_mean += l[a] * (h_r * u_r[a] - h_l * u_l[a]);
+    }
+    // Running sum ΔG_{α+1/2} and the flux ũ_{α+1/2} ΔG_{α+1/2} below layer α + 1.
+    let mut g_jump = 0.0;
+    let mut below = 0.0;
+    for a in 0..n {
+        let above = if a + 1 < n {
+            g_jump += l[a] * ((h_r * u_r[a] - h_l * u_l[a]) - dq_mean);
+            0.25 * (u_l[a] + u_l[a + 1] + u_r[a] + u_r[a + 1]) * g_jump
+        } else {
+            0.0
+        };
+        out[a] = -(above - below) / l[a];
+        below = above;
+    }
 }
 
 impl<L: BasalFriction> HydrostaticStep<L> {
+    /// The monolayer step (N = 1).
     pub fn new(law: L, nx: usize) -> Self {
+        Self::with_layers(law, nx, 1)
+    }
+
+    /// The step for `layers` ≥ 1 layers.
+    pub fn with_layers(law: L, nx: usize, layers: usize) -> Self {
+        assert!(layers >= 1);
         HydrostaticStep {
             law,
+            layers,
+            u_mean: vec![0.0; nx + 2],
+            u: vec![0.0; (nx + 2) * layers],
             flux_h: vec![0.0; nx + 1],
-            flux_hu: vec![0.0; nx + 1],
             source: vec![0.0; nx + 1],
+            flux_hu: vec![0.0; (nx + 1) * layers],
+            exchange: if layers > 1 {
+                vec![0.0; (nx + 1) * layers]
+            } else {
+                Vec::new()
+            },
             h_new: vec![0.0; nx + 2],
+        }
+    }
+
+    /// Velocities u_α and ū of every cell, ghosts included.
+    fn velocities(&mut self, state: &State) {
+        let n = self.layers;
+        for j in 0..state.h.len() {
+            let h = state.h[j];
+            for a in 0..n {
+                self.u[j * n + a] = velocity(h, state.hu[j * n + a]);
+            }
+            self.u_mean[j] = if n == 1 {
+                self.u[j]
+            } else {
+                state.mean_velocity(j)
+            };
+        }
+    }
+
+    /// Mass flux, pressure source, and each layer's momentum flux and exchange term at
+    /// every interface k (between cells k and k + 1, ghosts included).
+    fn interfaces(&mut self, mesh: &Mesh, dt: f64, l_frac: &[f64], h: &[f64]) {
+        let (nx, n) = (mesh.nx, self.layers);
+        let (g_n, dx) = (mesh.g_n, mesh.dx);
+        let side = |j: usize| Side {
+            h: h[j],
+            u: self.u_mean[j],
+            z: mesh.z[j],
+        };
+        let mut left = side(0);
+        for k in 0..=nx {
+            let right = side(k + 1);
+            let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
+            let Some((c, l, r)) = interface(&self.law, left, right, g_n, dx, dt) else {
+                self.flux_h[k] = 0.0;
+                self.source[k] = 0.0;
+                fluxes.fill(0.0);
+                if n > 1 {
+                    self.exchange[k * n..(k + 1) * n].fill(0.0);
+                }
+                left = right;
+                continue;
+            };
+            self.flux_h[k] = mass_flux(&c, l, r);
+            self.source[k] = c.source;
+            let u_l = &self.u[k * n..(k + 1) * n];
+            let u_r = &self.u[(k + 1) * n..(k + 2) * n];
+            let seen = |u: f64, at_rest: bool| if at_rest { 0.0 } else { u };
+            if n == 1 {
+                let (ul, ur) = (seen(u_l[0], c.left_at_rest), seen(u_r[0], c.right_at_rest));
+                fluxes[0] = layer_momentum_flux(&c, l.h, r.h, ul, ur, None);
+            } else {
+                let exchange = &mut self.exchange[k * n..(k + 1) * n];
+                if c.left_at_rest || c.right_at_rest {
+                    // One side at rest, the other dry: no velocity anywhere, no exchange.
+                    exchange.fill(0.0);
+                } else {
+                    exchange_terms(l_frac, l.h, r.h, u_l, u_r, exchange);
+                }
+                for a in 0..n {
+                    let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
+                    fluxes[a] = layer_momentum_flux(&c, l.h, r.h, ul, ur, Some(exchange[a]));
+                }
+            }
+            left = right;
         }
     }
 }
@@ -132,26 +307,13 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
     }
 
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
-        debug_assert_eq!(state.layers, 1);
-        let nx = mesh.nx;
-        let (g_n, dx) = (mesh.g_n, mesh.dx);
-        let side = |j: usize| Side {
-            h: state.h[j],
-            u: velocity(state.h[j], state.hu[j]),
-            z: mesh.z[j],
-        };
-        let mut left = side(0);
-        for k in 0..=nx {
-            let right = side(k + 1);
-            let (fh, fhu, s) = interface(&self.law, left, right, g_n, dx, dt);
-            self.flux_h[k] = fh;
-            self.flux_hu[k] = fhu;
-            self.source[k] = s;
-            left = right;
-        }
+        debug_assert_eq!(state.layers, self.layers);
+        let (nx, n) = (mesh.nx, self.layers);
+        self.velocities(state);
+        self.interfaces(mesh, dt, &state.l, &state.h);
 
         // Mass first: refuse the step (state untouched) if it would empty a cell.
-        let r = dt / dx;
+        let r = dt / mesh.dx;
         let mut worst = (f64::INFINITY, 0usize);
         for i in 1..=nx {
             let h = state.h[i] - r * (self.flux_h[i] - self.flux_h[i - 1]);
@@ -170,11 +332,20 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
         }
         for i in 1..=nx {
             state.h[i] = self.h_new[i].max(0.0);
-            state.hu[i] -= r
-                * (self.flux_hu[i] - self.flux_hu[i - 1]
-                    + 0.5 * (self.source[i] + self.source[i - 1]));
+            let source = 0.5 * (self.source[i] + self.source[i - 1]);
+            let (right, left) = (i * n, (i - 1) * n);
+            let hu = &mut state.hu[i * n..(i + 1) * n];
+            if n == 1 {
+                hu[0] -= r * (self.flux_hu[right] - self.flux_hu[left] + source);
+            } else {
+                for (a, q) in hu.iter_mut().enumerate() {
+                    let exchange = 0.5 * (self.exchange[right + a] + self.exchange[left + a]);
+                    *q -=
+                        r * (self.flux_hu[right + a] - self.flux_hu[left + a] + source + exchange);
+                }
+            }
             if state.h[i] <= H_DRY {
-                state.hu[i] = 0.0;
+                hu.fill(0.0);
             }
         }
         state.fill_ghosts(mesh);

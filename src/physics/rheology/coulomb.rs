@@ -1,6 +1,6 @@
 //! Constant Coulomb friction (classical Savage–Hutter): μ ≡ μ_c.
 
-use super::BasalFriction;
+use super::{BasalFriction, LocalFriction};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Coulomb {
@@ -14,6 +14,13 @@ impl BasalFriction for Coulomb {
     }
 
     fn mu_static(&self) -> f64 {
+        self.mu
+    }
+}
+
+impl LocalFriction for Coulomb {
+    #[inline(always)]
+    fn mu_local(&self, _shear_rate: f64, _p_over_rho: f64) -> f64 {
         self.mu
     }
 }

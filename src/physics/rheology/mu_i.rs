@@ -9,7 +9,7 @@
 //! and, for the monolayer model, the shear rate of the Bagnold profile
 //! γ̇ = 5|ū| / (2h) (seed 002 eq. 2.15).
 
-use super::BasalFriction;
+use super::{BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,6 +33,16 @@ pub fn inertial_number(d_s: f64, phi: f64, speed: f64, h: f64, p_over_rho: f64) 
     d_s * shear_rate / (phi * p_over_rho).sqrt()
 }
 
+/// Local inertial number I = d_s |∂_z u| / √(p/ρ_s), p/ρ_s = φ_s p/ρ (seed 003 eq. 10;
+/// with it the steady Bagnold profile is seed 001 eq. 29). Zero where p ≤ 0.
+#[inline(always)]
+pub fn local_inertial_number(d_s: f64, phi: f64, shear_rate: f64, p_over_rho: f64) -> f64 {
+    if p_over_rho <= 0.0 {
+        return 0.0;
+    }
+    d_s * shear_rate / (phi * p_over_rho).sqrt()
+}
+
 impl MuI {
     #[inline(always)]
     pub fn mu_of_i(&self, i: f64) -> f64 {
@@ -48,6 +58,15 @@ impl BasalFriction for MuI {
 
     fn mu_static(&self) -> f64 {
         self.mu_s
+    }
+}
+
+impl LocalFriction for MuI {
+    #[inline(always)]
+    fn mu_local(&self, shear_rate: f64, p_over_rho: f64) -> f64 {
+        self.mu_of_i(local_inertial_number(
+            self.d_s, self.phi, shear_rate, p_over_rho,
+        ))
     }
 }
 
