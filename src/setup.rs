@@ -1,7 +1,8 @@
 //! From a validated [`Scenario`] to a ready [`Simulation`]: samples the profiles on
 //! the mesh, adds the erodible bed (seed 001 §4.2, seed 003 eq. 34: the column sits
 //! on a uniform layer h_i of the same material, so h = initial.h + h_i), and builds
-//! the pipeline of the chosen model.
+//! the pipeline of the chosen model (monolayer or multilayer with `model.layers`
+//! layers; every layer starts with the velocity `initial.u`).
 
 use crate::mesh::{Mesh, MeshSpec};
 use crate::output::RunInfo;
@@ -26,12 +27,6 @@ fn setup_error(key: &str, message: &str) -> SetupError {
 }
 
 pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
-    if scn.model.layers > 1 {
-        return Err(setup_error(
-            "model.layers",
-            "the multilayer model (layers > 1) is not available yet; use layers = 1",
-        ));
-    }
     if scn.model.pressure == Pressure::NonHydrostatic {
         return Err(setup_error(
             "model.pressure",
@@ -68,8 +63,8 @@ pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
         .map(|(&x, &b)| scn.initial.u.eval(x, b))
         .collect();
     let mesh = Mesh::new(&spec, b);
-    let state = State::from_profiles(&mesh, &[1.0], &h, &u);
-    let stages = pipeline::hydrostatic_monolayer(&scn.friction, &scn.material, d.cells);
+    let state = State::from_profiles(&mesh, &scn.multilayer.layer_fractions, &h, &u);
+    let stages = pipeline::hydrostatic(&scn.friction, &scn.material, d.cells, &scn.multilayer);
     let config = RunConfig {
         t_end: scn.time.t_end,
         cfl: scn.time.cfl,
@@ -95,12 +90,10 @@ pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
         scenario_toml: scn.source_toml.clone(),
         front_threshold: scn.output.front_threshold,
     };
-    Ok(Simulation::new(
-        mesh,
-        state,
-        vec![h_i; d.cells],
-        stages,
-        config,
-        info,
-    ))
+    let mut sim = Simulation::new(mesh, state, vec![h_i; d.cells], stages, config, info);
+    sim.static_threshold = scn.multilayer.static_threshold;
+    if scn.model.layers > 1 {
+        sim.rest_speed = scn.multilayer.static_threshold;
+    }
+    Ok(sim)
 }

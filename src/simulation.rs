@@ -13,8 +13,9 @@ use crate::mesh::Mesh;
 use crate::numerics::cfl::cfl_dt;
 use crate::numerics::{Stage, StageError};
 use crate::output::{
-    GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+    CellField, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
 };
+use crate::profiles::{normal_velocities, static_interface};
 use crate::state::State;
 
 /// Time-loop settings.
@@ -54,6 +55,13 @@ pub struct Simulation {
     stage_times: Vec<Duration>,
     pub t: f64,
     pub steps: u64,
+    /// Layer speed (m/s) above which a layer counts as flowing, for the multilayer
+    /// output `/snapshots/static_interface` (default 1e-3 m/s, seed 001 §4.2.5).
+    pub static_threshold: f64,
+    /// Largest speed (m/s) of a mass at rest, for the stop time and `stop_at_rest`: 0
+    /// for the monolayer, which stops exactly; the multilayer model keeps regularised
+    /// creep velocities (seed 003 Remark 2), so setup uses its static threshold.
+    pub rest_speed: f64,
 }
 
 /// Largest number of Δt halvings before a step is declared failed.
@@ -79,6 +87,8 @@ impl Simulation {
             stage_times,
             t: 0.0,
             steps: 0,
+            static_threshold: 1e-3,
+            rest_speed: 0.0,
         }
     }
 
@@ -120,6 +130,11 @@ impl Simulation {
     fn apply_pipeline(&mut self, dt: f64) -> Result<(), StageError> {
         for (stage, time) in self.pipeline.iter_mut().zip(&mut self.stage_times) {
             let start = Instant::now();
+            stage.prepare(&self.mesh, &self.state);
+            *time += start.elapsed();
+        }
+        for (stage, time) in self.pipeline.iter_mut().zip(&mut self.stage_times) {
+            let start = Instant::now();
             stage.apply(&self.mesh, dt, &mut self.state)?;
             *time += start.elapsed();
         }
@@ -136,13 +151,30 @@ impl Simulation {
                     crate::physics::shallow::velocity(h, self.state.hu[(i + 1) * n + a]);
             }
         }
+        // The multilayer model also reports its normal velocities (seed 001 eq. 20)
+        // and the flow/no-flow interface.
+        let (w, interface) = if n > 1 {
+            let mut w = vec![0.0; n * nx];
+            normal_velocities(&self.mesh, &self.state, &mut w);
+            let mut interface = vec![0.0; nx];
+            static_interface(&self.state, self.static_threshold, &mut interface);
+            (Some(w), interface)
+        } else {
+            (None, Vec::new())
+        };
+        let extra = [CellField {
+            name: "static_interface",
+            units: "m",
+            data: &interface,
+        }];
         sink.snapshot(&SnapshotView {
             t: self.t,
             h: self.state.h_interior(),
             u: &u,
-            w: None,
+            w: w.as_deref(),
             p_nh: None,
             layers: n,
+            extra: if n > 1 { &extra } else { &[] },
         })
     }
 
@@ -182,7 +214,7 @@ impl Simulation {
         let cfg = self.config.clone();
         let mut next_output = cfg.output_every.min(cfg.t_end);
         let mut output_index = 1u64;
-        let mut rest_since: Option<f64> = (d0.max_speed == 0.0).then_some(0.0);
+        let mut rest_since: Option<f64> = (d0.max_speed <= self.rest_speed).then_some(0.0);
         let mut last = d0;
         let mut status = "completed";
         while self.t < cfg.t_end {
@@ -203,12 +235,13 @@ impl Simulation {
                 return Err(self.fail(sink, wall, &last, d0.front_x, rest_since, msg));
             }
             sink.step(&self.record(&d, dt))?;
-            rest_since = if d.max_speed == 0.0 {
+            let at_rest = d.max_speed <= self.rest_speed;
+            rest_since = if at_rest {
                 rest_since.or(Some(self.t))
             } else {
                 None
             };
-            let stop = cfg.stop_at_rest && d.max_speed == 0.0;
+            let stop = cfg.stop_at_rest && at_rest;
             if at_output || stop {
                 self.snapshot(sink)?;
             }

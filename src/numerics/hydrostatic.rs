@@ -20,8 +20,12 @@
 //! where ΔG_{α+1/2} = Σ_{β≤α} l_β (Δq_β − Δq̄) is the jump of the exchange across the
 //! interface (q_β = h u_β) and ũ_{α+1/2} the mean of u_{α+1/2} on both sides, i.e.
 //! 𝓑 = ½(B(U_L) + B(U_R))(U_R − U_L) (seed 003 eq. 19). Each layer's momentum is
-//! upwinded with its own velocity through Ũ^± = (ĥ^±, ĥ^± u_α); the wave speeds use ū
-//! (seed 003 after eq. 21).
+//! upwinded with its own velocity through Ũ^± = (ĥ^±, ĥ^± u_α). The wave speeds are
+//! those of seed 003 (after eq. 21) with √(g_n h) replaced, for N > 1, by
+//! √(g_n h + 3 Σ l_α (u_α − ū)²), which bounds the outer eigenvalues of a sheared
+//! column: with ū ± √(g_n h) alone a Bagnold profile at Froude number ≈ 1 looks
+//! supercritical, the flux is fully upwinded and the uniform flow is unstable
+//! (`docs/numerics.md`, Multilayer).
 //!
 //! with the hydrostatic reconstruction h⁻ = max(0, h_L − (Δz)_+),
 //! h⁺ = max(0, h_R − (−Δz)_+) (seed 000 eq. 19). The source enters with a minus sign:
@@ -56,8 +60,10 @@ use crate::state::State;
 pub struct HydrostaticStep<L: BasalFriction> {
     law: L,
     layers: usize,
-    /// Per cell with ghosts (nx + 2): mean velocity ū; per cell and layer: u_α.
+    /// Per cell with ghosts (nx + 2): mean velocity ū and shear term 3 Σ l_α (u_α − ū)²
+    /// of the wave speed; per cell and layer: u_α.
     u_mean: Vec<f64>,
+    shear: Vec<f64>,
     u: Vec<f64>,
     /// Per interface (nx + 1): mass flux, pressure source 𝓢.
     flux_h: Vec<f64>,
@@ -75,6 +81,20 @@ struct Side {
     h: f64,
     u: f64,
     z: f64,
+    /// Shear contribution to the wave speed, 3 Σ l_α (u_α − ū)² (0 for N = 1).
+    shear: f64,
+}
+
+/// Gravity wave speed of a sheared column, √(g_n h + 3 Σ l_α (u_α − ū)²): an estimate of
+/// the outer eigenvalues ū ± c of the multilayer system (√(g_n h) for N = 1 or a
+/// uniform profile).
+#[inline(always)]
+fn sheared_celerity(g_n: f64, h: f64, shear: f64) -> f64 {
+    if shear == 0.0 {
+        celerity(g_n, h)
+    } else {
+        (g_n * h.max(0.0) + shear).sqrt()
+    }
 }
 
 /// What an interface contributes independently of the layers: HLL coefficients, the
@@ -112,10 +132,12 @@ fn interface<L: BasalFriction>(
     let left_at_rest = r_dry && l.h + l.z < r.z;
     if left_at_rest {
         l.u = 0.0;
+        l.shear = 0.0;
     }
     let right_at_rest = l_dry && r.h + r.z < l.z;
     if right_at_rest {
         r.u = 0.0;
+        r.shear = 0.0;
     }
     let dz = r.z - l.z;
     let h_minus = (l.h - dz.max(0.0)).max(0.0);
@@ -125,9 +147,9 @@ fn interface<L: BasalFriction>(
     let (sl, sr) = (l.h.max(0.0).sqrt(), r.h.max(0.0).sqrt());
     let u_roe = (sl * l.u + sr * r.u) / (sl + sr);
     let h_roe = 0.5 * (l.h + r.h);
-    let c_roe = celerity(g_n, h_roe);
-    let s_left = (l.u - celerity(g_n, l.h)).min(u_roe - c_roe);
-    let s_right = (r.u + celerity(g_n, r.h)).max(u_roe + c_roe);
+    let c_roe = sheared_celerity(g_n, h_roe, 0.5 * (l.shear + r.shear));
+    let s_left = (l.u - sheared_celerity(g_n, l.h, l.shear)).min(u_roe - c_roe);
+    let s_right = (r.u + sheared_celerity(g_n, r.h, r.shear)).max(u_roe + c_roe);
     let spread = s_right - s_left;
     if spread <= 0.0 {
         return None;
@@ -222,6 +244,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             law,
             layers,
             u_mean: vec![0.0; nx + 2],
+            shear: vec![0.0; nx + 2],
             u: vec![0.0; (nx + 2) * layers],
             flux_h: vec![0.0; nx + 1],
             source: vec![0.0; nx + 1],
@@ -243,11 +266,19 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             for a in 0..n {
                 self.u[j * n + a] = velocity(h, state.hu[j * n + a]);
             }
-            self.u_mean[j] = if n == 1 {
-                self.u[j]
+            if n == 1 {
+                self.u_mean[j] = self.u[j];
             } else {
-                state.mean_velocity(j)
-            };
+                let mean = state.mean_velocity(j);
+                self.u_mean[j] = mean;
+                let u = &self.u[j * n..(j + 1) * n];
+                let spread: f64 = u
+                    .iter()
+                    .zip(&state.l)
+                    .map(|(u, l)| l * (u - mean) * (u - mean))
+                    .sum();
+                self.shear[j] = 3.0 * spread;
+            }
         }
     }
 
@@ -260,6 +291,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             h: h[j],
             u: self.u_mean[j],
             z: mesh.z[j],
+            shear: self.shear[j],
         };
         let mut left = side(0);
         for k in 0..=nx {

@@ -49,7 +49,9 @@ use rust_hdf5::H5File;
 
 pub use layout::stage_attr_name;
 
-use super::{GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord};
+use super::{
+    CellField, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+};
 
 /// Writes one run to an HDF5 file, progressively (see the module docs).
 #[derive(Debug)]
@@ -63,14 +65,19 @@ pub struct Hdf5Sink {
 }
 
 /// What `begin` and the first snapshot fix about the file.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Shape {
     nx: usize,
     nl: usize,
     /// Whether snapshots carry `w` / `p_nh`; `None` until the first snapshot.
     has_w: Option<bool>,
     has_p_nh: Option<bool>,
+    /// Names of the per-cell fields; `None` until the first snapshot.
+    extra: Option<Vec<&'static str>>,
 }
+
+/// Names of `/snapshots` datasets that a per-cell field may not take.
+const FIXED_SNAPSHOT_NAMES: [&str; 5] = ["t", "h", "u", "w", "p_nh"];
 
 impl Shape {
     /// Checks the lengths of a snapshot's arrays.
@@ -84,7 +91,36 @@ impl Shape {
         expect("h", Some(snap.h.len()), nx)?;
         expect("u", Some(snap.u.len()), nl * nx)?;
         expect("w", snap.w.map(<[f64]>::len), nl * nx)?;
-        expect("p_nh", snap.p_nh.map(<[f64]>::len), (nl + 1) * (nx + 1))
+        expect("p_nh", snap.p_nh.map(<[f64]>::len), (nl + 1) * (nx + 1))?;
+        for (k, field) in snap.extra.iter().enumerate() {
+            let name = field.name;
+            let plain =
+                !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            if !plain || FIXED_SNAPSHOT_NAMES.contains(&name) {
+                return Err(format!("per-cell field name {name:?} is not allowed"));
+            }
+            if snap.extra[..k].iter().any(|f| f.name == name) {
+                return Err(format!("per-cell field {name:?} given twice"));
+            }
+            expect(name, Some(field.data.len()), nx)?;
+        }
+        Ok(())
+    }
+
+    /// Fixes at the first snapshot which per-cell fields are written, and holds later
+    /// snapshots to the same names. Returns the fields to create now.
+    fn fix_extra<'s>(&mut self, snap: &'s SnapshotView) -> Result<Vec<CellField<'s>>, String> {
+        let names: Vec<&'static str> = snap.extra.iter().map(|f| f.name).collect();
+        match &self.extra {
+            Some(before) if *before != names => Err(format!(
+                "per-cell fields are {names:?} but were {before:?} in earlier snapshots"
+            )),
+            Some(_) => Ok(Vec::new()),
+            None => {
+                self.extra = Some(names);
+                Ok(snap.extra.to_vec())
+            }
+        }
     }
 
     /// Fixes at the first snapshot whether `w` and `p_nh` are written, and holds later
@@ -161,6 +197,7 @@ impl Hdf5Sink {
             return Err(self.err(format!("{call} after finish")));
         }
         self.shape
+            .clone()
             .ok_or_else(|| self.err(format!("{call} before begin")))
     }
 }
@@ -188,19 +225,23 @@ impl OutputSink for Hdf5Sink {
             nl: info.layers,
             has_w: None,
             has_p_nh: None,
+            extra: None,
         });
         Ok(())
     }
 
     fn snapshot(&mut self, snap: &SnapshotView) -> Result<(), OutputError> {
         let mut shape = self.check_open("snapshot")?;
-        let create = shape
+        let (create, create_extra) = shape
             .check_lengths(snap)
             .and_then(|()| shape.fix_optional(snap))
+            .and_then(|create| Ok((create, shape.fix_extra(snap)?)))
             .map_err(|e| self.err(format!("snapshot at t = {}: {e}", snap.t)))?;
+        let (nx, nl) = (shape.nx, shape.nl);
         self.shape = Some(shape);
         let file = self.open_file()?;
-        layout::create_optional(&file, (shape.nx, shape.nl), create)
+        layout::create_optional(&file, (nx, nl), create)
+            .and_then(|()| layout::create_cell_fields(&file, nx, &create_extra))
             .and_then(|()| layout::append_steps(&file, &self.pending))
             .and_then(|()| layout::append_snapshot(&file, snap))
             .map_err(|e| self.err(e))?;

@@ -1,0 +1,323 @@
+//! Step 2 of the splitting for N > 1 layers: the implicit viscous step of the
+//! multilayer μ(I) model (seed 003 eq. 23–25, seed 001 eq. 25–28), with the total
+//! thickness h fixed:
+//!
+//!   l_α (h u_α − (hu)*_α) = Δt (K_{α−1/2} − K_{α+1/2}) / ρ,     α = 1 … N,
+//!   K_{α+1/2}/ρ = −ν_{α+1/2} (u_{α+1} − u_α) / h_{α+1/2},     h_{α+1/2} = ½(l_α + l_{α+1}) h,
+//!   K_{N+1/2} = 0,
+//!
+//! where the new velocities u_α are implicit and the viscosities ν = η/ρ are frozen at
+//! t^n (seed 003 "Step 2"), so each cell solves one N×N symmetric tridiagonal system
+//! (Thomas algorithm). The shear stress is τ = ν ∂_z u with
+//!
+//!   ν = μ(I) p / R(s),   I = d_s s / √(p/ρ_s),   p/ρ = g_n h Σ_{β>α} l_β,
+//!
+//! s the strain rate: |∂_z u| = |u_{α+1} − u_α| / h_{α+1/2} (seed 001 eq. 24–26), or with
+//! the C-MSM correction √((∂_z u)² + (∂_X(u_α + u_{α+1}))²) (seed 001 eq. 32). R is the
+//! regularisation: R = √(s² + 4δ²) (seed 003 eq. 10, where ‖D‖ = s/2), or
+//! R = max(s, μ p/ν_M), ν_M = 250 √(g h³) (seed 001 eq. 6 and 25, η_M = ρ ν_M).
+//!
+//! At the bed, either
+//! - Coulomb friction K_{1/2}/ρ = −μ(I_{1/2}) g_n ĥ sgn(u_1) with the basal shear rate
+//!   u_1/h_1 (seed 001 eq. 26 and 28). The solve eliminates the layers from the top down
+//!   to one equation d u_1 = r − Δt σ s, s ∈ Sgn(u_1), which is solved exactly: u_1 = 0 if
+//!   |r| ≤ Δt σ (friction stops the bottom layer but never reverses it), as in the
+//!   monolayer friction step; or
+//! - no slip: K_{1/2}/ρ = −ν_{1/2} 2u_1/h_1 (seed 001 end of §3.3).
+//!
+//! ĥ is the well-balancing reconstruction of seed 003 eq. (25), read as in the monolayer
+//! friction step (`friction.rs`): where |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s the basal friction
+//! acts on ½(h_i + ½(h_{i−1} + h_{i+1})), the thickness the pressure force of step 1
+//! sees, so a column at rest below the repose slope is held by its basal friction.
+//!
+//! Sidewall friction in a channel of width W (optional): Jop's term μ_w (H − z)/W added
+//! to μ at every interface and at the bed (seed 001 eq. 30), or the layer force
+//! −l_α h (2/W) μ_w p_α u_α / √(u_α² + δ_u²) with u_α^n in the denominator, which only
+//! adds to the diagonal (seed 003 eq. 36).
+//!
+//! Cells thinner than [`THIN_LAYER`] are treated as one layer with Coulomb friction
+//! (seed 003 Remark 2): the depth-averaged discharge gets the monolayer friction update
+//! and every layer moves with it.
+
+use super::friction::coulomb_update;
+use super::{Stage, StageError};
+use crate::mesh::Mesh;
+use crate::physics::rheology::{BasalFriction, LocalFriction};
+use crate::physics::shallow::{velocity, H_DRY};
+use crate::physics::GRAVITY;
+use crate::scenario::{BasalCondition, Regularization, Sidewall, SidewallForm};
+use crate::state::State;
+
+/// Thickness (m) below which a cell is solved as a monolayer (seed 003 Remark 2).
+pub const THIN_LAYER: f64 = 1e-6;
+
+/// Velocity regularisation (m/s) of the layer sidewall force when the viscosity is
+/// regularised by the bound η_M (with δ regularisation, δ is used).
+pub const SIDEWALL_DELTA_U: f64 = 1e-5;
+
+/// Options of the viscous step (from the scenario's `rheology` table).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViscousOptions {
+    pub basal: BasalCondition,
+    pub regularization: Regularization,
+    pub sidewall: Option<Sidewall>,
+    /// Second-order strain rate of seed 001 eq. (32).
+    pub c_msm: bool,
+    /// Basal friction on ĥ of seed 003 eq. (25) (`true`) or on h (`false`, the
+    /// non-well-balanced variant of seed 003 Table 6b; for tests).
+    pub well_balanced: bool,
+}
+
+/// The implicit viscous step, generic over the rheology (a constant μ or μ(I)).
+#[derive(Debug)]
+pub struct MultilayerViscousStep<L: BasalFriction + LocalFriction> {
+    law: L,
+    opts: ViscousOptions,
+    layers: usize,
+    /// Frozen at t^n, per cell (nx + 2) and slot (N), cell-major: slot 0 the bed
+    /// (μ_b for Coulomb, ν_{1/2} for no slip), slot α the interface ν_{α+1/2}.
+    frozen: Vec<f64>,
+    /// Frozen layer sidewall coefficients (2/W) μ_w (p_α/ρ) / √(u_α² + δ_u²) (layer form).
+    side: Vec<f64>,
+    /// Σ_{β ≥ a} l_β for a = 0 … N (0-based layers): depth fraction above interface a.
+    above: Vec<f64>,
+    /// Per-column scratch (N): couplings Δt ν / h_{α+1/2}, reduced diagonal and rhs.
+    coupling: Vec<f64>,
+    diag: Vec<f64>,
+    rhs: Vec<f64>,
+}
+
+impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
+    pub fn new(law: L, nx: usize, l: &[f64], opts: ViscousOptions) -> Self {
+        let n = l.len();
+        assert!(n >= 2, "the viscous step is for N > 1 layers");
+        let mut above = vec![0.0; n + 1];
+        for a in (0..n).rev() {
+            above[a] = above[a + 1] + l[a];
+        }
+        let layer_sidewall = matches!(
+            opts.sidewall,
+            Some(Sidewall {
+                form: SidewallForm::Layer,
+                ..
+            })
+        );
+        MultilayerViscousStep {
+            law,
+            opts,
+            layers: n,
+            frozen: vec![0.0; (nx + 2) * n],
+            side: if layer_sidewall {
+                vec![0.0; (nx + 2) * n]
+            } else {
+                Vec::new()
+            },
+            above,
+            coupling: vec![0.0; n],
+            diag: vec![0.0; n],
+            rhs: vec![0.0; n],
+        }
+    }
+
+    /// Jop's sidewall friction μ_w (H − z)/W at depth `depth` below the surface.
+    #[inline(always)]
+    fn jop(&self, depth: f64) -> f64 {
+        match self.opts.sidewall {
+            Some(Sidewall {
+                mu_w,
+                width,
+                form: SidewallForm::Jop,
+            }) => mu_w * depth / width,
+            _ => 0.0,
+        }
+    }
+
+    /// ν = μ p / R(s): the frozen viscosity over density for strain rate `s`, friction
+    /// `mu`, pressure over density `p` in a column of thickness `h`.
+    #[inline(always)]
+    fn viscosity(&self, mu: f64, p: f64, s: f64, h: f64) -> f64 {
+        let stress = mu * p;
+        let r = match self.opts.regularization {
+            Regularization::Delta { delta } => (s * s + 4.0 * delta * delta).sqrt(),
+            Regularization::Bound => {
+                let nu_max = 250.0 * (GRAVITY * h * h * h).sqrt();
+                s.max(stress / nu_max)
+            }
+        };
+        if r > 0.0 {
+            stress / r
+        } else {
+            0.0
+        }
+    }
+
+    /// Freezes the coefficients of one wet cell `i` at the state t^n.
+    fn freeze_cell(&mut self, mesh: &Mesh, state: &State, i: usize) {
+        let n = self.layers;
+        let (g_n, l) = (mesh.g_n, &state.l);
+        let h = state.h[i];
+        let q = &state.hu[i * n..(i + 1) * n];
+        let u = |a: usize| velocity(h, q[a]);
+        let base = i * n;
+
+        // The bed.
+        let p_b = g_n * h;
+        self.frozen[base] = match self.opts.basal {
+            BasalCondition::Coulomb => {
+                let shear = (u(0) / (l[0] * h)).abs();
+                self.law.mu_local(shear, p_b) + self.jop(h)
+            }
+            BasalCondition::NoSlip => {
+                let shear = (2.0 * u(0) / (l[0] * h)).abs();
+                let mu = self.law.mu_local(shear, p_b) + self.jop(h);
+                self.viscosity(mu, p_b, shear, h)
+            }
+        };
+
+        // Interfaces α + 1/2 between 0-based layers a − 1 and a.
+        let dx2 = 2.0 * mesh.dx;
+        for a in 1..n {
+            let dz = 0.5 * (l[a - 1] + l[a]) * h;
+            let shear = (u(a) - u(a - 1)) / dz;
+            let s = if self.opts.c_msm {
+                let pair = |j: usize| {
+                    let hj = state.h[j];
+                    velocity(hj, state.hu[j * n + a - 1]) + velocity(hj, state.hu[j * n + a])
+                };
+                let dx_sum = (pair(i + 1) - pair(i - 1)) / dx2;
+                (shear * shear + dx_sum * dx_sum).sqrt()
+            } else {
+                shear.abs()
+            };
+            let p = g_n * h * self.above[a];
+            let mu = self.law.mu_local(s, p) + self.jop(h * self.above[a]);
+            self.frozen[base + a] = self.viscosity(mu, p, s, h);
+        }
+
+        if let Some(Sidewall {
+            mu_w,
+            width,
+            form: SidewallForm::Layer,
+        }) = self.opts.sidewall
+        {
+            let du = match self.opts.regularization {
+                Regularization::Delta { delta } => delta,
+                Regularization::Bound => SIDEWALL_DELTA_U,
+            };
+            let side = &mut self.side[base..base + n];
+            for (a, (side, l_a)) in side.iter_mut().zip(l).enumerate() {
+                let p_mid = g_n * h * (self.above[a] - 0.5 * l_a);
+                let ua = u(a);
+                *side = 2.0 / width * mu_w * p_mid / (ua * ua + du * du).sqrt();
+            }
+        }
+    }
+
+    /// Solves the column of cell `i` (thickness h ≥ [`THIN_LAYER`]) with the basal
+    /// friction impulse `impulse` = Δt μ_b g_n ĥ (Coulomb).
+    fn solve_column(&mut self, state: &mut State, i: usize, dt: f64, impulse: f64) {
+        let n = self.layers;
+        let h = state.h[i];
+        let base = i * n;
+        let l = &state.l;
+        let frozen = &self.frozen[base..base + n];
+        let (c, d, r) = (&mut self.coupling, &mut self.diag, &mut self.rhs);
+        let q = &mut state.hu[base..base + n];
+
+        // c[a] couples layers a − 1 and a (c[0] unused).
+        c[0] = 0.0;
+        for a in 1..n {
+            c[a] = dt * frozen[a] / (0.5 * (l[a - 1] + l[a]) * h);
+        }
+        for a in 0..n {
+            let upper = if a + 1 < n { c[a + 1] } else { 0.0 };
+            d[a] = l[a] * h + c[a] + upper;
+            r[a] = l[a] * q[a];
+        }
+        if !self.side.is_empty() {
+            for a in 0..n {
+                d[a] += dt * l[a] * h * self.side[base + a];
+            }
+        }
+        if self.opts.basal == BasalCondition::NoSlip {
+            d[0] += dt * frozen[0] * 2.0 / (l[0] * h);
+        }
+
+        // Eliminate from the top down, to one equation for the bottom layer.
+        for a in (1..n).rev() {
+            let m = c[a] / d[a];
+            d[a - 1] -= c[a] * m;
+            r[a - 1] += m * r[a];
+        }
+        let mut u_below = match self.opts.basal {
+            BasalCondition::Coulomb => coulomb_update(r[0], impulse) / d[0],
+            BasalCondition::NoSlip => r[0] / d[0],
+        };
+        q[0] = h * u_below;
+        for a in 1..n {
+            let u = (r[a] + c[a] * u_below) / d[a];
+            q[a] = h * u;
+            u_below = u;
+        }
+    }
+}
+
+impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
+    fn name(&self) -> &'static str {
+        "viscous"
+    }
+
+    fn prepare(&mut self, mesh: &Mesh, state: &State) {
+        debug_assert_eq!(state.layers, self.layers);
+        let n = self.layers;
+        for i in 1..=mesh.nx {
+            if state.h[i] > H_DRY {
+                self.freeze_cell(mesh, state, i);
+            } else {
+                // Dry at t^n: frozen when step 1 has wetted it (see `apply`).
+                self.frozen[i * n] = f64::NAN;
+            }
+        }
+    }
+
+    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
+        let n = self.layers;
+        let g_n = mesh.g_n;
+        // The relative margin keeps round-off from flipping the switch for a surface
+        // lying exactly at the repose slope (as in the monolayer friction step).
+        let slope_limit = 2.0 * mesh.dx * self.law.mu_static() * (1.0 + 1e-9);
+        for i in 1..=mesh.nx {
+            let h = state.h[i];
+            if h <= H_DRY {
+                state.hu[i * n..(i + 1) * n].fill(0.0);
+                continue;
+            }
+            let h_hat = if self.opts.well_balanced {
+                let (h_l, h_r) = (state.h[i - 1], state.h[i + 1]);
+                let eta_jump = (h_r + mesh.z[i + 1]) - (h_l + mesh.z[i - 1]);
+                if eta_jump.abs() <= slope_limit {
+                    0.5 * h + 0.25 * (h_l + h_r)
+                } else {
+                    h
+                }
+            } else {
+                h
+            };
+            if h < THIN_LAYER {
+                let q = &mut state.hu[i * n..(i + 1) * n];
+                let q_mean: f64 = q.iter().zip(&state.l).map(|(q, l)| q * l).sum();
+                let mu = self.law.mu(velocity(h, q_mean).abs(), h, g_n * h);
+                q.fill(coulomb_update(q_mean, dt * mu * g_n * h_hat));
+                continue;
+            }
+            if self.frozen[i * n].is_nan() {
+                // Dry at t^n, wetted by step 1: its coefficients come from this state.
+                self.freeze_cell(mesh, state, i);
+            }
+            let impulse = dt * self.frozen[i * n] * g_n * h_hat;
+            self.solve_column(state, i, dt, impulse);
+        }
+        state.fill_ghosts(mesh);
+        Ok(())
+    }
+}
