@@ -67,13 +67,14 @@ pub fn static_interface(state: &State, threshold: f64, out: &mut [f64]) {
     for (i, out) in out.iter_mut().enumerate() {
         let j = i + 1;
         let h = state.h[j];
-        let mut below = 0.0;
-        for a in 0..n {
-            if velocity(h, state.hu[j * n + a]).abs() > threshold {
-                break;
-            }
-            below += state.l[a];
+        if h <= H_DRY {
+            *out = 0.0;
+            continue;
         }
-        *out = if h > H_DRY { below.min(1.0) * h } else { 0.0 };
+        let q = &state.hu[j * n..(j + 1) * n];
+        *out = match q.iter().position(|&q| velocity(h, q).abs() > threshold) {
+            Some(a) => state.l[..a].iter().sum::<f64>() * h,
+            None => h,
+        };
     }
 }

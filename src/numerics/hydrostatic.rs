@@ -83,6 +83,8 @@ struct Side {
     z: f64,
     /// Shear contribution to the wave speed, 3 Σ l_α (u_α − ū)² (0 for N = 1).
     shear: f64,
+    /// Velocity u_1 of the bottom layer, on which the basal friction acts (ū for N = 1).
+    u_base: f64,
 }
 
 /// Gravity wave speed of a sheared column, √(g_n h + 3 Σ l_α (u_α − ū)²): an estimate of
@@ -133,11 +135,13 @@ fn interface<L: BasalFriction>(
     if left_at_rest {
         l.u = 0.0;
         l.shear = 0.0;
+        l.u_base = 0.0;
     }
     let right_at_rest = l_dry && r.h + r.z < l.z;
     if right_at_rest {
         r.u = 0.0;
         r.shear = 0.0;
+        r.u_base = 0.0;
     }
     let dz = r.z - l.z;
     let h_minus = (l.h - dz.max(0.0)).max(0.0);
@@ -160,7 +164,16 @@ fn interface<L: BasalFriction>(
     // Coulomb-aware reconstruction (ΔC): friction up to its threshold acts as bed.
     let mu = law.mu(u_roe.abs(), h_roe, g_n * h_roe);
     let threshold = g_n * mu;
-    let drive = u_roe / dt - g_n * ((r.h + r.z) - (l.h + l.z)) / dx;
+    // The friction acts on the bottom layer (seed 001 eq. 28): its velocity u_1 enters
+    // the drive. With ū, the O(δ) creep of the upper layers over a stopped bottom layer
+    // would exceed the friction margin near the repose slope (u/Δt is large) and
+    // break the balance. For N = 1, u_1 = ū.
+    let u_base = if l.u_base == l.u && r.u_base == r.u {
+        u_roe
+    } else {
+        (sl * l.u_base + sr * r.u_base) / (sl + sr)
+    };
+    let drive = u_base / dt - g_n * ((r.h + r.z) - (l.h + l.z)) / dx;
     let f = -drive.clamp(-threshold, threshold);
     let dz_c = dz - f * dx / g_n;
     let hc_minus = (l.h - dz_c.max(0.0)).max(0.0);
@@ -292,6 +305,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             u: self.u_mean[j],
             z: mesh.z[j],
             shear: self.shear[j],
+            u_base: self.u[j * n],
         };
         let mut left = side(0);
         for k in 0..=nx {
