@@ -240,10 +240,9 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         }
     }
 
-    /// Solves the column of cell `i` (thickness h ≥ [`THIN_LAYER`]) whose inertia and
-    /// weight are those of the thickness `weight` (ĥ or h), with the basal friction
-    /// impulse `impulse` = Δt μ_b g_n ĥ (Coulomb).
-    fn solve_column(&mut self, state: &mut State, i: usize, dt: f64, weight: f64, impulse: f64) {
+    /// Solves the column of cell `i` (thickness h ≥ [`THIN_LAYER`]) with the basal
+    /// friction impulse `impulse` = Δt μ_b g_n ĥ (Coulomb).
+    fn solve_column(&mut self, state: &mut State, i: usize, dt: f64, impulse: f64) {
         let n = self.layers;
         let h = state.h[i];
         let base = i * n;
@@ -260,7 +259,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             c[a] = dt * frozen[a] / (0.5 * (l[a - 1] + l[a]) * h);
         }
         for a in 0..n {
-            d[a] = l[a] * weight;
+            d[a] = l[a] * h;
             r[a] = l[a] * q[a];
         }
         if !self.side.is_empty() {
@@ -336,7 +335,7 @@ impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
                 self.freeze_cell(mesh, state, i);
             }
             let impulse = dt * self.frozen[i * n] * g_n * h_hat;
-            self.solve_column(state, i, dt, h_hat, impulse);
+            self.solve_column(state, i, dt, impulse);
         }
         state.fill_ghosts(mesh);
         Ok(())
