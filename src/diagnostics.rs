@@ -4,7 +4,7 @@
 //! values, so a NaN stops the run at the step that produced it.
 
 use crate::mesh::Mesh;
-use crate::physics::shallow::velocity;
+use crate::physics::shallow::{velocity, H_DRY};
 use crate::state::State;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,10 +39,20 @@ pub fn diagnose(mesh: &Mesh, state: &State, h_bed: &[f64], front_threshold: f64)
         }
         d.mass += h;
         d.h_max = d.h_max.max(h);
-        for (a, &qa) in q.iter().enumerate() {
-            let u = velocity(h, qa);
-            d.kinetic_energy += 0.5 * state.l[a] * h * u * u;
+        if n == 1 {
+            let u = velocity(h, q[0]);
+            d.kinetic_energy += 0.5 * state.l[0] * h * u * u;
             d.max_speed = d.max_speed.max(u.abs());
+        } else if h > H_DRY {
+            // Σ_α ½ l_α h u_α² = ½ Σ_α l_α q_α² / h, one division per cell.
+            let inv_h = 1.0 / h;
+            let (mut energy, mut q_max) = (0.0, 0.0f64);
+            for (&qa, &la) in q.iter().zip(&state.l) {
+                energy += la * qa * qa;
+                q_max = q_max.max(qa.abs());
+            }
+            d.kinetic_energy += 0.5 * energy * inv_h;
+            d.max_speed = d.max_speed.max(q_max * inv_h);
         }
         if h - bed > front_threshold {
             d.front_x = mesh.x[i];

@@ -4,7 +4,7 @@
 //! of the column, √(g_n h + 3 Σ l_α (u_α − ū)²), as in the hyperbolic step.
 
 use crate::mesh::Mesh;
-use crate::physics::shallow::{celerity, velocity, H_DRY};
+use crate::physics::shallow::{celerity, H_DRY};
 use crate::state::State;
 
 /// Largest signal speed max(|u|) + max(√(g_n h)) over the physical cells.
@@ -17,20 +17,27 @@ pub fn max_signal_speed(mesh: &Mesh, state: &State) -> f64 {
     let mut shear_max: f64 = 0.0;
     for j in 1..=mesh.nx {
         let h = state.h[j];
-        if h > H_DRY {
-            let mean = state.mean_velocity(j);
-            u_max = u_max.max(mean.abs());
-            h_max = h_max.max(h);
-            if n > 1 {
-                let shear: f64 = (0..n)
-                    .map(|a| {
-                        let d = velocity(h, state.hu[j * n + a]) - mean;
-                        state.l[a] * d * d
-                    })
-                    .sum();
-                shear_max = shear_max.max(3.0 * shear);
-            }
+        if h <= H_DRY {
+            continue;
         }
+        h_max = h_max.max(h);
+        if n == 1 {
+            u_max = u_max.max(state.mean_velocity(j).abs());
+            continue;
+        }
+        let inv_h = 1.0 / h;
+        let q = &state.hu[j * n..(j + 1) * n];
+        let mean: f64 = q.iter().zip(&state.l).map(|(q, l)| l * q).sum::<f64>() * inv_h;
+        let shear: f64 = q
+            .iter()
+            .zip(&state.l)
+            .map(|(q, l)| {
+                let d = q * inv_h - mean;
+                l * d * d
+            })
+            .sum();
+        u_max = u_max.max(mean.abs());
+        shear_max = shear_max.max(3.0 * shear);
     }
     if n == 1 {
         u_max + celerity(mesh.g_n, h_max)

@@ -65,6 +65,9 @@ pub struct HydrostaticStep<L: BasalFriction> {
     u_mean: Vec<f64>,
     shear: Vec<f64>,
     u: Vec<f64>,
+    /// 1/l_α and Σ_{β≤α} l_β (N > 1).
+    inv_l: Vec<f64>,
+    l_below: Vec<f64>,
     /// Per interface (nx + 1): mass flux, pressure source 𝓢.
     flux_h: Vec<f64>,
     source: Vec<f64>,
@@ -220,28 +223,42 @@ fn layer_momentum_flux(
     0.5 * (m_l + m_r) - 0.5 * (c.alpha0 * (c.hc_plus * u_r - c.hc_minus * u_l) + c.alpha1 * jump)
 }
 
+/// The layer fractions as the exchange terms use them.
+#[derive(Debug, Clone, Copy)]
+struct Fractions<'a> {
+    /// l_α.
+    l: &'a [f64],
+    /// 1/l_α.
+    inv: &'a [f64],
+    /// Σ_{β≤α} l_β.
+    below: &'a [f64],
+}
+
 /// The exchange terms 𝓑_α of one interface (N > 1), written into `out` (N values).
-/// `u_l`, `u_r` are the layer velocities the fluxes see on each side, `l` the fractions.
+/// `u_l`, `u_r` are the layer velocities the fluxes see on each side.
+///
+/// ΔG_{α+1/2} = Σ_{β≤α} l_β Δq_β − (Σ_{β≤α} l_β) Δq̄ is a running sum, so the whole
+/// interface costs one pass over the layers after the one for Δq̄.
 #[inline(always)]
-fn exchange_terms(l: &[f64], h_l: f64, h_r: f64, u_l: &[f64], u_r: &[f64], out: &mut [f64]) {
-    let n = l.len();
+fn exchange_terms(frac: Fractions, h_l: f64, h_r: f64, u_l: &[f64], u_r: &[f64], out: &mut [f64]) {
+    let n = frac.l.len();
+    let (l, inv_l, l_below) = (frac.l, &frac.inv[..n], &frac.below[..n]);
+    let (u_l, u_r, out) = (&u_l[..n], &u_r[..n], &mut out[..n]);
     let mut dq_mean = 0.0;
     for a in 0..n {
         dq_mean += l[a] * (h_r * u_r[a] - h_l * u_l[a]);
     }
-    // Running sum ΔG_{α+1/2} and the flux ũ_{α+1/2} ΔG_{α+1/2} below layer α + 1.
-    let mut g_jump = 0.0;
+    // Running Σ_{β≤α} l_β Δq_β, and the flux ũ_{α+1/2} ΔG_{α+1/2} below layer α + 1.
+    let mut partial = 0.0;
     let mut below = 0.0;
-    for a in 0..n {
-        let above = if a + 1 < n {
-            g_jump += l[a] * ((h_r * u_r[a] - h_l * u_l[a]) - dq_mean);
-            0.25 * (u_l[a] + u_l[a + 1] + u_r[a] + u_r[a + 1]) * g_jump
-        } else {
-            0.0
-        };
-        out[a] = -(above - below) / l[a];
+    for a in 0..n - 1 {
+        partial += l[a] * (h_r * u_r[a] - h_l * u_l[a]);
+        let g_jump = partial - l_below[a] * dq_mean;
+        let above = 0.25 * (u_l[a] + u_l[a + 1] + u_r[a] + u_r[a + 1]) * g_jump;
+        out[a] = (below - above) * inv_l[a];
         below = above;
     }
+    out[n - 1] = below * inv_l[n - 1];
 }
 
 impl<L: BasalFriction> HydrostaticStep<L> {
@@ -259,6 +276,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             u_mean: vec![0.0; nx + 2],
             shear: vec![0.0; nx + 2],
             u: vec![0.0; (nx + 2) * layers],
+            inv_l: vec![0.0; layers],
+            l_below: vec![0.0; layers],
             flux_h: vec![0.0; nx + 1],
             source: vec![0.0; nx + 1],
             flux_hu: vec![0.0; (nx + 1) * layers],
@@ -271,27 +290,49 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         }
     }
 
-    /// Velocities u_α and ū of every cell, ghosts included.
+    /// Velocities u_α and ū of every cell, ghosts included, and for N > 1 the shear
+    /// term of the wave speed and the inverse layer fractions.
     fn velocities(&mut self, state: &State) {
         let n = self.layers;
+        if n == 1 {
+            for j in 0..state.h.len() {
+                self.u[j] = velocity(state.h[j], state.hu[j]);
+                self.u_mean[j] = self.u[j];
+            }
+            return;
+        }
+        let mut sum = 0.0;
+        for ((inv, below), l) in self.inv_l.iter_mut().zip(&mut self.l_below).zip(&state.l) {
+            *inv = 1.0 / l;
+            sum += l;
+            *below = sum;
+        }
         for j in 0..state.h.len() {
             let h = state.h[j];
-            for a in 0..n {
-                self.u[j * n + a] = velocity(h, state.hu[j * n + a]);
+            let u = &mut self.u[j * n..(j + 1) * n];
+            if h <= H_DRY {
+                u.fill(0.0);
+                self.u_mean[j] = 0.0;
+                self.shear[j] = 0.0;
+                continue;
             }
-            if n == 1 {
-                self.u_mean[j] = self.u[j];
-            } else {
-                let mean = state.mean_velocity(j);
-                self.u_mean[j] = mean;
-                let u = &self.u[j * n..(j + 1) * n];
-                let spread: f64 = u
-                    .iter()
-                    .zip(&state.l)
-                    .map(|(u, l)| l * (u - mean) * (u - mean))
-                    .sum();
-                self.shear[j] = 3.0 * spread;
+            let inv_h = 1.0 / h;
+            let mut mean = 0.0;
+            for ((u, q), l) in u
+                .iter_mut()
+                .zip(&state.hu[j * n..(j + 1) * n])
+                .zip(&state.l)
+            {
+                *u = q * inv_h;
+                mean += l * *u;
             }
+            let spread: f64 = u
+                .iter()
+                .zip(&state.l)
+                .map(|(u, l)| l * (u - mean) * (u - mean))
+                .sum();
+            self.u_mean[j] = mean;
+            self.shear[j] = 3.0 * spread;
         }
     }
 
@@ -335,7 +376,12 @@ impl<L: BasalFriction> HydrostaticStep<L> {
                     // One side at rest, the other dry: no velocity anywhere, no exchange.
                     exchange.fill(0.0);
                 } else {
-                    exchange_terms(l_frac, l.h, r.h, u_l, u_r, exchange);
+                    let frac = Fractions {
+                        l: l_frac,
+                        inv: &self.inv_l,
+                        below: &self.l_below,
+                    };
+                    exchange_terms(frac, l.h, r.h, u_l, u_r, exchange);
                 }
                 for a in 0..n {
                     let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));

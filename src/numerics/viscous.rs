@@ -64,6 +64,9 @@ pub const REPOSE_BAND: f64 = 0.01;
 /// regularised by the bound η_M (with δ regularisation, δ is used).
 pub const SIDEWALL_DELTA_U: f64 = 1e-5;
 
+/// Columns solved together (see `solve_columns`).
+const LANES: usize = 4;
+
 /// Options of the viscous step (from the scenario's `rheology` table).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViscousOptions {
@@ -88,12 +91,18 @@ pub struct MultilayerViscousStep<L: BasalFriction + LocalFriction> {
     frozen: Vec<f64>,
     /// Frozen layer sidewall coefficients (2/W) μ_w (p_α/ρ) / √(u_α² + δ_u²) (layer form).
     side: Vec<f64>,
-    /// Σ_{β ≥ a} l_β for a = 0 … N (0-based layers): depth fraction above interface a.
+    /// Σ_{β ≥ a} l_β for a = 0 … N (0-based layers): depth fraction above interface a,
+    /// and 1/√ of it (a < N).
     above: Vec<f64>,
-    /// Per-column scratch (N): couplings Δt ν / h_{α+1/2}, reduced diagonal and rhs.
-    coupling: Vec<f64>,
-    diag: Vec<f64>,
-    rhs: Vec<f64>,
+    inv_sqrt_above: Vec<f64>,
+    /// 2/(l_{a−1} + l_a): 1/h_{α+1/2} in units of 1/h (a ≥ 1).
+    inv_gap: Vec<f64>,
+    /// Per-column scratch (N): velocities; per layer and lane, couplings
+    /// Δt ν / h_{α+1/2}, reduced diagonal and rhs.
+    velocity: Vec<f64>,
+    coupling: Vec<[f64; LANES]>,
+    diag: Vec<[f64; LANES]>,
+    rhs: Vec<[f64; LANES]>,
 }
 
 impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
@@ -103,6 +112,11 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         let mut above = vec![0.0; n + 1];
         for a in (0..n).rev() {
             above[a] = above[a + 1] + l[a];
+        }
+        let inv_sqrt_above = above[..n].iter().map(|a| 1.0 / a.sqrt()).collect();
+        let mut inv_gap = vec![0.0; n];
+        for a in 1..n {
+            inv_gap[a] = 2.0 / (l[a - 1] + l[a]);
         }
         let layer_sidewall = matches!(
             opts.sidewall,
@@ -122,9 +136,12 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
                 Vec::new()
             },
             above,
-            coupling: vec![0.0; n],
-            diag: vec![0.0; n],
-            rhs: vec![0.0; n],
+            inv_sqrt_above,
+            inv_gap,
+            velocity: vec![0.0; n],
+            coupling: vec![[0.0; LANES]; n],
+            diag: vec![[0.0; LANES]; n],
+            rhs: vec![[0.0; LANES]; n],
         }
     }
 
@@ -142,16 +159,13 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     }
 
     /// ν = μ p / R(s): the frozen viscosity over density for strain rate `s`, friction
-    /// `mu`, pressure over density `p` in a column of thickness `h`.
+    /// `mu` and pressure over density `p`; `nu_max` = ν_M of the bound regularisation.
     #[inline(always)]
-    fn viscosity(&self, mu: f64, p: f64, s: f64, h: f64) -> f64 {
+    fn viscosity(&self, mu: f64, p: f64, s: f64, nu_max: f64) -> f64 {
         let stress = mu * p;
         let r = match self.opts.regularization {
             Regularization::Delta { delta } => (s * s + 4.0 * delta * delta).sqrt(),
-            Regularization::Bound => {
-                let nu_max = 250.0 * (GRAVITY * h * h * h).sqrt();
-                s.max(stress / nu_max)
-            }
+            Regularization::Bound => s.max(stress / nu_max),
         };
         if r > 0.0 {
             stress / r
@@ -165,44 +179,53 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         let n = self.layers;
         let (g_n, l) = (mesh.g_n, &state.l);
         let h = state.h[i];
-        let q = &state.hu[i * n..(i + 1) * n];
-        let u = |a: usize| velocity(h, q[a]);
+        let inv_h = 1.0 / h;
+        for (u, q) in self.velocity.iter_mut().zip(&state.hu[i * n..(i + 1) * n]) {
+            *u = q * inv_h;
+        }
         let base = i * n;
         // Pressures are those of the column the pressure force of step 1 sees.
         let weight = self.weight_thickness(mesh, &state.h, i);
+        let p_b = g_n * weight;
+        let scale = self.law.inertial_scale(p_b);
+        let nu_max = match self.opts.regularization {
+            Regularization::Bound => 250.0 * (GRAVITY * h * h * h).sqrt(),
+            Regularization::Delta { .. } => f64::INFINITY,
+        };
+        let u = &self.velocity;
 
         // The bed.
-        let p_b = g_n * weight;
+        let inv_h1 = inv_h / l[0];
         self.frozen[base] = match self.opts.basal {
             BasalCondition::Coulomb => {
-                let shear = (u(0) / (l[0] * h)).abs();
-                self.law.mu_local(shear, p_b) + self.jop(h)
+                let shear = (u[0] * inv_h1).abs();
+                self.law.mu_at(shear * scale) + self.jop(h)
             }
             BasalCondition::NoSlip => {
-                let shear = (2.0 * u(0) / (l[0] * h)).abs();
-                let mu = self.law.mu_local(shear, p_b) + self.jop(h);
-                self.viscosity(mu, p_b, shear, h)
+                let shear = (2.0 * u[0] * inv_h1).abs();
+                let mu = self.law.mu_at(shear * scale) + self.jop(h);
+                self.viscosity(mu, p_b, shear, nu_max)
             }
         };
 
         // Interfaces α + 1/2 between 0-based layers a − 1 and a.
-        let dx2 = 2.0 * mesh.dx;
+        let inv_2dx = 0.5 / mesh.dx;
         for a in 1..n {
-            let dz = 0.5 * (l[a - 1] + l[a]) * h;
-            let shear = (u(a) - u(a - 1)) / dz;
+            let shear = (u[a] - u[a - 1]) * inv_h * self.inv_gap[a];
             let s = if self.opts.c_msm {
                 let pair = |j: usize| {
                     let hj = state.h[j];
                     velocity(hj, state.hu[j * n + a - 1]) + velocity(hj, state.hu[j * n + a])
                 };
-                let dx_sum = (pair(i + 1) - pair(i - 1)) / dx2;
+                let dx_sum = (pair(i + 1) - pair(i - 1)) * inv_2dx;
                 (shear * shear + dx_sum * dx_sum).sqrt()
             } else {
                 shear.abs()
             };
-            let p = g_n * weight * self.above[a];
-            let mu = self.law.mu_local(s, p) + self.jop(h * self.above[a]);
-            self.frozen[base + a] = self.viscosity(mu, p, s, h);
+            let p = p_b * self.above[a];
+            let mu =
+                self.law.mu_at(s * scale * self.inv_sqrt_above[a]) + self.jop(h * self.above[a]);
+            self.frozen[base + a] = self.viscosity(mu, p, s, nu_max);
         }
 
         if let Some(Sidewall {
@@ -217,8 +240,8 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             };
             let side = &mut self.side[base..base + n];
             for (a, (side, l_a)) in side.iter_mut().zip(l).enumerate() {
-                let p_mid = g_n * weight * (self.above[a] - 0.5 * l_a);
-                let ua = u(a);
+                let p_mid = p_b * (self.above[a] - 0.5 * l_a);
+                let ua = self.velocity[a];
                 *side = 2.0 / width * mu_w * p_mid / (ua * ua + du * du).sqrt();
             }
         }
@@ -240,57 +263,86 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         }
     }
 
-    /// Solves the column of cell `i` (thickness h ≥ [`THIN_LAYER`]) with the basal
-    /// friction impulse `impulse` = Δt μ_b g_n ĥ (Coulomb).
-    fn solve_column(&mut self, state: &mut State, i: usize, dt: f64, impulse: f64) {
+    /// Solves the columns of the cells `cells[..count]` (thickness h ≥ [`THIN_LAYER`])
+    /// with the basal friction impulses Δt μ_b g_n ĥ (Coulomb) `impulses`. The columns
+    /// are independent; solving [`LANES`] together interleaves their sequential Thomas
+    /// recurrences (each layer waits for a division), which the processor then
+    /// overlaps. Unused lanes repeat the last column and are not written back.
+    fn solve_columns(
+        &mut self,
+        state: &mut State,
+        cells: [usize; LANES],
+        impulses: [f64; LANES],
+        count: usize,
+        dt: f64,
+    ) {
         let n = self.layers;
-        let h = state.h[i];
-        let base = i * n;
         let l = &state.l;
-        let frozen = &self.frozen[base..base + n];
         let (c, d, r) = (&mut self.coupling, &mut self.diag, &mut self.rhs);
-        let q = &mut state.hu[base..base + n];
+        let h: [f64; LANES] = std::array::from_fn(|k| state.h[cells[k]]);
+        let base: [usize; LANES] = std::array::from_fn(|k| cells[k] * n);
+        let dt_over_h: [f64; LANES] = std::array::from_fn(|k| dt / h[k]);
 
         // c[a] couples layers a − 1 and a (c[0] unused). d[a] first holds the diagonal
         // without the couplings: the layer's own mass l_a h plus sidewall and no-slip
         // terms, all positive.
-        c[0] = 0.0;
-        for a in 1..n {
-            c[a] = dt * frozen[a] / (0.5 * (l[a - 1] + l[a]) * h);
+        c[0] = [0.0; LANES];
+        for (a, (c, gap)) in c.iter_mut().zip(&self.inv_gap).enumerate().skip(1) {
+            for k in 0..LANES {
+                c[k] = dt_over_h[k] * self.frozen[base[k] + a] * gap;
+            }
         }
         for a in 0..n {
-            d[a] = l[a] * h;
-            r[a] = l[a] * q[a];
+            for k in 0..LANES {
+                d[a][k] = l[a] * h[k];
+                r[a][k] = l[a] * state.hu[base[k] + a];
+            }
         }
         if !self.side.is_empty() {
             for a in 0..n {
-                d[a] += dt * l[a] * h * self.side[base + a];
+                for k in 0..LANES {
+                    d[a][k] += dt * l[a] * h[k] * self.side[base[k] + a];
+                }
             }
         }
         if self.opts.basal == BasalCondition::NoSlip {
-            d[0] += dt * frozen[0] * 2.0 / (l[0] * h);
+            for k in 0..LANES {
+                d[0][k] += dt_over_h[k] * self.frozen[base[k]] * 2.0 / l[0];
+            }
         }
 
         // Eliminate from the top down, to one equation for the bottom layer. The
         // reduced diagonal of layer a is e_a + c_a, with e_{a−1} = d_{a−1} + c_a e_a/(e_a + c_a):
         // written so, no coupling is subtracted from another, and a rigid column
         // (couplings ≫ l_a h, e.g. δ → 0 at rest) keeps its mass e ≈ Σ l h to round-off.
+        // d[a] then holds 1/(e_a + c_a) for the back-substitution.
         for a in (1..n).rev() {
-            let full = d[a] + c[a];
-            let m = c[a] / full;
-            d[a - 1] += m * d[a];
-            r[a - 1] += m * r[a];
-            d[a] = full;
+            let (lower, upper) = d.split_at_mut(a);
+            let (r_lower, r_upper) = r.split_at_mut(a);
+            let (d_a, d_below) = (&mut upper[0], &mut lower[a - 1]);
+            let (r_a, r_below) = (&r_upper[0], &mut r_lower[a - 1]);
+            for k in 0..LANES {
+                let inv = 1.0 / (d_a[k] + c[a][k]);
+                let m = c[a][k] * inv;
+                d_below[k] += m * d_a[k];
+                r_below[k] += m * r_a[k];
+                d_a[k] = inv;
+            }
         }
-        let mut u_below = match self.opts.basal {
-            BasalCondition::Coulomb => coulomb_update(r[0], impulse) / d[0],
-            BasalCondition::NoSlip => r[0] / d[0],
-        };
-        q[0] = h * u_below;
+        let mut u_below: [f64; LANES] = std::array::from_fn(|k| match self.opts.basal {
+            BasalCondition::Coulomb => coulomb_update(r[0][k], impulses[k]) / d[0][k],
+            BasalCondition::NoSlip => r[0][k] / d[0][k],
+        });
+        for k in 0..count {
+            state.hu[base[k]] = h[k] * u_below[k];
+        }
         for a in 1..n {
-            let u = (r[a] + c[a] * u_below) / d[a];
-            q[a] = h * u;
-            u_below = u;
+            for k in 0..LANES {
+                u_below[k] = (r[a][k] + c[a][k] * u_below[k]) * d[a][k];
+            }
+            for k in 0..count {
+                state.hu[base[k] + a] = h[k] * u_below[k];
+            }
         }
     }
 }
@@ -316,6 +368,8 @@ impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
         let n = self.layers;
         let g_n = mesh.g_n;
+        // Columns waiting to be solved together.
+        let (mut cells, mut impulses, mut count) = ([0usize; LANES], [0.0; LANES], 0);
         for i in 1..=mesh.nx {
             let h = state.h[i];
             if h <= H_DRY {
@@ -334,8 +388,19 @@ impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
                 // Dry at t^n, wetted by step 1: its coefficients come from this state.
                 self.freeze_cell(mesh, state, i);
             }
-            let impulse = dt * self.frozen[i * n] * g_n * h_hat;
-            self.solve_column(state, i, dt, impulse);
+            cells[count] = i;
+            impulses[count] = dt * self.frozen[i * n] * g_n * h_hat;
+            count += 1;
+            if count == LANES {
+                self.solve_columns(state, cells, impulses, count, dt);
+                count = 0;
+            }
+        }
+        if count > 0 {
+            for k in count..LANES {
+                (cells[k], impulses[k]) = (cells[count - 1], impulses[count - 1]);
+            }
+            self.solve_columns(state, cells, impulses, count, dt);
         }
         state.fill_ghosts(mesh);
         Ok(())

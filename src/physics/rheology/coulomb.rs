@@ -20,7 +20,12 @@ impl BasalFriction for Coulomb {
 
 impl LocalFriction for Coulomb {
     #[inline(always)]
-    fn mu_local(&self, _shear_rate: f64, _p_over_rho: f64) -> f64 {
+    fn inertial_scale(&self, _p_over_rho: f64) -> f64 {
+        0.0
+    }
+
+    #[inline(always)]
+    fn mu_at(&self, _inertial_number: f64) -> f64 {
         self.mu
     }
 }

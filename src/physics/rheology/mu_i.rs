@@ -63,10 +63,13 @@ impl BasalFriction for MuI {
 
 impl LocalFriction for MuI {
     #[inline(always)]
-    fn mu_local(&self, shear_rate: f64, p_over_rho: f64) -> f64 {
-        self.mu_of_i(local_inertial_number(
-            self.d_s, self.phi, shear_rate, p_over_rho,
-        ))
+    fn inertial_scale(&self, p_over_rho: f64) -> f64 {
+        local_inertial_number(self.d_s, self.phi, 1.0, p_over_rho)
+    }
+
+    #[inline(always)]
+    fn mu_at(&self, inertial_number: f64) -> f64 {
+        self.mu_of_i(inertial_number)
     }
 }
 
@@ -91,6 +94,20 @@ mod tests {
         assert_eq!(law.mu(0.0, 0.1, 9.81 * 0.1), law.mu_s);
         assert_relative_eq!(law.mu_of_i(1e12), law.mu_2, max_relative = 1e-10);
         assert_relative_eq!(law.mu_of_i(law.i0), 0.5 * (law.mu_s + law.mu_2));
+    }
+
+    #[test]
+    fn local_friction_uses_the_local_shear_rate() {
+        let law = beads();
+        // γ̇ = 100 1/s under p/ρ = 9.81·0.05: I = d_s γ̇ / √(φ p/ρ).
+        let i = 0.7e-3 * 100.0 / (0.62f64 * 9.81 * 0.05).sqrt();
+        assert_relative_eq!(
+            law.mu_local(100.0, 9.81 * 0.05),
+            law.mu_of_i(i),
+            max_relative = 1e-14
+        );
+        assert_eq!(law.mu_local(0.0, 1.0), law.mu_s);
+        assert_eq!(law.mu_local(1.0, 0.0), law.mu_s);
     }
 
     #[test]
