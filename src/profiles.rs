@@ -78,3 +78,87 @@ pub fn static_interface(state: &State, threshold: f64, out: &mut [f64]) {
         };
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::MeshSpec;
+    use crate::scenario::BoundaryKind;
+
+    fn mesh(slope_deg: f64, coordinates: Coordinates, b: impl Fn(f64) -> f64) -> Mesh {
+        let spec = MeshSpec {
+            x_min: 0.0,
+            x_max: 1.0,
+            cells: 10,
+            slope_deg,
+            coordinates,
+            left: BoundaryKind::Outflow,
+            right: BoundaryKind::Outflow,
+        };
+        let bed = spec.centres().iter().map(|&x| b(x)).collect();
+        Mesh::new(&spec, bed)
+    }
+
+    /// Uniform thickness, flat bed, every layer with u = a x: incompressibility gives
+    /// w = −a z at height z (seed 001 eq. 20).
+    #[test]
+    fn stretching_flow_has_linear_normal_velocity() {
+        let m = mesh(10.0, Coordinates::Local, |_| 0.0);
+        let l = [0.2, 0.3, 0.5];
+        let rate = 0.7;
+        let u: Vec<f64> = m.x.iter().map(|x| rate * x).collect();
+        let mut state = State::from_profiles(&m, &l, &[0.4; 10], &u);
+        // Extrapolated ghosts so the centred differences hold at the ends too.
+        for a in 0..3 {
+            state.hu[a] = 0.4 * rate * (m.x[0] - m.dx);
+            state.hu[11 * 3 + a] = 0.4 * rate * (m.x[9] + m.dx);
+        }
+        let mut w = vec![0.0; 3 * 10];
+        normal_velocities(&m, &state, &mut w);
+        let mid = [0.1 * 0.4, 0.35 * 0.4, 0.75 * 0.4];
+        for a in 0..3 {
+            for i in 0..10 {
+                assert!(
+                    (w[a * 10 + i] + rate * mid[a]).abs() < 1e-12,
+                    "layer {a}, cell {i}"
+                );
+            }
+        }
+    }
+
+    /// A flow at rest on a bump has w = 0; a uniform layer sliding over a bed of slope
+    /// s follows it: w = u s in every layer.
+    #[test]
+    fn sliding_layer_follows_the_bed() {
+        for coordinates in [Coordinates::Local, Coordinates::Cartesian] {
+            let m = mesh(0.0, coordinates, |x| 0.1 * x);
+            let l = [0.5, 0.5];
+            let state = State::from_profiles(&m, &l, &[0.2; 10], &[2.0; 10]);
+            let mut w = vec![0.0; 20];
+            normal_velocities(&m, &state, &mut w);
+            for i in 1..9 {
+                assert!((w[i] - 0.2).abs() < 1e-12 && (w[10 + i] - 0.2).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn static_interface_is_the_base_of_the_first_flowing_layer() {
+        let m = mesh(0.0, Coordinates::Local, |_| 0.0);
+        let l = [0.25, 0.25, 0.5];
+        let mut state = State::from_profiles(&m, &l, &[0.4; 10], &[0.0; 10]);
+        // Cell 0 at rest, cell 1 flows above the first layer, cell 2 flows at the bed,
+        // cell 3 is dry.
+        let n = 3;
+        state.hu[2 * n + 1] = 0.4 * 0.5;
+        state.hu[2 * n + 2] = 0.4 * 1.0;
+        state.hu[3 * n] = 0.4 * 0.01;
+        state.h[4] = 0.0;
+        let mut out = vec![-1.0; 10];
+        static_interface(&state, 1e-3, &mut out);
+        assert_eq!(out[0], 0.4);
+        assert_eq!(out[1], 0.25 * 0.4);
+        assert_eq!(out[2], 0.0);
+        assert_eq!(out[3], 0.0);
+    }
+}

@@ -301,3 +301,100 @@ fn io_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
         message: e.to_string(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn info(layers: usize) -> RunInfo {
+        RunInfo {
+            granflow_version: "test".into(),
+            model: "granular".into(),
+            pressure: "hydrostatic".into(),
+            layers,
+            coordinates: "local".into(),
+            slope_deg: 0.0,
+            scenario_toml: String::new(),
+            front_threshold: 1e-3,
+        }
+    }
+
+    fn begin(path: &Path) -> Hdf5Sink {
+        let mut sink = Hdf5Sink::create(path).unwrap();
+        let x = [0.5, 1.5, 2.5];
+        sink.begin(
+            &info(2),
+            &GridData {
+                x: &x,
+                b: &[0.0; 3],
+                h_bed: &[0.0; 3],
+            },
+        )
+        .unwrap();
+        sink
+    }
+
+    fn view<'a>(t: f64, data: &'a [f64], extra: &'a [CellField<'a>]) -> SnapshotView<'a> {
+        SnapshotView {
+            t,
+            h: &data[..3],
+            u: data,
+            w: None,
+            p_nh: None,
+            layers: 2,
+            extra,
+        }
+    }
+
+    #[test]
+    fn per_cell_fields_are_written_as_frames() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("extra.h5");
+        let mut sink = begin(&path);
+        let data = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        for t in [0.0, 1.0] {
+            let s = [t, t + 0.5, t + 0.25];
+            let extra = [CellField {
+                name: "static_interface",
+                units: "m",
+                data: &s,
+            }];
+            sink.snapshot(&view(t, &data, &extra)).unwrap();
+        }
+        let file = H5File::open(&path).unwrap();
+        let ds = file.dataset("snapshots/static_interface").unwrap();
+        assert_eq!(ds.shape(), [2, 3]);
+        assert_eq!(
+            ds.read_raw::<f64>().unwrap(),
+            [0.0, 0.5, 0.25, 1.0, 1.5, 1.25]
+        );
+    }
+
+    #[test]
+    fn per_cell_fields_are_checked() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = [1.0; 6];
+        let field = |name: &'static str, data: &'static [f64]| CellField {
+            name,
+            units: "m",
+            data,
+        };
+        let cases: [(&[CellField], &str); 4] = [
+            (&[field("h", &[0.0; 3])], "not allowed"),
+            (&[field("bad name", &[0.0; 3])], "not allowed"),
+            (&[field("phi", &[0.0; 2])], "phi has 2 values"),
+            (&[field("phi", &[0.0; 3]), field("phi", &[0.0; 3])], "twice"),
+        ];
+        for (k, (extra, message)) in cases.into_iter().enumerate() {
+            let mut sink = begin(&dir.path().join(format!("bad{k}.h5")));
+            let e = sink.snapshot(&view(0.0, &data, extra)).unwrap_err();
+            assert!(e.to_string().contains(message), "{e}");
+        }
+        // The names are fixed by the first snapshot.
+        let mut sink = begin(&dir.path().join("change.h5"));
+        sink.snapshot(&view(0.0, &data, &[field("phi", &[0.0; 3])]))
+            .unwrap();
+        let e = sink.snapshot(&view(1.0, &data, &[])).unwrap_err();
+        assert!(e.to_string().contains("earlier snapshots"), "{e}");
+    }
+}

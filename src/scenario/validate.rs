@@ -1222,6 +1222,118 @@ front_threshold = 2e-3
     }
 
     #[test]
+    fn multilayer_keys() {
+        let text = format!(
+            "{MINIMAL}[model]\nlayers = 3\nlayer_fractions = [0.2, 0.3, 0.5]\n[output]\nstatic_threshold = 2e-3\n"
+        );
+        let text = replace(
+            &text,
+            "mu = 0.5",
+            "mu = 0.5\nbasal = \"no_slip\"\nregularization = \"bound\"\nmu_w_deg = 10.4\nchannel_width = 0.1\nsidewall = \"layer\"\nc_msm = true",
+        );
+        let s = load(&text).unwrap();
+        let m = &s.multilayer;
+        assert_eq!(m.layer_fractions, vec![0.2, 0.3, 0.5]);
+        assert_eq!(m.basal, BasalCondition::NoSlip);
+        assert_eq!(m.regularization, Regularization::Bound);
+        let w = m.sidewall.unwrap();
+        assert!((w.mu_w - 10.4f64.to_radians().tan()).abs() < 1e-15);
+        assert_eq!((w.width, w.form), (0.1, SidewallForm::Layer));
+        assert!(m.c_msm);
+        assert_eq!(m.static_threshold, 2e-3);
+
+        // Defaults: uniform layers, Coulomb bed, δ = 1e-5, no sidewalls.
+        let s = load_set(MINIMAL, &["model.layers=4"]).unwrap();
+        assert_eq!(s.multilayer.layer_fractions, vec![0.25; 4]);
+        assert_eq!(s.multilayer.basal, BasalCondition::Coulomb);
+        assert_eq!(
+            s.multilayer.regularization,
+            Regularization::Delta { delta: 1e-5 }
+        );
+        assert_eq!(s.multilayer.sidewall, None);
+        assert!(!s.multilayer.c_msm);
+        assert_eq!(s.multilayer.static_threshold, 1e-3);
+        assert_eq!(load(MINIMAL).unwrap().multilayer.layer_fractions, vec![1.0]);
+
+        let bad = [
+            (
+                &["model.layers=2", "model.layer_fractions=[0.5]"][..],
+                "model.layer_fractions",
+                "one fraction per layer",
+            ),
+            (
+                &["model.layers=2", "model.layer_fractions=[0.5, 0.6]"],
+                "model.layer_fractions",
+                "sum to 1",
+            ),
+            (
+                &["model.layers=2", "model.layer_fractions=[1.5, -0.5]"],
+                "model.layer_fractions",
+                "greater than 0",
+            ),
+            (&["rheology.basal=no_slip"], "rheology.basal", "multilayer"),
+            (
+                &["model.layers=2", "rheology.basal=slip"],
+                "rheology.basal",
+                "unknown value",
+            ),
+            (
+                &[
+                    "model.layers=2",
+                    "rheology.regularization=bound",
+                    "rheology.delta=1e-3",
+                ],
+                "rheology.delta",
+                "only used by",
+            ),
+            (
+                &["model.layers=2", "rheology.delta=0"],
+                "rheology.delta",
+                "greater than 0",
+            ),
+            (
+                &["model.layers=2", "rheology.mu_w=0.2"],
+                "rheology.mu_w",
+                "channel_width",
+            ),
+            (
+                &["model.layers=2", "rheology.channel_width=0.1"],
+                "rheology.channel_width",
+                "mu_w",
+            ),
+            (
+                &["model.layers=2", "rheology.sidewall=jop"],
+                "rheology.sidewall",
+                "mu_w",
+            ),
+            (
+                &["rheology.mu_w=0.2", "rheology.channel_width=0.1"],
+                "rheology.mu_w",
+                "multilayer",
+            ),
+            (
+                &[
+                    "model.layers=2",
+                    "rheology.mu_w=0.2",
+                    "rheology.channel_width=0",
+                ],
+                "rheology.channel_width",
+                "greater than 0",
+            ),
+            (
+                &["model.layers=2", "output.static_threshold=0"],
+                "output.static_threshold",
+                "greater than 0",
+            ),
+        ];
+        for (sets, key, message) in bad {
+            let e = load_set(MINIMAL, sets).unwrap_err();
+            assert_eq!(e.key(), Some(key), "{sets:?}: {e}");
+            assert!(e.message().contains(message), "{sets:?}: {e}");
+        }
+    }
+
+    #[test]
     fn scenario_is_send_sync() {
         fn check<T: Send + Sync + Clone>() {}
         check::<Scenario>();
