@@ -66,7 +66,9 @@ fn main() {
         ("H-20 l.", 20, 79.4),
     ] {
         let scn = load_file(&path, &settings(layers)).expect("scenario");
-        let mut best: Option<(f64, u64, Vec<(String, f64)>)> = None;
+        // (wall time, steps, stage times) of the fastest run.
+        type Run = (f64, u64, Vec<(String, f64)>);
+        let mut best: Option<Run> = None;
         for _ in 0..reps {
             let mut sim = build_simulation(&scn).expect("setup");
             let start = Instant::now();

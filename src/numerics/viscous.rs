@@ -408,6 +408,7 @@ impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)] // index arithmetic mirrors the equations
 mod tests {
     use super::*;
     use crate::mesh::{Mesh, MeshSpec};
