@@ -209,6 +209,28 @@ fn bagnold_profile_converges_at_second_order_in_the_layers() {
     assert!(oinf.iter().all(|&o| o > 1.3), "L∞ orders {oinf:?}");
 }
 
+/// The Bagnold flow on the paper's 30 cells stays uniform along the slope: the wave
+/// speeds include the shear of the column (ū ± √(g_n h + 3 Σ l_α (u_α − ū)²)). With
+/// seed 003's ū ± √(g_n h) the flow (ū ≈ 3.2 m/s, √(g_n h) ≈ 3.0 m/s) counts as
+/// supercritical, is fully upwinded, and round-off grows into waves by t ≈ 15 s.
+#[test]
+fn bagnold_flow_stays_uniform_on_thirty_cells() {
+    let (_, mut sim) = scenario(
+        "bagnold.toml",
+        &sets(&["model.layers=4", "time.t_end=50", "output.every=50"]),
+    );
+    assert_eq!(sim.mesh.nx, 30);
+    run(&mut sim);
+    let h = sim.state.h_interior();
+    let worst = h.iter().fold(0.0f64, |m, h| m.max((h - 1.0).abs()));
+    assert!(worst < 1e-9, "max |h − 1| = {worst:e}");
+    let u_top: Vec<f64> = (0..30).map(|i| layer_velocities(&sim, i)[3]).collect();
+    let spread = u_top
+        .iter()
+        .fold(0.0f64, |m, u| m.max((u - u_top[0]).abs()));
+    assert!(u_top[0] > 4.5 && spread < 1e-9, "{u_top:?}");
+}
+
 /// Material of seed 001 §4.1.2 (Jop et al.'s glass beads in a narrow channel).
 struct Channel {
     d_s: f64,

@@ -168,9 +168,10 @@ fn interface<L: BasalFriction>(
     let mu = law.mu(u_roe.abs(), h_roe, g_n * h_roe);
     let threshold = g_n * mu;
     // The friction acts on the bottom layer (seed 001 eq. 28): its velocity u_1 enters
-    // the drive. With ū, the O(δ) creep of the upper layers over a stopped bottom layer
-    // would exceed the friction margin near the repose slope (u/Δt is large) and
-    // break the balance. For N = 1, u_1 = ū.
+    // the drive (seed 003 prints ū). Over a bottom layer that the viscous step has
+    // stopped, the regularised creep of the upper layers divided by Δt would exceed the
+    // friction margin, the reconstruction would let mass through, and a deposit would
+    // never come to rest (the C-MSM collapse of tests/multilayer.rs). For N = 1, u_1 = ū.
     let u_base = if l.u_base == l.u && r.u_base == r.u {
         u_roe
     } else {
