@@ -26,9 +26,12 @@
 //! - no slip: K_{1/2}/ρ = −ν_{1/2} 2u_1/h_1 (seed 001 end of §3.3).
 //!
 //! ĥ is the well-balancing reconstruction of seed 003 eq. (25), read as in the monolayer
-//! friction step (`friction.rs`): where |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s the basal friction
-//! acts on ½(h_i + ½(h_{i−1} + h_{i+1})), the thickness the pressure force of step 1
-//! sees, so a column at rest below the repose slope is held by its basal friction.
+//! friction step (`friction.rs`): where |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s (1 + 1 %) the
+//! column's weight — the pressures p in ν and the basal friction — is that of
+//! ½(h_i + ½(h_{i−1} + h_{i+1})), the thickness the pressure force of step 1 sees, so a
+//! column at rest below the repose slope is held by its basal friction and its layers
+//! by their strength μ p. The inertia stays l_α h (seed 003 eq. 24 puts ĥ there too,
+//! which multiplies the momentum by h/ĥ at every step). See docs/numerics.md.
 //!
 //! Sidewall friction in a channel of width W (optional): Jop's term μ_w (H − z)/W added
 //! to μ at every interface and at the bed (seed 001 eq. 30), or the layer force
@@ -37,7 +40,8 @@
 //!
 //! Cells thinner than [`THIN_LAYER`] are treated as one layer with Coulomb friction
 //! (seed 003 Remark 2): the depth-averaged discharge gets the monolayer friction update
-//! and every layer moves with it.
+//! and every layer moves with it. A cell dry at t^n and wetted by step 1 freezes its
+//! coefficients from the state after step 1.
 
 use super::friction::coulomb_update;
 use super::{Stage, StageError};
