@@ -79,6 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             w: None,
             p_nh: None,
             layers: nl,
+            extra: &[],
         })?;
         times.push(start.elapsed());
     }

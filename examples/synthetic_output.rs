@@ -115,6 +115,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 w: nh.then_some(&w[..]),
                 p_nh: nh.then_some(&p[..]),
                 layers: nl,
+                extra: &[],
             })?;
         }
     }

@@ -45,6 +45,7 @@ UNITS = {
     "snapshots/u": "m/s",
     "snapshots/w": "m/s",
     "snapshots/p_nh": "m^2/s^2",
+    "snapshots/static_interface": "m",
     "front/t": "s",
     "front/x": "m",
     "diagnostics/t": "s",
@@ -53,7 +54,8 @@ UNITS = {
     "diagnostics/kinetic_energy": "m^4/s^2",
     "diagnostics/max_speed": "m/s",
 }
-REQUIRED = [name for name in UNITS if name not in ("snapshots/w", "snapshots/p_nh")]
+OPTIONAL = ("snapshots/w", "snapshots/p_nh", "snapshots/static_interface")
+REQUIRED = [name for name in UNITS if name not in OPTIONAL]
 DIAGNOSTICS = ["t", "dt", "mass", "kinetic_energy", "max_speed"]
 
 
@@ -123,10 +125,20 @@ class Checker:
             "snapshots/u": (nt, nl, nx),
             "snapshots/w": (nt, nl, nx),
             "snapshots/p_nh": (nt, nl + 1, nx + 1),
+            "snapshots/static_interface": (nt, nx),
         }
         for name, shape in expected.items():
             if name in f and f[name].shape != shape:
                 self.fail(f"/{name} has shape {f[name].shape}, expected {shape}")
+        # Model-specific per-cell fields: one frame per snapshot, with units.
+        for name, ds in f["snapshots"].items():
+            path = f"snapshots/{name}"
+            if path in expected or not isinstance(ds, h5py.Dataset):
+                continue
+            if ds.shape[:1] != (nt,):
+                self.fail(f"/{path} has shape {ds.shape}, expected ({nt}, ...)")
+            if "units" not in ds.attrs:
+                self.fail(f"/{path} has no units attribute")
         pressure = f.attrs.get("pressure")
         if nt > 0 and (pressure == "nonhydrostatic") != ("snapshots/p_nh" in f):
             self.fail(f"pressure is {pressure!r} but /snapshots/p_nh is "
@@ -155,6 +167,10 @@ class Checker:
                 self.fail(f"/snapshots/{name} has NaN (first in snapshot {k})")
         if (h < 0).any():
             self.fail(f"/snapshots/h has negative values (min {np.nanmin(h):.3g})")
+        if "snapshots/static_interface" in f:
+            s = f["snapshots/static_interface"][:]
+            if np.isnan(s).any() or (s < 0).any() or (s > h * (1 + 1e-12)).any():
+                self.fail("/snapshots/static_interface is not within [0, h]")
         for name in ("snapshots/t", "diagnostics/t", "front/t"):
             t = f[name][:]
             if np.isnan(t).any() or (np.diff(t) < 0).any():

@@ -4,7 +4,7 @@
 //! values, so a NaN stops the run at the step that produced it.
 
 use crate::mesh::Mesh;
-use crate::physics::shallow::velocity;
+use crate::physics::shallow::{velocity, H_DRY};
 use crate::state::State;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -29,11 +29,24 @@ pub fn diagnose(mesh: &Mesh, state: &State, h_bed: &[f64], front_threshold: f64)
     for (i, ((&h, q), &bed)) in h.iter().zip(hu.chunks_exact(n)).zip(h_bed).enumerate() {
         mass += h;
         h_max = h_max.max(h);
-        for (&qa, &la) in q.iter().zip(&state.l) {
-            q_sum += qa;
-            let u = velocity(h, qa);
-            ke += la * h * u * u;
+        if n == 1 {
+            q_sum += q[0];
+            let u = velocity(h, q[0]);
+            ke += h * u * u;
             max_speed = max_speed.max(u.abs());
+        } else {
+            // Σ_α l_α h u_α² = Σ_α l_α q_α² / h, one division per cell.
+            let (mut energy, mut q_max) = (0.0, 0.0f64);
+            for (&qa, &la) in q.iter().zip(&state.l) {
+                q_sum += qa;
+                energy += la * qa * qa;
+                q_max = q_max.max(qa.abs());
+            }
+            if h > H_DRY {
+                let inv_h = 1.0 / h;
+                ke += energy * inv_h;
+                max_speed = max_speed.max(q_max * inv_h);
+            }
         }
         if h - bed > front_threshold {
             front = Some(i);

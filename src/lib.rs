@@ -12,6 +12,7 @@ pub mod numerics;
 pub mod output;
 pub mod physics;
 pub mod pipeline;
+pub mod profiles;
 pub mod runner;
 pub mod scenario;
 pub mod setup;

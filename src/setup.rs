@@ -1,7 +1,8 @@
 //! From a validated [`Scenario`] to a ready [`Simulation`]: samples the profiles on
 //! the mesh, adds the erodible bed (seed 001 §4.2, seed 003 eq. 34: the column sits
 //! on a uniform layer h_i of the same material, so h = initial.h + h_i), and builds
-//! the pipeline of the chosen model.
+//! the pipeline of the chosen model (monolayer or multilayer with `model.layers`
+//! layers; every layer starts with the velocity `initial.u`).
 
 use crate::mesh::{Mesh, MeshSpec};
 use crate::output::RunInfo;
@@ -26,10 +27,10 @@ fn setup_error(key: &str, message: &str) -> SetupError {
 }
 
 pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
-    if scn.model.layers > 1 {
+    if scn.model.layers > 1 && scn.model.pressure == Pressure::NonHydrostatic {
         return Err(setup_error(
-            "model.layers",
-            "the multilayer model (layers > 1) is not available yet; use layers = 1",
+            "model.pressure",
+            "the multilayer non-hydrostatic model (layers > 1 with \"nonhydrostatic\") is not available yet",
         ));
     }
     if scn.domain.coordinates == Coordinates::Cartesian && scn.domain.slope_deg != 0.0 {
@@ -63,7 +64,7 @@ pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
         .collect();
     let w = sample_normal_velocity(scn, &x, &b);
     let mesh = Mesh::new(&spec, b);
-    let mut state = State::from_profiles(&mesh, &[1.0], &h, &u);
+    let mut state = State::from_profiles(&mesh, &scn.multilayer.layer_fractions, &h, &u);
     let stages = match scn.model.pressure {
         Pressure::Hydrostatic => {
             if w.is_some() {
@@ -72,7 +73,7 @@ pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
                     "a normal velocity needs model.pressure = \"nonhydrostatic\"",
                 ));
             }
-            pipeline::hydrostatic_monolayer(&scn.friction, &scn.material, d.cells)
+            pipeline::hydrostatic(&scn.friction, &scn.material, d.cells, &scn.multilayer)
         }
         Pressure::NonHydrostatic => nonhydrostatic(scn, &mesh, &mut state, w),
     };
@@ -101,14 +102,12 @@ pub fn build_simulation(scn: &Scenario) -> Result<Simulation, SetupError> {
         scenario_toml: scn.source_toml.clone(),
         front_threshold: scn.output.front_threshold,
     };
-    Ok(Simulation::new(
-        mesh,
-        state,
-        vec![h_i; d.cells],
-        stages,
-        config,
-        info,
-    ))
+    let mut sim = Simulation::new(mesh, state, vec![h_i; d.cells], stages, config, info);
+    sim.static_threshold = scn.multilayer.static_threshold;
+    if scn.model.layers > 1 {
+        sim.rest_speed = scn.multilayer.static_threshold;
+    }
+    Ok(sim)
 }
 
 // Non-hydrostatic set-up (issue 3, seed 000).

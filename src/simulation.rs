@@ -13,9 +13,10 @@ use crate::mesh::Mesh;
 use crate::numerics::cfl::cfl_dt;
 use crate::numerics::{Stage, StageError};
 use crate::output::{
-    GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+    CellField, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
 };
 use crate::physics::shallow::celerity;
+use crate::profiles::{normal_velocities, static_interface};
 use crate::state::State;
 
 /// Time-loop settings.
@@ -58,6 +59,13 @@ pub struct Simulation {
     /// max|u| + √(g_n h_max) of the current state when the run loop has already
     /// computed it with the diagnostics (saves the CFL pass); None when stale.
     signal_speed: Option<f64>,
+    /// Layer speed (m/s) above which a layer counts as flowing, for the multilayer
+    /// output `/snapshots/static_interface` (default 1e-3 m/s, seed 001 §4.2.5).
+    pub static_threshold: f64,
+    /// Largest speed (m/s) of a mass at rest, for the stop time and `stop_at_rest`: 0
+    /// for the monolayer, which stops exactly; the multilayer model keeps regularised
+    /// creep velocities (seed 003 Remark 2), so setup uses its static threshold.
+    pub rest_speed: f64,
 }
 
 /// Largest number of Δt halvings before a step is declared failed.
@@ -84,6 +92,8 @@ impl Simulation {
             t: 0.0,
             steps: 0,
             signal_speed: None,
+            static_threshold: 1e-3,
+            rest_speed: 0.0,
         }
     }
 
@@ -104,7 +114,10 @@ impl Simulation {
     /// Diagnostics of the current state, remembering its signal speed for the next Δt.
     fn diagnose_for_next_step(&mut self) -> Diagnostics {
         let d = self.diagnostics();
-        self.signal_speed = Some(d.max_speed + celerity(self.mesh.g_n, d.h_max));
+        // N > 1 needs the sheared wave speed of numerics::cfl; the monolayer's is
+        // max|u| + √(g_n h_max), which the diagnostics already have.
+        self.signal_speed =
+            (self.state.layers == 1).then(|| d.max_speed + celerity(self.mesh.g_n, d.h_max));
         d
     }
 
@@ -133,6 +146,11 @@ impl Simulation {
     fn apply_pipeline(&mut self, dt: f64) -> Result<(), StageError> {
         for (stage, time) in self.pipeline.iter_mut().zip(&mut self.stage_times) {
             let start = Instant::now();
+            stage.prepare(&self.mesh, &self.state);
+            *time += start.elapsed();
+        }
+        for (stage, time) in self.pipeline.iter_mut().zip(&mut self.stage_times) {
+            let start = Instant::now();
             stage.apply(&self.mesh, dt, &mut self.state)?;
             *time += start.elapsed();
         }
@@ -154,13 +172,30 @@ impl Simulation {
             .nh
             .as_ref()
             .map(|nh| nh.snapshot_fields(&self.state));
+        // The multilayer model also reports its normal velocities (seed 001 eq. 20)
+        // and the flow/no-flow interface.
+        let (w_ml, interface) = if n > 1 {
+            let mut w = vec![0.0; n * nx];
+            normal_velocities(&self.mesh, &self.state, &mut w);
+            let mut interface = vec![0.0; nx];
+            static_interface(&self.state, self.static_threshold, &mut interface);
+            (Some(w), interface)
+        } else {
+            (None, Vec::new())
+        };
+        let extra = [CellField {
+            name: "static_interface",
+            units: "m",
+            data: &interface,
+        }];
         sink.snapshot(&SnapshotView {
             t: self.t,
             h: self.state.h_interior(),
             u: &u,
-            w: nh.as_ref().map(|(w, _)| w.as_slice()),
+            w: nh.as_ref().map(|(w, _)| w.as_slice()).or(w_ml.as_deref()),
             p_nh: nh.as_ref().map(|(_, p)| p.as_slice()),
             layers: n,
+            extra: if n > 1 { &extra } else { &[] },
         })
     }
 
@@ -200,7 +235,7 @@ impl Simulation {
         let cfg = self.config.clone();
         let mut next_output = cfg.output_every.min(cfg.t_end);
         let mut output_index = 1u64;
-        let mut rest_since: Option<f64> = (d0.max_speed == 0.0).then_some(0.0);
+        let mut rest_since: Option<f64> = (d0.max_speed <= self.rest_speed).then_some(0.0);
         let mut last = d0;
         let mut status = "completed";
         while self.t < cfg.t_end {
@@ -221,12 +256,13 @@ impl Simulation {
                 return Err(self.fail(sink, wall, &last, d0.front_x, rest_since, msg));
             }
             sink.step(&self.record(&d, dt))?;
-            rest_since = if d.max_speed == 0.0 {
+            let at_rest = d.max_speed <= self.rest_speed;
+            rest_since = if at_rest {
                 rest_since.or(Some(self.t))
             } else {
                 None
             };
-            let stop = cfg.stop_at_rest && d.max_speed == 0.0;
+            let stop = cfg.stop_at_rest && at_rest;
             if at_output || stop {
                 self.snapshot(sink)?;
             }

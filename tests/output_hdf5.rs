@@ -124,6 +124,7 @@ impl Synth {
             w: nh.then_some(&w[..]),
             p_nh: nh.then_some(&p[..]),
             layers: self.nl,
+            extra: &[],
         })
         .unwrap();
     }
@@ -467,6 +468,7 @@ fn bad_calls_are_errors() {
         w: None,
         p_nh: None,
         layers: FULL.nl,
+        extra: &[],
     };
     let err = sink.snapshot(&view).unwrap_err().to_string();
     assert!(err.contains("u has 7 values, expected 14"), "{err}");
@@ -492,6 +494,7 @@ fn optional_fields_cannot_change_between_snapshots() {
         w: None,
         p_nh: None,
         layers: FULL.nl,
+        extra: &[],
     };
     sink.snapshot(&view).unwrap();
     view.w = Some(&w);

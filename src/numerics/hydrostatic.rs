@@ -1,29 +1,54 @@
 //! Step 1 of the splitting: the hyperbolic (hydrostatic) problem (seed 000 eq. 17–24,
-//! seed 003 eq. 19–21), for the total mass and the discharge of a monolayer:
+//! seed 003 eq. 19–21), for the total mass and the discharge of each of the N layers
+//! (N = 1: the monolayer; seed 003 §4 step 1 with p_nh = 0):
 //!
-//!   ∂_t h + ∂_X(hu) = 0,   ∂_t(hu) + ∂_X(hu²) + g_n h ∂_X(h + z) = 0.
+//!   ∂_t h + ∂_X(hū) = 0,
+//!   ∂_t(hu_α) + ∂_X(hu_α²) + g_n h ∂_X(h + z) = (u_{α+1/2} G_{α+1/2} − u_{α−1/2} G_{α−1/2})/l_α,
+//!
+//! with ū = Σ l_α u_α, the mass exchange G_{α+1/2} = Σ_{β≤α} l_β ∂_X(h(u_β − ū))
+//! (seed 003 eq. 5, seed 001 eq. 19), G_{1/2} = G_{N+1/2} = 0, and the centred interface
+//! velocity u_{α+1/2} = ½(u_α + u_{α+1}). The right-hand side is the non-conservative
+//! product −𝓑(U)∂_X U of seed 003 eq. (18); it vanishes for N = 1.
 //!
 //! Path-conservative finite volumes with the HLL-type PVM diffusion:
 //!
-//!   U_i ← U_i − Δt/Δx (𝓕_{i+1/2} − 𝓕_{i−1/2} + ½(𝓢_{i+1/2} + 𝓢_{i−1/2})),
-//!   𝓕 = ½(F_c(U_L) + F_c(U_R)) − ½[α_0 (Ũ⁺ − Ũ⁻) + α_1 (F_c(U_R) − F_c(U_L) + 𝓢̃)],
-//!   𝓢 = (0, g_n ½(h_L + h_R)(h⁺ − h⁻)),
+//!   U_i ← U_i − Δt/Δx (𝓕_{i+1/2} − 𝓕_{i−1/2} + ½(𝓑_{i+1/2} + 𝓑_{i−1/2} + 𝓢_{i+1/2} + 𝓢_{i−1/2})),
+//!   𝓕 = ½(F_c(U_L) + F_c(U_R)) − ½[α_0 (Ũ⁺ − Ũ⁻) + α_1 (F_c(U_R) − F_c(U_L) + 𝓑 + 𝓢̃)],
+//!   𝓢 = (0, g_n ½(h_L + h_R)(h⁺ − h⁻), …),
+//!   𝓑_α = −(ũ_{α+1/2} ΔG_{α+1/2} − ũ_{α−1/2} ΔG_{α−1/2})/l_α,
+//!
+//! where ΔG_{α+1/2} = Σ_{β≤α} l_β (Δq_β − Δq̄) is the jump of the exchange across the
+//! interface (q_β = h u_β) and ũ_{α+1/2} the mean of u_{α+1/2} on both sides, i.e.
+//! 𝓑 = ½(B(U_L) + B(U_R))(U_R − U_L) (seed 003 eq. 19). Each layer's momentum is
+//! upwinded with its own velocity through Ũ^± = (ĥ^±, ĥ^± u_α). The wave speeds are
+//! those of seed 003 (after eq. 21) with √(g_n h) replaced, for N > 1, by
+//! √(g_n h + 3 Σ l_α (u_α − ū)²), which bounds the outer eigenvalues of a sheared
+//! column: with ū ± √(g_n h) alone a Bagnold profile at Froude number ≈ 1 looks
+//! supercritical, the flux is fully upwinded and the uniform flow is unstable
+//! (`docs/numerics.md`, Multilayer).
 //!
 //! with the hydrostatic reconstruction h⁻ = max(0, h_L − (Δb)_+), h⁺ = max(0, h_R − (−Δb)_+)
 //! over the bed b relative to the reference plane (seed 003 eq. 20), the plane's own
-//! slope entering 𝓢 as the jump Δb̃ of the potential (zero across a wall). The source
-//! enters with a minus sign: seed 000 eq. (20) prints "+", which contradicts
-//! ∂_t(hu) = −g_n h ∂_X(h + z).
+//! slope entering 𝓢 = g_n h̄ (h⁺ − h⁻ + Δb̃) as the jump Δb̃ of the potential (zero
+//! across a wall). The source enters with a minus sign: seed 000 eq. (20) prints "+",
+//! which contradicts ∂_t(hu) = −g_n h ∂_X(h + z).
 //!
 //! Two deliberate departures from the printed flux, both for positivity and both
 //! tested (`tests/properties.rs`, `tests/analytic.rs`):
-//! - F_c is evaluated at the reconstructed states U^± = (h^±, h^± u) (as in Audusse
+//! - F_c is evaluated at the reconstructed states U^± = (h^±, h^± u_α) (as in Audusse
 //!   et al.'s hydrostatic reconstruction), not at the cell states: with cell states a
 //!   wet cell moving away from a dry step drains the dry cell, for any Δt.
 //! - Reconstructing over b only (not b + b̃) keeps thin layers on steep planes
 //!   visible: over b + b̃ every layer thinner than tan θ Δx (2 mm at 22° with
 //!   Δx = 5 mm, thicker than the erodible beds of seed 001 §4.2) would be clipped
 //!   to h⁺ = 0 and feel a reduced gravity.
+//!
+//! Positivity: if a step would empty a cell (possible at wet/dry fronts, where the
+//! Coulomb-aware diffusion and the HLL bounds stop matching), the outgoing mass and
+//! momentum fluxes of that cell are scaled to what it holds (the "draining time"
+//! limiter of Bollermann, Chen, Kurganov & Noelle 2013). Each interface flux is used
+//! by both neighbours, so mass stays exactly conserved; steps that need no limiting
+//! are untouched.
 //!
 //! Granular masses at rest with |∂_X(h + z)| ≤ μ_s are kept exactly at rest by the
 //! Coulomb-aware reconstruction Ũ^± (seed 000 eq. 22–24, seed 003 §4 step 1): the
@@ -36,16 +61,12 @@
 //! opposite sign, which would make friction accelerate a moving mass) and its
 //! division by g_n (without it ΔC is not a length).
 //!
-//! Positivity: if a step would empty a cell (possible at wet/dry fronts, where the
-//! Coulomb-aware diffusion and the HLL bounds stop matching, e.g. a thin layer
-//! leaving a dry cell on a slope), the outgoing mass and momentum fluxes of that cell
-//! are scaled to what it holds (the "draining time" limiter of Bollermann, Chen,
-//! Kurganov & Noelle 2013). Each interface flux is used by both neighbours, so mass
-//! stays exactly conserved; steps that need no limiting are untouched.
-//!
 //! Wave speeds S_L, S_R: Einfeldt-type bounds with Roe averages (seed 000 after eq. 21).
-//! Wet/dry fronts: an emerging bed (h_L > 0, h_R dry, h_L + z_L < z_R, and its mirror)
-//! is seen with the wet state's velocity set to zero (seed 003 Remark 2).
+//! Wet/dry fronts: an emerging bed (h_L > 0, h_R dry, h_L + b_L < b_R, and its mirror)
+//! is seen with the wet state's velocities set to zero (seed 003 Remark 2).
+//!
+//! A state at rest has u_α = 0, so ΔG = 0 and 𝓑 = 0: the exchange terms keep granular
+//! masses at rest exactly at rest, like the monolayer.
 
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
@@ -53,20 +74,32 @@ use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{celerity, velocity, H_DRY};
 use crate::state::State;
 
-/// The hydrostatic step for N = 1, generic over the basal friction law (used in ΔC).
+/// The hydrostatic step for N ≥ 1 layers, generic over the basal friction law (used in ΔC).
 #[derive(Debug)]
 pub struct HydrostaticStep<L: BasalFriction> {
     law: L,
-    /// Per interface (nx + 1): mass flux, momentum flux, pressure source 𝓢.
+    layers: usize,
+    /// Per cell with ghosts (nx + 2): mean velocity ū and shear term 3 Σ l_α (u_α − ū)²
+    /// of the wave speed; per cell and layer: u_α.
+    u_mean: Vec<f64>,
+    shear: Vec<f64>,
+    u: Vec<f64>,
+    /// 1/l_α and Σ_{β≤α} l_β (N > 1).
+    inv_l: Vec<f64>,
+    l_below: Vec<f64>,
+    /// Per interface (nx + 1): mass flux, pressure source 𝓢.
     flux_h: Vec<f64>,
-    flux_hu: Vec<f64>,
     source: Vec<f64>,
+    /// Per interface and layer ((nx + 1)·N, interface-major): momentum flux and, for
+    /// N > 1, the exchange term 𝓑.
+    flux_hu: Vec<f64>,
+    exchange: Vec<f64>,
     h_new: Vec<f64>,
     /// Draining factors θ_j ∈ [0, 1] (nx + 2), used only when a cell would empty.
     drain: Vec<f64>,
 }
 
-/// Left or right state of an interface.
+/// Left or right state of an interface (ū for the velocity).
 #[derive(Debug, Clone, Copy)]
 struct Side {
     h: f64,
@@ -75,11 +108,44 @@ struct Side {
     b: f64,
     /// Potential elevation b + b̃.
     z: f64,
-    /// √h, computed once per cell (it serves both interfaces of the cell).
-    sqrt_h: f64,
+    /// Shear contribution to the wave speed, 3 Σ l_α (u_α − ū)² (0 for N = 1).
+    shear: f64,
+    /// Velocity u_1 of the bottom layer, on which the basal friction acts (ū for N = 1).
+    u_base: f64,
 }
 
-/// Interface contribution: (mass flux, momentum flux, pressure source 𝓢).
+/// Gravity wave speed of a sheared column, √(g_n h + 3 Σ l_α (u_α − ū)²): an estimate of
+/// the outer eigenvalues ū ± c of the multilayer system (√(g_n h) for N = 1 or a
+/// uniform profile).
+#[inline(always)]
+fn sheared_celerity(g_n: f64, h: f64, shear: f64) -> f64 {
+    if shear == 0.0 {
+        celerity(g_n, h)
+    } else {
+        (g_n * h.max(0.0) + shear).sqrt()
+    }
+}
+
+/// What an interface contributes independently of the layers: HLL coefficients, the
+/// Coulomb-aware reconstruction ĥ^±, the pressure sources 𝓢, 𝓢̃, and whether a side
+/// is seen at rest (emerging bed).
+#[derive(Debug, Clone, Copy)]
+struct Interface {
+    alpha0: f64,
+    alpha1: f64,
+    /// Hydrostatically reconstructed depths h^± (over b), at which F_c is evaluated.
+    h_minus: f64,
+    h_plus: f64,
+    hc_minus: f64,
+    hc_plus: f64,
+    source: f64,
+    source_c: f64,
+    left_at_rest: bool,
+    right_at_rest: bool,
+}
+
+/// The interface coefficients, or `None` where nothing crosses (both sides dry, or no
+/// wave). The returned sides carry the velocity the fluxes see.
 #[inline(always)]
 fn interface<L: BasalFriction>(
     law: &L,
@@ -88,18 +154,24 @@ fn interface<L: BasalFriction>(
     g_n: f64,
     dx: f64,
     dt: f64,
-) -> (f64, f64, f64) {
+) -> Option<(Interface, Side, Side)> {
     let l_dry = l.h <= H_DRY;
     let r_dry = r.h <= H_DRY;
     if l_dry && r_dry {
-        return (0.0, 0.0, 0.0);
+        return None;
     }
     // Emerging bed: the wet side cannot push mass up a dry step it does not overtop.
-    if r_dry && l.h + l.b < r.b {
+    let left_at_rest = r_dry && l.h + l.b < r.b;
+    if left_at_rest {
         l.u = 0.0;
+        l.shear = 0.0;
+        l.u_base = 0.0;
     }
-    if l_dry && r.h + r.b < l.b {
+    let right_at_rest = l_dry && r.h + r.b < l.b;
+    if right_at_rest {
         r.u = 0.0;
+        r.shear = 0.0;
+        r.u_base = 0.0;
     }
     let db = r.b - l.b;
     let dz = r.z - l.z;
@@ -108,16 +180,23 @@ fn interface<L: BasalFriction>(
     let h_plus = (r.h - (-db).max(0.0)).max(0.0);
 
     // Roe averages and HLL wave-speed bounds.
-    let (sl, sr) = (l.sqrt_h, r.sqrt_h);
+    let (sl, sr) = (l.h.max(0.0).sqrt(), r.h.max(0.0).sqrt());
     let u_roe = (sl * l.u + sr * r.u) / (sl + sr);
     let h_roe = 0.5 * (l.h + r.h);
-    let c_roe = celerity(g_n, h_roe);
-    let sqrt_g = g_n.sqrt();
-    let s_left = (l.u - sqrt_g * sl).min(u_roe - c_roe);
-    let s_right = (r.u + sqrt_g * sr).max(u_roe + c_roe);
+    let c_roe = sheared_celerity(g_n, h_roe, 0.5 * (l.shear + r.shear));
+    // √g √h reuses the √h of the Roe average (the monolayer's form since issue 2).
+    let side_celerity = |side: &Side, sqrt_h: f64| {
+        if side.shear == 0.0 {
+            g_n.sqrt() * sqrt_h
+        } else {
+            sheared_celerity(g_n, side.h, side.shear)
+        }
+    };
+    let s_left = (l.u - side_celerity(&l, sl)).min(u_roe - c_roe);
+    let s_right = (r.u + side_celerity(&r, sr)).max(u_roe + c_roe);
     let spread = s_right - s_left;
     if spread <= 0.0 {
-        return (0.0, 0.0, 0.0);
+        return None;
     }
     let alpha0 = (s_right * s_left.abs() - s_left * s_right.abs()) / spread;
     let alpha1 = (s_right.abs() - s_left.abs()) / spread;
@@ -125,33 +204,234 @@ fn interface<L: BasalFriction>(
     // Coulomb-aware reconstruction (ΔC): friction up to its threshold acts as bed.
     let mu = law.mu(u_roe.abs(), h_roe, g_n * h_roe);
     let threshold = g_n * mu;
-    let drive = u_roe / dt - g_n * ((r.h + r.z) - (l.h + l.z)) / dx;
+    // The friction acts on the bottom layer (seed 001 eq. 28): its velocity u_1 enters
+    // the drive (seed 003 prints ū). Over a bottom layer that the viscous step has
+    // stopped, the regularised creep of the upper layers divided by Δt would exceed the
+    // friction margin, the reconstruction would let mass through, and a deposit would
+    // never come to rest (the C-MSM collapse of tests/multilayer.rs). For N = 1, u_1 = ū.
+    let u_base = if l.u_base == l.u && r.u_base == r.u {
+        u_roe
+    } else {
+        (sl * l.u_base + sr * r.u_base) / (sl + sr)
+    };
+    let drive = u_base / dt - g_n * ((r.h + r.z) - (l.h + l.z)) / dx;
     let f = -drive.clamp(-threshold, threshold);
     let dz_c = dz - f * dx / g_n;
     let hc_minus = (l.h - dz_c.max(0.0)).max(0.0);
     let hc_plus = (r.h - (-dz_c).max(0.0)).max(0.0);
 
-    let (q_l, q_r) = (h_minus * l.u, h_plus * r.u);
-    let (m_l, m_r) = (q_l * l.u, q_r * r.u);
     let g_hbar = g_n * h_roe;
-    let source = g_hbar * (h_plus - h_minus + d_plane);
-    let source_c = g_hbar * (hc_plus - hc_minus);
+    let coefficients = Interface {
+        alpha0,
+        alpha1,
+        h_minus,
+        h_plus,
+        hc_minus,
+        hc_plus,
+        source: g_hbar * (h_plus - h_minus + d_plane),
+        source_c: g_hbar * (hc_plus - hc_minus),
+        left_at_rest,
+        right_at_rest,
+    };
+    Some((coefficients, l, r))
+}
 
-    let flux_h = 0.5 * (q_l + q_r) - 0.5 * (alpha0 * (hc_plus - hc_minus) + alpha1 * (q_r - q_l));
-    let flux_hu = 0.5 * (m_l + m_r)
-        - 0.5 * (alpha0 * (hc_plus * r.u - hc_minus * l.u) + alpha1 * (m_r - m_l + source_c));
-    (flux_h, flux_hu, source)
+/// Total mass flux through the interface (the sides carry ū), F_c at h^±.
+#[inline(always)]
+fn mass_flux(c: &Interface, l: Side, r: Side) -> f64 {
+    let (q_l, q_r) = (c.h_minus * l.u, c.h_plus * r.u);
+    0.5 * (q_l + q_r) - 0.5 * (c.alpha0 * (c.hc_plus - c.hc_minus) + c.alpha1 * (q_r - q_l))
+}
+
+/// Momentum flux of one layer with velocities `u_l`, `u_r` on the two sides (already
+/// zero on a side seen at rest); `exchange` is the layer's 𝓑 term (N > 1) or `None`.
+#[inline(always)]
+fn layer_momentum_flux(
+    c: &Interface,
+    h_l: f64,
+    h_r: f64,
+    u_l: f64,
+    u_r: f64,
+    exchange: Option<f64>,
+) -> f64 {
+    let (q_l, q_r) = (h_l * u_l, h_r * u_r);
+    let (m_l, m_r) = (q_l * u_l, q_r * u_r);
+    let jump = match exchange {
+        None => m_r - m_l + c.source_c,
+        Some(b) => m_r - m_l + b + c.source_c,
+    };
+    0.5 * (m_l + m_r) - 0.5 * (c.alpha0 * (c.hc_plus * u_r - c.hc_minus * u_l) + c.alpha1 * jump)
+}
+
+/// The layer fractions as the exchange terms use them.
+#[derive(Debug, Clone, Copy)]
+struct Fractions<'a> {
+    /// l_α.
+    l: &'a [f64],
+    /// 1/l_α.
+    inv: &'a [f64],
+    /// Σ_{β≤α} l_β.
+    below: &'a [f64],
+}
+
+/// The exchange terms 𝓑_α of one interface (N > 1), written into `out` (N values).
+/// `u_l`, `u_r` are the layer velocities the fluxes see on each side.
+///
+/// ΔG_{α+1/2} = Σ_{β≤α} l_β Δq_β − (Σ_{β≤α} l_β) Δq̄ is a running sum, so the whole
+/// interface costs one pass over the layers after the one for Δq̄.
+#[inline(always)]
+fn exchange_terms(frac: Fractions, h_l: f64, h_r: f64, u_l: &[f64], u_r: &[f64], out: &mut [f64]) {
+    let n = frac.l.len();
+    let (l, inv_l, l_below) = (frac.l, &frac.inv[..n], &frac.below[..n]);
+    let (u_l, u_r, out) = (&u_l[..n], &u_r[..n], &mut out[..n]);
+    let mut dq_mean = 0.0;
+    for a in 0..n {
+        dq_mean += l[a] * (h_r * u_r[a] - h_l * u_l[a]);
+    }
+    // Running Σ_{β≤α} l_β Δq_β, and the flux ũ_{α+1/2} ΔG_{α+1/2} below layer α + 1.
+    let mut partial = 0.0;
+    let mut below = 0.0;
+    for a in 0..n - 1 {
+        partial += l[a] * (h_r * u_r[a] - h_l * u_l[a]);
+        let g_jump = partial - l_below[a] * dq_mean;
+        let above = 0.25 * (u_l[a] + u_l[a + 1] + u_r[a] + u_r[a + 1]) * g_jump;
+        out[a] = (below - above) * inv_l[a];
+        below = above;
+    }
+    out[n - 1] = below * inv_l[n - 1];
 }
 
 impl<L: BasalFriction> HydrostaticStep<L> {
+    /// The monolayer step (N = 1).
     pub fn new(law: L, nx: usize) -> Self {
+        Self::with_layers(law, nx, 1)
+    }
+
+    /// The step for `layers` ≥ 1 layers.
+    pub fn with_layers(law: L, nx: usize, layers: usize) -> Self {
+        assert!(layers >= 1);
         HydrostaticStep {
             law,
+            layers,
+            u_mean: vec![0.0; nx + 2],
+            shear: vec![0.0; nx + 2],
+            u: vec![0.0; (nx + 2) * layers],
+            inv_l: vec![0.0; layers],
+            l_below: vec![0.0; layers],
             flux_h: vec![0.0; nx + 1],
-            flux_hu: vec![0.0; nx + 1],
             source: vec![0.0; nx + 1],
+            flux_hu: vec![0.0; (nx + 1) * layers],
+            exchange: if layers > 1 {
+                vec![0.0; (nx + 1) * layers]
+            } else {
+                Vec::new()
+            },
             h_new: vec![0.0; nx + 2],
             drain: vec![1.0; nx + 2],
+        }
+    }
+
+    /// Velocities u_α and ū of every cell, ghosts included, and for N > 1 the shear
+    /// term of the wave speed and the inverse layer fractions.
+    fn velocities(&mut self, state: &State) {
+        let n = self.layers;
+        if n == 1 {
+            for j in 0..state.h.len() {
+                self.u[j] = velocity(state.h[j], state.hu[j]);
+                self.u_mean[j] = self.u[j];
+            }
+            return;
+        }
+        let mut sum = 0.0;
+        for ((inv, below), l) in self.inv_l.iter_mut().zip(&mut self.l_below).zip(&state.l) {
+            *inv = 1.0 / l;
+            sum += l;
+            *below = sum;
+        }
+        for j in 0..state.h.len() {
+            let h = state.h[j];
+            let u = &mut self.u[j * n..(j + 1) * n];
+            if h <= H_DRY {
+                u.fill(0.0);
+                self.u_mean[j] = 0.0;
+                self.shear[j] = 0.0;
+                continue;
+            }
+            let inv_h = 1.0 / h;
+            let mut mean = 0.0;
+            for ((u, q), l) in u
+                .iter_mut()
+                .zip(&state.hu[j * n..(j + 1) * n])
+                .zip(&state.l)
+            {
+                *u = q * inv_h;
+                mean += l * *u;
+            }
+            let spread: f64 = u
+                .iter()
+                .zip(&state.l)
+                .map(|(u, l)| l * (u - mean) * (u - mean))
+                .sum();
+            self.u_mean[j] = mean;
+            self.shear[j] = 3.0 * spread;
+        }
+    }
+
+    /// Mass flux, pressure source, and each layer's momentum flux and exchange term at
+    /// every interface k (between cells k and k + 1, ghosts included).
+    fn interfaces(&mut self, mesh: &Mesh, dt: f64, l_frac: &[f64], h: &[f64]) {
+        let (nx, n) = (mesh.nx, self.layers);
+        let (g_n, dx) = (mesh.g_n, mesh.dx);
+        let side = |j: usize| Side {
+            h: h[j],
+            u: self.u_mean[j],
+            b: mesh.b_ghost[j],
+            z: mesh.z[j],
+            shear: self.shear[j],
+            u_base: self.u[j * n],
+        };
+        let mut left = side(0);
+        for k in 0..=nx {
+            let right = side(k + 1);
+            let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
+            let Some((c, l, r)) = interface(&self.law, left, right, g_n, dx, dt) else {
+                self.flux_h[k] = 0.0;
+                self.source[k] = 0.0;
+                fluxes.fill(0.0);
+                if n > 1 {
+                    self.exchange[k * n..(k + 1) * n].fill(0.0);
+                }
+                left = right;
+                continue;
+            };
+            self.flux_h[k] = mass_flux(&c, l, r);
+            self.source[k] = c.source;
+            let u_l = &self.u[k * n..(k + 1) * n];
+            let u_r = &self.u[(k + 1) * n..(k + 2) * n];
+            let seen = |u: f64, at_rest: bool| if at_rest { 0.0 } else { u };
+            if n == 1 {
+                let (ul, ur) = (seen(u_l[0], c.left_at_rest), seen(u_r[0], c.right_at_rest));
+                fluxes[0] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur, None);
+            } else {
+                let exchange = &mut self.exchange[k * n..(k + 1) * n];
+                if c.left_at_rest || c.right_at_rest {
+                    // One side at rest, the other dry: no velocity anywhere, no exchange.
+                    exchange.fill(0.0);
+                } else {
+                    let frac = Fractions {
+                        l: l_frac,
+                        inv: &self.inv_l,
+                        below: &self.l_below,
+                    };
+                    exchange_terms(frac, l.h, r.h, u_l, u_r, exchange);
+                }
+                for a in 0..n {
+                    let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
+                    fluxes[a] =
+                        layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur, Some(exchange[a]));
+                }
+            }
+            left = right;
         }
     }
 }
@@ -171,10 +451,10 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         worst
     }
 
-    /// Scales every interface flux by the draining factor of its donor cell,
-    /// θ_j = min(1, h_j / (r · outflow_j)).
+    /// Scales every interface flux (mass and each layer's momentum) by the draining
+    /// factor of its donor cell, θ_j = min(1, h_j / (r · outflow_j)).
     fn limit_draining(&mut self, h: &[f64], r: f64) {
-        let nx = h.len() - 2;
+        let (nx, n) = (h.len() - 2, self.layers);
         let interior = &h[1..=nx];
         for (k, (hj, f)) in interior.iter().zip(self.flux_h.windows(2)).enumerate() {
             let need = r * (f[1].max(0.0) + (-f[0]).max(0.0));
@@ -184,7 +464,9 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             let donor = if self.flux_h[k] > 0.0 { k } else { k + 1 };
             let theta = self.drain[donor];
             self.flux_h[k] *= theta;
-            self.flux_hu[k] *= theta;
+            for f in &mut self.flux_hu[k * n..(k + 1) * n] {
+                *f *= theta;
+            }
         }
         self.drain[1..=nx].fill(1.0);
     }
@@ -196,29 +478,14 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
     }
 
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
-        debug_assert_eq!(state.layers, 1);
-        let nx = mesh.nx;
-        let (g_n, dx) = (mesh.g_n, mesh.dx);
-        let side = |j: usize| Side {
-            h: state.h[j],
-            u: velocity(state.h[j], state.hu[j]),
-            b: mesh.b_ghost[j],
-            z: mesh.z[j],
-            sqrt_h: state.h[j].max(0.0).sqrt(),
-        };
-        let mut left = side(0);
-        for k in 0..=nx {
-            let right = side(k + 1);
-            let (fh, fhu, s) = interface(&self.law, left, right, g_n, dx, dt);
-            self.flux_h[k] = fh;
-            self.flux_hu[k] = fhu;
-            self.source[k] = s;
-            left = right;
-        }
+        debug_assert_eq!(state.layers, self.layers);
+        let (nx, n) = (mesh.nx, self.layers);
+        self.velocities(state);
+        self.interfaces(mesh, dt, &state.l, &state.h);
 
         // Mass first; limit the fluxes of cells that would empty, then refuse the step
         // (state untouched) if anything is still negative beyond round-off.
-        let r = dt / dx;
+        let r = dt / mesh.dx;
         let mut worst = self.update_mass(&state.h, r);
         if worst.0 < 0.0 {
             self.limit_draining(&state.h, r);
@@ -236,11 +503,20 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
             // hide a blow-up from the run's NaN check.
             let hn = self.h_new[i];
             state.h[i] = if hn < 0.0 { 0.0 } else { hn };
-            state.hu[i] -= r
-                * (self.flux_hu[i] - self.flux_hu[i - 1]
-                    + 0.5 * (self.source[i] + self.source[i - 1]));
+            let source = 0.5 * (self.source[i] + self.source[i - 1]);
+            let (right, left) = (i * n, (i - 1) * n);
+            let hu = &mut state.hu[i * n..(i + 1) * n];
+            if n == 1 {
+                hu[0] -= r * (self.flux_hu[right] - self.flux_hu[left] + source);
+            } else {
+                for (a, q) in hu.iter_mut().enumerate() {
+                    let exchange = 0.5 * (self.exchange[right + a] + self.exchange[left + a]);
+                    *q -=
+                        r * (self.flux_hu[right + a] - self.flux_hu[left + a] + source + exchange);
+                }
+            }
             if state.h[i] <= H_DRY {
-                state.hu[i] = 0.0;
+                hu.fill(0.0);
             }
         }
         state.fill_ghosts(mesh);

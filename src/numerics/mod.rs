@@ -1,5 +1,6 @@
 //! Numerics: loops over the grid. The time step is a pipeline of [`Stage`]s built
-//! from the scenario (seed 000 §3, seed 003 §4): hyperbolic → friction (→ projection).
+//! from the scenario (seed 000 §3, seed 003 §4): hyperbolic → friction or viscous
+//! (→ projection).
 
 pub mod cfl;
 pub mod friction;
@@ -7,6 +8,7 @@ pub mod hydrostatic;
 pub mod linalg;
 pub mod nonhydrostatic;
 pub mod projection;
+pub mod viscous;
 
 use crate::mesh::Mesh;
 use crate::state::State;
@@ -22,6 +24,10 @@ pub enum StageError {
 pub trait Stage: Send {
     /// Stable name, used for the stage timers (`time_<name>_s`).
     fn name(&self) -> &'static str;
+    /// Called once per time step, before any stage is applied, with the state at t^n
+    /// (again when a step is retried). Stages whose coefficients are frozen at t^n
+    /// (the multilayer viscous step) compute them here; the default does nothing.
+    fn prepare(&mut self, _mesh: &Mesh, _state: &State) {}
     /// Advances `state` by `dt`. On error the state must be left unchanged.
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError>;
 }

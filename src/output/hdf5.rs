@@ -49,7 +49,9 @@ use rust_hdf5::H5File;
 
 pub use layout::stage_attr_name;
 
-use super::{GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord};
+use super::{
+    CellField, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+};
 
 /// Writes one run to an HDF5 file, progressively (see the module docs).
 #[derive(Debug)]
@@ -63,14 +65,19 @@ pub struct Hdf5Sink {
 }
 
 /// What `begin` and the first snapshot fix about the file.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Shape {
     nx: usize,
     nl: usize,
     /// Whether snapshots carry `w` / `p_nh`; `None` until the first snapshot.
     has_w: Option<bool>,
     has_p_nh: Option<bool>,
+    /// Names of the per-cell fields; `None` until the first snapshot.
+    extra: Option<Vec<&'static str>>,
 }
+
+/// Names of `/snapshots` datasets that a per-cell field may not take.
+const FIXED_SNAPSHOT_NAMES: [&str; 5] = ["t", "h", "u", "w", "p_nh"];
 
 impl Shape {
     /// Checks the lengths of a snapshot's arrays.
@@ -84,7 +91,36 @@ impl Shape {
         expect("h", Some(snap.h.len()), nx)?;
         expect("u", Some(snap.u.len()), nl * nx)?;
         expect("w", snap.w.map(<[f64]>::len), nl * nx)?;
-        expect("p_nh", snap.p_nh.map(<[f64]>::len), (nl + 1) * (nx + 1))
+        expect("p_nh", snap.p_nh.map(<[f64]>::len), (nl + 1) * (nx + 1))?;
+        for (k, field) in snap.extra.iter().enumerate() {
+            let name = field.name;
+            let plain =
+                !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            if !plain || FIXED_SNAPSHOT_NAMES.contains(&name) {
+                return Err(format!("per-cell field name {name:?} is not allowed"));
+            }
+            if snap.extra[..k].iter().any(|f| f.name == name) {
+                return Err(format!("per-cell field {name:?} given twice"));
+            }
+            expect(name, Some(field.data.len()), nx)?;
+        }
+        Ok(())
+    }
+
+    /// Fixes at the first snapshot which per-cell fields are written, and holds later
+    /// snapshots to the same names. Returns the fields to create now.
+    fn fix_extra<'s>(&mut self, snap: &'s SnapshotView) -> Result<Vec<CellField<'s>>, String> {
+        let names: Vec<&'static str> = snap.extra.iter().map(|f| f.name).collect();
+        match &self.extra {
+            Some(before) if *before != names => Err(format!(
+                "per-cell fields are {names:?} but were {before:?} in earlier snapshots"
+            )),
+            Some(_) => Ok(Vec::new()),
+            None => {
+                self.extra = Some(names);
+                Ok(snap.extra.to_vec())
+            }
+        }
     }
 
     /// Fixes at the first snapshot whether `w` and `p_nh` are written, and holds later
@@ -161,6 +197,7 @@ impl Hdf5Sink {
             return Err(self.err(format!("{call} after finish")));
         }
         self.shape
+            .clone()
             .ok_or_else(|| self.err(format!("{call} before begin")))
     }
 }
@@ -188,19 +225,23 @@ impl OutputSink for Hdf5Sink {
             nl: info.layers,
             has_w: None,
             has_p_nh: None,
+            extra: None,
         });
         Ok(())
     }
 
     fn snapshot(&mut self, snap: &SnapshotView) -> Result<(), OutputError> {
         let mut shape = self.check_open("snapshot")?;
-        let create = shape
+        let (create, create_extra) = shape
             .check_lengths(snap)
             .and_then(|()| shape.fix_optional(snap))
+            .and_then(|create| Ok((create, shape.fix_extra(snap)?)))
             .map_err(|e| self.err(format!("snapshot at t = {}: {e}", snap.t)))?;
+        let (nx, nl) = (shape.nx, shape.nl);
         self.shape = Some(shape);
         let file = self.open_file()?;
-        layout::create_optional(&file, (shape.nx, shape.nl), create)
+        layout::create_optional(&file, (nx, nl), create)
+            .and_then(|()| layout::create_cell_fields(&file, nx, &create_extra))
             .and_then(|()| layout::append_steps(&file, &self.pending))
             .and_then(|()| layout::append_snapshot(&file, snap))
             .map_err(|e| self.err(e))?;
@@ -258,5 +299,102 @@ fn io_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
     OutputError::Io {
         path: path.display().to_string(),
         message: e.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn info(layers: usize) -> RunInfo {
+        RunInfo {
+            granflow_version: "test".into(),
+            model: "granular".into(),
+            pressure: "hydrostatic".into(),
+            layers,
+            coordinates: "local".into(),
+            slope_deg: 0.0,
+            scenario_toml: String::new(),
+            front_threshold: 1e-3,
+        }
+    }
+
+    fn begin(path: &Path) -> Hdf5Sink {
+        let mut sink = Hdf5Sink::create(path).unwrap();
+        let x = [0.5, 1.5, 2.5];
+        sink.begin(
+            &info(2),
+            &GridData {
+                x: &x,
+                b: &[0.0; 3],
+                h_bed: &[0.0; 3],
+            },
+        )
+        .unwrap();
+        sink
+    }
+
+    fn view<'a>(t: f64, data: &'a [f64], extra: &'a [CellField<'a>]) -> SnapshotView<'a> {
+        SnapshotView {
+            t,
+            h: &data[..3],
+            u: data,
+            w: None,
+            p_nh: None,
+            layers: 2,
+            extra,
+        }
+    }
+
+    #[test]
+    fn per_cell_fields_are_written_as_frames() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("extra.h5");
+        let mut sink = begin(&path);
+        let data = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        for t in [0.0, 1.0] {
+            let s = [t, t + 0.5, t + 0.25];
+            let extra = [CellField {
+                name: "static_interface",
+                units: "m",
+                data: &s,
+            }];
+            sink.snapshot(&view(t, &data, &extra)).unwrap();
+        }
+        let file = H5File::open(&path).unwrap();
+        let ds = file.dataset("snapshots/static_interface").unwrap();
+        assert_eq!(ds.shape(), [2, 3]);
+        assert_eq!(
+            ds.read_raw::<f64>().unwrap(),
+            [0.0, 0.5, 0.25, 1.0, 1.5, 1.25]
+        );
+    }
+
+    #[test]
+    fn per_cell_fields_are_checked() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = [1.0; 6];
+        let field = |name: &'static str, data: &'static [f64]| CellField {
+            name,
+            units: "m",
+            data,
+        };
+        let cases: [(&[CellField], &str); 4] = [
+            (&[field("h", &[0.0; 3])], "not allowed"),
+            (&[field("bad name", &[0.0; 3])], "not allowed"),
+            (&[field("phi", &[0.0; 2])], "phi has 2 values"),
+            (&[field("phi", &[0.0; 3]), field("phi", &[0.0; 3])], "twice"),
+        ];
+        for (k, (extra, message)) in cases.into_iter().enumerate() {
+            let mut sink = begin(&dir.path().join(format!("bad{k}.h5")));
+            let e = sink.snapshot(&view(0.0, &data, extra)).unwrap_err();
+            assert!(e.to_string().contains(message), "{e}");
+        }
+        // The names are fixed by the first snapshot.
+        let mut sink = begin(&dir.path().join("change.h5"));
+        sink.snapshot(&view(0.0, &data, &[field("phi", &[0.0; 3])]))
+            .unwrap();
+        let e = sink.snapshot(&view(1.0, &data, &[])).unwrap_err();
+        assert!(e.to_string().contains("earlier snapshots"), "{e}");
     }
 }

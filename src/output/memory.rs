@@ -12,6 +12,18 @@ pub struct Snapshot {
     pub u: Vec<f64>,
     pub w: Option<Vec<f64>>,
     pub p_nh: Option<Vec<f64>>,
+    /// Model-specific per-cell fields (name, nx values).
+    pub extra: Vec<(String, Vec<f64>)>,
+}
+
+impl Snapshot {
+    /// The per-cell field `name`, if the snapshot has it.
+    pub fn field(&self, name: &str) -> Option<&[f64]> {
+        self.extra
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_slice())
+    }
 }
 
 #[derive(Debug, Default, Clone)]
@@ -41,6 +53,11 @@ impl OutputSink for MemorySink {
             u: snap.u.to_vec(),
             w: snap.w.map(<[f64]>::to_vec),
             p_nh: snap.p_nh.map(<[f64]>::to_vec),
+            extra: snap
+                .extra
+                .iter()
+                .map(|f| (f.name.to_string(), f.data.to_vec()))
+                .collect(),
         });
         Ok(())
     }

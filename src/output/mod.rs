@@ -56,6 +56,18 @@ pub struct GridData<'a> {
     pub h_bed: &'a [f64],
 }
 
+/// A model-specific field with one value per cell, written as `/snapshots/<name>`
+/// of shape (nt, nx), e.g. the multilayer model's `static_interface`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CellField<'a> {
+    /// Dataset name: ASCII letters, digits and `_`, not one of the fixed names.
+    pub name: &'static str,
+    /// The `units` attribute.
+    pub units: &'static str,
+    /// nx values.
+    pub data: &'a [f64],
+}
+
 /// One snapshot, `/snapshots/*[k]`. Layered arrays are layer-major: index α·nx + i.
 #[derive(Debug, Clone, Copy)]
 pub struct SnapshotView<'a> {
@@ -69,6 +81,8 @@ pub struct SnapshotView<'a> {
     /// Non-hydrostatic pressure at the interfaces ((nl+1)·(nx+1)), non-hydrostatic runs only.
     pub p_nh: Option<&'a [f64]>,
     pub layers: usize,
+    /// Model-specific per-cell fields; the same names in every snapshot of a run.
+    pub extra: &'a [CellField<'a>],
 }
 
 /// One row per time step: `/diagnostics/*` and `/front/*`.

@@ -77,6 +77,57 @@ pub struct ModelSpec {
     pub layers: usize,
 }
 
+/// Condition at the bed of the multilayer model (seed 001 eq. 28 and end of §3.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BasalCondition {
+    /// Coulomb friction μ(I_{1/2}) p_b u_1/|u_1| (`rheology.basal = "coulomb"`).
+    Coulomb,
+    /// u = 0 at the bed, stress from the rheology with ∂_z u ≈ 2u_1/h_1 (`"no_slip"`).
+    NoSlip,
+}
+
+/// How the μ(I) viscosity η = μ(I) p / |∂_z u| is kept finite where the shear vanishes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Regularization {
+    /// η = μ p / √(‖D‖² + δ²) (seed 003 eq. 10), `rheology.delta` = δ in 1/s.
+    Delta { delta: f64 },
+    /// η = μ p / max(‖D‖, μ p/η_M), η_M = 250 ρ √(g h³) (seed 001 eq. 6 and 25).
+    Bound,
+}
+
+/// Where the sidewall friction of a channel of width W enters the multilayer model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SidewallForm {
+    /// Jop's term μ_w (H − z)/W added to μ(I) (seed 001 eq. 30).
+    Jop,
+    /// A friction force −l_α h (2/W) μ_w p_α u_α/|u_α| on each layer (seed 003 eq. 36).
+    Layer,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sidewall {
+    /// Wall friction coefficient μ_w.
+    pub mu_w: f64,
+    /// Channel width W (m).
+    pub width: f64,
+    pub form: SidewallForm,
+}
+
+/// Options of the multilayer model (`model.layers > 1`); the monolayer model ignores
+/// `regularization`, `c_msm` and `static_threshold` and rejects the others.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MultilayerSpec {
+    /// Layer fractions l_α, bottom first (`model.layer_fractions`, uniform by default).
+    pub layer_fractions: Vec<f64>,
+    pub basal: BasalCondition,
+    pub regularization: Regularization,
+    pub sidewall: Option<Sidewall>,
+    /// Second-order strain-rate correction of seed 001 eq. (32) ("C-MSM").
+    pub c_msm: bool,
+    /// Speed (m/s) above which a layer flows, for `/snapshots/static_interface`.
+    pub static_threshold: f64,
+}
+
 #[derive(Debug, Clone)]
 pub struct Initial {
     /// Flow thickness above the erodible bed, h(x) ≥ 0 (the bed layer is added on top).
@@ -134,6 +185,8 @@ pub struct Scenario {
     pub material: Material,
     pub friction: FrictionLaw,
     pub model: ModelSpec,
+    /// Layer fractions and viscous options of the multilayer model.
+    pub multilayer: MultilayerSpec,
     pub initial: Initial,
     pub boundary: Boundaries,
     pub time: TimeSpec,

@@ -59,6 +59,14 @@ pub(crate) struct RawRheology {
     pub mu_2: Option<f64>,
     pub mu_2_deg: Option<f64>,
     pub i0: Option<f64>,
+    pub basal: Option<String>,
+    pub regularization: Option<String>,
+    pub delta: Option<f64>,
+    pub mu_w: Option<f64>,
+    pub mu_w_deg: Option<f64>,
+    pub channel_width: Option<f64>,
+    pub sidewall: Option<String>,
+    pub c_msm: Option<bool>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -67,6 +75,7 @@ pub(crate) struct RawModel {
     pub kind: Option<String>,
     pub pressure: Option<String>,
     pub layers: Option<i64>,
+    pub layer_fractions: Option<Vec<f64>>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -99,4 +108,5 @@ pub(crate) struct RawOutput {
     pub file: Option<String>,
     pub every: Option<f64>,
     pub front_threshold: Option<f64>,
+    pub static_threshold: Option<f64>,
 }

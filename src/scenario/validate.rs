@@ -16,8 +16,9 @@ use super::raw::{
     RawTime,
 };
 use super::{
-    Boundaries, BoundaryKind, Coordinates, Domain, FrictionLaw, Initial, Material, ModelKind,
-    ModelSpec, OutputSpec, Pressure, Scenario, TimeSpec,
+    BasalCondition, Boundaries, BoundaryKind, Coordinates, Domain, FrictionLaw, Initial, Material,
+    ModelKind, ModelSpec, MultilayerSpec, OutputSpec, Pressure, Regularization, Scenario, Sidewall,
+    SidewallForm, TimeSpec,
 };
 
 /// Largest accepted `domain.cells`.
@@ -188,12 +189,19 @@ fn validate(
         None => Profile::constant(0.0),
     };
     let material = material(raw.material.unwrap_or_default())?;
-    let friction = rheology(section("rheology", raw.rheology)?)?;
-    let model = model(raw.model.unwrap_or_default())?;
+    let mut raw_rheology = section("rheology", raw.rheology)?;
+    let viscous = ViscousKeys::take(&mut raw_rheology);
+    let friction = rheology(raw_rheology)?;
+    let mut raw_model = raw.model.unwrap_or_default();
+    let fractions = raw_model.layer_fractions.take();
+    let model = model(raw_model)?;
     let initial = initial(section("initial", raw.initial)?, base_dir)?;
     let boundary = boundary(raw.boundary.unwrap_or_default())?;
     let time = time(section("time", raw.time)?)?;
-    let output = output(raw.output.unwrap_or_default(), &time, default_output)?;
+    let mut raw_output = raw.output.unwrap_or_default();
+    let static_threshold = raw_output.static_threshold.take();
+    let output = output(raw_output, &time, default_output)?;
+    let multilayer = multilayer(viscous, fractions, static_threshold, model.layers)?;
     sample_profiles(&domain, &bed, &initial)?;
     Ok(Scenario {
         source_toml,
@@ -203,6 +211,7 @@ fn validate(
         material,
         friction,
         model,
+        multilayer,
         initial,
         boundary,
         time,
@@ -381,6 +390,159 @@ fn model(m: RawModel) -> Res<ModelSpec> {
         pressure,
         layers,
     })
+}
+
+/// The `[rheology]` keys of the multilayer model's viscous step, taken out of the raw
+/// table before the friction law is read.
+struct ViscousKeys {
+    basal: Option<String>,
+    regularization: Option<String>,
+    delta: Option<f64>,
+    mu_w: Option<f64>,
+    mu_w_deg: Option<f64>,
+    channel_width: Option<f64>,
+    sidewall: Option<String>,
+    c_msm: Option<bool>,
+}
+
+impl ViscousKeys {
+    fn take(r: &mut RawRheology) -> ViscousKeys {
+        ViscousKeys {
+            basal: r.basal.take(),
+            regularization: r.regularization.take(),
+            delta: r.delta.take(),
+            mu_w: r.mu_w.take(),
+            mu_w_deg: r.mu_w_deg.take(),
+            channel_width: r.channel_width.take(),
+            sidewall: r.sidewall.take(),
+            c_msm: r.c_msm.take(),
+        }
+    }
+}
+
+/// Default regularisation parameter δ (1/s) of seed 003 §5.
+pub(crate) const DEFAULT_DELTA: f64 = 1e-5;
+
+fn multilayer(
+    v: ViscousKeys,
+    fractions: Option<Vec<f64>>,
+    static_threshold: Option<f64>,
+    layers: usize,
+) -> Res<MultilayerSpec> {
+    let multilayer_only = |key: &str| -> ScenarioError {
+        ScenarioError::at(
+            key,
+            "only used by the multilayer model; set model.layers > 1 or remove it",
+        )
+    };
+    let layer_fractions = match fractions {
+        None => vec![1.0 / layers as f64; layers],
+        Some(l) => layer_fractions(l, layers)?,
+    };
+    let basal = choice(
+        "rheology.basal",
+        v.basal.as_deref(),
+        BasalCondition::Coulomb,
+        &[
+            ("coulomb", BasalCondition::Coulomb),
+            ("no_slip", BasalCondition::NoSlip),
+        ],
+    )?;
+    if basal == BasalCondition::NoSlip && layers == 1 {
+        return Err(multilayer_only("rheology.basal"));
+    }
+    #[derive(Clone, Copy, PartialEq)]
+    enum Reg {
+        Delta,
+        Bound,
+    }
+    let reg = choice(
+        "rheology.regularization",
+        v.regularization.as_deref(),
+        Reg::Delta,
+        &[("delta", Reg::Delta), ("bound", Reg::Bound)],
+    )?;
+    let regularization = match (reg, v.delta) {
+        (Reg::Bound, Some(_)) => {
+            return err(
+                "rheology.delta",
+                "only used by regularization = \"delta\" (rheology.regularization is \"bound\"); remove it",
+            )
+        }
+        (Reg::Bound, None) => Regularization::Bound,
+        (Reg::Delta, d) => Regularization::Delta {
+            delta: positive("rheology.delta", d.unwrap_or(DEFAULT_DELTA))?,
+        },
+    };
+    let mu_w = coefficient("mu_w", v.mu_w, v.mu_w_deg)?;
+    let sidewall = match (mu_w, v.channel_width) {
+        (None, None) => {
+            if v.sidewall.is_some() {
+                return err(
+                    "rheology.sidewall",
+                    "needs the wall friction rheology.mu_w (or mu_w_deg) and rheology.channel_width",
+                );
+            }
+            None
+        }
+        (Some((_, key)), None) => {
+            return err(
+                &key,
+                "sidewall friction needs the channel width rheology.channel_width too",
+            )
+        }
+        (None, Some(_)) => {
+            return err(
+                "rheology.channel_width",
+                "sidewall friction needs the wall friction rheology.mu_w (or mu_w_deg) too",
+            )
+        }
+        (Some((mu_w, key)), Some(w)) => {
+            if layers == 1 {
+                return Err(multilayer_only(&key));
+            }
+            let width = positive("rheology.channel_width", w)?;
+            let form = choice(
+                "rheology.sidewall",
+                v.sidewall.as_deref(),
+                SidewallForm::Jop,
+                &[("jop", SidewallForm::Jop), ("layer", SidewallForm::Layer)],
+            )?;
+            Some(Sidewall { mu_w, width, form })
+        }
+    };
+    let static_threshold = positive("output.static_threshold", static_threshold.unwrap_or(1e-3))?;
+    Ok(MultilayerSpec {
+        layer_fractions,
+        basal,
+        regularization,
+        sidewall,
+        c_msm: v.c_msm.unwrap_or(false),
+        static_threshold,
+    })
+}
+
+/// `model.layer_fractions`: one positive number per layer, bottom first, summing to 1
+/// (to 1e-9; the fractions are then rescaled to sum to 1 to round-off).
+fn layer_fractions(l: Vec<f64>, layers: usize) -> Res<Vec<f64>> {
+    let key = "model.layer_fractions";
+    if l.len() != layers {
+        return err(
+            key,
+            format!(
+                "has {} values but model.layers = {layers}; give one fraction per layer",
+                l.len()
+            ),
+        );
+    }
+    for &v in &l {
+        positive(key, v)?;
+    }
+    let sum: f64 = l.iter().sum();
+    if (sum - 1.0).abs() > 1e-9 {
+        return err(key, format!("must sum to 1, sums to {sum}"));
+    }
+    Ok(l.iter().map(|v| v / sum).collect())
 }
 
 fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
@@ -1081,6 +1243,118 @@ front_threshold = 2e-3
         assert_eq!(s.domain.cells, 600);
         assert_eq!(s.boundary.right, BoundaryKind::Outflow);
         assert!(matches!(s.friction, FrictionLaw::MuI { .. }));
+    }
+
+    #[test]
+    fn multilayer_keys() {
+        let text = format!(
+            "{MINIMAL}[model]\nlayers = 3\nlayer_fractions = [0.2, 0.3, 0.5]\n[output]\nstatic_threshold = 2e-3\n"
+        );
+        let text = replace(
+            &text,
+            "mu = 0.5",
+            "mu = 0.5\nbasal = \"no_slip\"\nregularization = \"bound\"\nmu_w_deg = 10.4\nchannel_width = 0.1\nsidewall = \"layer\"\nc_msm = true",
+        );
+        let s = load(&text).unwrap();
+        let m = &s.multilayer;
+        assert_eq!(m.layer_fractions, vec![0.2, 0.3, 0.5]);
+        assert_eq!(m.basal, BasalCondition::NoSlip);
+        assert_eq!(m.regularization, Regularization::Bound);
+        let w = m.sidewall.unwrap();
+        assert!((w.mu_w - 10.4f64.to_radians().tan()).abs() < 1e-15);
+        assert_eq!((w.width, w.form), (0.1, SidewallForm::Layer));
+        assert!(m.c_msm);
+        assert_eq!(m.static_threshold, 2e-3);
+
+        // Defaults: uniform layers, Coulomb bed, δ = 1e-5, no sidewalls.
+        let s = load_set(MINIMAL, &["model.layers=4"]).unwrap();
+        assert_eq!(s.multilayer.layer_fractions, vec![0.25; 4]);
+        assert_eq!(s.multilayer.basal, BasalCondition::Coulomb);
+        assert_eq!(
+            s.multilayer.regularization,
+            Regularization::Delta { delta: 1e-5 }
+        );
+        assert_eq!(s.multilayer.sidewall, None);
+        assert!(!s.multilayer.c_msm);
+        assert_eq!(s.multilayer.static_threshold, 1e-3);
+        assert_eq!(load(MINIMAL).unwrap().multilayer.layer_fractions, vec![1.0]);
+
+        let bad = [
+            (
+                &["model.layers=2", "model.layer_fractions=[0.5]"][..],
+                "model.layer_fractions",
+                "one fraction per layer",
+            ),
+            (
+                &["model.layers=2", "model.layer_fractions=[0.5, 0.6]"],
+                "model.layer_fractions",
+                "sum to 1",
+            ),
+            (
+                &["model.layers=2", "model.layer_fractions=[1.5, -0.5]"],
+                "model.layer_fractions",
+                "greater than 0",
+            ),
+            (&["rheology.basal=no_slip"], "rheology.basal", "multilayer"),
+            (
+                &["model.layers=2", "rheology.basal=slip"],
+                "rheology.basal",
+                "unknown value",
+            ),
+            (
+                &[
+                    "model.layers=2",
+                    "rheology.regularization=bound",
+                    "rheology.delta=1e-3",
+                ],
+                "rheology.delta",
+                "only used by",
+            ),
+            (
+                &["model.layers=2", "rheology.delta=0"],
+                "rheology.delta",
+                "greater than 0",
+            ),
+            (
+                &["model.layers=2", "rheology.mu_w=0.2"],
+                "rheology.mu_w",
+                "channel_width",
+            ),
+            (
+                &["model.layers=2", "rheology.channel_width=0.1"],
+                "rheology.channel_width",
+                "mu_w",
+            ),
+            (
+                &["model.layers=2", "rheology.sidewall=jop"],
+                "rheology.sidewall",
+                "mu_w",
+            ),
+            (
+                &["rheology.mu_w=0.2", "rheology.channel_width=0.1"],
+                "rheology.mu_w",
+                "multilayer",
+            ),
+            (
+                &[
+                    "model.layers=2",
+                    "rheology.mu_w=0.2",
+                    "rheology.channel_width=0",
+                ],
+                "rheology.channel_width",
+                "greater than 0",
+            ),
+            (
+                &["model.layers=2", "output.static_threshold=0"],
+                "output.static_threshold",
+                "greater than 0",
+            ),
+        ];
+        for (sets, key, message) in bad {
+            let e = load_set(MINIMAL, sets).unwrap_err();
+            assert_eq!(e.key(), Some(key), "{sets:?}: {e}");
+            assert!(e.message().contains(message), "{sets:?}: {e}");
+        }
     }
 
     #[test]

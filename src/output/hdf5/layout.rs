@@ -4,7 +4,9 @@
 
 use rust_hdf5::{H5Dataset, H5File, H5Group, VarLenUnicode};
 
-use crate::output::{GridData, RunInfo, RunSummary, SnapshotView, StepRecord, FORMAT_VERSION};
+use crate::output::{
+    CellField, GridData, RunInfo, RunSummary, SnapshotView, StepRecord, FORMAT_VERSION,
+};
 
 /// Rows per chunk of the per-step series (`/diagnostics/*`, `/front/*`): 64 KiB.
 const STEP_CHUNK: usize = 8192;
@@ -84,6 +86,23 @@ pub(super) fn create_optional(
     Ok(())
 }
 
+/// Creates `/snapshots/<name>` (nt, nx) for the model-specific per-cell fields, which
+/// exist only when the first snapshot carries them.
+pub(super) fn create_cell_fields(
+    file: &H5File,
+    nx: usize,
+    fields: &[CellField],
+) -> rust_hdf5::Result<()> {
+    if fields.is_empty() {
+        return Ok(());
+    }
+    let group = file.root_group().group("snapshots")?;
+    for field in fields {
+        frames(&group, field.name, &[nx], field.units)?;
+    }
+    Ok(())
+}
+
 /// Appends step records to `/diagnostics/*` and `/front/*`.
 pub(super) fn append_steps(file: &H5File, recs: &[StepRecord]) -> rust_hdf5::Result<()> {
     if recs.is_empty() {
@@ -108,6 +127,10 @@ pub(super) fn append_snapshot(file: &H5File, snap: &SnapshotView) -> rust_hdf5::
         if let Some(data) = data {
             file.dataset_writer(name)?.append(data)?;
         }
+    }
+    for field in snap.extra {
+        file.dataset_writer(&format!("snapshots/{}", field.name))?
+            .append(field.data)?;
     }
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! Constant Coulomb friction (classical Savage–Hutter): μ ≡ μ_c.
 
-use super::BasalFriction;
+use super::{BasalFriction, LocalFriction};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Coulomb {
@@ -14,6 +14,18 @@ impl BasalFriction for Coulomb {
     }
 
     fn mu_static(&self) -> f64 {
+        self.mu
+    }
+}
+
+impl LocalFriction for Coulomb {
+    #[inline(always)]
+    fn inertial_scale(&self, _p_over_rho: f64) -> f64 {
+        0.0
+    }
+
+    #[inline(always)]
+    fn mu_at(&self, _inertial_number: f64) -> f64 {
         self.mu
     }
 }

@@ -9,7 +9,7 @@ mod coulomb;
 mod mu_i;
 
 pub use coulomb::Coulomb;
-pub use mu_i::{inertial_number, MuI};
+pub use mu_i::{inertial_number, local_inertial_number, MuI};
 
 /// A basal friction law μ(state).
 pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
@@ -20,4 +20,23 @@ pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
     /// Static coefficient (the value at rest), which sets the repose angle
     /// atan(μ_static) of the well-balanced states (seed 000 eq. 16).
     fn mu_static(&self) -> f64;
+}
+
+/// The friction coefficient of the bulk rheology at a point of the flow, used by the
+/// multilayer model between layers and at the bed (seed 001 eq. 25–26, seed 003
+/// eq. 10): μ(I) with the local inertial number I = d_s |∂_z u| / √(p/ρ_s), or a
+/// constant μ (seed 001's "μ_s-MSM").
+pub trait LocalFriction: Copy + Send + Sync + std::fmt::Debug {
+    /// d_s / √(p/ρ_s) for the pressure over density p/ρ (m²/s²): times a shear rate it
+    /// gives I (0 for a law that does not use I).
+    fn inertial_scale(&self, p_over_rho: f64) -> f64;
+
+    /// μ at the inertial number I.
+    fn mu_at(&self, inertial_number: f64) -> f64;
+
+    /// μ for a shear rate |∂_z u| (1/s) under the pressure over density p/ρ (m²/s²).
+    #[inline(always)]
+    fn mu_local(&self, shear_rate: f64, p_over_rho: f64) -> f64 {
+        self.mu_at(shear_rate * self.inertial_scale(p_over_rho))
+    }
 }

@@ -9,7 +9,7 @@
 //! and, for the monolayer model, the shear rate of the Bagnold profile
 //! γ̇ = 5|ū| / (2h) (seed 002 eq. 2.15).
 
-use super::BasalFriction;
+use super::{BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,6 +33,16 @@ pub fn inertial_number(d_s: f64, phi: f64, speed: f64, h: f64, p_over_rho: f64) 
     d_s * shear_rate / (phi * p_over_rho).sqrt()
 }
 
+/// Local inertial number I = d_s |∂_z u| / √(p/ρ_s), p/ρ_s = φ_s p/ρ (seed 003 eq. 10;
+/// with it the steady Bagnold profile is seed 001 eq. 29). Zero where p ≤ 0.
+#[inline(always)]
+pub fn local_inertial_number(d_s: f64, phi: f64, shear_rate: f64, p_over_rho: f64) -> f64 {
+    if p_over_rho <= 0.0 {
+        return 0.0;
+    }
+    d_s * shear_rate / (phi * p_over_rho).sqrt()
+}
+
 impl MuI {
     /// μ(I), written as μ_s + (μ_2 − μ_s)/(1 + I_0/I) so that I = ∞ gives μ_2 and
     /// I = 0 gives μ_s without a 0/0 or ∞/∞.
@@ -50,6 +60,18 @@ impl BasalFriction for MuI {
 
     fn mu_static(&self) -> f64 {
         self.mu_s
+    }
+}
+
+impl LocalFriction for MuI {
+    #[inline(always)]
+    fn inertial_scale(&self, p_over_rho: f64) -> f64 {
+        local_inertial_number(self.d_s, self.phi, 1.0, p_over_rho)
+    }
+
+    #[inline(always)]
+    fn mu_at(&self, inertial_number: f64) -> f64 {
+        self.mu_of_i(inertial_number)
     }
 }
 
@@ -76,6 +98,20 @@ mod tests {
         assert_relative_eq!(law.mu_of_i(law.i0), 0.5 * (law.mu_s + law.mu_2));
         assert_eq!(law.mu_of_i(f64::INFINITY), law.mu_2);
         assert_eq!(law.mu_of_i(0.0), law.mu_s);
+    }
+
+    #[test]
+    fn local_friction_uses_the_local_shear_rate() {
+        let law = beads();
+        // γ̇ = 100 1/s under p/ρ = 9.81·0.05: I = d_s γ̇ / √(φ p/ρ).
+        let i = 0.7e-3 * 100.0 / (0.62f64 * 9.81 * 0.05).sqrt();
+        assert_relative_eq!(
+            law.mu_local(100.0, 9.81 * 0.05),
+            law.mu_of_i(i),
+            max_relative = 1e-14
+        );
+        assert_eq!(law.mu_local(0.0, 1.0), law.mu_s);
+        assert_eq!(law.mu_local(1.0, 0.0), law.mu_s);
     }
 
     #[test]

@@ -1,0 +1,728 @@
+//! The hydrostatic multilayer μ(I) model (seed 001 eq. 27–28, seed 003 §4 with
+//! p_nh = 0): N = 1 is the monolayer bit for bit, steady profiles against the exact
+//! solutions of seed 001 (Bagnold eq. 29, Table 1; sidewalls eq. 30, Table 2),
+//! well-balancing with N layers (seed 003 Table 6), mass and positivity, and the
+//! erodible-bed effect of seed 001 §4.2.4 (Figs. 11–12).
+//!
+//! The numbers each test measures are printed (`cargo test --test multilayer --
+//! --nocapture`) and recorded in docs/numerics.md.
+
+mod common;
+use std::path::{Path, PathBuf};
+
+use common::{run, tan_deg, Case};
+use granflow::output::memory::MemorySink;
+use granflow::physics::GRAVITY as G;
+use granflow::scenario::{load_file, BoundaryKind, FrictionLaw, Scenario};
+use granflow::setup::build_simulation;
+use granflow::simulation::Simulation;
+
+fn scenario_path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(name)
+}
+
+/// Loads `scenarios/<name>` with `--set` overrides and builds its run.
+fn scenario(name: &str, sets: &[String]) -> (Scenario, Simulation) {
+    let scn = load_file(&scenario_path(name), sets).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let sim = build_simulation(&scn).unwrap_or_else(|e| panic!("{name}: {e}"));
+    (scn, sim)
+}
+
+fn sets(items: &[&str]) -> Vec<String> {
+    items.iter().map(|s| s.to_string()).collect()
+}
+
+/// Layer velocities of physical cell `i` (0-based).
+fn layer_velocities(sim: &Simulation, i: usize) -> Vec<f64> {
+    let n = sim.state.layers;
+    let h = sim.state.h[i + 1];
+    (0..n).map(|a| sim.state.hu[(i + 1) * n + a] / h).collect()
+}
+
+/// Relative L1, L2 and L∞ errors of `u` against `exact`.
+fn relative_errors(u: &[f64], exact: &[f64]) -> [f64; 3] {
+    let d: Vec<f64> = u.iter().zip(exact).map(|(u, e)| (u - e).abs()).collect();
+    let l1 = d.iter().sum::<f64>() / exact.iter().map(|e| e.abs()).sum::<f64>();
+    let l2 =
+        (d.iter().map(|d| d * d).sum::<f64>() / exact.iter().map(|e| e * e).sum::<f64>()).sqrt();
+    let linf =
+        d.iter().fold(0.0f64, |m, d| m.max(*d)) / exact.iter().fold(0.0f64, |m, e| m.max(e.abs()));
+    [l1, l2, linf]
+}
+
+/// Orders log2(e_N / e_2N) between successive numbers of layers.
+fn orders(errors: &[[f64; 3]], norm: usize) -> Vec<f64> {
+    errors
+        .windows(2)
+        .map(|w| (w[0][norm] / w[1][norm]).log2())
+        .collect()
+}
+
+/// FNV-1a over the bits of every value (−0 counted as +0).
+fn fnv(hash: &mut u64, v: f64) {
+    for b in (v + 0.0).to_bits().to_le_bytes() {
+        *hash ^= b as u64;
+        *hash = hash.wrapping_mul(0x100_0000_01b3);
+    }
+}
+
+fn state_hash(sim: &granflow::simulation::Simulation) -> u64 {
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    for &v in sim.state.h.iter().chain(&sim.state.hu) {
+        fnv(&mut hash, v);
+    }
+    hash
+}
+
+/// The monolayer runs whose final states were hashed with the code of issue 2, before
+/// the hyperbolic step was generalised to N layers.
+fn monolayer_reference_runs() -> Vec<(&'static str, granflow::simulation::Simulation)> {
+    let mut case = Case::new(-0.2, 3.0, 320);
+    case.slope_deg = 22.0;
+    case.right = BoundaryKind::Outflow;
+    case.law = FrictionLaw::MuI {
+        mu_s: tan_deg(25.5),
+        mu_2: tan_deg(36.0),
+        i0: 0.279,
+    };
+    case.t_end = 1.0;
+    case.every = 0.25;
+    let collapse = case.build(
+        |_| 0.0,
+        |x, _| if x <= 0.0 { 0.14 + 1.82e-3 } else { 1.82e-3 },
+        |_| 0.0,
+    );
+    let mut case = Case::new(-2.0, 2.5, 200);
+    case.law = FrictionLaw::Coulomb { mu: 0.3 };
+    case.slope_deg = 10.0;
+    case.t_end = 0.3;
+    let dam_break = case.build(
+        |x| 0.05 * (3.0 * x).sin(),
+        |x, _| if x < 0.0 { 1.0 } else { 0.1 },
+        |_| 0.0,
+    );
+    vec![("collapse", collapse), ("dam_break", dam_break)]
+}
+
+/// (steps, hash of the final h and hu) of [`monolayer_reference_runs`], recorded with
+/// the monolayer code of issue 2 as it stood on main just before the N-layer step was
+/// merged (after its positivity changes: reconstruction over b, fluxes at h^±,
+/// draining limiter).
+const MONOLAYER_REFERENCE: [(u64, u64); 2] =
+    [(318, 0xf1f8_66d0_d9fc_dc2a), (138, 0xbed4_8c8e_e000_f4f9)];
+
+#[test]
+fn monolayer_numbers_are_frozen() {
+    for ((name, mut sim), (steps, hash)) in monolayer_reference_runs()
+        .into_iter()
+        .zip(MONOLAYER_REFERENCE)
+    {
+        let (_, s) = run(&mut sim);
+        assert_eq!(s.steps, steps, "{name}");
+        assert_eq!(
+            state_hash(&sim),
+            hash,
+            "{name}: the monolayer numbers changed"
+        );
+    }
+}
+
+#[test]
+fn one_layer_runs_the_monolayer_pipeline() {
+    let (_, mono) = scenario("collapse.toml", &[]);
+    assert_eq!(mono.stage_names(), ["hyperbolic", "friction"]);
+    let (_, multi) = scenario("collapse.toml", &sets(&["model.layers=20"]));
+    assert_eq!(multi.stage_names(), ["hyperbolic", "viscous"]);
+    assert_eq!(multi.state.l.len(), 20);
+    assert!((multi.state.l.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+}
+
+/// Midpoints of the layers of a column of thickness `h`.
+fn midpoints(l: &[f64], h: f64) -> Vec<f64> {
+    let mut below = 0.0;
+    l.iter()
+        .map(|&l| {
+            let z = (below + 0.5 * l) * h;
+            below += l;
+            z
+        })
+        .collect()
+}
+
+/// Seed 001 §4.1.1 and Table 1: the Bagnold flow (eq. 29) with N = 4 … 128 layers.
+/// The flow is uniform along the slope, so one column (one cell between outflow
+/// boundaries) stands for the paper's 30 cells; it starts at rest and is steady to
+/// 1e-9 by t = 200 s (the paper stops at 50 s, where the surface velocity still
+/// changes by 2e-3 relatively in our runs).
+#[test]
+fn bagnold_profile_converges_at_second_order_in_the_layers() {
+    let (theta, mu_s, mu_2, i0, d_s, phi): (f64, f64, f64, f64, f64, f64) =
+        (0.43, 0.38, 0.62, 0.279, 0.04, 0.62);
+    let i_theta = i0 * (theta.tan() - mu_s) / (mu_2 - theta.tan());
+    let scale = 2.0 / 3.0 * i_theta * (phi * G * theta.cos()).sqrt() / d_s;
+    let mut errors = Vec::new();
+    let layers = [4, 8, 16, 32, 64, 128];
+    for n in layers {
+        let (_, mut sim) = scenario(
+            "bagnold.toml",
+            &sets(&[
+                &format!("model.layers={n}"),
+                "domain.cells=1",
+                "domain.x_max=0.0333",
+                "time.t_end=200",
+                "output.every=200",
+            ]),
+        );
+        assert!((sim.mesh.theta - theta).abs() < 1e-9);
+        run(&mut sim);
+        let h = sim.state.h[1];
+        assert!((h - 1.0).abs() < 1e-12, "h = {h}");
+        let exact: Vec<f64> = midpoints(&sim.state.l, h)
+            .iter()
+            .map(|z| scale * (h.powf(1.5) - (h - z).powf(1.5)))
+            .collect();
+        errors.push(relative_errors(&layer_velocities(&sim, 0), &exact));
+    }
+    let (o1, o2, oinf) = (orders(&errors, 0), orders(&errors, 1), orders(&errors, 2));
+    println!("Bagnold (seed 001 Table 1): N, L1 error, order, L2 error, order, Linf error, order");
+    for (k, n) in layers.iter().enumerate() {
+        let o = |v: &[f64]| {
+            k.checked_sub(1)
+                .map_or("–".into(), |j| format!("{:.2}", v[j]))
+        };
+        let e = errors[k];
+        println!(
+            "  {n:4} {:.3e} {} {:.3e} {} {:.3e} {}",
+            e[0],
+            o(&o1),
+            e[1],
+            o(&o2),
+            e[2],
+            o(&oinf)
+        );
+    }
+    assert!(errors[0][0] < 1.5e-2, "N = 4: {:?}", errors[0]);
+    assert!(errors[5][0] < 2e-5, "N = 128: {:?}", errors[5]);
+    for (k, (a, b)) in o1.iter().zip(&o2).enumerate() {
+        assert!(*a > 1.85 && *b > 1.85, "orders at step {k}: L1 {a}, L2 {b}");
+    }
+    assert!(oinf.iter().all(|&o| o > 1.3), "L∞ orders {oinf:?}");
+}
+
+/// The Bagnold flow on the paper's 30 cells stays uniform along the slope: the wave
+/// speeds include the shear of the column (ū ± √(g_n h + 3 Σ l_α (u_α − ū)²)). With
+/// seed 003's ū ± √(g_n h) the flow (ū ≈ 3.2 m/s, √(g_n h) ≈ 3.0 m/s) counts as
+/// supercritical, is fully upwinded, and round-off grows into waves by t ≈ 15 s.
+#[test]
+fn bagnold_flow_stays_uniform_on_thirty_cells() {
+    let (_, mut sim) = scenario(
+        "bagnold.toml",
+        &sets(&["model.layers=4", "time.t_end=50", "output.every=50"]),
+    );
+    assert_eq!(sim.mesh.nx, 30);
+    run(&mut sim);
+    let h = sim.state.h_interior();
+    let worst = h.iter().fold(0.0f64, |m, h| m.max((h - 1.0).abs()));
+    assert!(worst < 1e-9, "max |h − 1| = {worst:e}");
+    let u_top: Vec<f64> = (0..30).map(|i| layer_velocities(&sim, i)[3]).collect();
+    let spread = u_top
+        .iter()
+        .fold(0.0f64, |m, u| m.max((u - u_top[0]).abs()));
+    assert!(u_top[0] > 4.5 && spread < 1e-9, "{u_top:?}");
+}
+
+/// Material of seed 001 §4.1.2 (Jop et al.'s glass beads in a narrow channel).
+struct Channel {
+    d_s: f64,
+    phi: f64,
+    mu_s: f64,
+    mu_2: f64,
+    i0: f64,
+    mu_w: f64,
+    depth: f64,
+}
+
+impl Channel {
+    fn jop() -> Channel {
+        let d_s = 0.53e-3;
+        Channel {
+            d_s,
+            phi: 0.6,
+            mu_s: tan_deg(20.9),
+            mu_2: tan_deg(32.76),
+            i0: 0.279,
+            mu_w: tan_deg(10.4),
+            depth: 45.0 * d_s,
+        }
+    }
+
+    /// Seed 001 eq. (30): u at height z of a channel of width `w` on slope `theta`,
+    /// zero below the static interface h*.
+    fn u(&self, z: f64, theta: f64, w: f64) -> f64 {
+        let a = (self.mu_2 - self.mu_s) / self.mu_w * w;
+        let s_star = ((theta.tan() - self.mu_s) / self.mu_w * w).min(self.depth);
+        let h2 = (self.mu_2 - theta.tan()) / self.mu_w * w;
+        let s = (self.depth - z).min(s_star);
+        let c = 2.0 * self.i0 * (self.phi * G * theta.cos()).sqrt() / self.d_s;
+        c * (s.powf(1.5) / 3.0 - s_star.powf(1.5) / 3.0 - a * (s.sqrt() - s_star.sqrt())
+            + h2.sqrt() * a * ((s / h2).sqrt().atan() - (s_star / h2).sqrt().atan()))
+    }
+
+    /// Q* = ∫u dz / (d_s √(g d_s)) (Simpson's rule).
+    fn discharge(&self, theta: f64, w: f64) -> f64 {
+        let m = 4000;
+        let dz = self.depth / m as f64;
+        let sum: f64 = (0..=m)
+            .map(|k| {
+                let weight = if k == 0 || k == m {
+                    1.0
+                } else if k % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                weight * self.u(k as f64 * dz, theta, w)
+            })
+            .sum();
+        sum * dz / 3.0 / (self.d_s * (G * self.d_s).sqrt())
+    }
+
+    /// The slope at which the discharge is `q_star` (bisection).
+    fn slope_for(&self, q_star: f64, w: f64) -> f64 {
+        let (mut lo, mut hi) = (self.mu_s.atan() + 1e-9, self.mu_2.atan() - 1e-6);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if self.discharge(mid, w) > q_star {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+}
+
+/// Runs the sidewall channel of width `w_ds` grain diameters at Q* = 31.5 with `n`
+/// layers to steady state; returns the relative errors against eq. (30).
+fn sidewall_errors(w_ds: f64, n: usize, form: &str) -> [f64; 3] {
+    let ch = Channel::jop();
+    let w = w_ds * ch.d_s;
+    let theta = ch.slope_for(31.5, w);
+    let (_, mut sim) = scenario(
+        "sidewall_channel.toml",
+        &sets(&[
+            &format!("model.layers={n}"),
+            &format!("rheology.channel_width={w:e}"),
+            &format!("domain.slope_deg={:.17e}", theta.to_degrees()),
+            &format!("rheology.sidewall={form}"),
+            "time.t_end=300",
+            "output.every=300",
+        ]),
+    );
+    run(&mut sim);
+    let h = sim.state.h[1];
+    assert!((h - ch.depth).abs() < 1e-12 * ch.depth);
+    let exact: Vec<f64> = midpoints(&sim.state.l, h)
+        .iter()
+        .map(|&z| ch.u(z, theta, w))
+        .collect();
+    relative_errors(&layer_velocities(&sim, 0), &exact)
+}
+
+/// Seed 001 §4.1.2, Fig. 5 and Table 2: steady profiles with sidewall friction for
+/// W = 19, 57, 283 d_s with 50 layers, and the convergence in N for W = 283 d_s.
+#[test]
+fn sidewall_profiles_match_jop_solution() {
+    let ch = Channel::jop();
+    println!("Sidewalls (seed 001 eq. 30), Q* = 31.5, N = 50: W/d_s, θ, h*/d_s, L1, L2, L∞ errors");
+    for (w_ds, bound) in [(19.0, 3e-3), (57.0, 1e-3), (283.0, 5e-4)] {
+        let w = w_ds * ch.d_s;
+        let theta = ch.slope_for(31.5, w);
+        let h_star = ch.depth - (theta.tan() - ch.mu_s) / ch.mu_w * w;
+        let e = sidewall_errors(w_ds, 50, "jop");
+        println!(
+            "  {w_ds:5} {:.4}° {:.2} {:.3e} {:.3e} {:.3e}",
+            theta.to_degrees(),
+            h_star / ch.d_s,
+            e[0],
+            e[1],
+            e[2]
+        );
+        assert!(h_star > 0.0, "a static layer under the flow");
+        assert!(e[0] < bound && e[1] < 2.0 * bound, "W = {w_ds} d_s: {e:?}");
+    }
+    // The layer form of seed 003 eq. (36) has the same steady state.
+    let e = sidewall_errors(57.0, 50, "layer");
+    println!(
+        "  layer form (seed 003 eq. 36), W = 57 d_s: {:.3e} {:.3e} {:.3e}",
+        e[0], e[1], e[2]
+    );
+    assert!(e[0] < 2e-3, "{e:?}");
+
+    let layers = [4, 8, 16, 32, 64];
+    let errors: Vec<[f64; 3]> = layers
+        .iter()
+        .map(|&n| sidewall_errors(283.0, n, "jop"))
+        .collect();
+    let o1 = orders(&errors, 0);
+    println!("  W = 283 d_s (Table 2): N, L1, L2, L∞ errors, L1 order");
+    for (k, n) in layers.iter().enumerate() {
+        let e = errors[k];
+        let o = k
+            .checked_sub(1)
+            .map_or("–".into(), |j| format!("{:.2}", o1[j]));
+        println!("  {n:4} {:.3e} {:.3e} {:.3e} {o}", e[0], e[1], e[2]);
+    }
+    let mean = o1.iter().sum::<f64>() / o1.len() as f64;
+    assert!(mean > 1.8, "mean L1 order {mean}: {o1:?}");
+    assert!(errors[4][0] < 2e-4, "{:?}", errors[4]);
+}
+
+/// The errors of seed 003 eq. (35) against the initial state, maximal over the
+/// snapshots: Δx Σ|h − h⁰| and Δx Σ h/N Σ_α |u_α|.
+fn departures_from_rest(sink: &MemorySink, dx: f64, layers: usize) -> (f64, f64) {
+    let h0 = &sink.snapshots[0].h;
+    let nx = h0.len();
+    let mut worst = (0.0f64, 0.0f64);
+    for snap in &sink.snapshots {
+        let eh: f64 = snap
+            .h
+            .iter()
+            .zip(h0)
+            .map(|(h, h0)| (h - h0).abs())
+            .sum::<f64>()
+            * dx;
+        let eu: f64 = (0..nx)
+            .map(|i| {
+                let speeds: f64 = (0..layers).map(|a| snap.u[a * nx + i].abs()).sum();
+                snap.h[i] / layers as f64 * speeds
+            })
+            .sum::<f64>()
+            * dx;
+        worst = (worst.0.max(eh), worst.1.max(eu));
+    }
+    worst
+}
+
+/// The at-rest random bed of seed 003 §5.3 with 10 layers, regularisation `delta`,
+/// surface slope `surface_deg`, and the well-balancing ĥ of eq. (25) on or off.
+fn at_rest_run(delta: f64, surface_deg: f64, well_balanced: bool) -> (f64, f64) {
+    use granflow::numerics::viscous::ViscousOptions;
+    use granflow::pipeline::hydrostatic_multilayer;
+    let (scn, sim) = scenario(
+        "at_rest_random_bed_multilayer.toml",
+        &sets(&[
+            &format!("rheology.delta={delta:e}"),
+            &format!("initial.h=\"0.8 - tan({surface_deg}*deg)*(x-2) - b\""),
+        ]),
+    );
+    let ml = &scn.multilayer;
+    let opts = ViscousOptions {
+        basal: ml.basal,
+        regularization: ml.regularization,
+        sidewall: ml.sidewall,
+        c_msm: ml.c_msm,
+        well_balanced,
+    };
+    let stages = hydrostatic_multilayer(
+        &scn.friction,
+        &scn.material,
+        sim.mesh.nx,
+        &ml.layer_fractions,
+        opts,
+    );
+    let mut sim = Simulation::new(
+        sim.mesh.clone(),
+        sim.state.clone(),
+        sim.h_bed.clone(),
+        stages,
+        sim.config.clone(),
+        sim.info.clone(),
+    );
+    let (sink, _) = run(&mut sim);
+    assert!(sim.steps > 400, "{} steps", sim.steps);
+    departures_from_rest(&sink, sim.mesh.dx, sim.state.layers)
+}
+
+/// Seed 003 §5.3, Table 6: a mass at rest exactly at the repose slope stays at rest
+/// up to the creep the δ regularisation allows (errors proportional to δ), only with
+/// the reconstruction ĥ of eq. (25); with ĥ = h it moves whatever δ; a surface 0.01°
+/// steeper moves.
+#[test]
+fn multilayer_mass_at_repose_stays_at_rest_to_order_delta() {
+    println!(
+        "Well-balanced test (seed 003 Table 6), 10 layers, t = 1 s: δ, L1 error h, L1 error u"
+    );
+    let mut balanced = Vec::new();
+    for delta in [1e-5, 1e-10, 1e-15] {
+        let (eh, eu) = at_rest_run(delta, 20.0, true);
+        println!("  ĥ (25)  δ = {delta:.0e}: {eh:.3e} {eu:.3e}");
+        assert!(
+            eh <= 100.0 * delta + 1e-12 && eu <= 300.0 * delta + 1e-12,
+            "δ = {delta}: {eh:e}, {eu:e}"
+        );
+        balanced.push((delta, eh, eu));
+    }
+    for delta in [1e-10, 1e-15] {
+        let (eh, eu) = at_rest_run(delta, 20.0, false);
+        println!("  ĥ = h   δ = {delta:.0e}: {eh:.3e} {eu:.3e}");
+        let &(_, wb_h, wb_u) = balanced.iter().find(|b| b.0 == delta).unwrap();
+        assert!(
+            eh > 1e-6 && eh > 1e3 * wb_h,
+            "ĥ = h must be visibly worse: {eh:e} vs {wb_h:e}"
+        );
+        assert!(eu > 1e3 * wb_u, "{eu:e} vs {wb_u:e}");
+    }
+    let (eh, eu) = at_rest_run(1e-10, 20.01, true);
+    println!("  surface at 20.01°, δ = 1e-10: {eh:.3e} {eu:.3e}");
+    assert!(
+        eh > 1e-5 && eu > 1e-5,
+        "a surface beyond the repose slope moves: {eh:e}, {eu:e}"
+    );
+}
+
+/// A multilayer collapse between two walls: the mass is conserved to round-off at
+/// every step and h ≥ 0 at every snapshot, for μ(I), constant friction with no-slip
+/// and C-MSM variants.
+#[test]
+fn multilayer_collapse_conserves_mass_and_stays_positive() {
+    let base = [
+        "domain.x_max=1.0",
+        "domain.cells=200",
+        "boundary.right=wall",
+        "model.layers=8",
+        "time.t_end=1.5",
+        "time.stop_at_rest=false",
+        "output.every=0.05",
+    ];
+    let variants: [&[&str]; 3] = [
+        &["initial.erodible_bed=0"],
+        &["rheology.c_msm=true", "rheology.regularization=delta"],
+        &["rheology.basal=no_slip", "initial.erodible_bed=2e-3"],
+    ];
+    for extra in variants {
+        let all: Vec<&str> = base.iter().chain(extra.iter()).copied().collect();
+        let (_, mut sim) = scenario("erodible_bed.toml", &sets(&all));
+        let (sink, _) = run(&mut sim);
+        let m0 = sink.steps[0].mass;
+        for rec in &sink.steps {
+            assert!(
+                (rec.mass - m0).abs() <= 1e-13 * m0,
+                "{extra:?} t = {}: mass {} vs {m0}",
+                rec.t,
+                rec.mass
+            );
+        }
+        for snap in &sink.snapshots {
+            assert!(
+                snap.h.iter().all(|&h| h >= 0.0),
+                "{extra:?}: h < 0 at t = {}",
+                snap.t
+            );
+            assert!(
+                snap.u.iter().all(|u| u.is_finite()),
+                "{extra:?}: t = {}",
+                snap.t
+            );
+        }
+        let max_u = sink.steps.iter().map(|r| r.max_speed).fold(0.0, f64::max);
+        assert!(
+            max_u > 0.5,
+            "{extra:?}: the column collapses (max speed {max_u})"
+        );
+    }
+}
+
+/// The erodible-bed scenario with the constant friction μ = μ_s = tan 25.5° instead of
+/// μ(I) (seed 001's "μ_s-MSM").
+fn constant_friction_text() -> String {
+    let text = std::fs::read_to_string(scenario_path("erodible_bed.toml")).unwrap();
+    let start = text.find("law = \"mu_i\"").expect("μ(I) law");
+    let end = text.find("i0 = 0.279").expect("i0") + "i0 = 0.279".len();
+    format!(
+        "{}law = \"coulomb\"\nmu_deg = 25.5{}",
+        &text[..start],
+        &text[end..]
+    )
+}
+
+/// Runout (m) of the seed 001 §4.2 collapse at θ = 22° on an erodible bed `h_i`, run
+/// until every layer is slower than 1 mm/s.
+fn erodible_runout(h_i: f64, constant_friction: bool, extra: &[&str]) -> f64 {
+    let mut all = vec![format!("initial.erodible_bed={h_i:e}")];
+    all.extend(extra.iter().map(|s| s.to_string()));
+    let scn = if constant_friction {
+        let dir = scenario_path("");
+        granflow::scenario::load_str(&constant_friction_text(), &dir, &all).unwrap()
+    } else {
+        load_file(&scenario_path("erodible_bed.toml"), &all).unwrap()
+    };
+    let mut sim = build_simulation(&scn).unwrap();
+    assert_eq!(sim.state.layers, 20);
+    assert_eq!(sim.mesh.theta.to_degrees().round(), 22.0);
+    let (_, summary) = run(&mut sim);
+    assert_eq!(summary.status, "stopped_at_rest", "h_i = {h_i} {extra:?}");
+    summary.runout
+}
+
+/// Seed 001 §4.2.4 (Figs. 10–12): at θ = 22° with 20 layers, the runout increases with
+/// the erodible-bed thickness (h_i = 1.82 → 4.6 mm) with the μ(I) rheology (paper
+/// +4.4 %), and decreases with a constant friction coefficient μ_s (μ_s-MSM).
+#[test]
+fn erodible_bed_lengthens_runout_with_mu_i_but_not_with_constant_friction() {
+    let change = |(a, b): (f64, f64)| 100.0 * (b - a) / a;
+    let mu_i = (
+        erodible_runout(1.82e-3, false, &[]),
+        erodible_runout(4.6e-3, false, &[]),
+    );
+    let mu_s = (
+        erodible_runout(1.82e-3, true, &[]),
+        erodible_runout(4.6e-3, true, &[]),
+    );
+    println!("Erodible bed, θ = 22°, 20 layers, h_i = 1.82 → 4.6 mm:");
+    println!(
+        "  μ(I)-MSM runout {:.3} → {:.3} m ({:+.1} %, paper +4.4 %)",
+        mu_i.0,
+        mu_i.1,
+        change(mu_i)
+    );
+    println!(
+        "  μ_s-MSM  runout {:.3} → {:.3} m ({:+.1} %, paper: decreases)",
+        mu_s.0,
+        mu_s.1,
+        change(mu_s)
+    );
+    assert!(
+        change(mu_i) > 1.0,
+        "μ(I): the runout must increase with h_i"
+    );
+    assert!(
+        change(mu_s) < -1.0,
+        "μ_s: the runout must decrease with h_i"
+    );
+    assert!(
+        mu_s.0 > mu_i.0,
+        "constant friction runs further (seed 001 §4.2.3)"
+    );
+}
+
+/// C-MSM (seed 001 eq. 32) at θ = 22°: the runout increases too (paper +8.6 %).
+#[test]
+fn erodible_bed_lengthens_runout_with_c_msm() {
+    let r = (
+        erodible_runout(1.82e-3, false, &["rheology.c_msm=true"]),
+        erodible_runout(4.6e-3, false, &["rheology.c_msm=true"]),
+    );
+    let change = 100.0 * (r.1 - r.0) / r.0;
+    println!(
+        "  μ(I)-C-MSM runout {:.3} → {:.3} m ({change:+.1} %, paper +8.6 %)",
+        r.0, r.1
+    );
+    assert!(change > 1.0);
+}
+
+/// Every scenario file loads, builds and runs a few steps.
+#[test]
+fn every_scenario_runs_a_few_steps() {
+    let dir = scenario_path("");
+    let mut names: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 10, "{names:?}");
+    for path in names {
+        let scn = load_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut sim = build_simulation(&scn).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        for _ in 0..3 {
+            sim.step(scn.time.t_end).unwrap();
+        }
+        let d = sim.diagnostics();
+        assert!(d.non_finite_at.is_none(), "{}", path.display());
+        let viscous = sim.stage_names().contains(&"viscous");
+        assert_eq!(viscous, scn.model.layers > 1, "{}", path.display());
+    }
+}
+
+/// A multilayer run writes per-layer u and w and the flow/no-flow interface to its
+/// HDF5 file, with the shapes of docs/output-format.md.
+#[test]
+fn multilayer_output_has_w_and_static_interface() {
+    use rust_hdf5::H5File;
+    let dir = tempfile::tempdir().unwrap();
+    let h5 = dir.path().join("eb.h5");
+    let scn = load_file(
+        &scenario_path("erodible_bed.toml"),
+        &sets(&[
+            "domain.cells=160",
+            "model.layers=6",
+            "time.t_end=1.2",
+            "output.every=0.4",
+        ]),
+    )
+    .unwrap();
+    let report = granflow::runner::run_to_files(&scn, &h5, &mut |_| {}).unwrap();
+    assert_eq!(report.summary.status, "completed");
+    let f = H5File::open(&h5).unwrap();
+    let shape = |name: &str| f.dataset(name).unwrap().shape();
+    let read = |name: &str| f.dataset(name).unwrap().read_raw::<f64>().unwrap();
+    assert_eq!(shape("snapshots/u"), [4, 6, 160]);
+    assert_eq!(shape("snapshots/w"), [4, 6, 160]);
+    assert_eq!(shape("snapshots/static_interface"), [4, 160]);
+    let (h, si, w) = (
+        read("snapshots/h"),
+        read("snapshots/static_interface"),
+        read("snapshots/w"),
+    );
+    assert!(si.iter().zip(&h).all(|(s, h)| *s >= 0.0 && *s <= *h));
+    // At t = 0 all is at rest: the interface is the free surface and w = 0.
+    assert_eq!(&si[..160], &h[..160]);
+    assert!(w[..6 * 160].iter().all(|&w| w == 0.0));
+    // When the flow slows down, the lower layers stop first: upper layers flow over
+    // static ones (seed 001 §4.2.5). The collapsing column moves down (w < 0).
+    let last = &si[3 * 160..];
+    let h_last = &h[3 * 160..];
+    assert!(last.iter().zip(h_last).any(|(s, h)| *s > 0.0 && *s < *h));
+    assert!(w[3 * 6 * 160..].iter().any(|&w| w < -1e-3));
+    if let Ok(python) = std::env::var("GRANFLOW_PYTHON") {
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/check_output.py");
+        let out = std::process::Command::new(python)
+            .arg(script)
+            .arg(&h5)
+            .args(["--expect-layers", "6"])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+/// Many short steps (CFL 0.1, Δt shortened to land on frequent output times) must
+/// not change the dynamics: the viscous step conserves the momentum of a column
+/// except for the friction it applies. (With the inertia taken as ĥ instead of h,
+/// each step multiplied the momentum by h/ĥ and this collapse blew up at t ≈ 0.4 s.)
+#[test]
+fn many_short_steps_stay_stable() {
+    let (_, mut sim) = scenario(
+        "erodible_bed.toml",
+        &sets(&[
+            "domain.cells=320",
+            "model.layers=4",
+            "time.cfl=0.1",
+            "time.t_end=1.0",
+            "time.stop_at_rest=false",
+            "rheology.regularization=delta",
+            "output.every=0.0005",
+        ]),
+    );
+    let (sink, summary) = run(&mut sim);
+    assert_eq!(summary.status, "completed");
+    let max_u = sink.steps.iter().map(|r| r.max_speed).fold(0.0, f64::max);
+    assert!(max_u < 3.0, "max speed {max_u}");
+}
