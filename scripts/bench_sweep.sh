@@ -12,6 +12,7 @@
 # the same machine), REPEAT times. Prints the fastest and the median wall time of each,
 # runs per second and the speed-up. Other processes on the machine lower and scatter
 # the numbers: the fastest repetition is the least disturbed one. Needs python3.
+# CASES="uniform paper" (default) selects the sweeps.
 set -euo pipefail
 shopt -s inherit_errexit
 cd "$(dirname "$0")/.."
@@ -67,6 +68,11 @@ print(f"{'':8s} all --jobs 1: {' '.join(f'{t:.2f}' for t in one)}")
 print(f"{'':8s} all --jobs {jobs}: {' '.join(f'{t:.2f}' for t in many)}")
 PY
 }
-report uniform 8 "$work/uniform.toml"
-report paper 12 scenarios/sweeps/erodible_bed.toml --set domain.cells=3000
+for case in ${CASES:-uniform paper}; do
+    case $case in
+    uniform) report uniform 8 "$work/uniform.toml" ;;
+    paper) report paper 12 scenarios/sweeps/erodible_bed.toml --set domain.cells=3000 ;;
+    *) echo "unknown case $case" >&2 && exit 2 ;;
+    esac
+done
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
