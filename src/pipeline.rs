@@ -81,16 +81,7 @@ pub fn nonhydrostatic_monolayer(
 ) -> Vec<Box<dyn Stage>> {
     match *law {
         FrictionLaw::Coulomb { mu } => nh_monolayer(Coulomb { mu }, mesh),
-        FrictionLaw::MuI { mu_s, mu_2, i0 } => nh_monolayer(
-            MuI {
-                mu_s,
-                mu_2,
-                i0,
-                d_s: material.d_s,
-                phi: material.phi,
-            },
-            mesh,
-        ),
+        FrictionLaw::MuI { mu_s, mu_2, i0 } => nh_monolayer(mu_i(mu_s, mu_2, i0, material), mesh),
     }
 }
 /// The hydrostatic multilayer pipeline with layer fractions `l` (N = `l.len()` > 1):
