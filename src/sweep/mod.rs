@@ -267,6 +267,87 @@ fn write_summary(path: &Path, axes: &[String], rows: &[Row]) -> Result<(), Sweep
         .map_err(|e| SweepError::Io(format!("cannot write {}: {e}", path.display())))
 }
 
+/// The run list written to `DIR/sweep-plan.toml` (identical for every shard).
+fn plan_of(spec: &SweepSpec, base: &[String], axes: &[String], prepared: &[Prepared]) -> Plan {
+    Plan {
+        format: PLAN_FORMAT,
+        granflow_version: env!("CARGO_PKG_VERSION").to_string(),
+        sweep_file: spec.path.display().to_string(),
+        scenario: spec.scenario.display().to_string(),
+        base_overrides: base.to_vec(),
+        axes: axes.to_vec(),
+        sweep_toml: spec.text.clone(),
+        runs: prepared
+            .iter()
+            .map(|p| PlanRun {
+                index: p.point.index,
+                name: p.point.name.clone(),
+                scenario_hash: p.hash.clone(),
+                values: p
+                    .point
+                    .params
+                    .iter()
+                    .map(|(_, v)| v.display.clone())
+                    .collect(),
+                overrides: p.point.overrides(),
+            })
+            .collect(),
+    }
+}
+
+/// Runs `mine[slot]` for every slot in `todo` on `jobs` workers of `pool`, each taking
+/// the next run in sweep order. `records` holds the results known so far (one per run of
+/// `mine`) and is completed in place; the summary at `summary_path` is rewritten at most
+/// once a second on the way.
+#[allow(clippy::too_many_arguments)]
+fn execute(
+    pool: &rayon::ThreadPool,
+    jobs: usize,
+    mine: &[&Prepared],
+    todo: &[usize],
+    records: &mut [Option<record::RunRecord>],
+    dir: &Path,
+    axes: &[String],
+    summary_path: &Path,
+    ui: &Ui,
+) {
+    let rows_of = |records: &[Option<record::RunRecord>], pending: &str| -> Vec<Row> {
+        mine.iter()
+            .zip(records)
+            .map(|(p, r)| row_for(p, r.clone(), pending))
+            .collect()
+    };
+    let live = Mutex::new((records, Instant::now()));
+    let next = AtomicUsize::new(0);
+    pool.scope(|s| {
+        for _ in 0..jobs.min(todo.len()) {
+            s.spawn(|_| loop {
+                let i = next.fetch_add(1, Ordering::SeqCst);
+                let Some(&slot) = todo.get(i) else { break };
+                let run = mine[slot];
+                let name = &run.point.name;
+                let bar = ui.start(name);
+                let mut drawn = 0u64;
+                let record = exec::run_one(run, dir, &mut |p| {
+                    if p.steps >= drawn + 64 {
+                        drawn = p.steps;
+                        Ui::advance(&bar, name, &p);
+                    }
+                });
+                ui.finish(bar, &record);
+                let mut live = live.lock().unwrap_or_else(|e| e.into_inner());
+                let (records, last_write) = &mut *live;
+                records[slot] = Some(record);
+                if last_write.elapsed() >= Duration::from_secs(1) {
+                    *last_write = Instant::now();
+                    // Best effort: the caller's final write reports errors.
+                    let _ = write_summary(summary_path, axes, &rows_of(records, "pending"));
+                }
+            });
+        }
+    });
+}
+
 /// Runs a sweep (or one shard of it).
 pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
     let started = Instant::now();
@@ -291,30 +372,7 @@ pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
             dir.display()
         ))
     })?;
-    let plan = Plan {
-        format: PLAN_FORMAT,
-        granflow_version: env!("CARGO_PKG_VERSION").to_string(),
-        sweep_file: spec.path.display().to_string(),
-        scenario: spec.scenario.display().to_string(),
-        base_overrides: base.clone(),
-        axes: axes.clone(),
-        sweep_toml: spec.text.clone(),
-        runs: prepared
-            .iter()
-            .map(|p| PlanRun {
-                index: p.point.index,
-                name: p.point.name.clone(),
-                scenario_hash: p.hash.clone(),
-                values: p
-                    .point
-                    .params
-                    .iter()
-                    .map(|(_, v)| v.display.clone())
-                    .collect(),
-                overrides: p.point.overrides(),
-            })
-            .collect(),
-    };
+    let plan = plan_of(&spec, &base, &axes, &prepared);
     let replaced = plan.write(&dir).map_err(SweepError::Io)?;
 
     let mine: Vec<&Prepared> = prepared
@@ -356,52 +414,25 @@ pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
         dir.display()
     ));
 
-    // Results so far, for the summary rewritten (at most once a second) while running.
-    struct Live {
-        records: Vec<Option<record::RunRecord>>,
-        last_write: Instant,
-    }
-    let live = Mutex::new(Live {
-        records: done,
-        last_write: Instant::now(),
-    });
-    let rows_of = |records: &[Option<record::RunRecord>], pending: &str| -> Vec<Row> {
-        mine.iter()
-            .zip(records)
-            .map(|(p, r)| row_for(p, r.clone(), pending))
-            .collect()
-    };
-    let next = AtomicUsize::new(0);
-    pool.scope(|s| {
-        for _ in 0..jobs.min(todo.len()) {
-            s.spawn(|_| loop {
-                let i = next.fetch_add(1, Ordering::SeqCst);
-                let Some(&slot) = todo.get(i) else { break };
-                let run = mine[slot];
-                let name = &run.point.name;
-                let bar = ui.start(name);
-                let mut drawn = 0u64;
-                let record = exec::run_one(run, &dir, &mut |p| {
-                    if p.steps >= drawn + 64 {
-                        drawn = p.steps;
-                        Ui::advance(&bar, name, &p);
-                    }
-                });
-                ui.finish(bar, &record);
-                let mut live = live.lock().unwrap_or_else(|e| e.into_inner());
-                live.records[slot] = Some(record);
-                if live.last_write.elapsed() >= Duration::from_secs(1) {
-                    live.last_write = Instant::now();
-                    // Best effort: the final write below reports errors.
-                    let _ = write_summary(&summary_path, &axes, &rows_of(&live.records, "pending"));
-                }
-            });
-        }
-    });
+    let mut records = done;
+    execute(
+        &pool,
+        jobs,
+        &mine,
+        &todo,
+        &mut records,
+        &dir,
+        &axes,
+        &summary_path,
+        &ui,
+    );
     ui.done();
 
-    let live = live.into_inner().unwrap_or_else(|e| e.into_inner());
-    let rows = rows_of(&live.records, "not run");
+    let rows: Vec<Row> = mine
+        .iter()
+        .zip(records)
+        .map(|(p, r)| row_for(p, r, "not run"))
+        .collect();
     write_summary(&summary_path, &axes, &rows)?;
     Ok(SweepReport {
         dir,
@@ -454,15 +485,23 @@ pub fn merge(dir: &Path) -> Result<SweepReport, SweepError> {
     })
 }
 
-fn finish(report: &SweepReport, quiet: bool, what: &str) -> u8 {
+fn finish(report: &SweepReport, quiet: bool, merged: bool) -> u8 {
     let failed = report.failed();
     if !quiet {
         print!("{}", report.table());
+        let counts = if merged {
+            format!("{} runs", report.rows.len())
+        } else {
+            format!(
+                "{} runs ({} run now, {} already done)",
+                report.rows.len(),
+                report.ran,
+                report.skipped
+            )
+        };
         println!(
-            "{what}: {} runs ({} run now, {} already done), {failed} not ok, {:.2} s; summary in {}",
-            report.rows.len(),
-            report.ran,
-            report.skipped,
+            "{}: {counts}, {failed} not ok, {:.2} s; summary in {}",
+            if merged { "merge" } else { "sweep" },
             report.wall_time_s,
             report.summary.display()
         );
@@ -482,7 +521,7 @@ fn finish(report: &SweepReport, quiet: bool, what: &str) -> u8 {
 /// `granflow sweep …`: returns the exit code.
 pub fn main(args: &SweepArgs) -> u8 {
     let result = match &args.command {
-        Some(SweepCommand::Merge(m)) => merge(&m.dir).map(|r| (r, m.quiet, "merge")),
+        Some(SweepCommand::Merge(m)) => merge(&m.dir).map(|r| (r, m.quiet, true)),
         None => {
             let opts = SweepOptions {
                 sweep: args.sweep.clone().expect("required by clap"),
@@ -493,11 +532,11 @@ pub fn main(args: &SweepArgs) -> u8 {
                 set: args.set.clone(),
                 quiet: args.quiet,
             };
-            run(&opts).map(|r| (r, args.quiet, "sweep"))
+            run(&opts).map(|r| (r, args.quiet, false))
         }
     };
     match result {
-        Ok((report, quiet, what)) => finish(&report, quiet, what),
+        Ok((report, quiet, merged)) => finish(&report, quiet, merged),
         Err(e) => {
             eprintln!("error: {e}");
             e.exit_code()
