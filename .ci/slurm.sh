@@ -13,7 +13,8 @@
 #    a local, unsharded run of the same sweep: every column but wall_time_s identical.
 # 5. Stops the daemons it started (by PID, on any exit) and removes the directory.
 #
-# Environment: SLURM_CI_PORT (slurmctld port, default 16817; slurmd uses the next one),
+# Environment: SLURM_CI_PORT (first slurmctld port tried, default 16817; slurmd uses the
+# next one; ports in use are skipped),
 # SLURM_CI_KEEP=1 keeps the temporary directory (logs) for inspection.
 set -euo pipefail
 shopt -s inherit_errexit
@@ -27,7 +28,7 @@ REPO=$(cd "$(dirname "$0")/.." && pwd)
 SWEEP=$REPO/scenarios/sweeps/slopes.toml
 SETS=(--set domain.cells=200)
 SHARDS=2
-PORT=${SLURM_CI_PORT:-16817}
+PORT=${SLURM_CI_PORT:-16817} # first port tried; moved up while taken (another cluster)
 START=$(date +%s)
 
 log() { echo "[slurm-ci $(($(date +%s) - START))s] $*"; }
@@ -123,6 +124,12 @@ PIDS+=("$(pid_from "$T/munge/munged.pid")") || die "munged wrote no PID"
 munge --socket="$MUNGE_SOCKET" -n | unmunge --socket="$MUNGE_SOCKET" >/dev/null ||
     die "munge round trip failed"
 
+# Two free ports (slurmctld, slurmd), so that several copies of this script can run.
+port_taken() { (exec 3<>"/dev/tcp/127.0.0.1/$1") 2>/dev/null; }
+for _ in $(seq 50); do
+    port_taken "$PORT" || port_taken $((PORT + 1)) || break
+    PORT=$((PORT + 2))
+done
 HOST=$(hostname -s)
 CPUS=$(nproc)
 mkdir -p "$T/state" "$T/spool"
