@@ -68,6 +68,9 @@ pub struct Simulation {
     pub rest_speed: f64,
 }
 
+/// A CFL time step below this fraction of t_end stops the run as a solver failure.
+const MIN_DT_FRACTION: f64 = 1e-10;
+
 /// Largest number of Δt halvings before a step is declared failed.
 const MAX_RETRIES: usize = 12;
 
@@ -242,7 +245,11 @@ impl Simulation {
             let dt = match self.step(next_output - self.t) {
                 Ok(dt) => dt,
                 Err(e) => {
-                    return Err(self.fail(sink, wall, &last, d0.front_x, rest_since, e.to_string()))
+                    let msg = match e {
+                        RunError::Solver(m) => m,
+                        other => other.to_string(),
+                    };
+                    return Err(self.fail(sink, wall, &last, d0.front_x, rest_since, msg));
                 }
             };
             let at_output = self.t + dt >= next_output * (1.0 - 1e-14);
@@ -252,6 +259,17 @@ impl Simulation {
                 let msg = format!(
                     "non-finite value at x = {} m, t = {:.6e} s (step {})",
                     self.mesh.x[i], self.t, self.steps
+                );
+                return Err(self.fail(sink, wall, &last, d0.front_x, rest_since, msg));
+            }
+            // A finite but absurd state (e.g. u = 1e154 m/s) would otherwise crawl on
+            // with Δt near zero, filling memory with step records.
+            let speed = d.max_speed + celerity(self.mesh.g_n, d.h_max);
+            let next_dt = cfg.cfl * self.mesh.dx / speed;
+            if next_dt < MIN_DT_FRACTION * cfg.t_end {
+                let msg = format!(
+                    "time step collapsed to {next_dt:.3e} s at t = {:.6e} s (step {}, max speed {:.3e} m/s)",
+                    self.t, self.steps, d.max_speed
                 );
                 return Err(self.fail(sink, wall, &last, d0.front_x, rest_since, msg));
             }

@@ -267,3 +267,30 @@ fn overflowing_column_fails_instead_of_vanishing() {
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("non-finite value at x ="), "{stderr}");
 }
+
+#[test]
+fn collapsing_time_step_fails_instead_of_running_forever() {
+    // Regression: u = 1e100 m/s keeps every value finite but makes Δt ≈ 1e-102 s; the
+    // run crawled on, filling memory and the front CSV.
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "ok.toml", MINIMAL);
+    let h5 = dir.path().join("crawl.h5");
+    let out = granflow()
+        .args([
+            "run",
+            &path,
+            "-o",
+            h5.to_str().unwrap(),
+            "--set",
+            "initial.u=1e154",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("time step collapsed"), "{stderr}");
+    assert!(
+        !stderr.contains("solver failure: solver failure"),
+        "{stderr}"
+    );
+}
