@@ -282,7 +282,7 @@ fn collapsing_time_step_fails_instead_of_running_forever() {
             "-o",
             h5.to_str().unwrap(),
             "--set",
-            "initial.u=1e154",
+            "initial.u=1e100",
         ])
         .output()
         .unwrap();
