@@ -32,6 +32,27 @@ impl<L: BasalFriction> CoulombFrictionStep<L> {
     }
 }
 
+/// The bound 2Δx μ_s on |η_{i+1} − η_{i−1}| below which ĥ applies. The relative
+/// margin keeps round-off from flipping the switch for a surface lying exactly at the
+/// repose slope (the limit case of seed 003 §5.3).
+#[inline(always)]
+pub fn repose_slope_limit(dx: f64, mu_static: f64) -> f64 {
+    2.0 * dx * mu_static * (1.0 + 1e-9)
+}
+
+/// ĥ_i of seed 003 eq. (25) (module doc): ½(h_i + ½(h_{i−1} + h_{i+1})) where the free
+/// surface η = h + z is within `slope_limit`, h_i elsewhere. `i` indexes the
+/// ghost-inclusive arrays.
+#[inline(always)]
+pub fn well_balanced_thickness(h: &[f64], z: &[f64], i: usize, slope_limit: f64) -> f64 {
+    let eta_jump = (h[i + 1] + z[i + 1]) - (h[i - 1] + z[i - 1]);
+    if eta_jump.abs() <= slope_limit {
+        0.5 * h[i] + 0.25 * (h[i - 1] + h[i + 1])
+    } else {
+        h[i]
+    }
+}
+
 /// Applies a friction impulse `dt_sigma` ≥ 0 against the discharge `q`, stopping it
 /// if the impulse is large enough. A NaN impulse propagates (it must reach the
 /// run's NaN check, not silently stop the flow).
@@ -52,9 +73,7 @@ impl<L: BasalFriction> Stage for CoulombFrictionStep<L> {
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, 1);
         let g_n = mesh.g_n;
-        // The relative margin keeps round-off from flipping the switch for a surface
-        // lying exactly at the repose slope (the limit case of seed 003 §5.3).
-        let slope_limit = 2.0 * mesh.dx * self.law.mu_static() * (1.0 + 1e-9);
+        let slope_limit = repose_slope_limit(mesh.dx, self.law.mu_static());
         let (h, z) = (&state.h, &mesh.z);
         for i in 1..=mesh.nx {
             let q = state.hu[i];
@@ -66,12 +85,7 @@ impl<L: BasalFriction> Stage for CoulombFrictionStep<L> {
                 state.hu[i] = 0.0;
                 continue;
             }
-            let eta_jump = (h[i + 1] + z[i + 1]) - (h[i - 1] + z[i - 1]);
-            let h_hat = if eta_jump.abs() <= slope_limit {
-                0.5 * hi + 0.25 * (h[i - 1] + h[i + 1])
-            } else {
-                hi
-            };
+            let h_hat = well_balanced_thickness(h, z, i, slope_limit);
             let mu = self.law.mu(velocity(hi, q).abs(), hi, g_n * hi);
             state.hu[i] = coulomb_update(q, dt * mu * g_n * h_hat);
         }

@@ -24,7 +24,7 @@
 //! hydrostatic friction step (seed 003 eq. 25, see `friction.rs`); a negative total
 //! pressure (the grains are lifted) gives no friction.
 
-use super::friction::coulomb_update;
+use super::friction::{coulomb_update, repose_slope_limit, well_balanced_thickness};
 use super::hydrostatic::HydrostaticStep;
 use super::projection::monolayer::{centred_gradient, correction_coefficients, doubled_bed};
 use super::{Stage, StageError};
@@ -116,9 +116,7 @@ impl<L: BasalFriction> Stage for NhFrictionStep<L> {
         let g_n = mesh.g_n;
         let inv_dx = 1.0 / mesh.dx;
         let inv_2dx = 0.5 * inv_dx;
-        // As in friction.rs: ĥ where the free surface is below the repose slope, with
-        // the same relative margin against round-off.
-        let slope_limit = 2.0 * mesh.dx * self.law.mu_static() * (1.0 + 1e-9);
+        let slope_limit = repose_slope_limit(mesh.dx, self.law.mu_static());
         let nh = state.nh.as_mut().expect("non-hydrostatic state");
         let (h, z, p) = (&state.h, &mesh.z, &nh.p);
         for i in 1..=mesh.nx {
@@ -141,12 +139,7 @@ impl<L: BasalFriction> Stage for NhFrictionStep<L> {
             if q == 0.0 && hw == 0.0 {
                 continue;
             }
-            let eta_jump = (h[i + 1] + z[i + 1]) - (h[i - 1] + z[i - 1]);
-            let h_hat = if eta_jump.abs() <= slope_limit {
-                0.5 * hi + 0.25 * (h[i - 1] + h[i + 1])
-            } else {
-                hi
-            };
+            let h_hat = well_balanced_thickness(h, z, i, slope_limit);
             let p_total = g_n * hi + p_b;
             let mu = self.law.mu(velocity(hi, state.hu[i]).abs(), hi, p_total);
             let sigma = mu * (g_n * h_hat + p_b).max(0.0);
