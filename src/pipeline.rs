@@ -118,7 +118,6 @@ pub fn hydrostatic(
         regularization: spec.regularization,
         sidewall: spec.sidewall,
         c_msm: spec.c_msm,
-        well_balanced: true,
     };
     hydrostatic_multilayer(law, material, nx, &spec.layer_fractions, opts)
 }

@@ -128,11 +128,12 @@ fn granular_mass_at_rest_keeps_q_exactly_zero() {
 // ---------------------------------------------------------------------------------
 // The hydrostatic path
 
-/// Fingerprints of two hydrostatic runs made with the code just before the
-/// non-hydrostatic model was merged (the parent of the merge commit on main, after the
-/// positivity changes of the hyperbolic step): the hydrostatic numbers must not change.
-const GOLDEN_COLLAPSE: [u64; 3] = [0x1f5d1c7412fc63e9, 0x7b409a9f19890399, 0x32720420e3abddd1];
-const GOLDEN_RANDOM_BED: [u64; 3] = [0xcc438f76ab87f5ad, 0xf829046e16c1317f, 0x154d4e67cadd3ef5];
+/// Fingerprints of two hydrostatic runs, first made with the code just before the
+/// non-hydrostatic model was merged: adding non-hydrostatic stages must not change the
+/// hydrostatic numbers. Re-recorded once, deliberately, when step 1 moved to the
+/// own-depth split of the pressure source (docs/numerics.md).
+const GOLDEN_COLLAPSE: [u64; 3] = [0x5557abb381e6e51f, 0x2d04cd9bc92a65bd, 0x65031aecc88d73bf];
+const GOLDEN_RANDOM_BED: [u64; 3] = [0x9bdff5447baf3c4d, 0x1a7e609655d584c3, 0xed47d875d2e9bfe7];
 const COLLAPSE_SETS: [&str; 2] = ["time.t_end=0.4", "time.stop_at_rest=false"];
 const RANDOM_BED_SETS: [&str; 2] = [
     "initial.h=\"0.8 - tan(20.5*deg)*(x-2) - b\"",
@@ -140,7 +141,7 @@ const RANDOM_BED_SETS: [&str; 2] = [
 ];
 
 #[test]
-fn hydrostatic_runs_are_bit_for_bit_those_before_the_nonhydrostatic_model() {
+fn hydrostatic_runs_keep_their_recorded_numbers() {
     assert_eq!(
         fingerprints("collapse.toml", &COLLAPSE_SETS),
         GOLDEN_COLLAPSE
@@ -354,8 +355,10 @@ fn collapse_front_velocity_nh_accelerates_then_decays_h_starts_fastest() {
     let (h0, nh0) = (at(&vh, 0.02), at(&vnh, 0.02));
     println!("front velocity, hydrostatic: {h0:.2} m/s at 0.02 s, peak {ph:.2} m/s at {th:.3} s, {:.2} m/s at 0.9 s", at(&vh, 0.9));
     println!("front velocity, non-hydrostatic: {nh0:.2} m/s at 0.02 s, peak {pnh:.2} m/s at {tnh:.3} s, {:.2} m/s at 0.9 s", at(&vnh, 0.9));
-    // Hydrostatic: maximal at the start, then decreasing.
-    assert!(th <= 0.02, "hydrostatic peak at {th} s");
+    // Hydrostatic: maximal at the start (the first few cells, which the discrete front
+    // needs to form), then decreasing.
+    assert!(th <= 0.05, "hydrostatic peak at {th} s");
+    assert!(h0 >= 0.9 * ph, "hydrostatic start {h0} vs peak {ph}");
     assert!(at(&vh, 0.5) < 0.75 * ph);
     // Non-hydrostatic: slow start, later peak, decay.
     assert!(nh0 < 0.65 * pnh, "start {nh0} vs peak {pnh}");
@@ -368,9 +371,6 @@ fn collapse_front_velocity_nh_accelerates_then_decays_h_starts_fastest() {
 }
 
 #[test]
-#[ignore = "known defect: in the gate case a film cell at the front reaches |u| ≈ 43 m/s at \
-            t ≈ 7 ms (the centred q̃ ∂(2b+h) correction is not proportional to h); the \
-            front-velocity peak then measures that film, see docs/numerics.md"]
 fn gate_slows_the_start_and_raises_the_peak_of_the_front_velocity() {
     // Seed 000 §4.3, Fig. 16: with the gate's normal velocity the front is slower in
     // the first instants, then accelerates more; at 22° the deposit hardly changes.

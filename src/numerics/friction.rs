@@ -8,12 +8,12 @@
 //! so friction can stop a mass but never reverse it. μ_i is the law at the post-
 //! advection state (a constant for Coulomb; μ(I) with I from seed 000 eq. 15e).
 //!
-//! ĥ_i is the well-balancing reconstruction of seed 003 eq. (25): where the free
-//! surface is below the repose slope, |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s, the friction acts
-//! on ĥ_i = ½(h_i + ½(h_{i−1} + h_{i+1})), the thickness the discrete pressure force of
-//! step 1 sees (its interface sources use ½(h_i + h_{i±1})). Then a mass at rest with
-//! |∂_X η| ≤ μ_s has |(hu)*| ≤ Δt σ exactly and stays at rest. (The printed form
-//! h_i + ½(h_{i−1} + h_{i+1}) is twice the thickness; we read the factor ½ as missing.)
+//! The friction acts on the cell's own depth h_i: step 1 gives each cell the share
+//! g_n h_i Δη/2 of the pressure source of each of its faces (`hydrostatic.rs`), so a
+//! cell at rest feels g_n h_i (η_{i+1} − η_{i−1})/(2Δx) and a mass whose free surface
+//! satisfies |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s has |(hu)*| ≤ Δt σ exactly and stays at rest,
+//! for any profile. Seed 003's well-balancing thickness ĥ of eq. (25) compensates the
+//! centred split ½ g_n h̄ Δη of the printed scheme and is not needed (docs/numerics.md).
 
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
@@ -29,27 +29,6 @@ pub struct CoulombFrictionStep<L: BasalFriction> {
 impl<L: BasalFriction> CoulombFrictionStep<L> {
     pub fn new(law: L) -> Self {
         CoulombFrictionStep { law }
-    }
-}
-
-/// The bound 2Δx μ_s on |η_{i+1} − η_{i−1}| below which ĥ applies. The relative
-/// margin keeps round-off from flipping the switch for a surface lying exactly at the
-/// repose slope (the limit case of seed 003 §5.3).
-#[inline(always)]
-pub fn repose_slope_limit(dx: f64, mu_static: f64) -> f64 {
-    2.0 * dx * mu_static * (1.0 + 1e-9)
-}
-
-/// ĥ_i of seed 003 eq. (25) (module doc): ½(h_i + ½(h_{i−1} + h_{i+1})) where the free
-/// surface η = h + z is within `slope_limit`, h_i elsewhere. `i` indexes the
-/// ghost-inclusive arrays.
-#[inline(always)]
-pub fn well_balanced_thickness(h: &[f64], z: &[f64], i: usize, slope_limit: f64) -> f64 {
-    let eta_jump = (h[i + 1] + z[i + 1]) - (h[i - 1] + z[i - 1]);
-    if eta_jump.abs() <= slope_limit {
-        0.5 * h[i] + 0.25 * (h[i - 1] + h[i + 1])
-    } else {
-        h[i]
     }
 }
 
@@ -73,21 +52,17 @@ impl<L: BasalFriction> Stage for CoulombFrictionStep<L> {
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, 1);
         let g_n = mesh.g_n;
-        let slope_limit = repose_slope_limit(mesh.dx, self.law.mu_static());
-        let (h, z) = (&state.h, &mesh.z);
-        for i in 1..=mesh.nx {
-            let q = state.hu[i];
-            if q == 0.0 {
+        let nx = mesh.nx;
+        for (q, &h) in state.hu[1..=nx].iter_mut().zip(&state.h[1..=nx]) {
+            if *q == 0.0 {
                 continue;
             }
-            let hi = h[i];
-            if hi <= H_DRY {
-                state.hu[i] = 0.0;
+            if h <= H_DRY {
+                *q = 0.0;
                 continue;
             }
-            let h_hat = well_balanced_thickness(h, z, i, slope_limit);
-            let mu = self.law.mu(velocity(hi, q).abs(), hi, g_n * hi);
-            state.hu[i] = coulomb_update(q, dt * mu * g_n * h_hat);
+            let mu = self.law.mu(velocity(h, *q).abs(), h, g_n * h);
+            *q = coulomb_update(*q, dt * mu * g_n * h);
         }
         state.fill_ghosts(mesh);
         Ok(())

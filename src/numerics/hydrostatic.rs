@@ -12,9 +12,11 @@
 //!
 //! Path-conservative finite volumes with the HLL-type PVM diffusion:
 //!
-//!   U_i ← U_i − Δt/Δx (𝓕_{i+1/2} − 𝓕_{i−1/2} + ½(𝓑_{i+1/2} + 𝓑_{i−1/2} + 𝓢_{i+1/2} + 𝓢_{i−1/2})),
-//!   𝓕 = ½(F_c(U_L) + F_c(U_R)) − ½[α_0 (Ũ⁺ − Ũ⁻) + α_1 (F_c(U_R) − F_c(U_L) + 𝓑 + 𝓢̃)],
-//!   𝓢 = (0, g_n ½(h_L + h_R)(h⁺ − h⁻), …),
+//!   U_i ← U_i − Δt/Δx (𝓕_{i+1/2} − 𝓕_{i−1/2} + ½(𝓑_{i+1/2} + 𝓑_{i−1/2}) + 𝓢ᴸ_{i+1/2} + 𝓢ᴿ_{i−1/2}),
+//!   𝓕 = ½(F_c(U_L) + F_c(U_R)) − ½[α_0 (Ũ⁺ − Ũ⁻) + α_1 (F_c(U_R) − F_c(U_L) + 𝓑)],
+//!   𝓢ᴸ = θ_L 𝓢 − m α_1 𝓢̃,   𝓢ᴿ = θ_R 𝓢 + m α_1 𝓢̃,
+//!   θ_L = h_L/(h_L + h_R),   θ_R = 1 − θ_L,   m = min(θ_L, θ_R),
+//!   𝓢 = (0, g_n ½(h_L + h_R)(h⁺ − h⁻), …),   𝓢̃ the same with ĥ^±,
 //!   𝓑_α = −(ũ_{α+1/2} ΔG_{α+1/2} − ũ_{α−1/2} ΔG_{α−1/2})/l_α,
 //!
 //! where ΔG_{α+1/2} = Σ_{β≤α} l_β (Δq_β − Δq̄) is the jump of the exchange across the
@@ -33,7 +35,17 @@
 //! across a wall). The source enters with a minus sign: seed 000 eq. (20) prints "+",
 //! which contradicts ∂_t(hu) = −g_n h ∂_X(h + z).
 //!
-//! Two deliberate departures from the printed flux, both for positivity and both
+//! The pressure source of a face goes to its two cells in proportion to their own
+//! depths: at rest each cell takes g_n h Δη/2, and in the upwind part m α_1 𝓢̃ the
+//! thinner side bounds the share. With h_L = h_R this is the printed scheme (θ = m = ½:
+//! ½𝓢 each, α_1 𝓢̃ inside the flux jump). The printed split gives a film beside a thick
+//! cell half of g_n h̄ Δη, h̄ ≈ h_thick/2, i.e. an acceleration ∝ h_thick/h_film: films at
+//! fronts and bed steps reached 10²–10⁴ m/s and the time step collapsed
+//! (`tests/properties.rs`). With the own-depth split every cell's pressure force is
+//! g_n h_i × (a surface slope), the friction step can weigh h_i itself (no ĥ of seed 003
+//! eq. 25), and a mass at rest with |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s is held exactly.
+//!
+//! Two more departures from the printed flux, both for positivity and both
 //! tested (`tests/properties.rs`, `tests/analytic.rs`):
 //! - F_c is evaluated at the reconstructed states U^± = (h^±, h^± u_α) (as in Audusse
 //!   et al.'s hydrostatic reconstruction), not at the cell states: with cell states a
@@ -87,9 +99,10 @@ pub struct HydrostaticStep<L: BasalFriction> {
     /// 1/l_α and Σ_{β≤α} l_β (N > 1).
     inv_l: Vec<f64>,
     l_below: Vec<f64>,
-    /// Per interface (nx + 1): mass flux, pressure source 𝓢.
+    /// Per interface (nx + 1): mass flux, pressure sources of the left and right cells.
     flux_h: Vec<f64>,
-    source: Vec<f64>,
+    share_left: Vec<f64>,
+    share_right: Vec<f64>,
     /// Per interface and layer ((nx + 1)·N, interface-major): momentum flux and, for
     /// N > 1, the exchange term 𝓑.
     flux_hu: Vec<f64>,
@@ -138,8 +151,9 @@ struct Interface {
     h_plus: f64,
     hc_minus: f64,
     hc_plus: f64,
-    source: f64,
-    source_c: f64,
+    /// The pressure sources the left and right cells take (module documentation).
+    share_left: f64,
+    share_right: f64,
     left_at_rest: bool,
     right_at_rest: bool,
 }
@@ -220,7 +234,13 @@ fn interface<L: BasalFriction>(
     let hc_minus = (l.h - dz_c.max(0.0)).max(0.0);
     let hc_plus = (r.h - (-dz_c).max(0.0)).max(0.0);
 
+    // 𝓢 and α_1 𝓢̃ split between the cells in proportion to their own depths.
     let g_hbar = g_n * h_roe;
+    let source = g_hbar * (h_plus - h_minus + d_plane);
+    let upwind = alpha1 * g_hbar * (hc_plus - hc_minus);
+    let theta_left = l.h.max(0.0) / (l.h.max(0.0) + r.h.max(0.0));
+    let theta_right = 1.0 - theta_left;
+    let m = theta_left.min(theta_right);
     let coefficients = Interface {
         alpha0,
         alpha1,
@@ -228,8 +248,8 @@ fn interface<L: BasalFriction>(
         h_plus,
         hc_minus,
         hc_plus,
-        source: g_hbar * (h_plus - h_minus + d_plane),
-        source_c: g_hbar * (hc_plus - hc_minus),
+        share_left: theta_left * source - m * upwind,
+        share_right: theta_right * source + m * upwind,
         left_at_rest,
         right_at_rest,
     };
@@ -257,8 +277,8 @@ fn layer_momentum_flux(
     let (q_l, q_r) = (h_l * u_l, h_r * u_r);
     let (m_l, m_r) = (q_l * u_l, q_r * u_r);
     let jump = match exchange {
-        None => m_r - m_l + c.source_c,
-        Some(b) => m_r - m_l + b + c.source_c,
+        None => m_r - m_l,
+        Some(b) => m_r - m_l + b,
     };
     0.5 * (m_l + m_r) - 0.5 * (c.alpha0 * (c.hc_plus * u_r - c.hc_minus * u_l) + c.alpha1 * jump)
 }
@@ -319,7 +339,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             inv_l: vec![0.0; layers],
             l_below: vec![0.0; layers],
             flux_h: vec![0.0; nx + 1],
-            source: vec![0.0; nx + 1],
+            share_left: vec![0.0; nx + 1],
+            share_right: vec![0.0; nx + 1],
             flux_hu: vec![0.0; (nx + 1) * layers],
             exchange: if layers > 1 {
                 vec![0.0; (nx + 1) * layers]
@@ -396,7 +417,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
             let Some((c, l, r)) = interface(&self.law, left, right, g_n, dx, dt) else {
                 self.flux_h[k] = 0.0;
-                self.source[k] = 0.0;
+                self.share_left[k] = 0.0;
+                self.share_right[k] = 0.0;
                 fluxes.fill(0.0);
                 if n > 1 {
                     self.exchange[k * n..(k + 1) * n].fill(0.0);
@@ -405,7 +427,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
                 continue;
             };
             self.flux_h[k] = mass_flux(&c, l, r);
-            self.source[k] = c.source;
+            self.share_left[k] = c.share_left;
+            self.share_right[k] = c.share_right;
             let u_l = &self.u[k * n..(k + 1) * n];
             let u_r = &self.u[(k + 1) * n..(k + 2) * n];
             let seen = |u: f64, at_rest: bool| if at_rest { 0.0 } else { u };
@@ -503,7 +526,7 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
             // hide a blow-up from the run's NaN check.
             let hn = self.h_new[i];
             state.h[i] = if hn < 0.0 { 0.0 } else { hn };
-            let source = 0.5 * (self.source[i] + self.source[i - 1]);
+            let source = self.share_left[i] + self.share_right[i - 1];
             let (right, left) = (i * n, (i - 1) * n);
             let hu = &mut state.hu[i * n..(i + 1) * n];
             if n == 1 {

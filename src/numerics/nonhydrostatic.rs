@@ -12,21 +12,21 @@
 //! **Step 2** ([`NhFrictionStep`]): the explicit pressure terms of p^n, then Coulomb
 //! friction with the total basal pressure (seed 000 step 2, its two key points):
 //!
-//!   (hu)* = (hu) − Δt (h_i (∂_X q̄)_i + q̄_i (∂_X G)_i),     G = 2b + h,
-//!   σ_i = μ(I) (g_n ĥ_i + 2q̄_i),  I from p_b/ρ = g_n h + 2q̄ (seed 000 eq. 15e),
+//!   (hu)* = (hu) − Δt (∂_X(h q̄) + 2q̄ ∂_X b)_i   (the discrete operator of step 3),
+//!   σ_i = μ(I) (g_n h_i + 2q̄_i),  I from p_b/ρ = g_n h + 2q̄ (seed 000 eq. 15e),
 //!   if Δt σ_i < |(hu)*|:  hu ← (hu)* − Δt σ_i sgn((hu)*),  hw ← hw + 2Δt q̄_i,
 //!   otherwise:            hu ← 0,  hw ← 0,
 //!
 //! with q̄_i = p_i/2, p_i = (p_{i−1/2} + p_{i+1/2})/2 (p the basal pressure stored at the
 //! faces). The pressure terms use the same discrete operator as the correction of step 3
 //! (see [`super::projection::monolayer`]), so the total pressure force of a step is that
-//! operator applied to p^{n+1} = p^n + p̃. ĥ is the well-balancing thickness of the
-//! hydrostatic friction step (seed 003 eq. 25, see `friction.rs`); a negative total
-//! pressure (the grains are lifted) gives no friction.
+//! operator applied to p^{n+1} = p^n + p̃. As in the hydrostatic friction step the
+//! weight is the cell's own g_n h_i (`friction.rs`); a negative total pressure (the
+//! grains are lifted) gives no friction.
 
-use super::friction::{coulomb_update, repose_slope_limit, well_balanced_thickness};
+use super::friction::coulomb_update;
 use super::hydrostatic::HydrostaticStep;
-use super::projection::monolayer::{centred_gradient, correction_coefficients, doubled_bed};
+use super::projection::monolayer::{cell_coefficients, doubled_bed};
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
 use crate::physics::rheology::BasalFriction;
@@ -115,10 +115,8 @@ impl<L: BasalFriction> Stage for NhFrictionStep<L> {
         debug_assert_eq!(state.layers, 1);
         let g_n = mesh.g_n;
         let inv_dx = 1.0 / mesh.dx;
-        let inv_2dx = 0.5 * inv_dx;
-        let slope_limit = repose_slope_limit(mesh.dx, self.law.mu_static());
         let nh = state.nh.as_mut().expect("non-hydrostatic state");
-        let (h, z, p) = (&state.h, &mesh.z, &nh.p);
+        let (h, p) = (&state.h, &nh.p);
         for i in 1..=mesh.nx {
             let hi = h[i];
             if hi <= H_DRY {
@@ -131,18 +129,16 @@ impl<L: BasalFriction> Stage for NhFrictionStep<L> {
             let mut q = state.hu[i];
             let mut hw = nh.hw[i];
             if pl != 0.0 || pr != 0.0 {
-                let g = centred_gradient(&self.two_b, h, i, inv_2dx);
-                let (a, b) = correction_coefficients(hi, g, inv_dx);
+                let (a, b) = cell_coefficients(&self.two_b, h, i, mesh.nx, inv_dx);
                 q += dt * (a * pl + b * pr);
                 hw += dt * p_b;
             }
             if q == 0.0 && hw == 0.0 {
                 continue;
             }
-            let h_hat = well_balanced_thickness(h, z, i, slope_limit);
             let p_total = g_n * hi + p_b;
             let mu = self.law.mu(velocity(hi, state.hu[i]).abs(), hi, p_total);
-            let sigma = mu * (g_n * h_hat + p_b).max(0.0);
+            let sigma = mu * (g_n * hi + p_b).max(0.0);
             let q_new = coulomb_update(q, dt * sigma);
             state.hu[i] = q_new;
             nh.hw[i] = if q_new == 0.0 { 0.0 } else { hw };

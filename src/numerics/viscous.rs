@@ -25,13 +25,11 @@
 //!   monolayer friction step; or
 //! - no slip: K_{1/2}/ρ = −ν_{1/2} 2u_1/h_1 (seed 001 end of §3.3).
 //!
-//! ĥ is the well-balancing reconstruction of seed 003 eq. (25), read as in the monolayer
-//! friction step (`friction.rs`): where |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s (1 + 1 %) the
-//! column's weight — the pressures p in ν and the basal friction — is that of
-//! ½(h_i + ½(h_{i−1} + h_{i+1})), the thickness the pressure force of step 1 sees, so a
-//! column at rest below the repose slope is held by its basal friction and its layers
-//! by their strength μ p. The inertia stays l_α h (seed 003 eq. 24 puts ĥ there too,
-//! which multiplies the momentum by h/ĥ at every step). See docs/numerics.md.
+//! The column's weight — the pressures p in ν and the basal friction — is that of its
+//! own depth h_i: step 1 gives each cell the pressure source g_n h_i Δη/2 of each face
+//! (`hydrostatic.rs`), so a column at rest below the repose slope is held by its basal
+//! friction and its layers by their strength μ p without seed 003's ĥ of eq. (25)
+//! (see `friction.rs` and docs/numerics.md).
 //!
 //! Sidewall friction in a channel of width W (optional): Jop's term μ_w (H − z)/W added
 //! to μ at every interface and at the bed (seed 001 eq. 30), or the layer force
@@ -55,15 +53,6 @@ use crate::state::State;
 /// Thickness (m) below which a cell is solved as a monolayer (seed 003 Remark 2).
 pub const THIN_LAYER: f64 = 1e-6;
 
-/// Relative excess of the free-surface slope over μ_s up to which the switch of seed 003
-/// eq. (25) keeps the well-balancing thickness ĥ. The regularised creep of the upper
-/// layers (O(δ)) slowly deforms a deposit lying at the repose slope; with the
-/// round-off margin of the monolayer (1e-9) the switch then flips to h, where ĥ > h the
-/// basal friction no longer matches the pressure force, and the deposit slides
-/// (`tests/multilayer.rs`, well-balanced test). Using ĥ for a slightly steeper surface
-/// does not hold it: pressure and friction then see the same ĥ.
-pub const REPOSE_BAND: f64 = 0.01;
-
 /// Velocity regularisation (m/s) of the layer sidewall force when the viscosity is
 /// regularised by the bound η_M (with δ regularisation, δ is used).
 pub const SIDEWALL_DELTA_U: f64 = 1e-5;
@@ -79,9 +68,6 @@ pub struct ViscousOptions {
     pub sidewall: Option<Sidewall>,
     /// Second-order strain rate of seed 001 eq. (32).
     pub c_msm: bool,
-    /// Basal friction on ĥ of seed 003 eq. (25) (`true`) or on h (`false`, the
-    /// non-well-balanced variant of seed 003 Table 6b; for tests).
-    pub well_balanced: bool,
 }
 
 /// The implicit viscous step, generic over the rheology (a constant μ or μ(I)).
@@ -189,7 +175,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         }
         let base = i * n;
         // Pressures are those of the column the pressure force of step 1 sees.
-        let weight = self.weight_thickness(mesh, &state.h, i);
+        let weight = state.h[i];
         let p_b = g_n * weight;
         let scale = self.law.inertial_scale(p_b);
         let nu_max = match self.opts.regularization {
@@ -248,22 +234,6 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
                 let ua = self.velocity[a];
                 *side = 2.0 / width * mu_w * p_mid / (ua * ua + du * du).sqrt();
             }
-        }
-    }
-
-    /// ĥ of seed 003 eq. (25) where the free surface is below the repose slope, up to
-    /// the tolerance [`REPOSE_BAND`] (and the step is well balanced), h elsewhere.
-    #[inline(always)]
-    fn weight_thickness(&self, mesh: &Mesh, h: &[f64], i: usize) -> f64 {
-        if !self.opts.well_balanced {
-            return h[i];
-        }
-        let slope_limit = 2.0 * mesh.dx * self.law.mu_static() * (1.0 + REPOSE_BAND);
-        let eta_jump = (h[i + 1] + mesh.z[i + 1]) - (h[i - 1] + mesh.z[i - 1]);
-        if eta_jump.abs() <= slope_limit {
-            0.5 * h[i] + 0.25 * (h[i - 1] + h[i + 1])
-        } else {
-            h[i]
         }
     }
 
@@ -380,7 +350,7 @@ impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
                 state.hu[i * n..(i + 1) * n].fill(0.0);
                 continue;
             }
-            let h_hat = self.weight_thickness(mesh, &state.h, i);
+            let h_hat = h;
             if h < THIN_LAYER {
                 let q = &mut state.hu[i * n..(i + 1) * n];
                 let q_mean: f64 = q.iter().zip(&state.l).map(|(q, l)| q * l).sum();
@@ -438,7 +408,6 @@ mod tests {
             regularization: Regularization::Delta { delta: 1e-5 },
             sidewall: None,
             c_msm: false,
-            well_balanced: true,
         }
     }
 
