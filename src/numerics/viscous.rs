@@ -174,9 +174,8 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             *u = q * inv_h;
         }
         let base = i * n;
-        // Pressures are those of the column the pressure force of step 1 sees.
-        let weight = state.h[i];
-        let p_b = g_n * weight;
+        // Pressures are those of the column's own depth, as the pressure force of step 1.
+        let p_b = g_n * h;
         let scale = self.law.inertial_scale(p_b);
         let nu_max = match self.opts.regularization {
             Regularization::Bound => 250.0 * (GRAVITY * h * h * h).sqrt(),
@@ -350,12 +349,11 @@ impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
                 state.hu[i * n..(i + 1) * n].fill(0.0);
                 continue;
             }
-            let h_hat = h;
             if h < THIN_LAYER {
                 let q = &mut state.hu[i * n..(i + 1) * n];
                 let q_mean: f64 = q.iter().zip(&state.l).map(|(q, l)| q * l).sum();
                 let mu = self.law.mu(velocity(h, q_mean).abs(), h, g_n * h);
-                q.fill(coulomb_update(q_mean, dt * mu * g_n * h_hat));
+                q.fill(coulomb_update(q_mean, dt * mu * g_n * h));
                 continue;
             }
             if self.frozen[i * n].is_nan() {
@@ -363,7 +361,7 @@ impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
                 self.freeze_cell(mesh, state, i);
             }
             cells[count] = i;
-            impulses[count] = dt * self.frozen[i * n] * g_n * h_hat;
+            impulses[count] = dt * self.frozen[i * n] * g_n * h;
             count += 1;
             if count == LANES {
                 self.solve_columns(state, cells, impulses, count, dt);

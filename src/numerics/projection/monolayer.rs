@@ -52,11 +52,19 @@ use super::{PressureSolver, ProjectionOperator};
 use crate::mesh::Mesh;
 use crate::numerics::linalg::{PressureRows, ScalarRow};
 
+use crate::scenario::BoundaryKind;
+use crate::state::State;
+
 /// A face carries the constraint only when both neighbouring cells are thicker than
 /// this fraction of Δx (see the module documentation).
 pub const NH_FILM_FRACTION: f64 = 0.05;
-use crate::scenario::BoundaryKind;
-use crate::state::State;
+
+/// Whether the face between cells of depths `h_l`, `h_r` is wet (carries the
+/// constraint and a pressure), with `h_min` = [`NH_FILM_FRACTION`] Δx.
+#[inline(always)]
+fn wet_face(h_l: f64, h_r: f64, h_min: f64) -> bool {
+    h_l > h_min && h_r > h_min
+}
 
 /// 2b with one ghost on each side (the ghost bed repeats the edge bed, for walls and
 /// outflows alike; `mesh.z` does the same for its bed part).
@@ -179,7 +187,7 @@ impl PressureRows for MonolayerRows<'_> {
         let (nx, inv_dx) = (self.nx, self.inv_dx);
         let (l, r) = (k, k + 1);
         let (hl, hr) = (h[l], h[r]);
-        if !(hl > self.h_min && hr > self.h_min) {
+        if !wet_face(hl, hr, self.h_min) {
             return ScalarRow::IDENTITY; // a dry face: p = 0
         }
         // Outflow boundaries: homogeneous Neumann, Π equals its inner neighbour.
@@ -290,8 +298,11 @@ impl ProjectionOperator for MonolayerOperator {
             );
             let h_min = self.h_min;
             for (((p, &pi), &hl), &hr) in p.iter_mut().zip(&pi[span.clone()]).zip(hl).zip(hr) {
-                let wet = hl > h_min && hr > h_min;
-                *p = if wet { *p + pi * inv_dt } else { 0.0 };
+                *p = if wet_face(hl, hr, h_min) {
+                    *p + pi * inv_dt
+                } else {
+                    0.0
+                };
             }
         }
         nh.p[..span.start].fill(0.0);
@@ -340,7 +351,7 @@ pub fn constraint_residual(mesh: &Mesh, state: &State) -> ConstraintResidual {
     for k in 0..=nx {
         let outflow = (k == 0 && mesh.left == BoundaryKind::Outflow)
             || (k == nx && mesh.right == BoundaryKind::Outflow);
-        if outflow || !(state.h[k] > h_min && state.h[k + 1] > h_min) {
+        if outflow || !wet_face(state.h[k], state.h[k + 1], h_min) {
             continue;
         }
         let (_, beta_l) = cell_coefficients(&two_b, &state.h, k, nx, inv_dx);

@@ -12,10 +12,6 @@ impl BasalFriction for Coulomb {
     fn mu(&self, _speed: f64, _h: f64, _p_over_rho: f64) -> f64 {
         self.mu
     }
-
-    fn mu_static(&self) -> f64 {
-        self.mu
-    }
 }
 
 impl LocalFriction for Coulomb {

@@ -16,10 +16,6 @@ pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
     /// Friction coefficient for depth-averaged speed |u| (m/s), thickness h (m) and
     /// basal pressure over density p_b/ρ (m²/s², g_n h for a hydrostatic layer).
     fn mu(&self, speed: f64, h: f64, p_over_rho: f64) -> f64;
-
-    /// Static coefficient (the value at rest), which sets the repose angle
-    /// atan(μ_static) of the well-balanced states (seed 000 eq. 16).
-    fn mu_static(&self) -> f64;
 }
 
 /// The friction coefficient of the bulk rheology at a point of the flow, used by the

@@ -57,10 +57,6 @@ impl BasalFriction for MuI {
     fn mu(&self, speed: f64, h: f64, p_over_rho: f64) -> f64 {
         self.mu_of_i(inertial_number(self.d_s, self.phi, speed, h, p_over_rho))
     }
-
-    fn mu_static(&self) -> f64 {
-        self.mu_s
-    }
 }
 
 impl LocalFriction for MuI {
