@@ -13,7 +13,7 @@ use std::time::Instant;
 use granflow::output::memory::MemorySink;
 use granflow::runner::run_to_files;
 use granflow::scenario::{load_file, Scenario};
-use granflow::setup::build_simulation;
+use granflow::setup::build_granular;
 
 fn collapse(overrides: &[&str]) -> Scenario {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/collapse.toml");
@@ -28,7 +28,7 @@ type Timing = (f64, u64, Vec<(String, f64)>);
 fn best_run(scn: &Scenario, repeats: usize) -> Timing {
     let mut best: Option<Timing> = None;
     for _ in 0..repeats {
-        let mut sim = build_simulation(scn).unwrap();
+        let mut sim = build_granular(scn);
         let mut sink = MemorySink::default();
         let start = Instant::now();
         let summary = sim.run(&mut sink, &mut |_| {}).unwrap();

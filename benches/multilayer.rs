@@ -17,7 +17,7 @@ use granflow::output::{
     GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
 };
 use granflow::scenario::load_file;
-use granflow::setup::build_simulation;
+use granflow::setup::build_granular;
 
 /// Discards everything: the benchmark times the solver only.
 struct NullSink;
@@ -70,7 +70,7 @@ fn main() {
         type Run = (f64, u64, Vec<(String, f64)>);
         let mut best: Option<Run> = None;
         for _ in 0..reps {
-            let mut sim = build_simulation(&scn).expect("setup");
+            let mut sim = build_granular(&scn);
             let start = Instant::now();
             let summary = sim.run(&mut NullSink, &mut |_| {}).expect("run");
             let wall = start.elapsed().as_secs_f64();

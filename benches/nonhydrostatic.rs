@@ -15,9 +15,12 @@
 use std::path::Path;
 use std::time::Instant;
 
+use granflow::model::granular::Granular;
 use granflow::scenario::load_file;
-use granflow::setup::build_simulation;
+use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
+
+type Sim = Simulation<Granular>;
 
 struct Case {
     name: &'static str,
@@ -47,17 +50,17 @@ const CASES: &[Case] = &[
     },
 ];
 
-fn build(case: &Case, pressure: &str) -> Simulation {
+fn build(case: &Case, pressure: &str) -> Sim {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/collapse.toml");
     let mut sets: Vec<String> = case.sets.iter().map(|s| s.to_string()).collect();
     sets.push(format!("model.pressure={pressure}"));
     sets.push("time.stop_at_rest=false".into());
     let scn = load_file(&path, &sets).expect("scenario");
-    build_simulation(&scn).expect("builds")
+    build_granular(&scn)
 }
 
 /// A run advanced to the case's `t0`.
-fn warmed_up(case: &Case, pressure: &str) -> Simulation {
+fn warmed_up(case: &Case, pressure: &str) -> Sim {
     let mut sim = build(case, pressure);
     while sim.t < case.t0 {
         let dt = sim.step(case.t0 - sim.t).expect("step");
@@ -67,7 +70,7 @@ fn warmed_up(case: &Case, pressure: &str) -> Simulation {
 }
 
 /// Wall time per step of `steps` steps.
-fn burst(sim: &mut Simulation, steps: usize) -> f64 {
+fn burst(sim: &mut Sim, steps: usize) -> f64 {
     let start = Instant::now();
     for _ in 0..steps {
         let dt = sim.step(f64::INFINITY).expect("step");
@@ -80,7 +83,7 @@ fn burst(sim: &mut Simulation, steps: usize) -> f64 {
 /// models take turns, burst by burst, so that a busy moment of the machine hits both
 /// alike; the minimum keeps the least disturbed burst.
 fn time_models(case: &Case, models: &[&str], bursts: usize) -> Vec<(f64, Vec<(String, f64)>)> {
-    let mut sims: Vec<Simulation> = models.iter().map(|m| warmed_up(case, m)).collect();
+    let mut sims: Vec<Sim> = models.iter().map(|m| warmed_up(case, m)).collect();
     let before: Vec<_> = sims.iter().map(|s| s.stage_times()).collect();
     let per_burst = (case.steps / bursts).max(1);
     let mut best = vec![f64::INFINITY; models.len()];

@@ -1,21 +1,21 @@
 //! granflow: shallow-layer simulator for dry granular flows.
 //!
-//! Architecture (see `docs/numerics.md`): a validated [`scenario::Scenario`] builds a
-//! [`mesh::Mesh`], a layered [`state::State`] and a [`pipeline`] of sub-steps
-//! (hyperbolic → friction/viscous → projection, seed 000 §3 and seed 003 §4) that
-//! [`simulation::Simulation`] advances in time, reporting to an [`output::OutputSink`].
+//! Architecture (see `docs/architecture.md`): a validated [`scenario::Scenario`] names
+//! a [`model::Model`]; [`setup`] builds its [`mesh::Mesh`], its state and its
+//! [`pipeline`] of sub-steps (hyperbolic → friction/viscous → projection, seed 000 §3
+//! and seed 003 §4), which the generic [`simulation::Simulation`] advances in time,
+//! consulting its [`stop`] rules and reporting to an [`output::OutputSink`].
 
 pub mod cli;
-pub mod diagnostics;
 pub mod mesh;
+pub mod model;
 pub mod numerics;
 pub mod output;
 pub mod physics;
 pub mod pipeline;
-pub mod profiles;
 pub mod runner;
 pub mod scenario;
 pub mod setup;
 pub mod simulation;
-pub mod state;
+pub mod stop;
 pub mod sweep;

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use clap::Parser;
 use granflow::cli::{Cli, Command, RunArgs, ScenarioArgs};
-use granflow::runner::{self, RunFailure};
+use granflow::runner;
 use granflow::scenario::{self, Scenario};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -23,19 +23,16 @@ fn load(args: &ScenarioArgs) -> Result<Scenario, ExitCode> {
 
 fn check(args: &ScenarioArgs) -> ExitCode {
     match load(args).map(|s| runner::check(&s)) {
-        Ok(Ok(sim)) => {
+        Ok(run) => {
             println!(
-                "{}: ok ({} cells, {} layer(s), stages: {})",
+                "{}: ok ({} model, {} cells, {} layer(s), stages: {})",
                 args.scenario.display(),
-                sim.mesh.nx,
-                sim.state.layers,
-                sim.stage_names().join(" → ")
+                run.info().model,
+                run.cells(),
+                run.info().layers,
+                run.stage_names().join(" → ")
             );
             ExitCode::SUCCESS
-        }
-        Ok(Err(e)) => {
-            eprintln!("error: {e}");
-            ExitCode::from(EXIT_BAD_INPUT)
         }
         Err(code) => code,
     }
@@ -83,10 +80,6 @@ fn run(args: &RunArgs) -> ExitCode {
                 print!("{report}");
             }
             ExitCode::SUCCESS
-        }
-        Err(RunFailure::Setup(e)) => {
-            eprintln!("error: {e}");
-            ExitCode::from(EXIT_BAD_INPUT)
         }
         Err(e) => {
             eprintln!("error: {e}");

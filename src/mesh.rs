@@ -11,7 +11,23 @@
 //! Arrays carry one ghost cell on each side: index 0 and nx + 1.
 
 use crate::physics::GRAVITY;
-use crate::scenario::{BoundaryKind, Coordinates};
+
+/// Frame in which the shallow model is written (seed 000 §4.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coordinates {
+    /// Along and normal to a reference plane of slope θ; gravity g cos θ normal to it.
+    Local,
+    /// Horizontal x, vertical z; the slope lives inside b(x) and gravity is g.
+    Cartesian,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BoundaryKind {
+    /// Reflecting wall: ghost discharge opposite, thickness mirrored (seed 003 Remark 6).
+    Wall,
+    /// Free outflow: ghost state copied (homogeneous Neumann).
+    Outflow,
+}
 
 #[derive(Debug, Clone)]
 pub struct Mesh {

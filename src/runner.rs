@@ -8,15 +8,12 @@ use crate::output::csv::{front_csv_path, FrontCsvSink};
 use crate::output::hdf5::Hdf5Sink;
 use crate::output::{OutputError, RunSummary, Tee};
 use crate::scenario::Scenario;
-use crate::setup::{build_simulation, SetupError};
-use crate::simulation::{Progress, RunError, Simulation};
+use crate::setup::{build, Run};
+use crate::simulation::{Progress, RunError};
 
 /// Why a run did not produce a complete result.
 #[derive(Debug, thiserror::Error)]
 pub enum RunFailure {
-    /// Valid TOML asking for something unavailable (exit code 2).
-    #[error(transparent)]
-    Setup(#[from] SetupError),
     #[error(transparent)]
     Output(#[from] OutputError),
     /// The solver stopped (NaN, negative thickness): the files hold what was valid.
@@ -33,8 +30,8 @@ pub struct RunReport {
 }
 
 /// Builds the run without executing it (`granflow check`).
-pub fn check(scn: &Scenario) -> Result<Simulation, SetupError> {
-    build_simulation(scn)
+pub fn check(scn: &Scenario) -> Box<dyn Run> {
+    build(scn)
 }
 
 /// Runs `scn`, writing the HDF5 file `h5` and its `_front.csv` companion.
@@ -43,7 +40,7 @@ pub fn run_to_files(
     h5: &Path,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<RunReport, RunFailure> {
-    let mut sim = build_simulation(scn)?;
+    let mut sim = build(scn);
     let front_csv = front_csv_path(h5);
     let mut sink = Tee::new(Hdf5Sink::create(h5)?, FrontCsvSink::create(&front_csv)?);
     match sim.run(&mut sink, progress) {

@@ -11,11 +11,14 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::{run, tan_deg, Case};
+use granflow::model::granular::Granular;
 use granflow::output::memory::MemorySink;
 use granflow::physics::GRAVITY as G;
 use granflow::scenario::{load_file, BoundaryKind, FrictionLaw, Scenario};
-use granflow::setup::build_simulation;
+use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
+
+type Sim = Simulation<Granular>;
 
 fn scenario_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -24,9 +27,9 @@ fn scenario_path(name: &str) -> PathBuf {
 }
 
 /// Loads `scenarios/<name>` with `--set` overrides and builds its run.
-fn scenario(name: &str, sets: &[String]) -> (Scenario, Simulation) {
+fn scenario(name: &str, sets: &[String]) -> (Scenario, Sim) {
     let scn = load_file(&scenario_path(name), sets).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let sim = build_simulation(&scn).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let sim = build_granular(&scn);
     (scn, sim)
 }
 
@@ -35,7 +38,7 @@ fn sets(items: &[&str]) -> Vec<String> {
 }
 
 /// Layer velocities of physical cell `i` (0-based).
-fn layer_velocities(sim: &Simulation, i: usize) -> Vec<f64> {
+fn layer_velocities(sim: &Sim, i: usize) -> Vec<f64> {
     let n = sim.state.layers;
     let h = sim.state.h[i + 1];
     (0..n).map(|a| sim.state.hu[(i + 1) * n + a] / h).collect()
@@ -68,7 +71,7 @@ fn fnv(hash: &mut u64, v: f64) {
     }
 }
 
-fn state_hash(sim: &granflow::simulation::Simulation) -> u64 {
+fn state_hash(sim: &granflow::simulation::Simulation<granflow::model::granular::Granular>) -> u64 {
     let mut hash = 0xcbf2_9ce4_8422_2325u64;
     for &v in sim.state.h.iter().chain(&sim.state.hu) {
         fnv(&mut hash, v);
@@ -78,7 +81,10 @@ fn state_hash(sim: &granflow::simulation::Simulation) -> u64 {
 
 /// The monolayer runs whose final states were hashed with the code of issue 2, before
 /// the hyperbolic step was generalised to N layers.
-fn monolayer_reference_runs() -> Vec<(&'static str, granflow::simulation::Simulation)> {
+fn monolayer_reference_runs() -> Vec<(
+    &'static str,
+    granflow::simulation::Simulation<granflow::model::granular::Granular>,
+)> {
     let mut case = Case::new(-0.2, 3.0, 320);
     case.slope_deg = 22.0;
     case.right = BoundaryKind::Outflow;
@@ -519,7 +525,7 @@ fn erodible_runout(h_i: f64, constant_friction: bool, extra: &[&str]) -> f64 {
     } else {
         load_file(&scenario_path("erodible_bed.toml"), &all).unwrap()
     };
-    let mut sim = build_simulation(&scn).unwrap();
+    let mut sim = build_granular(&scn);
     assert_eq!(sim.state.layers, 20);
     assert_eq!(sim.mesh.theta.to_degrees().round(), 22.0);
     let (_, summary) = run(&mut sim);
@@ -596,7 +602,7 @@ fn every_scenario_runs_a_few_steps() {
     assert!(names.len() >= 10, "{names:?}");
     for path in names {
         let scn = load_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let mut sim = build_simulation(&scn).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut sim = build_granular(&scn);
         for _ in 0..3 {
             sim.step(scn.time.t_end).unwrap();
         }

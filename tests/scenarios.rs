@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use granflow::output::memory::MemorySink;
 use granflow::scenario::load_file;
-use granflow::setup::build_simulation;
+use granflow::setup::build_granular;
 
 fn scenario_files() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
@@ -24,7 +24,7 @@ fn every_scenario_loads_and_runs_a_few_steps() {
     assert!(files.len() >= 5, "{files:?}");
     for path in files {
         let scn = load_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let mut sim = build_simulation(&scn).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut sim = build_granular(&scn);
         let m0 = sim.diagnostics().mass;
         for _ in 0..5 {
             sim.step(scn.output.every).unwrap();
@@ -43,7 +43,7 @@ fn every_scenario_loads_and_runs_a_few_steps() {
 fn collapse_runs_to_rest_with_finite_runout() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/collapse.toml");
     let scn = load_file(&path, &[]).unwrap();
-    let mut sim = build_simulation(&scn).unwrap();
+    let mut sim = build_granular(&scn);
     let mut sink = MemorySink::default();
     let summary = sim.run(&mut sink, &mut |_| {}).unwrap();
     assert_eq!(summary.status, "stopped_at_rest");
@@ -72,7 +72,7 @@ fn collapse_regression_norms() {
     // must be explained.
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/collapse.toml");
     let scn = load_file(&path, &[]).unwrap();
-    let mut sim = build_simulation(&scn).unwrap();
+    let mut sim = build_granular(&scn);
     let mut sink = MemorySink::default();
     let summary = sim.run(&mut sink, &mut |_| {}).unwrap();
     let last = sink.snapshots.last().unwrap();
@@ -113,7 +113,7 @@ fn erodible_bed_is_added_under_the_column_and_recorded() {
         ],
     )
     .unwrap();
-    let mut sim = build_simulation(&scn).unwrap();
+    let mut sim = build_granular(&scn);
     let mut sink = MemorySink::default();
     sim.run(&mut sink, &mut |_| {}).unwrap();
     assert!(sink.h_bed.iter().all(|&v| v == h_i));

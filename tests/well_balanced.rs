@@ -15,7 +15,12 @@ fn rand01(x: f64) -> f64 {
 }
 
 /// Seed 003 §5.3: random bed, free surface of slope `surface_deg`, μ_s = tan 20°.
-fn random_bed_case(surface_deg: f64) -> (Vec<f64>, granflow::simulation::Simulation) {
+fn random_bed_case(
+    surface_deg: f64,
+) -> (
+    Vec<f64>,
+    granflow::simulation::Simulation<granflow::model::granular::Granular>,
+) {
     let mut case = Case::new(-3.0, 1.0, 300);
     case.left = BoundaryKind::Outflow;
     case.right = BoundaryKind::Outflow;
@@ -29,7 +34,7 @@ fn random_bed_case(surface_deg: f64) -> (Vec<f64>, granflow::simulation::Simulat
     case.every = 0.25;
     let bed = |x: f64| 2.0 / (x + 4.0) - 0.5 + (-10.0 * (x + 1.5).powi(2)).exp() + 0.15 * rand01(x);
     let slope = tan_deg(surface_deg);
-    let sim = case.build(bed, |x, b| 0.8 - slope * (x - 2.0) - b, |_| 0.0);
+    let sim = case.build(bed, move |x, b| 0.8 - slope * (x - 2.0) - b, |_| 0.0);
     (sim.state.h_interior().to_vec(), sim)
 }
 
@@ -64,7 +69,12 @@ fn granular_mass_just_beyond_repose_angle_moves() {
     assert!(du > 1e-4, "max |u| = {du:e}");
 }
 
-fn lake(emerged: bool) -> (Vec<f64>, granflow::simulation::Simulation) {
+fn lake(
+    emerged: bool,
+) -> (
+    Vec<f64>,
+    granflow::simulation::Simulation<granflow::model::granular::Granular>,
+) {
     let mut case = Case::new(0.0, 10.0, 200);
     case.t_end = 1.0;
     case.every = 0.25;

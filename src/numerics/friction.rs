@@ -17,9 +17,9 @@
 
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
+use crate::model::granular::state::LayeredState;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{velocity, H_DRY};
-use crate::state::State;
 
 #[derive(Debug)]
 pub struct CoulombFrictionStep<L: BasalFriction> {
@@ -44,12 +44,12 @@ pub fn coulomb_update(q: f64, dt_sigma: f64) -> f64 {
     }
 }
 
-impl<L: BasalFriction> Stage for CoulombFrictionStep<L> {
+impl<L: BasalFriction> Stage<LayeredState> for CoulombFrictionStep<L> {
     fn name(&self) -> &'static str {
         "friction"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, 1);
         let g_n = mesh.g_n;
         let nx = mesh.nx;

@@ -80,11 +80,12 @@
 //! A state at rest has u_α = 0, so ΔG = 0 and 𝓑 = 0: the exchange terms keep granular
 //! masses at rest exactly at rest, like the monolayer.
 
+use super::tracer::TracerTransport;
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
+use crate::model::granular::state::LayeredState;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{celerity, velocity, H_DRY};
-use crate::state::State;
 
 /// The hydrostatic step for N ≥ 1 layers, generic over the basal friction law (used in ΔC).
 #[derive(Debug)]
@@ -110,6 +111,8 @@ pub struct HydrostaticStep<L: BasalFriction> {
     h_new: Vec<f64>,
     /// Draining factors θ_j ∈ [0, 1] (nx + 2), used only when a cell would empty.
     drain: Vec<f64>,
+    /// Transport of the state's tracers (idle when it has none).
+    tracers: TracerTransport,
 }
 
 /// Left or right state of an interface (ū for the velocity).
@@ -349,12 +352,13 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             },
             h_new: vec![0.0; nx + 2],
             drain: vec![1.0; nx + 2],
+            tracers: TracerTransport::default(),
         }
     }
 
     /// Velocities u_α and ū of every cell, ghosts included, and for N > 1 the shear
     /// term of the wave speed and the inverse layer fractions.
-    fn velocities(&mut self, state: &State) {
+    fn velocities(&mut self, state: &LayeredState) {
         let n = self.layers;
         if n == 1 {
             for j in 0..state.h.len() {
@@ -495,14 +499,17 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     }
 }
 
-impl<L: BasalFriction> Stage for HydrostaticStep<L> {
+impl<L: BasalFriction> Stage<LayeredState> for HydrostaticStep<L> {
     fn name(&self) -> &'static str {
         "hyperbolic"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, self.layers);
         let (nx, n) = (mesh.nx, self.layers);
+        if !state.tracers.is_empty() {
+            self.tracers.before_step(&state.h, n, &state.tracers);
+        }
         self.velocities(state);
         self.interfaces(mesh, dt, &state.l, &state.h);
 
@@ -543,12 +550,14 @@ impl<L: BasalFriction> Stage for HydrostaticStep<L> {
             }
         }
         state.fill_ghosts(mesh);
+        if !state.tracers.is_empty() {
+            self.tracers
+                .after_step(&self.flux_h, &state.h, r, n, &mut state.tracers);
+        }
         Ok(())
     }
 }
 
-// Non-hydrostatic extension (issue 3): the mass fluxes of the last step transport the
-// normal discharge hw as a passive scalar (src/numerics/nonhydrostatic.rs).
 impl<L: BasalFriction> HydrostaticStep<L> {
     /// Mass fluxes 𝓕^h of the last step at the faces k = 0..=nx (face k lies between
     /// the ghost-inclusive cells k and k + 1).

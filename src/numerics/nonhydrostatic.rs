@@ -1,13 +1,7 @@
-//! Steps 1 and 2 of the splitting for the weakly non-hydrostatic monolayer model
-//! (seed 000 §3). Step 3, the projection, is in [`super::projection`].
-//!
-//! Only non-hydrostatic pipelines build these stages; the hydrostatic pipeline is left
-//! exactly as it is (same stages, same arithmetic, no branch on the model).
-//!
-//! **Step 1** ([`NhHyperbolicStep`]): the hydrostatic step, unchanged, then the normal
-//! discharge transported as a passive scalar by its upwinded mass flux (seed 000 after
-//! eq. 24): (hw)_i ← (hw)_i − Δt/Δx (𝓕^h_{i+1/2} w^up_{i+1/2} − 𝓕^h_{i−1/2} w^up_{i−1/2}),
-//! w^up the velocity w^n = hw/h of the upwind cell.
+//! Step 2 of the splitting for the weakly non-hydrostatic monolayer model (seed 000
+//! §3). Step 1 is the hydrostatic step, whose mass fluxes carry the normal discharge
+//! hw as a tracer (seed 000 after eq. 24, `super::tracer`); step 3, the projection, is
+//! in [`super::projection`]. Only non-hydrostatic pipelines build these stages.
 //!
 //! **Step 2** ([`NhFrictionStep`]): the explicit pressure terms of p^n, then Coulomb
 //! friction with the total basal pressure (seed 000 step 2, its two key points):
@@ -25,70 +19,12 @@
 //! grains are lifted) gives no friction.
 
 use super::friction::coulomb_update;
-use super::hydrostatic::HydrostaticStep;
 use super::projection::monolayer::{cell_coefficients, doubled_bed};
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
+use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{velocity, H_DRY};
-use crate::state::State;
-
-/// Step 1 with the normal discharge transported by the hydrostatic mass flux.
-#[derive(Debug)]
-pub struct NhHyperbolicStep<L: BasalFriction> {
-    inner: HydrostaticStep<L>,
-    /// w^n per cell with ghosts, kept from before the hydrostatic update.
-    w: Vec<f64>,
-    /// Upwinded fluxes of hw at the faces.
-    flux_hw: Vec<f64>,
-}
-
-impl<L: BasalFriction> NhHyperbolicStep<L> {
-    pub fn new(law: L, nx: usize) -> Self {
-        NhHyperbolicStep {
-            inner: HydrostaticStep::new(law, nx),
-            w: vec![0.0; nx + 2],
-            flux_hw: vec![0.0; nx + 1],
-        }
-    }
-}
-
-impl<L: BasalFriction> Stage for NhHyperbolicStep<L> {
-    fn name(&self) -> &'static str {
-        "hyperbolic"
-    }
-
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
-        debug_assert_eq!(state.layers, 1);
-        // The loops below are branch-free (selects) so that they vectorise.
-        {
-            let nh = state.nh.as_ref().expect("non-hydrostatic state");
-            for ((w, &h), &hw) in self.w.iter_mut().zip(&state.h).zip(&nh.hw) {
-                let v = hw / h.max(H_DRY);
-                *w = if h > H_DRY { v } else { 0.0 };
-            }
-        }
-        self.inner.apply(mesh, dt, state)?;
-        let nx = mesh.nx;
-        let r = dt / mesh.dx;
-        let flux = self.inner.mass_flux();
-        let (w_left, w_right) = (&self.w[..nx + 1], &self.w[1..]);
-        for (((f_hw, &f), &wl), &wr) in self.flux_hw.iter_mut().zip(flux).zip(w_left).zip(w_right) {
-            *f_hw = f * if f > 0.0 { wl } else { wr };
-        }
-        let nh = state.nh.as_mut().expect("non-hydrostatic state");
-        let cells = nh.hw[1..=nx]
-            .iter_mut()
-            .zip(&state.h[1..=nx])
-            .zip(self.flux_hw.windows(2));
-        for ((hw, &h), f) in cells {
-            let v = *hw - r * (f[1] - f[0]);
-            *hw = if h > H_DRY { v } else { 0.0 };
-        }
-        nh.fill_ghosts(nx, 1);
-        Ok(())
-    }
-}
 
 /// Step 2: explicit p^n terms and Coulomb friction with the total basal pressure.
 #[derive(Debug)]
@@ -106,28 +42,35 @@ impl<L: BasalFriction> NhFrictionStep<L> {
     }
 }
 
-impl<L: BasalFriction> Stage for NhFrictionStep<L> {
+impl<L: BasalFriction> Stage<LayeredState> for NhFrictionStep<L> {
     fn name(&self) -> &'static str {
         "friction"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, 1);
         let g_n = mesh.g_n;
         let inv_dx = 1.0 / mesh.dx;
-        let nh = state.nh.as_mut().expect("non-hydrostatic state");
-        let (h, p) = (&state.h, &nh.p);
+        let LayeredState {
+            h, hu, tracers, nh, ..
+        } = state;
+        let p = &nh.as_ref().expect("non-hydrostatic state").p;
+        let hw_all = &mut tracers
+            .iter_mut()
+            .find(|t| t.name == HW)
+            .expect("non-hydrostatic state carries hw")
+            .q;
         for i in 1..=mesh.nx {
             let hi = h[i];
             if hi <= H_DRY {
-                state.hu[i] = 0.0;
-                nh.hw[i] = 0.0;
+                hu[i] = 0.0;
+                hw_all[i] = 0.0;
                 continue;
             }
             let (pl, pr) = (p[i - 1], p[i]);
             let p_b = 0.5 * (pl + pr);
-            let mut q = state.hu[i];
-            let mut hw = nh.hw[i];
+            let mut q = hu[i];
+            let mut hw = hw_all[i];
             if pl != 0.0 || pr != 0.0 {
                 let (a, b) = cell_coefficients(&self.two_b, h, i, mesh.nx, inv_dx);
                 q += dt * (a * pl + b * pr);
@@ -137,13 +80,13 @@ impl<L: BasalFriction> Stage for NhFrictionStep<L> {
                 continue;
             }
             let p_total = g_n * hi + p_b;
-            let mu = self.law.mu(velocity(hi, state.hu[i]).abs(), hi, p_total);
+            let mu = self.law.mu(velocity(hi, hu[i]).abs(), hi, p_total);
             let sigma = mu * (g_n * hi + p_b).max(0.0);
             let q_new = coulomb_update(q, dt * sigma);
-            state.hu[i] = q_new;
-            nh.hw[i] = if q_new == 0.0 { 0.0 } else { hw };
+            hu[i] = q_new;
+            hw_all[i] = if q_new == 0.0 { 0.0 } else { hw };
         }
-        nh.fill_ghosts(mesh.nx, 1);
+        fill_tracer_ghosts(hw_all, mesh.nx, 1);
         state.fill_ghosts(mesh);
         Ok(())
     }

@@ -44,11 +44,10 @@
 use super::friction::coulomb_update;
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
+use crate::model::granular::state::LayeredState;
 use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::{velocity, H_DRY};
 use crate::physics::GRAVITY;
-use crate::scenario::{BasalCondition, Regularization, Sidewall, SidewallForm};
-use crate::state::State;
 
 /// Thickness (m) below which a cell is solved as a monolayer (seed 003 Remark 2).
 pub const THIN_LAYER: f64 = 1e-6;
@@ -59,6 +58,42 @@ pub const SIDEWALL_DELTA_U: f64 = 1e-5;
 
 /// Columns solved together (see `solve_columns`).
 const LANES: usize = 4;
+
+/// Condition at the bed of the multilayer model (seed 001 eq. 28 and end of §3.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BasalCondition {
+    /// Coulomb friction μ(I_{1/2}) p_b u_1/|u_1| (`rheology.basal = "coulomb"`).
+    Coulomb,
+    /// u = 0 at the bed, stress from the rheology with ∂_z u ≈ 2u_1/h_1 (`"no_slip"`).
+    NoSlip,
+}
+
+/// How the μ(I) viscosity η = μ(I) p / |∂_z u| is kept finite where the shear vanishes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Regularization {
+    /// η = μ p / √(‖D‖² + δ²) (seed 003 eq. 10), `rheology.delta` = δ in 1/s.
+    Delta { delta: f64 },
+    /// η = μ p / max(‖D‖, μ p/η_M), η_M = 250 ρ √(g h³) (seed 001 eq. 6 and 25).
+    Bound,
+}
+
+/// Where the sidewall friction of a channel of width W enters the multilayer model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SidewallForm {
+    /// Jop's term μ_w (H − z)/W added to μ(I) (seed 001 eq. 30).
+    Jop,
+    /// A friction force −l_α h (2/W) μ_w p_α u_α/|u_α| on each layer (seed 003 eq. 36).
+    Layer,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sidewall {
+    /// Wall friction coefficient μ_w.
+    pub mu_w: f64,
+    /// Channel width W (m).
+    pub width: f64,
+    pub form: SidewallForm,
+}
 
 /// Options of the viscous step (from the scenario's `rheology` table).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -165,7 +200,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     }
 
     /// Freezes the coefficients of one wet cell `i` at the state t^n.
-    fn freeze_cell(&mut self, mesh: &Mesh, state: &State, i: usize) {
+    fn freeze_cell(&mut self, mesh: &Mesh, state: &LayeredState, i: usize) {
         let n = self.layers;
         let (g_n, l) = (mesh.g_n, &state.l);
         let h = state.h[i];
@@ -243,7 +278,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     /// overlaps. Unused lanes repeat the last column and are not written back.
     fn solve_columns(
         &mut self,
-        state: &mut State,
+        state: &mut LayeredState,
         cells: [usize; LANES],
         impulses: [f64; LANES],
         count: usize,
@@ -320,12 +355,12 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     }
 }
 
-impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
+impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscousStep<L> {
     fn name(&self) -> &'static str {
         "viscous"
     }
 
-    fn prepare(&mut self, mesh: &Mesh, state: &State) {
+    fn prepare(&mut self, mesh: &Mesh, state: &LayeredState) {
         debug_assert_eq!(state.layers, self.layers);
         let n = self.layers;
         for i in 1..=mesh.nx {
@@ -338,7 +373,7 @@ impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
         }
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         let n = self.layers;
         let g_n = mesh.g_n;
         // Columns waiting to be solved together.
@@ -383,9 +418,9 @@ impl<L: BasalFriction + LocalFriction> Stage for MultilayerViscousStep<L> {
 #[allow(clippy::needless_range_loop)] // index arithmetic mirrors the equations
 mod tests {
     use super::*;
+    use crate::mesh::{BoundaryKind, Coordinates};
     use crate::mesh::{Mesh, MeshSpec};
     use crate::physics::rheology::{Coulomb, MuI};
-    use crate::scenario::{BoundaryKind, Coordinates};
 
     fn mesh(cells: usize, slope_deg: f64) -> Mesh {
         let spec = MeshSpec {
@@ -445,7 +480,7 @@ mod tests {
         let m = mesh(3, 20.0);
         let h0 = 0.8;
         let u: Vec<f64> = (0..n).map(|a| 0.3 + 0.2 * a as f64 * a as f64).collect();
-        let mut state = State::from_profiles(&m, &l, &[h0; 3], &[0.0; 3]);
+        let mut state = LayeredState::from_profiles(&m, &l, &[h0; 3], &[0.0; 3]);
         for j in 0..5 {
             for a in 0..n {
                 state.hu[j * n + a] = h0 * u[a];
@@ -498,7 +533,7 @@ mod tests {
         let g_n = m.g_n;
         let h0 = 0.1;
         for (speed, stops) in [(1e-3, true), (2.0, false)] {
-            let mut state = State::from_profiles(&m, &l, &[h0; 3], &[speed; 3]);
+            let mut state = LayeredState::from_profiles(&m, &l, &[h0; 3], &[speed; 3]);
             // A sheared profile at t^n.
             for a in 0..4 {
                 state.hu[2 * 4 + a] = h0 * speed * (1.0 + a as f64);
@@ -531,7 +566,7 @@ mod tests {
         let l = [0.5, 0.5];
         let m = mesh(3, 0.0);
         let h0 = 0.5 * THIN_LAYER;
-        let mut state = State::from_profiles(&m, &l, &[h0; 3], &[0.0; 3]);
+        let mut state = LayeredState::from_profiles(&m, &l, &[h0; 3], &[0.0; 3]);
         state.hu[2 * 2] = h0 * 1.0;
         state.hu[2 * 2 + 1] = h0 * 3.0;
         let mut step = MultilayerViscousStep::new(law, 3, &l, options(BasalCondition::Coulomb));

@@ -8,3 +8,14 @@ pub mod shallow;
 
 /// Gravitational acceleration (m/s²), as in the seeds' experiments.
 pub const GRAVITY: f64 = 9.81;
+
+/// The granular material (seed 000 Table 1).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Grain density ρ_s (kg/m³).
+    pub rho_s: f64,
+    /// Solid volume fraction φ_s (flow density ρ = φ_s ρ_s).
+    pub phi: f64,
+    /// Grain diameter d_s (m).
+    pub d_s: f64,
+}

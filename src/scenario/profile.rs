@@ -38,6 +38,17 @@ enum Kind {
     Constant(f64),
     Expr(Arc<Expression>),
     Table(Arc<Table>),
+    Function(Function),
+}
+
+/// A profile given as Rust code (tests and library users), f(x, b).
+#[derive(Clone)]
+struct Function(Arc<dyn Fn(f64, f64) -> f64 + Send + Sync>);
+
+impl fmt::Debug for Function {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("Function")
+    }
 }
 
 impl Profile {
@@ -45,6 +56,14 @@ impl Profile {
     pub fn constant(v: f64) -> Profile {
         Profile {
             kind: Kind::Constant(v),
+        }
+    }
+
+    /// A profile computed by `f(x, b)`, for library users and tests that build a
+    /// [`Scenario`](super::Scenario) without a file.
+    pub fn function(f: impl Fn(f64, f64) -> f64 + Send + Sync + 'static) -> Profile {
+        Profile {
+            kind: Kind::Function(Function(Arc::new(f))),
         }
     }
 
@@ -91,6 +110,7 @@ impl Profile {
                 t.xs[0],
                 t.xs[t.xs.len() - 1]
             ),
+            Kind::Function(_) => "function".to_string(),
         }
     }
 
@@ -100,6 +120,7 @@ impl Profile {
             Kind::Constant(v) => Ok(*v),
             Kind::Expr(e) => e.eval(x, b),
             Kind::Table(t) => Ok(t.eval(x)),
+            Kind::Function(f) => Ok((f.0)(x, b)),
         }
     }
 

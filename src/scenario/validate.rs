@@ -189,20 +189,22 @@ fn validate(
         None => Profile::constant(0.0),
     };
     let material = material(raw.material.unwrap_or_default())?;
-    let mut raw_rheology = section("rheology", raw.rheology)?;
-    let viscous = ViscousKeys::take(&mut raw_rheology);
-    let friction = rheology(raw_rheology)?;
-    let mut raw_model = raw.model.unwrap_or_default();
-    let fractions = raw_model.layer_fractions.take();
-    let model = model(raw_model)?;
+    let raw_rheology = section("rheology", raw.rheology)?;
+    let friction = rheology(&raw_rheology)?;
+    let raw_model = raw.model.unwrap_or_default();
+    let model = model(&raw_model)?;
     let initial = initial(section("initial", raw.initial)?, base_dir)?;
     let boundary = boundary(raw.boundary.unwrap_or_default())?;
     let time = time(section("time", raw.time)?)?;
-    let mut raw_output = raw.output.unwrap_or_default();
-    let static_threshold = raw_output.static_threshold.take();
-    let output = output(raw_output, &time, default_output)?;
-    let multilayer = multilayer(viscous, fractions, static_threshold, model.layers)?;
-    sample_profiles(&domain, &bed, &initial)?;
+    let raw_output = raw.output.unwrap_or_default();
+    let output = output(&raw_output, &time, default_output)?;
+    let multilayer = multilayer(
+        ViscousKeys::of(&raw_rheology),
+        raw_model.layer_fractions.clone(),
+        raw_output.static_threshold,
+        model.layers,
+    )?;
+    sample_profiles(&domain, &bed, &initial, model.pressure)?;
     Ok(Scenario {
         source_toml,
         base_dir: base_dir.to_path_buf(),
@@ -305,7 +307,7 @@ fn coefficient(name: &str, plain: Option<f64>, degrees: Option<f64>) -> Res<Opti
     }
 }
 
-fn rheology(r: RawRheology) -> Res<FrictionLaw> {
+fn rheology(r: &RawRheology) -> Res<FrictionLaw> {
     let law = required("rheology.law", r.law.as_deref())?;
     #[derive(Clone, Copy, PartialEq)]
     enum Law {
@@ -368,7 +370,7 @@ fn rheology(r: RawRheology) -> Res<FrictionLaw> {
     }
 }
 
-fn model(m: RawModel) -> Res<ModelSpec> {
+fn model(m: &RawModel) -> Res<ModelSpec> {
     let kind = choice(
         "model.kind",
         m.kind.as_deref(),
@@ -385,6 +387,12 @@ fn model(m: RawModel) -> Res<ModelSpec> {
         ],
     )?;
     let layers = int_in("model.layers", m.layers.unwrap_or(1), 1, MAX_LAYERS)?;
+    if layers > 1 && pressure == Pressure::NonHydrostatic {
+        return err(
+            "model.pressure",
+            "the multilayer non-hydrostatic model (layers > 1 with \"nonhydrostatic\") is not available yet",
+        );
+    }
     Ok(ModelSpec {
         kind,
         pressure,
@@ -392,8 +400,8 @@ fn model(m: RawModel) -> Res<ModelSpec> {
     })
 }
 
-/// The `[rheology]` keys of the multilayer model's viscous step, taken out of the raw
-/// table before the friction law is read.
+/// The `[rheology]` keys of the multilayer model's viscous step (the friction law's keys
+/// are read by `rheology`).
 struct ViscousKeys {
     basal: Option<String>,
     regularization: Option<String>,
@@ -406,16 +414,16 @@ struct ViscousKeys {
 }
 
 impl ViscousKeys {
-    fn take(r: &mut RawRheology) -> ViscousKeys {
+    fn of(r: &RawRheology) -> ViscousKeys {
         ViscousKeys {
-            basal: r.basal.take(),
-            regularization: r.regularization.take(),
-            delta: r.delta.take(),
-            mu_w: r.mu_w.take(),
-            mu_w_deg: r.mu_w_deg.take(),
-            channel_width: r.channel_width.take(),
-            sidewall: r.sidewall.take(),
-            c_msm: r.c_msm.take(),
+            basal: r.basal.clone(),
+            regularization: r.regularization.clone(),
+            delta: r.delta,
+            mu_w: r.mu_w,
+            mu_w_deg: r.mu_w_deg,
+            channel_width: r.channel_width,
+            sidewall: r.sidewall.clone(),
+            c_msm: r.c_msm,
         }
     }
 }
@@ -598,8 +606,8 @@ fn time(t: RawTime) -> Res<TimeSpec> {
     })
 }
 
-fn output(o: RawOutput, time: &TimeSpec, default_file: &str) -> Res<OutputSpec> {
-    let file = o.file.unwrap_or_else(|| default_file.to_owned());
+fn output(o: &RawOutput, time: &TimeSpec, default_file: &str) -> Res<OutputSpec> {
+    let file = o.file.clone().unwrap_or_else(|| default_file.to_owned());
     if file.trim().is_empty() {
         return err("output.file", "must not be empty");
     }
@@ -612,9 +620,15 @@ fn output(o: RawOutput, time: &TimeSpec, default_file: &str) -> Res<OutputSpec> 
     })
 }
 
-/// Evaluates `bed.b`, then `initial.h` and `initial.u` at every cell centre: all must be
-/// finite and the thickness non-negative. The first offending centre is reported.
-fn sample_profiles(domain: &Domain, bed: &Profile, initial: &Initial) -> Res<()> {
+/// Evaluates `bed.b`, then `initial.h`, `initial.u` and `initial.w` at every cell centre:
+/// all must be finite, the thickness non-negative, and w zero unless the pressure is
+/// non-hydrostatic. The first offending centre is reported.
+fn sample_profiles(
+    domain: &Domain,
+    bed: &Profile,
+    initial: &Initial,
+    pressure: Pressure,
+) -> Res<()> {
     let n = domain.cells;
     let dx = (domain.x_max - domain.x_min) / n as f64;
     let x_min = domain.x_min;
@@ -662,6 +676,14 @@ fn sample_profiles(domain: &Domain, bed: &Profile, initial: &Initial) -> Res<()>
     }
     if let Some(i) = first_bad(&|i| !initial.w.eval(centre(i), bed_at(i)).is_finite()) {
         return Err(not_finite("initial.w", &initial.w, centre(i), bed_at(i)));
+    }
+    if pressure == Pressure::Hydrostatic
+        && first_bad(&|i| initial.w.eval(centre(i), bed_at(i)) != 0.0).is_some()
+    {
+        return err(
+            "initial.w",
+            "a normal velocity needs model.pressure = \"nonhydrostatic\"",
+        );
     }
     Ok(())
 }
@@ -801,7 +823,7 @@ i0 = 0.279
 
 [model]
 kind = "granular"
-pressure = "nonhydrostatic"
+pressure = "hydrostatic"
 layers = 4
 
 [initial]
@@ -831,7 +853,7 @@ front_threshold = 2e-3
         };
         assert!((mu_s - 20.9f64.to_radians().tan()).abs() < 1e-15);
         assert_eq!((mu_2, i0), (0.64, 0.279));
-        assert_eq!(s.model.pressure, Pressure::NonHydrostatic);
+        assert_eq!(s.model.pressure, Pressure::Hydrostatic);
         assert_eq!(s.model.layers, 4);
         assert_eq!(s.initial.h.eval(-0.5, 0.0), 0.14);
         assert_eq!(s.initial.h.eval(0.5, 0.0), 0.0);
@@ -1046,6 +1068,9 @@ front_threshold = 2e-3
     fn normal_velocity_defaults_to_zero_and_is_checked() {
         assert_eq!(load(MINIMAL).unwrap().initial.w.as_constant(), Some(0.0));
         let text = replace(MINIMAL, "h = 0.1", "h = 0.1\nw = \"if(x < 0.5, 2.3, b)\"");
+        let e = fails_at(&text, "initial.w", Some(12));
+        assert!(e.message().contains("nonhydrostatic"), "{e}");
+        let text = format!("{text}\n[model]\npressure = \"nonhydrostatic\"\n");
         let s = load(&text).unwrap();
         assert_eq!(s.initial.w.eval(0.25, 0.0), 2.3);
         assert_eq!(s.initial.w.eval(0.75, 0.1), 0.1);

@@ -19,7 +19,7 @@ use crate::output::{
     StepRecord, Tee,
 };
 use crate::scenario::Scenario;
-use crate::setup::build_simulation;
+use crate::setup::build;
 use crate::simulation::Progress;
 
 /// A run whose scenario has been loaded and checked.
@@ -90,7 +90,7 @@ pub fn run_one(run: &Prepared, dir: &Path, progress: &mut dyn FnMut(Progress)) -
         return record;
     }
     let outcome = catch_unwind(AssertUnwindSafe(|| -> Result<RunSummary, String> {
-        let mut sim = build_simulation(&run.scenario).map_err(|e| e.to_string())?;
+        let mut sim = build(&run.scenario);
         let sinks = create_run_sinks(&h5).map_err(|e| e.to_string())?;
         let mut sink = Tee::new(sinks, SummaryCapture::default());
         let result = sim.run(&mut sink, progress);

@@ -196,12 +196,6 @@ fn prepare(
                 overrides.extend(point.overrides());
                 let scenario = scenario::load_str(&text, &base_dir, &overrides)
                     .map_err(|e| run_error(spec, base, point, &e))?;
-                crate::runner::check(&scenario).map_err(|e| {
-                    let from_axis = spec.axis_touching(&e.key).map_or(String::new(), |a| {
-                        format!(" (varied by the axis '{}')", a.key)
-                    });
-                    format!("run {} ({}): {e}{from_axis}", point.index, point.name)
-                })?;
                 let hash = format!("{:016x}", naming::fnv1a(scenario.source_toml.as_bytes()));
                 Ok(Prepared {
                     point: point.clone(),

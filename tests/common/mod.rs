@@ -1,13 +1,16 @@
 //! Builds runs from plain closures, without scenario files.
 #![allow(dead_code)]
 
-use granflow::mesh::{Mesh, MeshSpec};
+use granflow::model::granular::Granular;
 use granflow::output::memory::MemorySink;
-use granflow::output::{RunInfo, RunSummary};
-use granflow::pipeline::hydrostatic_monolayer;
-use granflow::scenario::{BoundaryKind, Coordinates, FrictionLaw, Material};
-use granflow::simulation::{RunConfig, Simulation};
-use granflow::state::State;
+use granflow::output::RunSummary;
+use granflow::scenario::{
+    BasalCondition, Boundaries, BoundaryKind, Coordinates, Domain, FrictionLaw, Initial, Material,
+    ModelKind, ModelSpec, MultilayerSpec, OutputSpec, Pressure, Profile, Regularization, Scenario,
+    TimeSpec,
+};
+use granflow::setup::build_granular;
+use granflow::simulation::Simulation;
 
 pub struct Case {
     pub x_min: f64,
@@ -50,52 +53,67 @@ impl Case {
         }
     }
 
-    /// Builds the run with bed `b(x)`, thickness `h(x, b)` and velocity `u(x)`.
+    /// Builds the run with bed `b(x)`, thickness `h(x, b)` and velocity `u(x)`, through
+    /// the same set-up as a scenario file (`setup::build_granular`).
     pub fn build(
         &self,
-        b: impl Fn(f64) -> f64,
-        h: impl Fn(f64, f64) -> f64,
-        u: impl Fn(f64) -> f64,
-    ) -> Simulation {
-        let spec = MeshSpec {
-            x_min: self.x_min,
-            x_max: self.x_max,
-            cells: self.cells,
-            slope_deg: self.slope_deg,
-            coordinates: self.coordinates,
-            left: self.left,
-            right: self.right,
+        b: impl Fn(f64) -> f64 + Send + Sync + 'static,
+        h: impl Fn(f64, f64) -> f64 + Send + Sync + 'static,
+        u: impl Fn(f64) -> f64 + Send + Sync + 'static,
+    ) -> Simulation<Granular> {
+        let scn = Scenario {
+            source_toml: String::new(),
+            base_dir: ".".into(),
+            domain: Domain {
+                x_min: self.x_min,
+                x_max: self.x_max,
+                cells: self.cells,
+                slope_deg: self.slope_deg,
+                coordinates: self.coordinates,
+            },
+            bed: Profile::function(move |x, _| b(x)),
+            material: Self::beads_material(),
+            friction: self.law,
+            model: ModelSpec {
+                kind: ModelKind::Granular,
+                pressure: Pressure::Hydrostatic,
+                layers: 1,
+            },
+            multilayer: MultilayerSpec {
+                layer_fractions: vec![1.0],
+                basal: BasalCondition::Coulomb,
+                regularization: Regularization::Delta { delta: 1e-5 },
+                sidewall: None,
+                c_msm: false,
+                static_threshold: 1e-3,
+            },
+            initial: Initial {
+                h: Profile::function(h),
+                u: Profile::function(move |x, _| u(x)),
+                w: Profile::constant(0.0),
+                erodible_bed: 0.0,
+            },
+            boundary: Boundaries {
+                left: self.left,
+                right: self.right,
+            },
+            time: TimeSpec {
+                t_end: self.t_end,
+                cfl: self.cfl,
+                stop_at_rest: self.stop_at_rest,
+            },
+            output: OutputSpec {
+                file: "test.h5".into(),
+                every: self.every,
+                front_threshold: 1e-3,
+            },
         };
-        let x = spec.centres();
-        let bed: Vec<f64> = x.iter().map(|&x| b(x)).collect();
-        let h0: Vec<f64> = x.iter().zip(&bed).map(|(&x, &b)| h(x, b)).collect();
-        let u0: Vec<f64> = x.iter().map(|&x| u(x)).collect();
-        let mesh = Mesh::new(&spec, bed);
-        let state = State::from_profiles(&mesh, &[1.0], &h0, &u0);
-        let pipeline = hydrostatic_monolayer(&self.law, &Self::beads_material(), self.cells);
-        let config = RunConfig {
-            t_end: self.t_end,
-            cfl: self.cfl,
-            stop_at_rest: self.stop_at_rest,
-            output_every: self.every,
-            front_threshold: 1e-3,
-        };
-        let info = RunInfo {
-            granflow_version: "test".into(),
-            model: "granular".into(),
-            pressure: "hydrostatic".into(),
-            layers: 1,
-            coordinates: "local".into(),
-            slope_deg: self.slope_deg,
-            scenario_toml: String::new(),
-            front_threshold: 1e-3,
-        };
-        Simulation::new(mesh, state, vec![0.0; self.cells], pipeline, config, info)
+        build_granular(&scn)
     }
 }
 
 /// Runs to the end, keeping everything in memory.
-pub fn run(sim: &mut Simulation) -> (MemorySink, RunSummary) {
+pub fn run(sim: &mut Simulation<Granular>) -> (MemorySink, RunSummary) {
     let mut sink = MemorySink::default();
     let summary = sim.run(&mut sink, &mut |_| {}).expect("run succeeds");
     (sink, summary)

@@ -30,7 +30,7 @@ pub mod monolayer;
 use super::linalg::{thomas_rows, PressureRows, ScalarRow};
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
-use crate::state::State;
+use crate::model::granular::state::LayeredState;
 
 /// Solves the (block-)tridiagonal pressure system of one projection, given row by row.
 pub trait PressureSolver: Send + std::fmt::Debug {
@@ -70,7 +70,7 @@ pub trait ProjectionOperator: Send + std::fmt::Debug {
     fn solve<S: PressureSolver<Row = Self::Row>>(
         &mut self,
         mesh: &Mesh,
-        state: &State,
+        state: &LayeredState,
         solver: &mut S,
         pi: &mut [f64],
     );
@@ -78,7 +78,7 @@ pub trait ProjectionOperator: Send + std::fmt::Debug {
     /// Applies the correction of the impulses `pi` to the discharges (hu, hw) of
     /// `state` (h has not changed since [`solve`](Self::solve)), and advances the
     /// pressure, p ← p + Π/Δt, resetting it to 0 on faces without a constraint.
-    fn correct(&mut self, mesh: &Mesh, state: &mut State, pi: &[f64], dt: f64);
+    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64);
 }
 
 /// The "projection" stage: form and solve the pressure system, correct.
@@ -105,12 +105,14 @@ impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> ProjectionStage<O, 
     }
 }
 
-impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> Stage for ProjectionStage<O, S> {
+impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> Stage<LayeredState>
+    for ProjectionStage<O, S>
+{
     fn name(&self) -> &'static str {
         "projection"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut State) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         self.operator
             .solve(mesh, state, &mut self.solver, &mut self.pi);
         self.operator.correct(mesh, state, &self.pi, dt);

@@ -52,8 +52,8 @@ use super::{PressureSolver, ProjectionOperator};
 use crate::mesh::Mesh;
 use crate::numerics::linalg::{PressureRows, ScalarRow};
 
-use crate::scenario::BoundaryKind;
-use crate::state::State;
+use crate::mesh::BoundaryKind;
+use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
 
 /// A face carries the constraint only when both neighbouring cells are thicker than
 /// this fraction of Δx (see the module documentation).
@@ -147,7 +147,13 @@ impl MonolayerOperator {
 ///   𝒞 = β_l u_l + α_r u_r + (w_l + w_r)/2
 ///     = ½ [(w_l + w_r) − (u_l (∂_X b)_l + u_r (∂_X b)_r) + h_{i+1/2} (u_r − u_l)/Δx].
 #[inline(always)]
-fn constraint_at(state: &State, hw: &[f64], l: usize, beta_l: f64, alpha_r: f64) -> (f64, f64) {
+fn constraint_at(
+    state: &LayeredState,
+    hw: &[f64],
+    l: usize,
+    beta_l: f64,
+    alpha_r: f64,
+) -> (f64, f64) {
     let r = l + 1;
     let (h, hu) = (&state.h, &state.hu);
     let (u_l, u_r) = (hu[l] / h[l], hu[r] / h[r]);
@@ -239,15 +245,11 @@ impl ProjectionOperator for MonolayerOperator {
     fn solve<S: PressureSolver<Row = ScalarRow>>(
         &mut self,
         mesh: &Mesh,
-        state: &State,
+        state: &LayeredState,
         solver: &mut S,
         pi: &mut [f64],
     ) {
         debug_assert_eq!(state.layers, 1);
-        let nh = state
-            .nh
-            .as_ref()
-            .expect("non-hydrostatic stage on a hydrostatic state");
         let h = &state.h[..];
         // The span of the mass: faces outside it are dry (never formed).
         let first = h.iter().position(|&h| h > self.h_min);
@@ -260,7 +262,7 @@ impl ProjectionOperator for MonolayerOperator {
         let rows = MonolayerRows {
             h,
             hu: &state.hu,
-            hw: &nh.hw,
+            hw: state.hw(),
             two_b: &self.two_b,
             nx: mesh.nx,
             inv_dx: 1.0 / mesh.dx,
@@ -272,14 +274,21 @@ impl ProjectionOperator for MonolayerOperator {
         solver.solve(&rows, pi);
     }
 
-    fn correct(&mut self, mesh: &Mesh, state: &mut State, pi: &[f64], dt: f64) {
+    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64) {
         let nx = mesh.nx;
-        let nh = state
-            .nh
+        let LayeredState {
+            h, hu, tracers, nh, ..
+        } = state;
+        let nh = nh
             .as_mut()
             .expect("non-hydrostatic stage on a hydrostatic state");
+        let hw = &mut tracers
+            .iter_mut()
+            .find(|t| t.name == HW)
+            .expect("non-hydrostatic state carries hw")
+            .q;
         let span = self.span.clone();
-        let (h, two_b) = (&state.h[..], &self.two_b[..]);
+        let (h, two_b) = (&h[..], &self.two_b[..]);
         let inv_dx = 1.0 / mesh.dx;
         if !span.is_empty() {
             // The cells touching a face of the span.
@@ -287,8 +296,8 @@ impl ProjectionOperator for MonolayerOperator {
             for i in c0..=c1 {
                 let (a, b) = cell_coefficients(two_b, h, i, nx, inv_dx);
                 let (pl, pr) = (pi[i - 1], pi[i]);
-                state.hu[i] += a * pl + b * pr;
-                nh.hw[i] += 0.5 * (pl + pr);
+                hu[i] += a * pl + b * pr;
+                hw[i] += 0.5 * (pl + pr);
             }
             let inv_dt = 1.0 / dt;
             let (p, hl, hr) = (
@@ -307,7 +316,7 @@ impl ProjectionOperator for MonolayerOperator {
         }
         nh.p[..span.start].fill(0.0);
         nh.p[span.end..].fill(0.0);
-        nh.fill_ghosts(nx, 1);
+        fill_tracer_ghosts(hw, nx, 1);
         state.fill_ghosts(mesh);
     }
 }
@@ -337,9 +346,8 @@ impl ConstraintResidual {
 /// Evaluates the discrete constraint 𝒞 = 𝒯ᵀ(u, w) (seed 000 eq. 27 divided by h,
 /// discretised at the faces as in the projection, module documentation) on the
 /// current state.
-pub fn constraint_residual(mesh: &Mesh, state: &State) -> ConstraintResidual {
+pub fn constraint_residual(mesh: &Mesh, state: &LayeredState) -> ConstraintResidual {
     let nx = mesh.nx;
-    let nh = state.nh.as_ref().expect("a non-hydrostatic state");
     let two_b = doubled_bed(mesh);
     let inv_dx = 1.0 / mesh.dx;
     let h_min = NH_FILM_FRACTION * mesh.dx;
@@ -356,7 +364,7 @@ pub fn constraint_residual(mesh: &Mesh, state: &State) -> ConstraintResidual {
         }
         let (_, beta_l) = cell_coefficients(&two_b, &state.h, k, nx, inv_dx);
         let (alpha_r, _) = cell_coefficients(&two_b, &state.h, k + 1, nx, inv_dx);
-        let (c, scale) = constraint_at(state, &nh.hw, k, beta_l, alpha_r);
+        let (c, scale) = constraint_at(state, state.hw(), k, beta_l, alpha_r);
         res.max_abs = res.max_abs.max(c.abs());
         res.scale = res.scale.max(scale);
         res.faces += 1;
@@ -367,15 +375,14 @@ pub fn constraint_residual(mesh: &Mesh, state: &State) -> ConstraintResidual {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::Coordinates;
     use crate::mesh::MeshSpec;
     use crate::numerics::linalg::thomas;
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
     use crate::numerics::Stage;
-    use crate::scenario::Coordinates;
-    use crate::state::NonHydrostatic;
 
     /// A wet, moving state on a curved bed (Cartesian, walls): every face constrained.
-    fn moving_state(cells: usize) -> (Mesh, State) {
+    fn moving_state(cells: usize) -> (Mesh, LayeredState) {
         let spec = MeshSpec {
             x_min: 0.0,
             x_max: 1.0,
@@ -391,8 +398,8 @@ mod tests {
         let u: Vec<f64> = x.iter().map(|x| 0.5 * (4.0 * x).sin()).collect();
         let w: Vec<f64> = x.iter().map(|x| 0.1 * (5.0 * x).cos()).collect();
         let mesh = Mesh::new(&spec, b);
-        let mut state = State::from_profiles(&mesh, &[1.0], &h, &u);
-        state.nh = Some(NonHydrostatic::from_profile(&state, &w));
+        let mut state = LayeredState::from_profiles(&mesh, &[1.0], &h, &u);
+        state.add_nonhydrostatic(&w);
         (mesh, state)
     }
 
@@ -421,10 +428,9 @@ mod tests {
         assert!(dp < 1e-12 * scale, "{dp} vs {scale}");
     }
 
-    fn kinetic_energy(state: &State, nx: usize) -> f64 {
-        let nh = state.nh.as_ref().unwrap();
+    fn kinetic_energy(state: &LayeredState, nx: usize) -> f64 {
         (1..=nx)
-            .map(|i| (state.hu[i].powi(2) + nh.hw[i].powi(2)) / (2.0 * state.h[i]))
+            .map(|i| (state.hu[i].powi(2) + state.hw()[i].powi(2)) / (2.0 * state.h[i]))
             .sum()
     }
 
@@ -443,13 +449,12 @@ mod tests {
                 ThomasSolver::default(),
                 mesh.nx,
             );
-            let (hu0, hw0) = (state.hu.clone(), state.nh.as_ref().unwrap().hw.clone());
+            let (hu0, hw0) = (state.hu.clone(), state.hw().to_vec());
             stage.apply(&mesh, 1e-3, &mut state).unwrap();
             let after = kinetic_energy(&state, mesh.nx);
-            let nh = state.nh.as_ref().unwrap();
             let removed: f64 = (1..=mesh.nx)
                 .map(|i| {
-                    ((state.hu[i] - hu0[i]).powi(2) + (nh.hw[i] - hw0[i]).powi(2))
+                    ((state.hu[i] - hu0[i]).powi(2) + (state.hw()[i] - hw0[i]).powi(2))
                         / (2.0 * state.h[i])
                 })
                 .sum();
@@ -469,7 +474,7 @@ mod tests {
     /// The stencil printed after seed 000 eq. (28): eq. (28) discretised directly at
     /// the faces (centred ∂_X q̃ over 2Δx, minmod ∂_XX G, 4q̃ at the face), then the
     /// corrections of the paper. Returns the relative residual of (27) afterwards.
-    fn printed_stencil_residual(mesh: &Mesh, state: &mut State) -> f64 {
+    fn printed_stencil_residual(mesh: &Mesh, state: &mut LayeredState) -> f64 {
         let nx = mesh.nx;
         let (dx, h) = (mesh.dx, state.h.clone());
         let two_b = doubled_bed(mesh);
@@ -486,7 +491,7 @@ mod tests {
         let n = nx + 1;
         let (mut lo, mut di, mut up, mut rhs) =
             (vec![0.0; n], vec![1.0; n], vec![0.0; n], vec![0.0; n]);
-        let hw = state.nh.as_ref().unwrap().hw.clone();
+        let hw = state.hw().to_vec();
         for k in 1..nx {
             let hk = 0.5 * (h[k] + h[k + 1]);
             let dh = (h[k + 1] - h[k]) / dx;
@@ -504,14 +509,13 @@ mod tests {
         }
         let (mut pi, mut scratch) = (vec![0.0; n], vec![0.0; n]);
         thomas(&lo, &di, &up, &rhs, &mut pi, &mut scratch);
-        let nh = state.nh.as_mut().unwrap();
         for i in 1..=nx {
             let g = ((two_b[i + 1] + h[i + 1]) - (two_b[i - 1] + h[i - 1])) / (2.0 * dx);
             let mean = 0.5 * (pi[i - 1] + pi[i]);
             state.hu[i] -= h[i] * (pi[i] - pi[i - 1]) / dx + mean * g;
-            nh.hw[i] += 2.0 * mean;
+            state.hw_mut()[i] += 2.0 * mean;
         }
-        nh.fill_ghosts(nx, 1);
+        fill_tracer_ghosts(state.hw_mut(), nx, 1);
         state.fill_ghosts(mesh);
         // The middle half of the domain, away from the boundary rows (which carry no
         // constraint here) and from the kink of the ghost bed in the minmod ∂_XX G.
@@ -526,8 +530,8 @@ mod tests {
         max_abs / scale
     }
 
-    fn nh_hw(state: &State) -> Vec<f64> {
-        state.nh.as_ref().unwrap().hw.clone()
+    fn nh_hw(state: &LayeredState) -> Vec<f64> {
+        state.hw().to_vec()
     }
 
     #[test]

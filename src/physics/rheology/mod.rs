@@ -11,6 +11,15 @@ mod mu_i;
 pub use coulomb::Coulomb;
 pub use mu_i::{inertial_number, local_inertial_number, MuI};
 
+/// Basal friction law (seed 000 eq. 6).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FrictionLaw {
+    /// Constant Coulomb coefficient μ (classical Savage–Hutter).
+    Coulomb { mu: f64 },
+    /// μ(I) = μ_s + (μ_2 − μ_s) I / (I_0 + I).
+    MuI { mu_s: f64, mu_2: f64, i0: f64 },
+}
+
 /// A basal friction law μ(state).
 pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
     /// Friction coefficient for depth-averaged speed |u| (m/s), thickness h (m) and

@@ -18,13 +18,13 @@
 //! layer, from the bottom, whose speed exceeds a threshold (the whole thickness h when
 //! no layer does; seed 001 §4.2.5 uses 1e-3 m/s).
 
+use crate::mesh::Coordinates;
 use crate::mesh::Mesh;
+use crate::model::granular::state::LayeredState;
 use crate::physics::shallow::{velocity, H_DRY};
-use crate::scenario::Coordinates;
-use crate::state::State;
 
 /// Normal velocity of every layer at its midpoint, layer-major (α·nx + i), into `w`.
-pub fn normal_velocities(mesh: &Mesh, state: &State, w: &mut [f64]) {
+pub fn normal_velocities(mesh: &Mesh, state: &LayeredState, w: &mut [f64]) {
     let (nx, n) = (mesh.nx, state.layers);
     assert_eq!(w.len(), n * nx);
     let two_dx = 2.0 * mesh.dx;
@@ -62,7 +62,7 @@ pub fn normal_velocities(mesh: &Mesh, state: &State, w: &mut [f64]) {
 }
 
 /// Height above the bed of the flow/no-flow interface in every cell, into `out` (nx).
-pub fn static_interface(state: &State, threshold: f64, out: &mut [f64]) {
+pub fn static_interface(state: &LayeredState, threshold: f64, out: &mut [f64]) {
     let n = state.layers;
     for (i, out) in out.iter_mut().enumerate() {
         let j = i + 1;
@@ -82,8 +82,8 @@ pub fn static_interface(state: &State, threshold: f64, out: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::BoundaryKind;
     use crate::mesh::MeshSpec;
-    use crate::scenario::BoundaryKind;
 
     fn mesh(slope_deg: f64, coordinates: Coordinates, b: impl Fn(f64) -> f64) -> Mesh {
         let spec = MeshSpec {
@@ -107,7 +107,7 @@ mod tests {
         let l = [0.2, 0.3, 0.5];
         let rate = 0.7;
         let u: Vec<f64> = m.x.iter().map(|x| rate * x).collect();
-        let mut state = State::from_profiles(&m, &l, &[0.4; 10], &u);
+        let mut state = LayeredState::from_profiles(&m, &l, &[0.4; 10], &u);
         // Extrapolated ghosts so the centred differences hold at the ends too.
         for a in 0..3 {
             state.hu[a] = 0.4 * rate * (m.x[0] - m.dx);
@@ -133,7 +133,7 @@ mod tests {
         for coordinates in [Coordinates::Local, Coordinates::Cartesian] {
             let m = mesh(0.0, coordinates, |x| 0.1 * x);
             let l = [0.5, 0.5];
-            let state = State::from_profiles(&m, &l, &[0.2; 10], &[2.0; 10]);
+            let state = LayeredState::from_profiles(&m, &l, &[0.2; 10], &[2.0; 10]);
             let mut w = vec![0.0; 20];
             normal_velocities(&m, &state, &mut w);
             for i in 1..9 {
@@ -146,7 +146,7 @@ mod tests {
     fn static_interface_is_the_base_of_the_first_flowing_layer() {
         let m = mesh(0.0, Coordinates::Local, |_| 0.0);
         let l = [0.25, 0.25, 0.5];
-        let mut state = State::from_profiles(&m, &l, &[0.4; 10], &[0.0; 10]);
+        let mut state = LayeredState::from_profiles(&m, &l, &[0.4; 10], &[0.0; 10]);
         // Cell 0 at rest, cell 1 flows above the first layer, cell 2 flows at the bed,
         // cell 3 is dry.
         let n = 3;

@@ -1,0 +1,98 @@
+//! The sub-step pipeline of a granular run, built from the model choice (architecture
+//! note: "the pipeline is built from the scenario"). Every stage is monomorphised over
+//! the friction law, chosen once in [`with_law`]: a constant-Coulomb run contains no
+//! μ(I) code at all, a hydrostatic run has no projection stage, a monolayer run no
+//! viscous solve. The hyperbolic stage is the same code for every N and every
+//! pressure; the non-hydrostatic normal discharge rides it as a tracer.
+
+use crate::mesh::Mesh;
+use crate::model::granular::config::{MultilayerSpec, Pressure};
+use crate::model::granular::state::LayeredState;
+use crate::numerics::friction::CoulombFrictionStep;
+use crate::numerics::hydrostatic::HydrostaticStep;
+use crate::numerics::nonhydrostatic::NhFrictionStep;
+use crate::numerics::projection::monolayer::MonolayerOperator;
+use crate::numerics::projection::{ProjectionStage, ThomasSolver};
+use crate::numerics::viscous::{MultilayerViscousStep, ViscousOptions};
+use crate::numerics::Stage;
+use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, MuI};
+use crate::physics::Material;
+use crate::pipeline::Pipeline;
+
+/// Something built for a concrete friction law type.
+pub trait WithLaw {
+    type Out;
+    fn with<L: BasalFriction + LocalFriction + 'static>(self, law: L) -> Self::Out;
+}
+
+/// Calls `w` with the law of `law` as a concrete type: the one place where the
+/// scenario's friction law becomes code.
+pub fn with_law<W: WithLaw>(law: &FrictionLaw, material: &Material, w: W) -> W::Out {
+    match *law {
+        FrictionLaw::Coulomb { mu } => w.with(Coulomb { mu }),
+        FrictionLaw::MuI { mu_s, mu_2, i0 } => w.with(MuI {
+            mu_s,
+            mu_2,
+            i0,
+            d_s: material.d_s,
+            phi: material.phi,
+        }),
+    }
+}
+
+/// The stages of a granular run: hyperbolic, then friction (N = 1) or viscous
+/// (N > 1), then the projection of a non-hydrostatic run.
+pub struct Stages<'a> {
+    pub mesh: &'a Mesh,
+    pub pressure: Pressure,
+    pub multilayer: &'a MultilayerSpec,
+}
+
+impl WithLaw for Stages<'_> {
+    type Out = Vec<Box<dyn Stage<LayeredState>>>;
+
+    fn with<L: BasalFriction + LocalFriction + 'static>(self, law: L) -> Self::Out {
+        let (mesh, spec) = (self.mesh, self.multilayer);
+        let (nx, l) = (mesh.nx, &spec.layer_fractions);
+        let mut stages: Self::Out = vec![Box::new(HydrostaticStep::with_layers(law, nx, l.len()))];
+        match (self.pressure, l.len()) {
+            (Pressure::Hydrostatic, 1) => stages.push(Box::new(CoulombFrictionStep::new(law))),
+            (Pressure::Hydrostatic, _) => {
+                let opts = ViscousOptions {
+                    basal: spec.basal,
+                    regularization: spec.regularization,
+                    sidewall: spec.sidewall,
+                    c_msm: spec.c_msm,
+                };
+                stages.push(Box::new(MultilayerViscousStep::new(law, nx, l, opts)));
+            }
+            (Pressure::NonHydrostatic, _) => {
+                // Validation admits the non-hydrostatic pressure with one layer only.
+                assert_eq!(l.len(), 1, "non-hydrostatic multilayer model");
+                stages.push(Box::new(NhFrictionStep::new(law, mesh)));
+                stages.push(Box::new(ProjectionStage::new(
+                    MonolayerOperator::new(mesh),
+                    ThomasSolver::default(),
+                    nx,
+                )));
+            }
+        }
+        stages
+    }
+}
+
+/// The pipeline of a granular run with friction law `law`.
+pub fn granular(
+    law: &FrictionLaw,
+    material: &Material,
+    mesh: &Mesh,
+    pressure: Pressure,
+    multilayer: &MultilayerSpec,
+) -> Pipeline<LayeredState> {
+    let stages = Stages {
+        mesh,
+        pressure,
+        multilayer,
+    };
+    Pipeline::new(with_law(law, material, stages))
+}

@@ -1,0 +1,83 @@
+//! Models: what is simulated, apart from how the time loop runs it.
+//!
+//! A [`Model`] owns its conserved variables (the associated `State`), its diagnostics
+//! (masses, energy, front, the signal speed of the CFL step) and its output fields.
+//! Its physics (pointwise fluxes, wave speeds, sources) lives in `physics/`, its loops
+//! over the grid are [`Stage`](crate::numerics::Stage)s of `numerics/` acting on its
+//! state, and its scenario keys are validated by its own module (`scenario/` asks the
+//! model, never the reverse). The run loop, [`Simulation`](crate::simulation::Simulation),
+//! is generic over the model: adding a model is adding a module here (see
+//! `docs/architecture.md`, "How to add a model").
+//!
+//! - [`granular`]: the layered family of seeds 000, 001 and 003 (Savage–Hutter with
+//!   Coulomb or μ(I) friction, the multilayer μ(I) model, the weakly non-hydrostatic
+//!   monolayer model).
+
+pub mod granular;
+
+use crate::mesh::Mesh;
+use crate::output::{OutputError, OutputSink};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelKind {
+    /// The layered family: Savage–Hutter, multilayer, non-hydrostatic.
+    Granular,
+}
+
+impl ModelKind {
+    /// The name of `model.kind` in scenarios and output files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Granular => "granular",
+        }
+    }
+}
+
+/// What the run loop needs to know of a state after each step, from one pass over the
+/// cells.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Diagnostics {
+    /// Volume of the main phase, ∫ h dx (m²).
+    pub mass: f64,
+    /// ∫ ½ h |u|² dx per unit density (m⁴/s²).
+    pub kinetic_energy: f64,
+    /// Largest speed of the material (m/s), for the rest test.
+    pub max_speed: f64,
+    /// Bound on the wave speeds that the hyperbolic step's fluxes use (m/s): the CFL
+    /// step is CFL Δx / `signal_speed`.
+    pub signal_speed: f64,
+    /// Front position (m), NaN when no cell exceeds the front threshold.
+    pub front_x: f64,
+    pub h_max: f64,
+    /// First cell (physical index) holding a non-finite value, if any.
+    pub non_finite_at: Option<usize>,
+}
+
+/// A simulated model: its state, its diagnostics and its output.
+pub trait Model: Send + 'static {
+    /// The conserved variables (cell averages with ghost cells).
+    type State: Send;
+
+    /// `model.kind`, as written to the output file.
+    fn kind(&self) -> &'static str;
+
+    /// Diagnostics of `state` in one pass over the cells.
+    fn diagnose(&self, mesh: &Mesh, state: &Self::State) -> Diagnostics;
+
+    /// Largest speed (m/s) of a mass that counts as at rest (0: exactly at rest).
+    fn rest_speed(&self) -> f64 {
+        0.0
+    }
+
+    /// Thickness of the initial erodible bed per cell (`/grid/h_bed`), zeros if none.
+    fn bed_layer(&self) -> &[f64];
+
+    /// Hands the snapshot of `state` at time `t` to `sink`.
+    fn snapshot(
+        &self,
+        mesh: &Mesh,
+        state: &Self::State,
+        t: f64,
+        sink: &mut dyn OutputSink,
+    ) -> Result<(), OutputError>;
+}

@@ -1,0 +1,107 @@
+//! From a validated [`Scenario`] to a ready run of its model: the pieces every model
+//! shares (mesh, time-loop settings, run metadata), the dispatch on `model.kind`, and
+//! one module per model that reads its part of the scenario. This is the only place
+//! where scenarios meet models: `model/` and `numerics/` never read a scenario.
+
+mod granular;
+
+use crate::mesh::{Mesh, MeshSpec};
+use crate::model::granular::Granular;
+use crate::model::ModelKind;
+use crate::output::{OutputSink, RunInfo, RunSummary};
+use crate::scenario::{Coordinates, Scenario};
+use crate::simulation::{Progress, RunConfig, RunError, Simulation};
+
+/// A run of any model, as the command line and the sweeps drive it.
+pub trait Run: Send {
+    /// Runs to the end (see [`Simulation::run`]).
+    fn run(
+        &mut self,
+        sink: &mut dyn OutputSink,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<RunSummary, RunError>;
+    /// Names of the pipeline's stages, in order.
+    fn stage_names(&self) -> Vec<&'static str>;
+    /// Number of cells.
+    fn cells(&self) -> usize;
+    /// Run metadata (model, pressure, layers, …).
+    fn info(&self) -> &RunInfo;
+}
+
+impl<M: crate::model::Model> Run for Simulation<M> {
+    fn run(
+        &mut self,
+        sink: &mut dyn OutputSink,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<RunSummary, RunError> {
+        Simulation::run(self, sink, progress)
+    }
+    fn stage_names(&self) -> Vec<&'static str> {
+        Simulation::stage_names(self)
+    }
+    fn cells(&self) -> usize {
+        self.mesh.nx
+    }
+    fn info(&self) -> &RunInfo {
+        &self.info
+    }
+}
+
+/// The run of `scn`'s model.
+pub fn build(scn: &Scenario) -> Box<dyn Run> {
+    match scn.model.kind {
+        ModelKind::Granular => Box::new(build_granular(scn)),
+    }
+}
+
+/// The run of a granular scenario (`model.kind = "granular"`).
+pub fn build_granular(scn: &Scenario) -> Simulation<Granular> {
+    granular::build(scn)
+}
+
+/// The mesh of a scenario, with its bed sampled at the cell centres.
+pub fn mesh_of(scn: &Scenario) -> Mesh {
+    let d = &scn.domain;
+    let spec = MeshSpec {
+        x_min: d.x_min,
+        x_max: d.x_max,
+        cells: d.cells,
+        slope_deg: d.slope_deg,
+        coordinates: d.coordinates,
+        left: scn.boundary.left,
+        right: scn.boundary.right,
+    };
+    let b = spec
+        .centres()
+        .iter()
+        .map(|&x| scn.bed.eval(x, 0.0))
+        .collect();
+    Mesh::new(&spec, b)
+}
+
+/// The time-loop settings of a scenario.
+pub fn run_config(scn: &Scenario) -> RunConfig {
+    RunConfig {
+        t_end: scn.time.t_end,
+        cfl: scn.time.cfl,
+        output_every: scn.output.every,
+    }
+}
+
+/// The run metadata written to the output file.
+pub fn run_info(scn: &Scenario, pressure: &str, layers: usize) -> RunInfo {
+    RunInfo {
+        granflow_version: env!("CARGO_PKG_VERSION").to_string(),
+        model: scn.model.kind.name().to_string(),
+        pressure: pressure.to_string(),
+        layers,
+        coordinates: match scn.domain.coordinates {
+            Coordinates::Local => "local",
+            Coordinates::Cartesian => "cartesian",
+        }
+        .to_string(),
+        slope_deg: scn.domain.slope_deg,
+        scenario_toml: scn.source_toml.clone(),
+        front_threshold: scn.output.front_threshold,
+    }
+}

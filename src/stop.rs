@@ -1,0 +1,155 @@
+//! Stop rules: small checks the run loop consults after every step (the shape of
+//! Oceananigans' stop criteria and callbacks). Each rule sees the step just taken and
+//! answers "go on", "stop with this status" or "fail with this reason"; the loop
+//! itself only advances time and writes output.
+//!
+//! The default rules ([`default_rules`]): a non-finite value fails the run, a CFL step
+//! that collapses fails it, and with `time.stop_at_rest` a mass at rest ends it.
+//! The end time is the loop's own condition.
+
+use crate::model::Diagnostics;
+
+/// What a rule sees after a step.
+#[derive(Debug, Clone, Copy)]
+pub struct StepContext<'a> {
+    pub t: f64,
+    pub t_end: f64,
+    pub steps: u64,
+    /// Diagnostics of the state after the step.
+    pub diagnostics: &'a Diagnostics,
+    /// The CFL time step the next step would take (∞ if nothing moves).
+    pub next_dt: f64,
+    /// Position (m) of cell `i`, for messages.
+    pub x: &'a [f64],
+    /// Whether the whole mass is at rest (every speed ≤ the model's rest speed).
+    pub at_rest: bool,
+}
+
+/// Why the solver gave up: the reason, where and when.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverFailure {
+    pub reason: FailureReason,
+    /// Position (m) of the offending cell, when there is one.
+    pub x: Option<f64>,
+    pub t: f64,
+    pub step: u64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum FailureReason {
+    /// A NaN or infinity in the state (before the first step: in the initial state).
+    NonFinite,
+    /// The thickness would become negative even with the smallest retried Δt.
+    NegativeThickness { h: f64, dt: f64 },
+    /// The CFL step fell below [`MIN_DT_FRACTION`] of t_end.
+    DtCollapse { dt: f64, max_speed: f64 },
+    /// A stage left the model's admissible states (e.g. a volume fraction outside (0, 1)).
+    Inadmissible { quantity: &'static str, value: f64 },
+}
+
+impl std::fmt::Display for SolverFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.x.unwrap_or(f64::NAN);
+        let (t, step) = (self.t, self.step);
+        match &self.reason {
+            FailureReason::NonFinite if step == 0 => {
+                write!(f, "non-finite initial state at x = {x}")
+            }
+            FailureReason::NonFinite => {
+                write!(f, "non-finite value at x = {x} m, t = {t:.6e} s (step {step})")
+            }
+            FailureReason::NegativeThickness { h, dt } => write!(
+                f,
+                "thickness would become negative ({h:.3e} m) at x = {x} m, t = {t:.6e} s even with Δt = {dt:.3e} s"
+            ),
+            FailureReason::DtCollapse { dt, max_speed } => write!(
+                f,
+                "time step collapsed to {dt:.3e} s at t = {t:.6e} s (step {step}, max speed {max_speed:.3e} m/s)"
+            ),
+            FailureReason::Inadmissible { quantity, value } => write!(
+                f,
+                "{quantity} = {value:e} is outside its admissible range at x = {x} m, t = {t:.6e} s (step {step})"
+            ),
+        }
+    }
+}
+
+/// What a rule decides.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Verdict {
+    Continue,
+    /// End the run normally with this status (e.g. "stopped_at_rest").
+    Stop(&'static str),
+    Fail(SolverFailure),
+}
+
+/// A check consulted after every step.
+pub trait StopRule: Send {
+    fn check(&mut self, ctx: &StepContext) -> Verdict;
+}
+
+/// A non-finite value anywhere fails the run at the step that produced it.
+#[derive(Debug, Default)]
+pub struct NonFinite;
+
+impl StopRule for NonFinite {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        match ctx.diagnostics.non_finite_at {
+            None => Verdict::Continue,
+            Some(i) => Verdict::Fail(SolverFailure {
+                reason: FailureReason::NonFinite,
+                x: ctx.x.get(i).copied(),
+                t: ctx.t,
+                step: ctx.steps,
+            }),
+        }
+    }
+}
+
+/// A CFL step below this fraction of t_end stops the run as a solver failure.
+pub const MIN_DT_FRACTION: f64 = 1e-10;
+
+/// A finite but absurd state (e.g. u = 1e154 m/s) would crawl on with Δt near zero,
+/// filling memory with step records: fail it instead.
+#[derive(Debug, Default)]
+pub struct DtCollapse;
+
+impl StopRule for DtCollapse {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        if ctx.next_dt >= MIN_DT_FRACTION * ctx.t_end {
+            return Verdict::Continue;
+        }
+        Verdict::Fail(SolverFailure {
+            reason: FailureReason::DtCollapse {
+                dt: ctx.next_dt,
+                max_speed: ctx.diagnostics.max_speed,
+            },
+            x: None,
+            t: ctx.t,
+            step: ctx.steps,
+        })
+    }
+}
+
+/// Ends the run once the whole mass is at rest (`time.stop_at_rest`).
+#[derive(Debug, Default)]
+pub struct AtRest;
+
+impl StopRule for AtRest {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        if ctx.at_rest {
+            Verdict::Stop("stopped_at_rest")
+        } else {
+            Verdict::Continue
+        }
+    }
+}
+
+/// The rules every run consults, in order.
+pub fn default_rules(stop_at_rest: bool) -> Vec<Box<dyn StopRule>> {
+    let mut rules: Vec<Box<dyn StopRule>> = vec![Box::new(NonFinite), Box::new(DtCollapse)];
+    if stop_at_rest {
+        rules.push(Box::new(AtRest));
+    }
+    rules
+}
