@@ -115,9 +115,11 @@ fn monolayer_reference_runs() -> Vec<(
 /// (steps, hash of the final h and hu) of [`monolayer_reference_runs`], first recorded
 /// with the monolayer code of issue 2 just before the N-layer step was merged, and
 /// re-recorded once, deliberately, when step 1 moved to the own-depth split of the
-/// pressure source (was (318, 0xf1f8_66d0_d9fc_dc2a), (138, 0xbed4_8c8e_e000_f4f9)).
+/// pressure source (was (318, 0xf1f8_66d0_d9fc_dc2a), (138, 0xbed4_8c8e_e000_f4f9)), and
+/// once more when the CFL step moved to the per-cell signal speed of issue 9 (was
+/// (316, 0x94a4_269f_c278_0f41), (137, 0x7120_5480_a0e0_2e80)).
 const MONOLAYER_REFERENCE: [(u64, u64); 2] =
-    [(316, 0x94a4_269f_c278_0f41), (137, 0x7120_5480_a0e0_2e80)];
+    [(260, 0xde0e_176e_1b18_e79d), (107, 0x4a7c_00e0_9ebe_fc35)];
 
 #[test]
 fn monolayer_numbers_are_frozen() {

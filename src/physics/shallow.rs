@@ -21,3 +21,15 @@ pub fn velocity(h: f64, hu: f64) -> f64 {
 pub fn celerity(g_n: f64, h: f64) -> f64 {
     (g_n * h.max(0.0)).sqrt()
 }
+
+/// Gravity wave speed of a sheared column, √(g_n h + s) with s = 3 Σ l_α (u_α − ū)²:
+/// an estimate of the outer eigenvalues ū ± c of the multilayer system (seed 003 §4;
+/// √(g_n h) for N = 1 or a uniform profile, s = 0).
+#[inline(always)]
+pub fn sheared_celerity(g_n: f64, h: f64, shear: f64) -> f64 {
+    if shear == 0.0 {
+        celerity(g_n, h)
+    } else {
+        (g_n * h.max(0.0) + shear).sqrt()
+    }
+}

@@ -4,9 +4,21 @@
 //! `/front`). The pass also detects non-finite values, so a NaN stops the run at the
 //! step that produced it.
 //!
-//! Signal speed (seed 003 eq. 14): max(|ū|) + √(g_n max h + max 3 Σ l_α (u_α − ū)²) over
-//! the wet cells, the sheared celerity of `physics::shallow` (the shear term is 0 for
-//! N = 1). The two maxima bound the Roe-averaged HLL speeds of every interface.
+//! Signal speed of the CFL step (seed 003 eq. 14), a bound on every wave speed the HLL
+//! flux of step 1 uses, taken per cell:
+//!
+//! - N = 1: s = max_i (|u_i| + √(g_n h_i)). It bounds the Einfeldt–Roe speeds
+//!   |u_roe| + √(g_n h_roe) of every face too: with a = √h_L, b = √h_R and both cells
+//!   below s, |u_roe| ≤ s − (a² + b²)/(a + b) ≤ s − √((a² + b²)/2) (since
+//!   a² + b² ≥ 2ab), i.e. |u_roe| + √(g_n (h_L + h_R)/2) ≤ s (g_n = 1 without loss).
+//! - N > 1, with the shear term σ_i = 3 Σ l_α (u_α − ū)² of the sheared celerity: the
+//!   smaller of max_i(|ū_i| + √(g_n h_i)) + √(max_i σ_i) (the same argument, with
+//!   √(x + y) ≤ √x + √y for the averaged shear of a face) and the column-blind bound
+//!   max_i |ū_i| + √(g_n max_i h_i + max_i σ_i); both bound every face speed.
+//!
+//! Before issue 9 the monolayer used max_i |u_i| + √(g_n max_i h_i), maxima taken over
+//! different cells: never smaller, often much larger (a fast thin front and a slow
+//! thick column), so more steps than the flux needs.
 
 use crate::mesh::Mesh;
 use crate::model::granular::state::LayeredState;
@@ -24,7 +36,7 @@ pub fn diagnose(
     let h = &state.h[1..=nx];
     let hu = &state.hu[n..(nx + 1) * n];
     let (mut mass, mut ke, mut q_sum, mut max_speed, mut h_max) = (0.0, 0.0, 0.0, 0.0f64, 0.0f64);
-    let (mut u_mean_max, mut shear_max) = (0.0f64, 0.0f64);
+    let (mut u_mean_max, mut shear_max, mut cell_max) = (0.0f64, 0.0f64, 0.0f64);
     let mut front = None;
     for (i, ((&h, q), &bed)) in h.iter().zip(hu.chunks_exact(n)).zip(h_bed).enumerate() {
         mass += h;
@@ -34,6 +46,7 @@ pub fn diagnose(
             let u = velocity(h, q[0]);
             ke += h * u * u;
             max_speed = max_speed.max(u.abs());
+            cell_max = cell_max.max(u.abs() + celerity(mesh.g_n, h));
         } else {
             // Σ_α l_α h u_α² = Σ_α l_α q_α² / h, one division per cell.
             let (mut energy, mut q_max) = (0.0, 0.0f64);
@@ -49,6 +62,7 @@ pub fn diagnose(
                 let (mean, shear) = mean_and_shear(q, &state.l, inv_h);
                 u_mean_max = u_mean_max.max(mean.abs());
                 shear_max = shear_max.max(shear);
+                cell_max = cell_max.max(mean.abs() + celerity(mesh.g_n, h));
             }
         }
         if h - bed > front_threshold {
@@ -56,9 +70,10 @@ pub fn diagnose(
         }
     }
     let signal_speed = if n == 1 {
-        max_speed + celerity(mesh.g_n, h_max)
+        cell_max
     } else {
-        u_mean_max + (mesh.g_n * h_max + shear_max).sqrt()
+        let per_cell = cell_max + shear_max.sqrt();
+        per_cell.min(u_mean_max + (mesh.g_n * h_max + shear_max).sqrt())
     };
     // A non-finite h or discharge poisons these sums; only then search for the cell.
     // (The kinetic energy may overflow for finite, absurd states: not a failure.)
@@ -95,4 +110,99 @@ fn mean_and_shear(q: &[f64], l: &[f64], inv_h: f64) -> (f64, f64) {
         })
         .sum();
     (mean, 3.0 * shear)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{BoundaryKind, Coordinates, MeshSpec};
+    use crate::physics::shallow::sheared_celerity;
+    use proptest::prelude::*;
+
+    /// The Einfeldt bounds S_L, S_R of every face, from their definition (seed 000 after
+    /// eq. 21, with the sheared celerity of seed 003 for N > 1): the speeds the HLL
+    /// flux of step 1 uses. The CFL signal speed must bound them all.
+    fn largest_face_speed(mesh: &Mesh, s: &LayeredState) -> f64 {
+        let n = s.layers;
+        let column = |j: usize| {
+            let h = s.h[j];
+            if h <= H_DRY {
+                return (h, 0.0, 0.0);
+            }
+            let (mean, shear) = mean_and_shear(&s.hu[j * n..(j + 1) * n], &s.l, 1.0 / h);
+            (h, mean, if n == 1 { 0.0 } else { shear })
+        };
+        let mut largest = 0.0f64;
+        for k in 1..mesh.nx {
+            let ((hl, ul, sl), (hr, ur, sr)) = (column(k), column(k + 1));
+            if hl <= H_DRY && hr <= H_DRY {
+                continue;
+            }
+            let (al, ar) = (hl.sqrt(), hr.sqrt());
+            let u_roe = (al * ul + ar * ur) / (al + ar);
+            let c_roe = sheared_celerity(mesh.g_n, 0.5 * (hl + hr), 0.5 * (sl + sr));
+            let s_left = (ul - sheared_celerity(mesh.g_n, hl, sl)).min(u_roe - c_roe);
+            let s_right = (ur + sheared_celerity(mesh.g_n, hr, sr)).max(u_roe + c_roe);
+            largest = largest.max(s_left.abs()).max(s_right.abs());
+        }
+        largest
+    }
+
+    fn state(layers: usize, h: &[f64], q: &[f64]) -> (Mesh, LayeredState) {
+        let nx = h.len();
+        let spec = MeshSpec {
+            x_min: 0.0,
+            x_max: 1.0,
+            cells: nx,
+            slope_deg: 20.0,
+            coordinates: Coordinates::Local,
+            left: BoundaryKind::Wall,
+            right: BoundaryKind::Wall,
+        };
+        let mesh = Mesh::new(&spec, vec![0.0; nx]);
+        let l = vec![1.0 / layers as f64; layers];
+        let mut s = LayeredState::from_profiles(&mesh, &l, h, &vec![0.0; nx]);
+        for i in 0..nx {
+            for a in 0..layers {
+                s.hu[(i + 1) * layers + a] = q[i * layers + a];
+            }
+        }
+        s.fill_ghosts(&mesh);
+        (mesh, s)
+    }
+
+    proptest! {
+        /// Thin fast cells next to thick slow ones, dry cells, sheared columns: the
+        /// per-cell signal speed bounds every face speed of the HLL flux.
+        #[test]
+        fn signal_speed_bounds_every_face_speed(
+            layers in 1usize..4,
+            cells in prop::collection::vec((0.0f64..1.0, -3.0f64..3.0, -3.0f64..3.0, -3.0f64..3.0, 0usize..4), 2..40),
+        ) {
+            let h: Vec<f64> = cells.iter().map(|c| match c.4 { 0 => 0.0, 1 => 1e-4 * c.0, _ => c.0 }).collect();
+            let q: Vec<f64> = cells
+                .iter()
+                .zip(&h)
+                .flat_map(|(c, &h)| [c.1 * h, c.2 * h, c.3 * h].into_iter().take(layers))
+                .collect();
+            let (mesh, s) = state(layers, &h, &q);
+            let d = diagnose(&mesh, &s, &vec![0.0; h.len()], 1e-3);
+            let faces = largest_face_speed(&mesh, &s);
+            prop_assert!(faces <= d.signal_speed * (1.0 + 1e-12), "faces {faces} > signal {}", d.signal_speed);
+        }
+    }
+
+    /// The per-cell bound is tighter than the old max|u| + √(g_n max h) when the fast
+    /// and the deep cells differ: a thin fast front ahead of a thick slow column.
+    #[test]
+    fn per_cell_bound_beats_the_sum_of_maxima() {
+        let (mesh, s) = state(1, &[0.5, 0.001], &[0.0, 0.001 * 3.0]);
+        let d = diagnose(&mesh, &s, &[0.0; 2], 1e-3);
+        let g_n = mesh.g_n;
+        let old = 3.0 + (g_n * 0.5).sqrt();
+        assert!(
+            (d.signal_speed - (g_n * 0.5).sqrt().max(3.0 + (g_n * 0.001).sqrt())).abs() < 1e-12
+        );
+        assert!(d.signal_speed < 0.7 * old, "{} vs {old}", d.signal_speed);
+    }
 }
