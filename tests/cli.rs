@@ -6,6 +6,10 @@ use std::path::Path;
 
 use assert_cmd::Command;
 
+mod common;
+
+use common::read_h5;
+
 const MINIMAL: &str = r#"[domain]
 x_min = -0.2
 x_max = 1.0
@@ -147,11 +151,7 @@ fn run_writes_hdf5_and_front_csv_and_prints_a_summary() {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     assert!(stdout.contains("runout"), "{stdout}");
     assert!(stdout.contains("stage times   hyperbolic"), "{stdout}");
     assert!(h5.exists());
@@ -195,9 +195,9 @@ fn solver_blow_up_exits_1_naming_where_and_when_and_keeps_the_file() {
     assert!(stderr.contains("non-finite value at x ="), "{stderr}");
     assert!(stderr.contains("t ="), "{stderr}");
     let f = rust_hdf5::H5File::open(&h5).unwrap();
-    let t = f.dataset("snapshots/t").unwrap().read_raw::<f64>().unwrap();
+    let t = read_h5(&f, "snapshots/t");
     assert_eq!(t, vec![0.0], "only the valid initial snapshot");
-    let h = f.dataset("snapshots/h").unwrap().read_raw::<f64>().unwrap();
+    let h = read_h5(&f, "snapshots/h");
     assert!(h.iter().all(|v| v.is_finite()));
 }
 
@@ -238,14 +238,10 @@ fn bed_from_a_csv_table_is_interpolated_relative_to_the_scenario_file() {
         .current_dir("/")
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let f = rust_hdf5::H5File::open(&h5).unwrap();
-    let x = f.dataset("grid/x").unwrap().read_raw::<f64>().unwrap();
-    let b = f.dataset("grid/b").unwrap().read_raw::<f64>().unwrap();
+    let x = read_h5(&f, "grid/x");
+    let b = read_h5(&f, "grid/b");
     for (x, b) in x.iter().zip(&b) {
         assert!((b - 0.1 * (x + 0.2)).abs() < 1e-12, "x = {x}: b = {b}");
     }

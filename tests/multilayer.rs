@@ -655,20 +655,7 @@ fn multilayer_output_has_w_and_static_interface() {
     let h_last = &h[3 * 160..];
     assert!(last.iter().zip(h_last).any(|(s, h)| *s > 0.0 && *s < *h));
     assert!(w[3 * 6 * 160..].iter().any(|&w| w < -1e-3));
-    if let Ok(python) = std::env::var("GRANFLOW_PYTHON") {
-        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/check_output.py");
-        let out = std::process::Command::new(python)
-            .arg(script)
-            .arg(&h5)
-            .args(["--expect-layers", "6"])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
+    common::check_output_with_h5py(&h5, 6);
 }
 
 /// Many short steps (CFL 0.1, Δt shortened to land on frequent output times) must

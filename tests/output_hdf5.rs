@@ -7,6 +7,8 @@
 //! `GRANFLOW_PYTHON` names a Python with h5py and numpy.
 //! `GRANFLOW_KEEP_H5=path` keeps the file of `full_run_round_trips` for other checks.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -161,9 +163,7 @@ fn shape(f: &H5File, name: &str) -> Vec<usize> {
     f.dataset(name).unwrap().shape()
 }
 
-fn read(f: &H5File, name: &str) -> Vec<f64> {
-    f.dataset(name).unwrap().read_raw::<f64>().unwrap()
-}
+use common::read_h5 as read;
 
 fn units(f: &H5File, name: &str) -> String {
     let ds = f.dataset(name).unwrap();
@@ -563,8 +563,7 @@ fn run_sinks_write_both_files() {
 /// `GRANFLOW_PYTHON` names a Python that has h5py and numpy.
 #[test]
 fn python_reader_accepts_the_file() {
-    let Ok(python) = std::env::var("GRANFLOW_PYTHON") else {
-        eprintln!("GRANFLOW_PYTHON not set: skipping the h5py check");
+    let Some(python) = common::python_with_h5py() else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -572,19 +571,7 @@ fn python_reader_accepts_the_file() {
         let path = temp_h5(&dir, name);
         let mut sink = Hdf5Sink::create(&path).unwrap();
         s.write(&mut sink);
-        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/check_output.py");
-        let out = Command::new(&python)
-            .arg(&script)
-            .arg(&path)
-            .args(["--expect-layers", &s.nl.to_string()])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stdout = common::check_output_with_h5py(&path, s.nl).expect("python set");
         assert!(stdout.starts_with("OK"), "{stdout}");
 
         let attrs = format!(

@@ -6,9 +6,9 @@ use std::path::Path;
 use assert_cmd::Command;
 use rust_hdf5::H5File;
 
-fn read(f: &H5File, name: &str) -> Vec<f64> {
-    f.dataset(name).unwrap().read_raw::<f64>().unwrap()
-}
+mod common;
+
+use common::read_h5 as read;
 
 fn shape(f: &H5File, name: &str) -> Vec<usize> {
     f.dataset(name).unwrap().shape()
@@ -30,11 +30,7 @@ fn collapse_output_honours_the_contract() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let f = H5File::open(&h5).unwrap();
 
     // Root attributes.

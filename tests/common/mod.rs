@@ -139,3 +139,43 @@ pub fn observed_order(dx: &[f64], err: &[f64]) -> f64 {
     let sxx: f64 = lx.iter().map(|x| (x - mx) * (x - mx)).sum();
     sxy / sxx
 }
+
+/// A float dataset of an HDF5 file, flattened.
+pub fn read_h5(f: &rust_hdf5::H5File, name: &str) -> Vec<f64> {
+    f.dataset(name).unwrap().read_raw::<f64>().unwrap()
+}
+
+/// Asserts that a finished command succeeded, showing its stderr otherwise; returns
+/// its stdout.
+pub fn assert_success(out: &std::process::Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The Python named by `GRANFLOW_PYTHON` (one with h5py and numpy), or `None` after
+/// saying that the h5py checks are skipped.
+pub fn python_with_h5py() -> Option<String> {
+    let python = std::env::var("GRANFLOW_PYTHON").ok();
+    if python.is_none() {
+        eprintln!("GRANFLOW_PYTHON not set: skipping the h5py check");
+    }
+    python
+}
+
+/// Runs `scripts/check_output.py` on `h5` with the Python of [`python_with_h5py`]
+/// (nothing when it is not set); returns the script's stdout.
+pub fn check_output_with_h5py(h5: &std::path::Path, layers: usize) -> Option<String> {
+    let python = python_with_h5py()?;
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/check_output.py");
+    let out = std::process::Command::new(python)
+        .arg(script)
+        .arg(h5)
+        .args(["--expect-layers", &layers.to_string()])
+        .output()
+        .unwrap();
+    Some(assert_success(&out))
+}
