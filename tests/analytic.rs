@@ -128,9 +128,9 @@ fn stoker_intermediate_state_is_consistent() {
 /// A uniform layer on a plane of slope θ with Coulomb friction μ, started at u0.
 fn sliding_layer(theta_deg: f64, mu: f64, u0: f64, t_end: f64) -> Vec<(f64, Vec<f64>)> {
     let mut case = Case::new(0.0, 1.0, 40);
-    case.slope_deg = theta_deg;
-    case.left = BoundaryKind::Outflow;
-    case.right = BoundaryKind::Outflow;
+    case.mesh.slope_deg = theta_deg;
+    case.mesh.left = BoundaryKind::Outflow;
+    case.mesh.right = BoundaryKind::Outflow;
     case.law = FrictionLaw::Coulomb { mu };
     case.t_end = t_end;
     case.every = t_end / 50.0;
@@ -187,9 +187,9 @@ fn cartesian_layer_on_a_sloped_bed_accelerates_at_g_tan_theta_minus_mu() {
     // Cartesian form (seed 000 §4.1): vertical thickness, gravity g, slope inside b.
     let (theta, mu): (f64, f64) = (25.0, 0.2);
     let mut case = Case::new(0.0, 4.0, 80);
-    case.coordinates = granflow::scenario::Coordinates::Cartesian;
-    case.left = BoundaryKind::Outflow;
-    case.right = BoundaryKind::Outflow;
+    case.mesh.coordinates = granflow::scenario::Coordinates::Cartesian;
+    case.mesh.left = BoundaryKind::Outflow;
+    case.mesh.right = BoundaryKind::Outflow;
     case.law = FrictionLaw::Coulomb { mu };
     case.t_end = 0.3;
     case.every = 0.05;

@@ -6,7 +6,7 @@ use common::{run, Case};
 use granflow::scenario::FrictionLaw;
 
 fn check(mut case: Case, slope_deg: f64) {
-    case.slope_deg = slope_deg;
+    case.mesh.slope_deg = slope_deg;
     case.every = 0.02;
     let mut sim = case.build(|_| 0.0, |x, _| if x <= 0.0 { 0.14 } else { 0.0 }, |_| 0.0);
     let (sink, _) = run(&mut sim);

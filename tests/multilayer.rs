@@ -86,8 +86,8 @@ fn monolayer_reference_runs() -> Vec<(
     granflow::simulation::Simulation<granflow::model::granular::Granular>,
 )> {
     let mut case = Case::new(-0.2, 3.0, 320);
-    case.slope_deg = 22.0;
-    case.right = BoundaryKind::Outflow;
+    case.mesh.slope_deg = 22.0;
+    case.mesh.right = BoundaryKind::Outflow;
     case.law = FrictionLaw::MuI {
         mu_s: tan_deg(25.5),
         mu_2: tan_deg(36.0),
@@ -102,7 +102,7 @@ fn monolayer_reference_runs() -> Vec<(
     );
     let mut case = Case::new(-2.0, 2.5, 200);
     case.law = FrictionLaw::Coulomb { mu: 0.3 };
-    case.slope_deg = 10.0;
+    case.mesh.slope_deg = 10.0;
     case.t_end = 0.3;
     let dam_break = case.build(
         |x| 0.05 * (3.0 * x).sin(),

@@ -27,7 +27,7 @@ proptest! {
         use_mu_i in any::<bool>(),
     ) {
         let mut case = Case::new(0.0, 1.0, 64);
-        case.slope_deg = slope;
+        case.mesh.slope_deg = slope;
         case.t_end = 0.2;
         case.every = 0.05;
         case.law = if use_mu_i {
@@ -60,7 +60,7 @@ proptest! {
 #[test]
 fn thin_cell_next_to_a_bed_step_keeps_a_bounded_speed() {
     let mut case = Case::new(0.0, 1.0, 64);
-    case.slope_deg = 17.267604394810913;
+    case.mesh.slope_deg = 17.267604394810913;
     case.law = FrictionLaw::Coulomb {
         mu: 0.4940065539737734,
     };
@@ -84,7 +84,7 @@ fn thin_cell_next_to_a_bed_step_keeps_a_bounded_speed() {
     }
     // Bound: the dry-bed front speed u_0 + 2√(g_n H) of a dam break of the block's
     // height plus the step it falls down, H = h_0 + Δb (Ritter; friction only slows).
-    let g_n = 9.81 * case.slope_deg.to_radians().cos();
+    let g_n = 9.81 * case.mesh.slope_deg.to_radians().cos();
     let bound = 1.317835187127497 + 2.0 * (g_n * (0.2632624997591779 + 0.238326241140986)).sqrt();
     println!("max speed {worst:.3} m/s (bound {bound:.3} m/s)");
     assert!(worst < bound, "max speed {worst} m/s, bound {bound} m/s");

@@ -22,8 +22,8 @@ fn random_bed_case(
     granflow::simulation::Simulation<granflow::model::granular::Granular>,
 ) {
     let mut case = Case::new(-3.0, 1.0, 300);
-    case.left = BoundaryKind::Outflow;
-    case.right = BoundaryKind::Outflow;
+    case.mesh.left = BoundaryKind::Outflow;
+    case.mesh.right = BoundaryKind::Outflow;
     case.law = FrictionLaw::MuI {
         mu_s: tan_deg(20.0),
         mu_2: tan_deg(36.0),

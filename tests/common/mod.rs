@@ -1,6 +1,7 @@
 //! Builds runs from plain closures, without scenario files.
 #![allow(dead_code)]
 
+use granflow::mesh::MeshSpec;
 use granflow::model::granular::Granular;
 use granflow::output::memory::MemorySink;
 use granflow::output::RunSummary;
@@ -13,13 +14,7 @@ use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
 
 pub struct Case {
-    pub x_min: f64,
-    pub x_max: f64,
-    pub cells: usize,
-    pub slope_deg: f64,
-    pub coordinates: Coordinates,
-    pub left: BoundaryKind,
-    pub right: BoundaryKind,
+    pub mesh: MeshSpec,
     pub law: FrictionLaw,
     pub cfl: f64,
     pub t_end: f64,
@@ -30,13 +25,15 @@ pub struct Case {
 impl Case {
     pub fn new(x_min: f64, x_max: f64, cells: usize) -> Case {
         Case {
-            x_min,
-            x_max,
-            cells,
-            slope_deg: 0.0,
-            coordinates: Coordinates::Local,
-            left: BoundaryKind::Wall,
-            right: BoundaryKind::Wall,
+            mesh: MeshSpec {
+                x_min,
+                x_max,
+                cells,
+                slope_deg: 0.0,
+                coordinates: Coordinates::Local,
+                left: BoundaryKind::Wall,
+                right: BoundaryKind::Wall,
+            },
             law: FrictionLaw::Coulomb { mu: 0.0 },
             cfl: 0.5,
             t_end: 1.0,
@@ -65,11 +62,11 @@ impl Case {
             source_toml: String::new(),
             base_dir: ".".into(),
             domain: Domain {
-                x_min: self.x_min,
-                x_max: self.x_max,
-                cells: self.cells,
-                slope_deg: self.slope_deg,
-                coordinates: self.coordinates,
+                x_min: self.mesh.x_min,
+                x_max: self.mesh.x_max,
+                cells: self.mesh.cells,
+                slope_deg: self.mesh.slope_deg,
+                coordinates: self.mesh.coordinates,
             },
             bed: Profile::function(move |x, _| b(x)),
             material: Self::beads_material(),
@@ -94,8 +91,8 @@ impl Case {
                 erodible_bed: 0.0,
             },
             boundary: Boundaries {
-                left: self.left,
-                right: self.right,
+                left: self.mesh.left,
+                right: self.mesh.right,
             },
             time: TimeSpec {
                 t_end: self.t_end,
