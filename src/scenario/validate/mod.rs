@@ -7,19 +7,22 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
+mod check;
+mod granular;
+
 use super::document::{line_of, serde_error, syntax_error, KeyIndex, Locator};
 use super::error::ScenarioError;
 use super::overrides::Override;
 use super::profile::Profile;
 use super::raw::{
-    RawBoundary, RawDomain, RawInitial, RawMaterial, RawModel, RawOutput, RawRheology, RawScenario,
-    RawTime,
+    RawBoundary, RawDomain, RawInitial, RawMaterial, RawOutput, RawScenario, RawTime,
 };
 use super::{
-    BasalCondition, Boundaries, BoundaryKind, Coordinates, Domain, FrictionLaw, Initial, Material,
-    ModelKind, ModelSpec, MultilayerSpec, OutputSpec, Pressure, Regularization, Scenario, Sidewall,
-    SidewallForm, TimeSpec,
+    Boundaries, BoundaryKind, Coordinates, Domain, Initial, Material, OutputSpec, Pressure,
+    Scenario, TimeSpec,
 };
+use check::*;
+use granular::{model, multilayer, rheology, ViscousKeys};
 
 /// Largest accepted `domain.cells`.
 pub(crate) const MAX_CELLS: i64 = 10_000_000;
@@ -104,74 +107,6 @@ fn load(
         }
     };
     validate(raw, source, base_dir, default_output).map_err(|e| locator.locate(e))
-}
-
-// ---------------------------------------------------------------------------------------
-// Small checks, all naming the key.
-
-type Res<T> = Result<T, ScenarioError>;
-
-fn err<T>(key: &str, message: impl Into<String>) -> Res<T> {
-    Err(ScenarioError::at(key, message))
-}
-
-fn section<T>(name: &str, s: Option<T>) -> Res<T> {
-    s.ok_or_else(|| ScenarioError::at(name, format!("missing required table [{name}]")))
-}
-
-fn required<T>(key: &str, v: Option<T>) -> Res<T> {
-    v.ok_or_else(|| ScenarioError::at(key, "missing required key"))
-}
-
-fn finite(key: &str, v: f64) -> Res<f64> {
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        err(key, format!("must be a finite number, got {v}"))
-    }
-}
-
-fn positive(key: &str, v: f64) -> Res<f64> {
-    finite(key, v)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        err(key, format!("must be greater than 0, got {v}"))
-    }
-}
-
-fn non_negative(key: &str, v: f64) -> Res<f64> {
-    finite(key, v)?;
-    if v >= 0.0 {
-        Ok(v)
-    } else {
-        err(key, format!("must be at least 0, got {v}"))
-    }
-}
-
-fn int_in(key: &str, v: i64, min: i64, max: i64) -> Res<usize> {
-    if v < min {
-        err(key, format!("must be at least {min}, got {v}"))
-    } else if v > max {
-        err(key, format!("must be at most {max}, got {v}"))
-    } else {
-        Ok(v as usize)
-    }
-}
-
-/// One of a fixed set of names.
-fn choice<T: Copy>(key: &str, v: Option<&str>, default: T, options: &[(&str, T)]) -> Res<T> {
-    let Some(v) = v else { return Ok(default) };
-    match options.iter().find(|(name, _)| *name == v) {
-        Some(&(_, t)) => Ok(t),
-        None => {
-            let names: Vec<String> = options.iter().map(|(n, _)| format!("\"{n}\"")).collect();
-            err(
-                key,
-                format!("unknown value \"{v}\" (expected {})", names.join(" or ")),
-            )
-        }
-    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -280,277 +215,6 @@ fn material(m: RawMaterial) -> Res<Material> {
     }
     let d_s = positive("material.d_s", m.d_s.unwrap_or(0.7e-3))?;
     Ok(Material { rho_s, phi, d_s })
-}
-
-/// A friction coefficient given either plainly (`mu`) or as an angle (`mu_deg`).
-/// Returns the coefficient and the key it came from.
-fn coefficient(name: &str, plain: Option<f64>, degrees: Option<f64>) -> Res<Option<(f64, String)>> {
-    let key = format!("rheology.{name}");
-    let key_deg = format!("rheology.{name}_deg");
-    match (plain, degrees) {
-        (Some(_), Some(_)) => err(
-            &key_deg,
-            format!("give either {key} or {key_deg}, not both"),
-        ),
-        (Some(v), None) => Ok(Some((non_negative(&key, v)?, key))),
-        (None, Some(a)) => {
-            finite(&key_deg, a)?;
-            if !(0.0..90.0).contains(&a) {
-                return err(
-                    &key_deg,
-                    format!("must be an angle in [0, 90) degrees, got {a}"),
-                );
-            }
-            Ok(Some((a.to_radians().tan(), key_deg)))
-        }
-        (None, None) => Ok(None),
-    }
-}
-
-fn rheology(r: &RawRheology) -> Res<FrictionLaw> {
-    let law = required("rheology.law", r.law.as_deref())?;
-    #[derive(Clone, Copy, PartialEq)]
-    enum Law {
-        Coulomb,
-        MuI,
-    }
-    let law = choice(
-        "rheology.law",
-        Some(law),
-        Law::Coulomb,
-        &[("coulomb", Law::Coulomb), ("mu_i", Law::MuI)],
-    )?;
-    let coulomb_keys = [("mu", r.mu.is_some()), ("mu_deg", r.mu_deg.is_some())];
-    let mu_i_keys = [
-        ("mu_s", r.mu_s.is_some()),
-        ("mu_s_deg", r.mu_s_deg.is_some()),
-        ("mu_2", r.mu_2.is_some()),
-        ("mu_2_deg", r.mu_2_deg.is_some()),
-        ("i0", r.i0.is_some()),
-    ];
-    let (foreign, this, other): (&[(&str, bool)], &str, &str) = match law {
-        Law::Coulomb => (&mu_i_keys, "coulomb", "mu_i"),
-        Law::MuI => (&coulomb_keys, "mu_i", "coulomb"),
-    };
-    if let Some((name, _)) = foreign.iter().find(|(_, given)| *given) {
-        return err(
-            &format!("rheology.{name}"),
-            format!("only used by law = \"{other}\" (rheology.law is \"{this}\"); remove it"),
-        );
-    }
-    match law {
-        Law::Coulomb => {
-            let (mu, _) = coefficient("mu", r.mu, r.mu_deg)?.ok_or_else(|| {
-                ScenarioError::at(
-                    "rheology.mu",
-                    "missing required key (law = \"coulomb\" needs mu or mu_deg)",
-                )
-            })?;
-            Ok(FrictionLaw::Coulomb { mu })
-        }
-        Law::MuI => {
-            let need = |name: &str| {
-                ScenarioError::at(
-                    format!("rheology.{name}"),
-                    format!("missing required key (law = \"mu_i\" needs {name} or {name}_deg)"),
-                )
-            };
-            let (mu_s, _) = coefficient("mu_s", r.mu_s, r.mu_s_deg)?.ok_or_else(|| need("mu_s"))?;
-            let (mu_2, key_2) =
-                coefficient("mu_2", r.mu_2, r.mu_2_deg)?.ok_or_else(|| need("mu_2"))?;
-            if mu_2 < mu_s {
-                return err(
-                    &key_2,
-                    format!("mu_2 = {mu_2} must be at least mu_s = {mu_s}"),
-                );
-            }
-            let i0 = positive("rheology.i0", required("rheology.i0", r.i0)?)?;
-            Ok(FrictionLaw::MuI { mu_s, mu_2, i0 })
-        }
-    }
-}
-
-fn model(m: &RawModel) -> Res<ModelSpec> {
-    let kind = choice(
-        "model.kind",
-        m.kind.as_deref(),
-        ModelKind::Granular,
-        &[("granular", ModelKind::Granular)],
-    )?;
-    let pressure = choice(
-        "model.pressure",
-        m.pressure.as_deref(),
-        Pressure::Hydrostatic,
-        &[
-            ("hydrostatic", Pressure::Hydrostatic),
-            ("nonhydrostatic", Pressure::NonHydrostatic),
-        ],
-    )?;
-    let layers = int_in("model.layers", m.layers.unwrap_or(1), 1, MAX_LAYERS)?;
-    if layers > 1 && pressure == Pressure::NonHydrostatic {
-        return err(
-            "model.pressure",
-            "the multilayer non-hydrostatic model (layers > 1 with \"nonhydrostatic\") is not available yet",
-        );
-    }
-    Ok(ModelSpec {
-        kind,
-        pressure,
-        layers,
-    })
-}
-
-/// The `[rheology]` keys of the multilayer model's viscous step (the friction law's keys
-/// are read by `rheology`).
-struct ViscousKeys {
-    basal: Option<String>,
-    regularization: Option<String>,
-    delta: Option<f64>,
-    mu_w: Option<f64>,
-    mu_w_deg: Option<f64>,
-    channel_width: Option<f64>,
-    sidewall: Option<String>,
-    c_msm: Option<bool>,
-}
-
-impl ViscousKeys {
-    fn of(r: &RawRheology) -> ViscousKeys {
-        ViscousKeys {
-            basal: r.basal.clone(),
-            regularization: r.regularization.clone(),
-            delta: r.delta,
-            mu_w: r.mu_w,
-            mu_w_deg: r.mu_w_deg,
-            channel_width: r.channel_width,
-            sidewall: r.sidewall.clone(),
-            c_msm: r.c_msm,
-        }
-    }
-}
-
-/// Default regularisation parameter δ (1/s) of seed 003 §5.
-pub(crate) const DEFAULT_DELTA: f64 = 1e-5;
-
-fn multilayer(
-    v: ViscousKeys,
-    fractions: Option<Vec<f64>>,
-    static_threshold: Option<f64>,
-    layers: usize,
-) -> Res<MultilayerSpec> {
-    let multilayer_only = |key: &str| -> ScenarioError {
-        ScenarioError::at(
-            key,
-            "only used by the multilayer model; set model.layers > 1 or remove it",
-        )
-    };
-    let layer_fractions = match fractions {
-        None => vec![1.0 / layers as f64; layers],
-        Some(l) => layer_fractions(l, layers)?,
-    };
-    let basal = choice(
-        "rheology.basal",
-        v.basal.as_deref(),
-        BasalCondition::Coulomb,
-        &[
-            ("coulomb", BasalCondition::Coulomb),
-            ("no_slip", BasalCondition::NoSlip),
-        ],
-    )?;
-    if basal == BasalCondition::NoSlip && layers == 1 {
-        return Err(multilayer_only("rheology.basal"));
-    }
-    #[derive(Clone, Copy, PartialEq)]
-    enum Reg {
-        Delta,
-        Bound,
-    }
-    let reg = choice(
-        "rheology.regularization",
-        v.regularization.as_deref(),
-        Reg::Delta,
-        &[("delta", Reg::Delta), ("bound", Reg::Bound)],
-    )?;
-    let regularization = match (reg, v.delta) {
-        (Reg::Bound, Some(_)) => {
-            return err(
-                "rheology.delta",
-                "only used by regularization = \"delta\" (rheology.regularization is \"bound\"); remove it",
-            )
-        }
-        (Reg::Bound, None) => Regularization::Bound,
-        (Reg::Delta, d) => Regularization::Delta {
-            delta: positive("rheology.delta", d.unwrap_or(DEFAULT_DELTA))?,
-        },
-    };
-    let mu_w = coefficient("mu_w", v.mu_w, v.mu_w_deg)?;
-    let sidewall = match (mu_w, v.channel_width) {
-        (None, None) => {
-            if v.sidewall.is_some() {
-                return err(
-                    "rheology.sidewall",
-                    "needs the wall friction rheology.mu_w (or mu_w_deg) and rheology.channel_width",
-                );
-            }
-            None
-        }
-        (Some((_, key)), None) => {
-            return err(
-                &key,
-                "sidewall friction needs the channel width rheology.channel_width too",
-            )
-        }
-        (None, Some(_)) => {
-            return err(
-                "rheology.channel_width",
-                "sidewall friction needs the wall friction rheology.mu_w (or mu_w_deg) too",
-            )
-        }
-        (Some((mu_w, key)), Some(w)) => {
-            if layers == 1 {
-                return Err(multilayer_only(&key));
-            }
-            let width = positive("rheology.channel_width", w)?;
-            let form = choice(
-                "rheology.sidewall",
-                v.sidewall.as_deref(),
-                SidewallForm::Jop,
-                &[("jop", SidewallForm::Jop), ("layer", SidewallForm::Layer)],
-            )?;
-            Some(Sidewall { mu_w, width, form })
-        }
-    };
-    let static_threshold = positive("output.static_threshold", static_threshold.unwrap_or(1e-3))?;
-    Ok(MultilayerSpec {
-        layer_fractions,
-        basal,
-        regularization,
-        sidewall,
-        c_msm: v.c_msm.unwrap_or(false),
-        static_threshold,
-    })
-}
-
-/// `model.layer_fractions`: one positive number per layer, bottom first, summing to 1
-/// (to 1e-9; the fractions are then rescaled to sum to 1 to round-off).
-fn layer_fractions(l: Vec<f64>, layers: usize) -> Res<Vec<f64>> {
-    let key = "model.layer_fractions";
-    if l.len() != layers {
-        return err(
-            key,
-            format!(
-                "has {} values but model.layers = {layers}; give one fraction per layer",
-                l.len()
-            ),
-        );
-    }
-    for &v in &l {
-        positive(key, v)?;
-    }
-    let sum: f64 = l.iter().sum();
-    if (sum - 1.0).abs() > 1e-9 {
-        return err(key, format!("must sum to 1, sums to {sum}"));
-    }
-    Ok(l.iter().map(|v| v / sum).collect())
 }
 
 fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
@@ -691,6 +355,9 @@ fn sample_profiles(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scenario::{
+        BasalCondition, FrictionLaw, ModelKind, ModelSpec, Regularization, SidewallForm,
+    };
     use std::fs;
 
     const MINIMAL: &str = r#"[domain]
@@ -1261,7 +928,7 @@ front_threshold = 2e-3
 
     #[test]
     fn documented_example_loads() {
-        let doc = include_str!("../../docs/scenario-format.md");
+        let doc = include_str!("../../../docs/scenario-format.md");
         let start = doc.find("```toml\n").expect("an example") + "```toml\n".len();
         let example = &doc[start..start + doc[start..].find("```").unwrap()];
         let s = load(example).unwrap_or_else(|e| panic!("{e}"));

@@ -1,0 +1,288 @@
+//! The keys of the granular model and of its friction laws: `[rheology]` (the basal
+//! law, seed 000 eq. 6, and the multilayer model's viscous options, seed 001 eq. 6,
+//! 25–32, seed 003 eq. 10 and 36), `[model]` and `output.static_threshold`. A new model
+//! adds its own file beside this one (docs/architecture.md, "How to add a model").
+
+use super::super::error::ScenarioError;
+use super::super::raw::{RawModel, RawRheology};
+use super::super::{
+    BasalCondition, FrictionLaw, ModelKind, ModelSpec, MultilayerSpec, Pressure, Regularization,
+    Sidewall, SidewallForm,
+};
+use super::check::*;
+use super::MAX_LAYERS;
+
+/// A friction coefficient given either plainly (`mu`) or as an angle (`mu_deg`).
+/// Returns the coefficient and the key it came from.
+pub(super) fn coefficient(
+    name: &str,
+    plain: Option<f64>,
+    degrees: Option<f64>,
+) -> Res<Option<(f64, String)>> {
+    let key = format!("rheology.{name}");
+    let key_deg = format!("rheology.{name}_deg");
+    match (plain, degrees) {
+        (Some(_), Some(_)) => err(
+            &key_deg,
+            format!("give either {key} or {key_deg}, not both"),
+        ),
+        (Some(v), None) => Ok(Some((non_negative(&key, v)?, key))),
+        (None, Some(a)) => {
+            finite(&key_deg, a)?;
+            if !(0.0..90.0).contains(&a) {
+                return err(
+                    &key_deg,
+                    format!("must be an angle in [0, 90) degrees, got {a}"),
+                );
+            }
+            Ok(Some((a.to_radians().tan(), key_deg)))
+        }
+        (None, None) => Ok(None),
+    }
+}
+
+pub(super) fn rheology(r: &RawRheology) -> Res<FrictionLaw> {
+    let law = required("rheology.law", r.law.as_deref())?;
+    #[derive(Clone, Copy, PartialEq)]
+    enum Law {
+        Coulomb,
+        MuI,
+    }
+    let law = choice(
+        "rheology.law",
+        Some(law),
+        Law::Coulomb,
+        &[("coulomb", Law::Coulomb), ("mu_i", Law::MuI)],
+    )?;
+    let coulomb_keys = [("mu", r.mu.is_some()), ("mu_deg", r.mu_deg.is_some())];
+    let mu_i_keys = [
+        ("mu_s", r.mu_s.is_some()),
+        ("mu_s_deg", r.mu_s_deg.is_some()),
+        ("mu_2", r.mu_2.is_some()),
+        ("mu_2_deg", r.mu_2_deg.is_some()),
+        ("i0", r.i0.is_some()),
+    ];
+    let (foreign, this, other): (&[(&str, bool)], &str, &str) = match law {
+        Law::Coulomb => (&mu_i_keys, "coulomb", "mu_i"),
+        Law::MuI => (&coulomb_keys, "mu_i", "coulomb"),
+    };
+    if let Some((name, _)) = foreign.iter().find(|(_, given)| *given) {
+        return err(
+            &format!("rheology.{name}"),
+            format!("only used by law = \"{other}\" (rheology.law is \"{this}\"); remove it"),
+        );
+    }
+    match law {
+        Law::Coulomb => {
+            let (mu, _) = coefficient("mu", r.mu, r.mu_deg)?.ok_or_else(|| {
+                ScenarioError::at(
+                    "rheology.mu",
+                    "missing required key (law = \"coulomb\" needs mu or mu_deg)",
+                )
+            })?;
+            Ok(FrictionLaw::Coulomb { mu })
+        }
+        Law::MuI => {
+            let need = |name: &str| {
+                ScenarioError::at(
+                    format!("rheology.{name}"),
+                    format!("missing required key (law = \"mu_i\" needs {name} or {name}_deg)"),
+                )
+            };
+            let (mu_s, _) = coefficient("mu_s", r.mu_s, r.mu_s_deg)?.ok_or_else(|| need("mu_s"))?;
+            let (mu_2, key_2) =
+                coefficient("mu_2", r.mu_2, r.mu_2_deg)?.ok_or_else(|| need("mu_2"))?;
+            if mu_2 < mu_s {
+                return err(
+                    &key_2,
+                    format!("mu_2 = {mu_2} must be at least mu_s = {mu_s}"),
+                );
+            }
+            let i0 = positive("rheology.i0", required("rheology.i0", r.i0)?)?;
+            Ok(FrictionLaw::MuI { mu_s, mu_2, i0 })
+        }
+    }
+}
+
+pub(super) fn model(m: &RawModel) -> Res<ModelSpec> {
+    let kind = choice(
+        "model.kind",
+        m.kind.as_deref(),
+        ModelKind::Granular,
+        &[("granular", ModelKind::Granular)],
+    )?;
+    let pressure = choice(
+        "model.pressure",
+        m.pressure.as_deref(),
+        Pressure::Hydrostatic,
+        &[
+            ("hydrostatic", Pressure::Hydrostatic),
+            ("nonhydrostatic", Pressure::NonHydrostatic),
+        ],
+    )?;
+    let layers = int_in("model.layers", m.layers.unwrap_or(1), 1, MAX_LAYERS)?;
+    if layers > 1 && pressure == Pressure::NonHydrostatic {
+        return err(
+            "model.pressure",
+            "the multilayer non-hydrostatic model (layers > 1 with \"nonhydrostatic\") is not available yet",
+        );
+    }
+    Ok(ModelSpec {
+        kind,
+        pressure,
+        layers,
+    })
+}
+
+/// The `[rheology]` keys of the multilayer model's viscous step (the friction law's keys
+/// are read by `rheology`).
+pub(super) struct ViscousKeys {
+    basal: Option<String>,
+    regularization: Option<String>,
+    delta: Option<f64>,
+    mu_w: Option<f64>,
+    mu_w_deg: Option<f64>,
+    channel_width: Option<f64>,
+    sidewall: Option<String>,
+    c_msm: Option<bool>,
+}
+
+impl ViscousKeys {
+    pub(super) fn of(r: &RawRheology) -> ViscousKeys {
+        ViscousKeys {
+            basal: r.basal.clone(),
+            regularization: r.regularization.clone(),
+            delta: r.delta,
+            mu_w: r.mu_w,
+            mu_w_deg: r.mu_w_deg,
+            channel_width: r.channel_width,
+            sidewall: r.sidewall.clone(),
+            c_msm: r.c_msm,
+        }
+    }
+}
+
+/// Default regularisation parameter δ (1/s) of seed 003 §5.
+pub(crate) const DEFAULT_DELTA: f64 = 1e-5;
+
+pub(super) fn multilayer(
+    v: ViscousKeys,
+    fractions: Option<Vec<f64>>,
+    static_threshold: Option<f64>,
+    layers: usize,
+) -> Res<MultilayerSpec> {
+    let multilayer_only = |key: &str| -> ScenarioError {
+        ScenarioError::at(
+            key,
+            "only used by the multilayer model; set model.layers > 1 or remove it",
+        )
+    };
+    let layer_fractions = match fractions {
+        None => vec![1.0 / layers as f64; layers],
+        Some(l) => layer_fractions(l, layers)?,
+    };
+    let basal = choice(
+        "rheology.basal",
+        v.basal.as_deref(),
+        BasalCondition::Coulomb,
+        &[
+            ("coulomb", BasalCondition::Coulomb),
+            ("no_slip", BasalCondition::NoSlip),
+        ],
+    )?;
+    if basal == BasalCondition::NoSlip && layers == 1 {
+        return Err(multilayer_only("rheology.basal"));
+    }
+    #[derive(Clone, Copy, PartialEq)]
+    enum Reg {
+        Delta,
+        Bound,
+    }
+    let reg = choice(
+        "rheology.regularization",
+        v.regularization.as_deref(),
+        Reg::Delta,
+        &[("delta", Reg::Delta), ("bound", Reg::Bound)],
+    )?;
+    let regularization = match (reg, v.delta) {
+        (Reg::Bound, Some(_)) => {
+            return err(
+                "rheology.delta",
+                "only used by regularization = \"delta\" (rheology.regularization is \"bound\"); remove it",
+            )
+        }
+        (Reg::Bound, None) => Regularization::Bound,
+        (Reg::Delta, d) => Regularization::Delta {
+            delta: positive("rheology.delta", d.unwrap_or(DEFAULT_DELTA))?,
+        },
+    };
+    let mu_w = coefficient("mu_w", v.mu_w, v.mu_w_deg)?;
+    let sidewall = match (mu_w, v.channel_width) {
+        (None, None) => {
+            if v.sidewall.is_some() {
+                return err(
+                    "rheology.sidewall",
+                    "needs the wall friction rheology.mu_w (or mu_w_deg) and rheology.channel_width",
+                );
+            }
+            None
+        }
+        (Some((_, key)), None) => {
+            return err(
+                &key,
+                "sidewall friction needs the channel width rheology.channel_width too",
+            )
+        }
+        (None, Some(_)) => {
+            return err(
+                "rheology.channel_width",
+                "sidewall friction needs the wall friction rheology.mu_w (or mu_w_deg) too",
+            )
+        }
+        (Some((mu_w, key)), Some(w)) => {
+            if layers == 1 {
+                return Err(multilayer_only(&key));
+            }
+            let width = positive("rheology.channel_width", w)?;
+            let form = choice(
+                "rheology.sidewall",
+                v.sidewall.as_deref(),
+                SidewallForm::Jop,
+                &[("jop", SidewallForm::Jop), ("layer", SidewallForm::Layer)],
+            )?;
+            Some(Sidewall { mu_w, width, form })
+        }
+    };
+    let static_threshold = positive("output.static_threshold", static_threshold.unwrap_or(1e-3))?;
+    Ok(MultilayerSpec {
+        layer_fractions,
+        basal,
+        regularization,
+        sidewall,
+        c_msm: v.c_msm.unwrap_or(false),
+        static_threshold,
+    })
+}
+
+/// `model.layer_fractions`: one positive number per layer, bottom first, summing to 1
+/// (to 1e-9; the fractions are then rescaled to sum to 1 to round-off).
+pub(super) fn layer_fractions(l: Vec<f64>, layers: usize) -> Res<Vec<f64>> {
+    let key = "model.layer_fractions";
+    if l.len() != layers {
+        return err(
+            key,
+            format!(
+                "has {} values but model.layers = {layers}; give one fraction per layer",
+                l.len()
+            ),
+        );
+    }
+    for &v in &l {
+        positive(key, v)?;
+    }
+    let sum: f64 = l.iter().sum();
+    if (sum - 1.0).abs() > 1e-9 {
+        return err(key, format!("must sum to 1, sums to {sum}"));
+    }
+    Ok(l.iter().map(|v| v / sum).collect())
+}
