@@ -96,6 +96,11 @@ impl<M: Model> Simulation<M> {
         }
     }
 
+    /// Adds a stop rule, consulted after the others.
+    pub fn add_rule(&mut self, rule: Box<dyn StopRule>) {
+        self.rules.push(rule);
+    }
+
     /// Names of the stages, in order.
     pub fn stage_names(&self) -> Vec<&'static str> {
         self.pipeline.names()

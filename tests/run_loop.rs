@@ -1,0 +1,94 @@
+//! The generic run loop: stop rules decide how a run ends, and the sink is finished
+//! whatever ends it (also an output error).
+
+mod common;
+
+use common::Case;
+use granflow::model::granular::Granular;
+use granflow::output::{
+    GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+};
+use granflow::simulation::{RunError, Simulation};
+use granflow::stop::{StepContext, StopRule, Verdict};
+
+fn collapse() -> Simulation<Granular> {
+    let mut case = Case::new(-0.2, 1.0, 120);
+    case.mesh.slope_deg = 22.0;
+    case.law = granflow::scenario::FrictionLaw::Coulomb { mu: 0.4 };
+    case.t_end = 1.0;
+    case.every = 0.1;
+    case.build(|_| 0.0, |x, _| if x < 0.0 { 0.14 } else { 0.0 }, |_| 0.0)
+}
+
+/// Fails its `fail_at`-th snapshot; remembers whether it was finished, and with what.
+#[derive(Default)]
+struct FlakySink {
+    snapshots: usize,
+    fail_at: usize,
+    finished: Option<String>,
+}
+
+impl OutputSink for FlakySink {
+    fn begin(&mut self, _: &RunInfo, _: &GridData) -> Result<(), OutputError> {
+        Ok(())
+    }
+    fn snapshot(&mut self, _: &SnapshotView) -> Result<(), OutputError> {
+        self.snapshots += 1;
+        if self.snapshots == self.fail_at {
+            return Err(OutputError::Io {
+                path: "flaky".into(),
+                message: "disk full".into(),
+            });
+        }
+        Ok(())
+    }
+    fn step(&mut self, _: &StepRecord) -> Result<(), OutputError> {
+        Ok(())
+    }
+    fn finish(&mut self, summary: &RunSummary) -> Result<(), OutputError> {
+        self.finished = Some(summary.status.clone());
+        Ok(())
+    }
+}
+
+#[test]
+fn an_output_error_still_finishes_the_sink() {
+    let mut sim = collapse();
+    let mut sink = FlakySink {
+        fail_at: 3,
+        ..Default::default()
+    };
+    let err = sim.run(&mut sink, &mut |_| {}).unwrap_err();
+    assert!(matches!(err, RunError::Output(_)), "{err}");
+    let status = sink.finished.expect("finish was called");
+    assert!(
+        status.starts_with("failed: ") && status.contains("disk full"),
+        "{status}"
+    );
+    assert_eq!(sink.snapshots, 3);
+}
+
+/// Ends the run after a number of steps with its own status.
+struct StepBudget(u64);
+
+impl StopRule for StepBudget {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        if ctx.steps >= self.0 {
+            Verdict::Stop("step_budget")
+        } else {
+            Verdict::Continue
+        }
+    }
+}
+
+#[test]
+fn a_stop_rule_ends_the_run_with_its_status() {
+    let mut sim = collapse();
+    sim.add_rule(Box::new(StepBudget(7)));
+    let (sink, summary) = common::run(&mut sim);
+    assert_eq!(summary.status, "step_budget");
+    assert_eq!(summary.steps, 7);
+    assert_eq!(sink.steps.len(), 8, "t = 0 and seven steps");
+    // The state at the stop is written as a snapshot.
+    assert_eq!(sink.snapshots.last().unwrap().t, summary.t_end);
+}
