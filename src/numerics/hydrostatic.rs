@@ -304,6 +304,28 @@ fn layer_momentum_flux(
     0.5 * (m_l + m_r) - 0.5 * (c.alpha0 * (c.hc_plus * u_r - c.hc_minus * u_l) + c.alpha1 * jump)
 }
 
+/// (F^h, F^hu, source of the left cell, source of the right cell) of a monolayer
+/// interface; all zero where nothing crosses.
+#[inline(always)]
+fn monolayer_fluxes<L: BasalFriction>(
+    law: &L,
+    l: Side,
+    r: Side,
+    g_n: f64,
+    dx: f64,
+    dt: f64,
+) -> (f64, f64, f64, f64) {
+    match interface(law, l, r, g_n, dx, dt) {
+        None => (0.0, 0.0, 0.0, 0.0),
+        Some((c, l, r)) => (
+            mass_flux(&c, l, r),
+            layer_momentum_flux(&c, c.h_minus, c.h_plus, l.u, r.u, None),
+            c.share_left,
+            c.share_right,
+        ),
+    }
+}
+
 /// The layer fractions as the exchange terms use them.
 #[derive(Debug, Clone, Copy)]
 struct Fractions<'a> {
@@ -351,7 +373,13 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     /// The step for `layers` ≥ 1 layers.
     pub fn with_layers(law: L, nx: usize, layers: usize) -> Self {
         assert!(layers >= 1);
-        let per_cell = |len: usize| if layers > 1 { vec![0.0; len] } else { Vec::new() };
+        let per_cell = |len: usize| {
+            if layers > 1 {
+                vec![0.0; len]
+            } else {
+                Vec::new()
+            }
+        };
         HydrostaticStep {
             law,
             layers,
@@ -461,8 +489,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             }
             for a in 0..n {
                 let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
-                fluxes[a] =
-                    layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur, Some(exchange[a]));
+                fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur, Some(exchange[a]));
             }
             left = right;
         }
@@ -493,17 +520,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         let h_new = &mut self.h_new[..nx + 2];
         let law = &self.law;
         let side = |j: usize| Side::monolayer(h[j], hu[j], b[j], z[j]);
-        // (F^h, F^hu, source of the left cell, source of the right cell) of an interface;
-        // all zero where nothing crosses.
-        let fluxes = |l: Side, r: Side| match interface(law, l, r, g_n, dx, dt) {
-            None => (0.0, 0.0, 0.0, 0.0),
-            Some((c, l, r)) => (
-                mass_flux(&c, l, r),
-                layer_momentum_flux(&c, c.h_minus, c.h_plus, l.u, r.u, None),
-                c.share_left,
-                c.share_right,
-            ),
-        };
+        let fluxes = |l: Side, r: Side| monolayer_fluxes(law, l, r, g_n, dx, dt);
         let mut worst = (f64::INFINITY, 1usize);
         let mut left = side(0);
         let mut right = side(1);
@@ -546,6 +563,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         let nx = h.len() - 2;
         let cells = h[1..=nx].iter_mut().zip(&mut hu[1..=nx]);
         let h_new = &self.h_new[1..=nx];
+        // Cell i: its right face i carries F^hu_{i+1/2} and the left-cell share
+        // 𝓢ᴸ_{i+1/2}, its left face i − 1 F^hu_{i−1/2} and the right-cell share 𝓢ᴿ_{i−1/2}.
         let (f_right, f_left) = (&self.flux_hu[1..=nx], &self.flux_hu[..nx]);
         let (s_right, s_left) = (&self.share_left[1..=nx], &self.share_right[..nx]);
         let faces = f_right.iter().zip(f_left).zip(s_right.iter().zip(s_left));
