@@ -85,15 +85,16 @@ use super::{Stage, StageError};
 use crate::mesh::Mesh;
 use crate::model::granular::state::LayeredState;
 use crate::physics::rheology::BasalFriction;
-use crate::physics::shallow::{celerity, velocity, H_DRY};
+use crate::physics::shallow::{sheared_celerity, velocity, H_DRY};
 
 /// The hydrostatic step for N ≥ 1 layers, generic over the basal friction law (used in ΔC).
 #[derive(Debug)]
 pub struct HydrostaticStep<L: BasalFriction> {
     law: L,
     layers: usize,
-    /// Per cell with ghosts (nx + 2): mean velocity ū and shear term 3 Σ l_α (u_α − ū)²
-    /// of the wave speed; per cell and layer: u_α.
+    /// N > 1 only (empty for N = 1, whose interface loop computes ū as it goes): per
+    /// cell with ghosts (nx + 2) mean velocity ū and shear term 3 Σ l_α (u_α − ū)² of
+    /// the wave speed; per cell and layer: u_α.
     u_mean: Vec<f64>,
     shear: Vec<f64>,
     u: Vec<f64>,
@@ -109,7 +110,8 @@ pub struct HydrostaticStep<L: BasalFriction> {
     flux_hu: Vec<f64>,
     exchange: Vec<f64>,
     h_new: Vec<f64>,
-    /// Draining factors θ_j ∈ [0, 1] (nx + 2), used only when a cell would empty.
+    /// Draining factors θ_j ∈ [0, 1] (nx + 2), used only when a cell would empty. The
+    /// ghost entries stay 1; the interior ones are all rewritten by each use.
     drain: Vec<f64>,
     /// Transport of the state's tracers (idle when it has none).
     tracers: TracerTransport,
@@ -128,17 +130,24 @@ struct Side {
     shear: f64,
     /// Velocity u_1 of the bottom layer, on which the basal friction acts (ū for N = 1).
     u_base: f64,
+    /// √max(h, 0), computed once per cell: it serves both interfaces of the cell.
+    sqrt_h: f64,
 }
 
-/// Gravity wave speed of a sheared column, √(g_n h + 3 Σ l_α (u_α − ū)²): an estimate of
-/// the outer eigenvalues ū ± c of the multilayer system (√(g_n h) for N = 1 or a
-/// uniform profile).
-#[inline(always)]
-fn sheared_celerity(g_n: f64, h: f64, shear: f64) -> f64 {
-    if shear == 0.0 {
-        celerity(g_n, h)
-    } else {
-        (g_n * h.max(0.0) + shear).sqrt()
+impl Side {
+    /// A monolayer cell: ū = u_1 = hu/h, no shear.
+    #[inline(always)]
+    fn monolayer(h: f64, hu: f64, b: f64, z: f64) -> Self {
+        let u = velocity(h, hu);
+        Side {
+            h,
+            u,
+            b,
+            z,
+            shear: 0.0,
+            u_base: u,
+            sqrt_h: h.max(0.0).sqrt(),
+        }
     }
 }
 
@@ -197,7 +206,7 @@ fn interface<L: BasalFriction>(
     let h_plus = (r.h - (-db).max(0.0)).max(0.0);
 
     // Roe averages and HLL wave-speed bounds.
-    let (sl, sr) = (l.h.max(0.0).sqrt(), r.h.max(0.0).sqrt());
+    let (sl, sr) = (l.sqrt_h, r.sqrt_h);
     let u_roe = (sl * l.u + sr * r.u) / (sl + sr);
     let h_roe = 0.5 * (l.h + r.h);
     let c_roe = sheared_celerity(g_n, h_roe, 0.5 * (l.shear + r.shear));
@@ -286,6 +295,28 @@ fn layer_momentum_flux(
     0.5 * (m_l + m_r) - 0.5 * (c.alpha0 * (c.hc_plus * u_r - c.hc_minus * u_l) + c.alpha1 * jump)
 }
 
+/// (F^h, F^hu, source of the left cell, source of the right cell) of a monolayer
+/// interface; all zero where nothing crosses.
+#[inline(always)]
+fn monolayer_fluxes<L: BasalFriction>(
+    law: &L,
+    l: Side,
+    r: Side,
+    g_n: f64,
+    dx: f64,
+    dt: f64,
+) -> (f64, f64, f64, f64) {
+    match interface(law, l, r, g_n, dx, dt) {
+        None => (0.0, 0.0, 0.0, 0.0),
+        Some((c, l, r)) => (
+            mass_flux(&c, l, r),
+            layer_momentum_flux(&c, c.h_minus, c.h_plus, l.u, r.u, None),
+            c.share_left,
+            c.share_right,
+        ),
+    }
+}
+
 /// The layer fractions as the exchange terms use them.
 #[derive(Debug, Clone, Copy)]
 struct Fractions<'a> {
@@ -333,12 +364,19 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     /// The step for `layers` ≥ 1 layers.
     pub fn with_layers(law: L, nx: usize, layers: usize) -> Self {
         assert!(layers >= 1);
+        let per_cell = |len: usize| {
+            if layers > 1 {
+                vec![0.0; len]
+            } else {
+                Vec::new()
+            }
+        };
         HydrostaticStep {
             law,
             layers,
-            u_mean: vec![0.0; nx + 2],
-            shear: vec![0.0; nx + 2],
-            u: vec![0.0; (nx + 2) * layers],
+            u_mean: per_cell(nx + 2),
+            shear: per_cell(nx + 2),
+            u: per_cell((nx + 2) * layers),
             inv_l: vec![0.0; layers],
             l_below: vec![0.0; layers],
             flux_h: vec![0.0; nx + 1],
@@ -356,17 +394,10 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         }
     }
 
-    /// Velocities u_α and ū of every cell, ghosts included, and for N > 1 the shear
-    /// term of the wave speed and the inverse layer fractions.
+    /// N > 1: velocities u_α and ū of every cell, ghosts included, the shear term of
+    /// the wave speed and the inverse layer fractions.
     fn velocities(&mut self, state: &LayeredState) {
         let n = self.layers;
-        if n == 1 {
-            for j in 0..state.h.len() {
-                self.u[j] = velocity(state.h[j], state.hu[j]);
-                self.u_mean[j] = self.u[j];
-            }
-            return;
-        }
         let mut sum = 0.0;
         for ((inv, below), l) in self.inv_l.iter_mut().zip(&mut self.l_below).zip(&state.l) {
             *inv = 1.0 / l;
@@ -402,8 +433,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         }
     }
 
-    /// Mass flux, pressure source, and each layer's momentum flux and exchange term at
-    /// every interface k (between cells k and k + 1, ghosts included).
+    /// N > 1: mass flux, pressure source, and each layer's momentum flux and exchange
+    /// term at every interface k (between cells k and k + 1, ghosts included).
     fn interfaces(&mut self, mesh: &Mesh, dt: f64, l_frac: &[f64], h: &[f64]) {
         let (nx, n) = (mesh.nx, self.layers);
         let (g_n, dx) = (mesh.g_n, mesh.dx);
@@ -414,19 +445,19 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             z: mesh.z[j],
             shear: self.shear[j],
             u_base: self.u[j * n],
+            sqrt_h: h[j].max(0.0).sqrt(),
         };
         let mut left = side(0);
         for k in 0..=nx {
             let right = side(k + 1);
             let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
             let Some((c, l, r)) = interface(&self.law, left, right, g_n, dx, dt) else {
+                // The cell update reads every interface's fluxes: they must be zero here.
                 self.flux_h[k] = 0.0;
                 self.share_left[k] = 0.0;
                 self.share_right[k] = 0.0;
                 fluxes.fill(0.0);
-                if n > 1 {
-                    self.exchange[k * n..(k + 1) * n].fill(0.0);
-                }
+                self.exchange[k * n..(k + 1) * n].fill(0.0);
                 left = right;
                 continue;
             };
@@ -436,30 +467,69 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             let u_l = &self.u[k * n..(k + 1) * n];
             let u_r = &self.u[(k + 1) * n..(k + 2) * n];
             let seen = |u: f64, at_rest: bool| if at_rest { 0.0 } else { u };
-            if n == 1 {
-                let (ul, ur) = (seen(u_l[0], c.left_at_rest), seen(u_r[0], c.right_at_rest));
-                fluxes[0] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur, None);
+            let exchange = &mut self.exchange[k * n..(k + 1) * n];
+            if c.left_at_rest || c.right_at_rest {
+                // One side at rest, the other dry: no velocity anywhere, no exchange.
+                exchange.fill(0.0);
             } else {
-                let exchange = &mut self.exchange[k * n..(k + 1) * n];
-                if c.left_at_rest || c.right_at_rest {
-                    // One side at rest, the other dry: no velocity anywhere, no exchange.
-                    exchange.fill(0.0);
-                } else {
-                    let frac = Fractions {
-                        l: l_frac,
-                        inv: &self.inv_l,
-                        below: &self.l_below,
-                    };
-                    exchange_terms(frac, l.h, r.h, u_l, u_r, exchange);
-                }
-                for a in 0..n {
-                    let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
-                    fluxes[a] =
-                        layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur, Some(exchange[a]));
-                }
+                let frac = Fractions {
+                    l: l_frac,
+                    inv: &self.inv_l,
+                    below: &self.l_below,
+                };
+                exchange_terms(frac, l.h, r.h, u_l, u_r, exchange);
+            }
+            for a in 0..n {
+                let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
+                fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur, Some(exchange[a]));
             }
             left = right;
         }
+    }
+
+    /// N = 1: the interfaces and the mass update in one pass. Each cell's velocity and
+    /// √h are computed once, when the loop reaches it, and carried to its second
+    /// interface; cell k's h_new follows as soon as interface k is done. Returns the
+    /// smallest h_new and its cell, as [`Self::update_mass`] does (same operations, same
+    /// order: the results are those of the N-layer path with N = 1).
+    fn monolayer_interfaces(
+        &mut self,
+        mesh: &Mesh,
+        dt: f64,
+        h: &[f64],
+        hu: &[f64],
+        r: f64,
+    ) -> (f64, usize) {
+        let nx = mesh.nx;
+        let (g_n, dx) = (mesh.g_n, mesh.dx);
+        // Equal lengths up front: no bounds checks in the loop.
+        let (h, hu) = (&h[..nx + 2], &hu[..nx + 2]);
+        let (b, z) = (&mesh.b_ghost[..nx + 2], &mesh.z[..nx + 2]);
+        let flux_h = &mut self.flux_h[..nx + 1];
+        let flux_hu = &mut self.flux_hu[..nx + 1];
+        let share_left = &mut self.share_left[..nx + 1];
+        let share_right = &mut self.share_right[..nx + 1];
+        let h_new = &mut self.h_new[..nx + 2];
+        let law = &self.law;
+        let side = |j: usize| Side::monolayer(h[j], hu[j], b[j], z[j]);
+        let fluxes = |l: Side, r: Side| monolayer_fluxes(law, l, r, g_n, dx, dt);
+        let mut worst = (f64::INFINITY, 1usize);
+        let mut left = side(0);
+        let mut right = side(1);
+        let (mut f_left, f_hu, s_l, s_r) = fluxes(left, right);
+        (flux_h[0], flux_hu[0], share_left[0], share_right[0]) = (f_left, f_hu, s_l, s_r);
+        for k in 1..=nx {
+            (left, right) = (right, side(k + 1));
+            let (f_right, f_hu, s_l, s_r) = fluxes(left, right);
+            (flux_h[k], flux_hu[k], share_left[k], share_right[k]) = (f_right, f_hu, s_l, s_r);
+            let hn = h[k] - r * (f_right - f_left);
+            h_new[k] = hn;
+            if hn < worst.0 {
+                worst = (hn, k);
+            }
+            f_left = f_right;
+        }
+        worst
     }
 }
 
@@ -476,6 +546,50 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             }
         }
         worst
+    }
+
+    /// N = 1: h ← h_new (round-off below zero clipped), hu ← hu − r (F^hu_{i+1/2} −
+    /// F^hu_{i−1/2} + 𝓢ᴸ_{i+1/2} + 𝓢ᴿ_{i−1/2}), zero in dry cells; interior cells
+    /// only. One branch-free pass over equal-length slices.
+    fn update_monolayer(&self, h: &mut [f64], hu: &mut [f64], r: f64) {
+        let nx = h.len() - 2;
+        let cells = h[1..=nx].iter_mut().zip(&mut hu[1..=nx]);
+        let h_new = &self.h_new[1..=nx];
+        // Cell i: its right face i carries F^hu_{i+1/2} and the left-cell share
+        // 𝓢ᴸ_{i+1/2}, its left face i − 1 F^hu_{i−1/2} and the right-cell share 𝓢ᴿ_{i−1/2}.
+        let (f_right, f_left) = (&self.flux_hu[1..=nx], &self.flux_hu[..nx]);
+        let (s_right, s_left) = (&self.share_left[1..=nx], &self.share_right[..nx]);
+        let faces = f_right.iter().zip(f_left).zip(s_right.iter().zip(s_left));
+        for (((h, hu), hn), ((f_r, f_l), (s_r, s_l))) in cells.zip(h_new).zip(faces) {
+            // Clip round-off below zero; `f64::max` would also turn a NaN into 0 and
+            // hide a blow-up from the run's NaN check.
+            *h = if *hn < 0.0 { 0.0 } else { *hn };
+            let source = s_r + s_l;
+            let q = *hu - r * (f_r - f_l + source);
+            *hu = if *h <= H_DRY { 0.0 } else { q };
+        }
+    }
+
+    /// N > 1: h ← h_new and every layer's hu_α ← hu_α − r (flux jump + source +
+    /// exchange), zero in dry cells; interior cells only.
+    fn update_layers(&self, state: &mut LayeredState, nx: usize, r: f64) {
+        let n = self.layers;
+        for i in 1..=nx {
+            // Clip round-off below zero; `f64::max` would also turn a NaN into 0 and
+            // hide a blow-up from the run's NaN check.
+            let hn = self.h_new[i];
+            state.h[i] = if hn < 0.0 { 0.0 } else { hn };
+            let source = self.share_left[i] + self.share_right[i - 1];
+            let (right, left) = (i * n, (i - 1) * n);
+            let hu = &mut state.hu[i * n..(i + 1) * n];
+            for (a, q) in hu.iter_mut().enumerate() {
+                let exchange = 0.5 * (self.exchange[right + a] + self.exchange[left + a]);
+                *q -= r * (self.flux_hu[right + a] - self.flux_hu[left + a] + source + exchange);
+            }
+            if state.h[i] <= H_DRY {
+                hu.fill(0.0);
+            }
+        }
     }
 
     /// Scales every interface flux (mass and each layer's momentum) by the draining
@@ -495,7 +609,6 @@ impl<L: BasalFriction> HydrostaticStep<L> {
                 *f *= theta;
             }
         }
-        self.drain[1..=nx].fill(1.0);
     }
 }
 
@@ -510,13 +623,16 @@ impl<L: BasalFriction> Stage<LayeredState> for HydrostaticStep<L> {
         if !state.tracers.is_empty() {
             self.tracers.before_step(&state.h, n, &state.tracers);
         }
-        self.velocities(state);
-        self.interfaces(mesh, dt, &state.l, &state.h);
-
         // Mass first; limit the fluxes of cells that would empty, then refuse the step
         // (state untouched) if anything is still negative beyond round-off.
         let r = dt / mesh.dx;
-        let mut worst = self.update_mass(&state.h, r);
+        let mut worst = if n == 1 {
+            self.monolayer_interfaces(mesh, dt, &state.h, &state.hu, r)
+        } else {
+            self.velocities(state);
+            self.interfaces(mesh, dt, &state.l, &state.h);
+            self.update_mass(&state.h, r)
+        };
         if worst.0 < 0.0 {
             self.limit_draining(&state.h, r);
             worst = self.update_mass(&state.h, r);
@@ -528,26 +644,10 @@ impl<L: BasalFriction> Stage<LayeredState> for HydrostaticStep<L> {
                 h: worst.0,
             });
         }
-        for i in 1..=nx {
-            // Clip round-off below zero; `f64::max` would also turn a NaN into 0 and
-            // hide a blow-up from the run's NaN check.
-            let hn = self.h_new[i];
-            state.h[i] = if hn < 0.0 { 0.0 } else { hn };
-            let source = self.share_left[i] + self.share_right[i - 1];
-            let (right, left) = (i * n, (i - 1) * n);
-            let hu = &mut state.hu[i * n..(i + 1) * n];
-            if n == 1 {
-                hu[0] -= r * (self.flux_hu[right] - self.flux_hu[left] + source);
-            } else {
-                for (a, q) in hu.iter_mut().enumerate() {
-                    let exchange = 0.5 * (self.exchange[right + a] + self.exchange[left + a]);
-                    *q -=
-                        r * (self.flux_hu[right + a] - self.flux_hu[left + a] + source + exchange);
-                }
-            }
-            if state.h[i] <= H_DRY {
-                hu.fill(0.0);
-            }
+        if n == 1 {
+            self.update_monolayer(&mut state.h[..nx + 2], &mut state.hu[..nx + 2], r);
+        } else {
+            self.update_layers(state, nx, r);
         }
         state.fill_ghosts(mesh);
         if !state.tracers.is_empty() {
