@@ -13,29 +13,9 @@
 use std::path::Path;
 use std::time::Instant;
 
-use granflow::output::{
-    GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
-};
+use granflow::output::memory::SummarySink;
 use granflow::scenario::load_file;
 use granflow::setup::build_granular;
-
-/// Discards everything: the benchmark times the solver only.
-struct NullSink;
-
-impl OutputSink for NullSink {
-    fn begin(&mut self, _: &RunInfo, _: &GridData) -> Result<(), OutputError> {
-        Ok(())
-    }
-    fn snapshot(&mut self, _: &SnapshotView) -> Result<(), OutputError> {
-        Ok(())
-    }
-    fn step(&mut self, _: &StepRecord) -> Result<(), OutputError> {
-        Ok(())
-    }
-    fn finish(&mut self, _: &RunSummary) -> Result<(), OutputError> {
-        Ok(())
-    }
-}
 
 /// Seed 003 Table 9 settings on top of `scenarios/erodible_bed.toml` (seed 001 §4.2,
 /// the same collapse): μ_2 = tan 36° (seed 003 Table 1), δ regularisation, CFL 0.1.
@@ -72,7 +52,9 @@ fn main() {
         for _ in 0..reps {
             let mut sim = build_granular(&scn);
             let start = Instant::now();
-            let summary = sim.run(&mut NullSink, &mut |_| {}).expect("run");
+            let summary = sim
+                .run(&mut SummarySink::default(), &mut |_| {})
+                .expect("run");
             let wall = start.elapsed().as_secs_f64();
             assert_eq!(summary.status, "completed");
             if best.as_ref().is_none_or(|b| wall < b.0) {

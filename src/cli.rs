@@ -4,6 +4,11 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
+/// Exit code of a solver or output failure (a run, or a sweep or merge with failures).
+pub const EXIT_FAILURE: u8 = 1;
+/// Exit code for bad input: scenario, sweep file, options.
+pub const EXIT_BAD_INPUT: u8 = 2;
+
 #[derive(Debug, Parser)]
 #[command(
     name = "granflow",

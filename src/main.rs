@@ -6,13 +6,10 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Parser;
-use granflow::cli::{Cli, Command, RunArgs, ScenarioArgs};
+use granflow::cli::{Cli, Command, RunArgs, ScenarioArgs, EXIT_BAD_INPUT, EXIT_FAILURE};
 use granflow::runner;
 use granflow::scenario::{self, Scenario};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-
-const EXIT_FAILURE: u8 = 1;
-const EXIT_BAD_INPUT: u8 = 2;
 
 fn load(args: &ScenarioArgs) -> Result<Scenario, ExitCode> {
     scenario::load_file(&args.scenario, &args.set).map_err(|e| {

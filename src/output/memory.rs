@@ -72,3 +72,24 @@ impl OutputSink for MemorySink {
         Ok(())
     }
 }
+
+/// Keeps only the summary handed to `finish` (and ignores everything else): the sink
+/// for runs whose fields nobody reads (benchmarks, a sweep's summary capture).
+#[derive(Debug, Default, Clone)]
+pub struct SummarySink(pub Option<RunSummary>);
+
+impl OutputSink for SummarySink {
+    fn begin(&mut self, _: &RunInfo, _: &GridData) -> Result<(), OutputError> {
+        Ok(())
+    }
+    fn snapshot(&mut self, _: &SnapshotView) -> Result<(), OutputError> {
+        Ok(())
+    }
+    fn step(&mut self, _: &StepRecord) -> Result<(), OutputError> {
+        Ok(())
+    }
+    fn finish(&mut self, summary: &RunSummary) -> Result<(), OutputError> {
+        self.0 = Some(summary.clone());
+        Ok(())
+    }
+}

@@ -99,8 +99,9 @@ pub struct StepRecord {
     pub front_x: f64,
 }
 
-/// End-of-run summary, `/summary` attributes.
-#[derive(Debug, Clone, PartialEq)]
+/// End-of-run summary, `/summary` attributes (and, without the stage times, the
+/// outcome part of a sweep's result file).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunSummary {
     pub runout: f64,
     /// First time the mass is at rest, NaN if never.
@@ -112,7 +113,24 @@ pub struct RunSummary {
     /// "completed" | "stopped_at_rest" | "failed: …".
     pub status: String,
     /// (stage name, wall seconds), written as `time_<stage>_s`.
+    #[serde(skip)]
     pub stage_times: Vec<(String, f64)>,
+}
+
+impl RunSummary {
+    /// The summary of a run that never got going: `status`, unknown numbers (NaN).
+    pub fn not_run(status: String, wall_time_s: f64) -> RunSummary {
+        RunSummary {
+            runout: f64::NAN,
+            stop_time: f64::NAN,
+            h_max_final: f64::NAN,
+            t_end: f64::NAN,
+            steps: 0,
+            wall_time_s,
+            status,
+            stage_times: Vec::new(),
+        }
+    }
 }
 
 /// Where a run's results go.

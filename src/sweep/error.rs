@@ -13,10 +13,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-/// Exit code of a run or merge that had failures (also used for output errors).
-pub const EXIT_FAILURE: u8 = 1;
-/// Exit code for bad input: sweep file, generated scenarios, options.
-pub const EXIT_BAD_INPUT: u8 = 2;
+pub use crate::cli::{EXIT_BAD_INPUT, EXIT_FAILURE};
 
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum SweepError {

@@ -14,10 +14,8 @@ use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::expand::RunPoint;
 use super::record::{self, h5_path, RunRecord, RECORD_FORMAT};
-use crate::output::{
-    create_run_sinks, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView,
-    StepRecord, Tee,
-};
+use crate::output::memory::SummarySink;
+use crate::output::{create_run_sinks, RunSummary, Tee};
 use crate::scenario::Scenario;
 use crate::setup::build;
 use crate::simulation::Progress;
@@ -29,26 +27,6 @@ pub struct Prepared {
     pub scenario: Scenario,
     /// FNV-1a of the scenario text, 16 hex digits.
     pub hash: String,
-}
-
-/// Keeps the summary handed to `finish`.
-#[derive(Debug, Default)]
-struct SummaryCapture(Option<RunSummary>);
-
-impl OutputSink for SummaryCapture {
-    fn begin(&mut self, _: &RunInfo, _: &GridData) -> Result<(), OutputError> {
-        Ok(())
-    }
-    fn snapshot(&mut self, _: &SnapshotView) -> Result<(), OutputError> {
-        Ok(())
-    }
-    fn step(&mut self, _: &StepRecord) -> Result<(), OutputError> {
-        Ok(())
-    }
-    fn finish(&mut self, summary: &RunSummary) -> Result<(), OutputError> {
-        self.0 = Some(summary.clone());
-        Ok(())
-    }
 }
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
@@ -70,13 +48,7 @@ pub fn run_one(run: &Prepared, dir: &Path, progress: &mut dyn FnMut(Progress)) -
         index: run.point.index,
         name: name.clone(),
         scenario_hash: run.hash.clone(),
-        status: String::new(),
-        runout: f64::NAN,
-        stop_time: f64::NAN,
-        h_max_final: f64::NAN,
-        t_end: f64::NAN,
-        steps: 0,
-        wall_time_s: 0.0,
+        summary: RunSummary::not_run(String::new(), 0.0),
         h5: format!("{name}.h5"),
         parameters: run
             .point
@@ -86,13 +58,13 @@ pub fn run_one(run: &Prepared, dir: &Path, progress: &mut dyn FnMut(Progress)) -
             .collect(),
     };
     if let Err(e) = record::remove(dir, name) {
-        record.status = format!("failed: cannot remove the old result file: {e}");
+        record.summary.status = format!("failed: cannot remove the old result file: {e}");
         return record;
     }
     let outcome = catch_unwind(AssertUnwindSafe(|| -> Result<RunSummary, String> {
         let mut sim = build(&run.scenario);
         let sinks = create_run_sinks(&h5).map_err(|e| e.to_string())?;
-        let mut sink = Tee::new(sinks, SummaryCapture::default());
+        let mut sink = Tee::new(sinks, SummarySink::default());
         let result = sim.run(&mut sink, progress);
         // The summary the sink saw (also written for a failed run); else the error.
         match (sink.b.0.take(), result) {
@@ -102,26 +74,18 @@ pub fn run_one(run: &Prepared, dir: &Path, progress: &mut dyn FnMut(Progress)) -
         }
     }));
     match outcome {
-        Ok(Ok(s)) => {
-            record.status = s.status;
-            record.runout = s.runout;
-            record.stop_time = s.stop_time;
-            record.h_max_final = s.h_max_final;
-            record.t_end = s.t_end;
-            record.steps = s.steps;
-            record.wall_time_s = s.wall_time_s;
-        }
+        Ok(Ok(s)) => record.summary = s,
         Ok(Err(message)) => {
-            record.status = format!("failed: {message}");
-            record.wall_time_s = start.elapsed().as_secs_f64();
+            let wall = start.elapsed().as_secs_f64();
+            record.summary = RunSummary::not_run(format!("failed: {message}"), wall);
         }
         Err(payload) => {
-            record.status = format!("failed: panic: {}", panic_message(payload.as_ref()));
-            record.wall_time_s = start.elapsed().as_secs_f64();
+            let message = format!("failed: panic: {}", panic_message(payload.as_ref()));
+            record.summary = RunSummary::not_run(message, start.elapsed().as_secs_f64());
         }
     }
     if let Err(e) = record::write(dir, &record) {
-        record.status = format!(
+        record.summary.status = format!(
             "failed: cannot write {}: {e}",
             record::record_path(dir, name).display()
         );
@@ -203,8 +167,8 @@ impl Ui {
             self.overall.position(),
             self.overall.length().unwrap_or(0),
             record.name,
-            record.status,
-            record.wall_time_s
+            record.summary.status,
+            record.summary.wall_time_s
         );
         self.println(&line);
     }

@@ -23,6 +23,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::output::RunSummary;
+
 /// Version of the result-file layout.
 pub const RECORD_FORMAT: u32 = 1;
 
@@ -35,17 +37,9 @@ pub struct RunRecord {
     pub name: String,
     /// FNV-1a of the scenario text that was run, 16 hex digits.
     pub scenario_hash: String,
-    /// "completed" | "stopped_at_rest" | "failed: …".
-    pub status: String,
-    /// Front advance (m); NaN when unknown.
-    pub runout: f64,
-    /// First time the mass was at rest (s); NaN if never.
-    pub stop_time: f64,
-    pub h_max_final: f64,
-    /// Time reached (s).
-    pub t_end: f64,
-    pub steps: u64,
-    pub wall_time_s: f64,
+    /// How the run ended (status, runout, stop time, …), as in the HDF5 `/summary`.
+    #[serde(flatten)]
+    pub summary: RunSummary,
     /// The HDF5 file, relative to the sweep directory.
     pub h5: String,
     /// Axis key → value, as in the summary.
@@ -55,18 +49,19 @@ pub struct RunRecord {
 impl RunRecord {
     /// A run that ended normally.
     pub fn is_ok(&self) -> bool {
-        status_is_ok(&self.status)
+        status_is_ok(&self.summary.status)
     }
 
     /// The numbers and status, ignoring the wall time (which differs between runs).
     pub fn same_result(&self, other: &RunRecord) -> bool {
         let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
-        self.status == other.status
-            && self.steps == other.steps
-            && same(self.runout, other.runout)
-            && same(self.stop_time, other.stop_time)
-            && same(self.h_max_final, other.h_max_final)
-            && same(self.t_end, other.t_end)
+        let (a, b) = (&self.summary, &other.summary);
+        a.status == b.status
+            && a.steps == b.steps
+            && same(a.runout, b.runout)
+            && same(a.stop_time, b.stop_time)
+            && same(a.h_max_final, b.h_max_final)
+            && same(a.t_end, b.t_end)
     }
 }
 
@@ -151,7 +146,7 @@ pub fn done(dir: &Path, name: &str, hash: &str) -> Option<RunRecord> {
         return None;
     }
     let status = h5_status(&dir.join(&record.h5))?;
-    (status == record.status).then_some(record)
+    (status == record.summary.status).then_some(record)
 }
 
 #[cfg(test)]
@@ -164,13 +159,16 @@ mod tests {
             index: 3,
             name: "slope_deg=16".into(),
             scenario_hash: "0123456789abcdef".into(),
-            status: "failed: x, \"y\"".into(),
-            runout: 0.1 + 0.2,
-            stop_time: f64::NAN,
-            h_max_final: 1.0 / 3.0,
-            t_end: 1e300,
-            steps: 12,
-            wall_time_s: 2.5e-7,
+            summary: RunSummary {
+                status: "failed: x, \"y\"".into(),
+                runout: 0.1 + 0.2,
+                stop_time: f64::NAN,
+                h_max_final: 1.0 / 3.0,
+                t_end: 1e300,
+                steps: 12,
+                wall_time_s: 2.5e-7,
+                stage_times: Vec::new(),
+            },
             h5: "slope_deg=16.h5".into(),
             parameters: [("domain.slope_deg".to_string(), "16".to_string())].into(),
         }
@@ -183,7 +181,10 @@ mod tests {
         write(dir.path(), &r).unwrap();
         let back = read(dir.path(), &r.name).unwrap().unwrap();
         assert!(back.same_result(&r), "{back:?}");
-        assert_eq!(back.wall_time_s.to_bits(), r.wall_time_s.to_bits());
+        assert_eq!(
+            back.summary.wall_time_s.to_bits(),
+            r.summary.wall_time_s.to_bits()
+        );
         assert_eq!(back.parameters, r.parameters);
         assert!(!back.is_ok());
         // No temporary file left behind.
@@ -199,7 +200,7 @@ mod tests {
     fn done_needs_ok_status_matching_hash_and_h5() {
         let dir = tempfile::tempdir().unwrap();
         let mut r = record();
-        r.status = "completed".into();
+        r.summary.status = "completed".into();
         write(dir.path(), &r).unwrap();
         // No HDF5 file: not done.
         assert!(done(dir.path(), &r.name, &r.scenario_hash).is_none());

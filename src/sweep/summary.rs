@@ -29,7 +29,9 @@ pub struct Row {
 
 impl Row {
     pub fn status(&self) -> &str {
-        self.record.as_ref().map_or(&self.note, |r| &r.status)
+        self.record
+            .as_ref()
+            .map_or(&self.note, |r| &r.summary.status)
     }
 
     /// Completed or stopped at rest.
@@ -82,12 +84,17 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
         match &row.record {
             Some(r) => {
                 fields.extend(
-                    [r.runout, r.stop_time, r.h_max_final, r.t_end]
-                        .iter()
-                        .map(|&v| format_float(v)),
+                    [
+                        r.summary.runout,
+                        r.summary.stop_time,
+                        r.summary.h_max_final,
+                        r.summary.t_end,
+                    ]
+                    .iter()
+                    .map(|&v| format_float(v)),
                 );
-                fields.push(r.steps.to_string());
-                fields.push(format_float(r.wall_time_s));
+                fields.push(r.summary.steps.to_string());
+                fields.push(format_float(r.summary.wall_time_s));
             }
             None => fields.extend(std::iter::repeat_n(String::new(), 6)),
         }
@@ -128,11 +135,11 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
         let mut line = row.values.clone();
         match &row.record {
             Some(r) => line.extend([
-                num(r.runout),
-                num(r.stop_time),
-                num(r.h_max_final),
-                r.steps.to_string(),
-                format!("{:.2}", r.wall_time_s),
+                num(r.summary.runout),
+                num(r.summary.stop_time),
+                num(r.summary.h_max_final),
+                r.summary.steps.to_string(),
+                format!("{:.2}", r.summary.wall_time_s),
             ]),
             None => line.extend(std::iter::repeat_n(String::new(), 5)),
         }
@@ -169,6 +176,7 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::RunSummary;
     use crate::sweep::record::RECORD_FORMAT;
 
     fn rows() -> Vec<Row> {
@@ -177,20 +185,21 @@ mod tests {
             index: 0,
             name: "slope_deg=16".into(),
             scenario_hash: "x".into(),
-            status: "stopped_at_rest".into(),
-            runout: 0.832,
-            stop_time: f64::NAN,
-            h_max_final: 0.0417,
-            t_end: 1.4258,
-            steps: 125,
-            wall_time_s: 0.019,
+            summary: RunSummary {
+                status: "stopped_at_rest".into(),
+                runout: 0.832,
+                stop_time: f64::NAN,
+                h_max_final: 0.0417,
+                t_end: 1.4258,
+                steps: 125,
+                wall_time_s: 0.019,
+                stage_times: Vec::new(),
+            },
             h5: "slope_deg=16.h5".into(),
             parameters: Default::default(),
         };
-        let failed = RunRecord {
-            status: "failed: a, \"b\"".into(),
-            ..record.clone()
-        };
+        let mut failed = record.clone();
+        failed.summary.status = "failed: a, \"b\"".into();
         vec![
             Row {
                 index: 0,
@@ -248,7 +257,7 @@ mod tests {
         );
         assert!(lines[2].ends_with("missing"), "{t}");
         let mut big = rows();
-        big[0].record.as_mut().unwrap().h_max_final = 1e300;
+        big[0].record.as_mut().unwrap().summary.h_max_final = 1e300;
         let t = to_table(&["domain.slope_deg".into()], &big);
         assert!(t.lines().nth(1).unwrap().contains(" 1.0000e300 "), "{t}");
     }
