@@ -33,6 +33,7 @@ class Run:
                                      if "static_interface" in snaps else None)
             self.front_t = f["front/t"][:]
             self.front_x = f["front/x"][:]
+            self.front_threshold = float(f["front"].attrs.get("threshold", 1e-3))
             self.summary = ({k: _plain(v) for k, v in f["summary"].attrs.items()}
                             if "summary" in f else {})
             self.attrs = {k: _plain(v) for k, v in f.attrs.items()}
