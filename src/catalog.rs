@@ -185,10 +185,8 @@ pub fn init(name: &Path, from: Option<&str>, force: bool) -> Result<Written, Ini
             (renamed_output(b, &scenario), b.data)
         }
     };
-    let dir = match scenario.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    // Tables resolve against the scenario's directory (the current one for a bare name).
+    let dir = scenario.parent().unwrap_or(Path::new(""));
     let mut plan = vec![(scenario.clone(), toml.as_str(), false)];
     for (rel, text) in data {
         plan.push((dir.join(rel), text, true));
