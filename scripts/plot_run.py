@@ -1,51 +1,238 @@
 #!/usr/bin/env python3
-"""Plot one granflow run: thickness snapshots, front position and diagnostics.
+"""Plot one granflow run: free surface and thickness, front, x–t diagram, and for
+multilayer or non-hydrostatic runs the velocity profiles u(z), the static/flowing
+interface and the non-hydrostatic pressure; optionally an animation.
 
-    python scripts/plot_run.py RUN.h5 [--out RUN.png] [--every K]
+    python scripts/plot_run.py RUN.h5 [--out PREFIX] [--every K]
+                               [--x X ...] [--times T ...] [--gif] [--fps N]
 
-Left: bed and free surface (b + h) at every K-th snapshot (normal to the reference
-plane in local coordinates). Right: front position against time. Prints the
-summary attributes.
+Writes PREFIX.png (default: RUN.png next to RUN.h5):
+  - bed and free surface b + h at every K-th snapshot (one colour per time from a
+    sequential colour map, with a colour bar, so no two curves share a colour);
+  - the thickness h alone, so thin deposits stay visible over high relief;
+  - the front position against time;
+  - an x–t diagram: h as colour over (x, t), the front line on top.
+For multilayer runs (layers > 1) or non-hydrostatic runs, also PREFIX_layers.png:
+  - u(z) profiles at the positions --x (default: 1/4, 1/2, 3/4 of the mass) and
+    the times --times (default: four snapshots after t = 0), z the height above the
+    bed (normal to the reference plane in local coordinates) at each layer's middle;
+  - the static/flowing interface (multilayer runs) under the free surface;
+  - the basal non-hydrostatic pressure p_nh (non-hydrostatic runs).
+With --gif, PREFIX.gif: the flow over the bed, one frame per snapshot (matplotlib's
+PillowWriter; needs pillow). Prints the summary attributes.
+Needs h5py, numpy and matplotlib.
 """
 
 import argparse
 import pathlib
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib import cm, colors  # noqa: E402
 
 from granflow_io import Run  # noqa: E402
+
+CMAP = "viridis"
+
+
+def title(r, path):
+    a = r.attrs
+    return (f"{pathlib.Path(path).name}: {a.get('model')}, {a.get('pressure')}, "
+            f"{a.get('layers')} layer(s), {a.get('coordinates')}, θ = {a.get('slope_deg')}°")
+
+
+def chosen_snapshots(r, every):
+    every = every or max(1, len(r.t) // 10)
+    return sorted(set(range(0, len(r.t), every)) | {len(r.t) - 1})
+
+
+def time_colours(r):
+    norm = colors.Normalize(vmin=r.t[0], vmax=max(r.t[-1], r.t[0] + 1e-12))
+    return norm, cm.ScalarMappable(norm=norm, cmap=CMAP)
+
+
+def plot_main(r, path, every, out):
+    ks = chosen_snapshots(r, every)
+    norm, sm = time_colours(r)
+    fig, ax = plt.subplots(2, 2, figsize=(13, 8))
+    (a_surf, a_h), (a_front, a_xt) = ax
+
+    a_surf.fill_between(r.x, r.b.min() - 0.02 * np.ptp(r.b + r.h[0]) - 1e-9, r.b,
+                        color="0.85", lw=0)
+    a_surf.plot(r.x, r.b, "k-", lw=1, label="bed b")
+    for k in ks:
+        a_surf.plot(r.x, r.b + r.h[k], lw=1.2, color=sm.to_rgba(r.t[k]))
+        a_h.plot(r.x, r.h[k], lw=1.2, color=sm.to_rgba(r.t[k]))
+    a_surf.set_xlabel("x (m)")
+    a_surf.set_ylabel("b + h (m)")
+    a_surf.legend(loc="upper right", fontsize=8)
+    a_h.set_xlabel("x (m)")
+    a_h.set_ylabel("thickness h (m)")
+    a_h.set_ylim(bottom=0)
+    for a in (a_surf, a_h):
+        fig.colorbar(sm, ax=a, label="t (s)")
+
+    a_front.plot(r.front_t, r.front_x, "k-", lw=1.2)
+    a_front.set_xlabel("t (s)")
+    a_front.set_ylabel("front position (m)")
+    stop = r.summary.get("stop_time")
+    if stop is not None and np.isfinite(stop):
+        a_front.axvline(stop, color="0.5", ls="--", lw=1, label=f"at rest, t = {stop:.3f} s")
+        a_front.legend(fontsize=8)
+
+    plot_xt(a_xt, r, fig)
+    fig.suptitle(title(r, path))
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def plot_xt(a, r, fig):
+    """h as colour over (x, t), the front on top."""
+    if len(r.t) > 1:
+        mesh = a.pcolormesh(r.x, r.t, r.h, shading="nearest", cmap="magma_r")
+        fig.colorbar(mesh, ax=a, label="h (m)")
+    a.plot(r.front_x, r.front_t, color="tab:cyan", lw=1.5, label="front")
+    a.set_xlabel("x (m)")
+    a.set_ylabel("t (s)")
+    a.set_ylim(r.t[0], r.t[-1])
+    a.legend(loc="lower right", fontsize=8)
+    a.set_title("x–t diagram", fontsize=10)
+
+
+def default_positions(r, k):
+    """Three points at 1/4, 1/2 and 3/4 of the mass at snapshot k (where h exceeds a
+    tenth of its maximum, so that an erodible-bed film does not count)."""
+    thick = np.nonzero(r.h[k] > 0.1 * max(r.h[k].max(), 1e-12))[0]
+    if len(thick) == 0:
+        return [r.x[len(r.x) // 2]]
+    lo, hi = r.x[thick[0]], r.x[thick[-1]]
+    return sorted({r.x[r.cell(lo + f * (hi - lo))] for f in (0.25, 0.5, 0.75)})
+
+
+def layer_heights(r, k, i):
+    """Height above the bed of each layer's middle at snapshot k, cell i."""
+    f = r.layer_fractions()
+    return r.h[k, i] * (np.cumsum(f) - 0.5 * f)
+
+
+def plot_layers(r, path, xs, times, out):
+    multilayer = r.layers > 1
+    nh = r.p_nh is not None
+    panels = [p for p, on in (("u", multilayer), ("interface", r.static_interface is not None),
+                              ("p_nh", nh)) if on]
+    if not panels:
+        return None
+    ks = ([r.snapshot(t) for t in times] if times
+          else sorted(set(np.linspace(min(1, len(r.t) - 1), len(r.t) - 1, 4)
+                          .round().astype(int))))
+    norm, sm = time_colours(r)
+    fig, axs = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.3), squeeze=False)
+    axs = axs[0]
+    for a, panel in zip(axs, panels):
+        if panel == "u":
+            xs = xs or default_positions(r, ks[len(ks) // 2])
+            styles = ["-", "--", ":", "-."]
+            for j, x in enumerate(xs):
+                i = r.cell(x)
+                for k in ks:
+                    if r.h[k, i] <= 0:
+                        continue
+                    z = layer_heights(r, k, i)
+                    a.plot(r.u[k, :, i], z, styles[j % len(styles)], marker=".",
+                           color=sm.to_rgba(r.t[k]), lw=1.2)
+                a.plot([], [], "k" + styles[j % len(styles)], label=f"x = {r.x[i]:.3g} m")
+            a.set_xlabel("u (m/s)")
+            a.set_ylabel("z above the bed (m)")
+            a.set_title("velocity profiles u(z)", fontsize=10)
+            a.legend(fontsize=8)
+            fig.colorbar(sm, ax=a, label="t (s)")
+        elif panel == "interface":
+            for k in ks:
+                c = sm.to_rgba(r.t[k])
+                a.plot(r.x, r.h[k], "-", color=c, lw=1.2)
+                a.plot(r.x, r.static_interface[k], "--", color=c, lw=1.2)
+            a.plot([], [], "k-", label="free surface h")
+            a.plot([], [], "k--", label="static/flowing interface")
+            a.set_xlabel("x (m)")
+            a.set_ylabel("height above the bed (m)")
+            a.set_title("static/flowing interface", fontsize=10)
+            a.legend(fontsize=8)
+            fig.colorbar(sm, ax=a, label="t (s)")
+        else:
+            faces = np.concatenate([[r.x[0] - r.dx / 2], r.x + r.dx / 2])
+            for k in ks:
+                a.plot(faces, r.p_nh[k, 0], color=sm.to_rgba(r.t[k]), lw=1.2)
+            a.set_xlabel("x (m)")
+            a.set_ylabel("basal p_nh / ρ (m²/s²)")
+            a.set_title("non-hydrostatic pressure at the bed", fontsize=10)
+            fig.colorbar(sm, ax=a, label="t (s)")
+    fig.suptitle(title(r, path))
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def animate(r, path, out, fps):
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    a1.plot(r.x, r.b, "k-", lw=1)
+    surf, = a1.plot(r.x, r.b + r.h[0], "tab:orange", lw=1.5)
+    thick, = a2.plot(r.x, r.h[0], "tab:orange", lw=1.5)
+    front = a2.axvline(r.front_x[0] if len(r.front_x) else r.x[0], color="0.4", ls="--")
+    a1.set_ylim(min(r.b.min(), (r.b + r.h).min()),
+                1.05 * (r.b + r.h).max() + 1e-12)
+    a2.set_ylim(0, 1.05 * r.h.max() + 1e-12)
+    a1.set_ylabel("b + h (m)")
+    a2.set_ylabel("h (m)")
+    a2.set_xlabel("x (m)")
+    label = a1.set_title("")
+    fig.suptitle(title(r, path), fontsize=9)
+
+    def frame(k):
+        surf.set_ydata(r.b + r.h[k])
+        thick.set_ydata(r.h[k])
+        j = min(np.searchsorted(r.front_t, r.t[k]), len(r.front_x) - 1)
+        fx = r.front_x[j]
+        front.set_xdata([fx, fx])
+        label.set_text(f"t = {r.t[k]:.3f} s")
+        return surf, thick, front, label
+
+    anim = FuncAnimation(fig, frame, frames=len(r.t), blit=False)
+    anim.save(out, writer=PillowWriter(fps=fps))
+    plt.close(fig)
 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("run")
-    p.add_argument("--out")
+    p.add_argument("--out", help="prefix of the output files (default: RUN without .h5)")
     p.add_argument("--every", type=int, default=0, help="plot every K-th snapshot")
+    p.add_argument("--x", type=float, nargs="+", help="positions of the u(z) profiles (m)")
+    p.add_argument("--times", type=float, nargs="+",
+                   help="times of the profiles (s; the nearest snapshots)")
+    p.add_argument("--gif", action="store_true", help="also write an animation PREFIX.gif")
+    p.add_argument("--fps", type=int, default=8)
     args = p.parse_args()
     r = Run(args.run)
-    every = args.every or max(1, len(r.t) // 8)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4))
-    a1.plot(r.x, r.b, "k-", lw=1, label="bed b")
-    for k in sorted(set(range(0, len(r.t), every)) | {len(r.t) - 1}):
-        a1.plot(r.x, r.b + r.h[k], lw=1, label=f"t = {r.t[k]:.2f} s")
-    a1.set_xlabel("x (m)")
-    a1.set_ylabel("b + h (m)")
-    a1.legend(fontsize=7)
-    a2.plot(r.front_t, r.front_x, "b-")
-    a2.set_xlabel("t (s)")
-    a2.set_ylabel("front position (m)", color="b")
-    fig.suptitle(f"{pathlib.Path(args.run).name}: {r.attrs.get('model')}, "
-                 f"{r.attrs.get('pressure')}, {r.attrs.get('layers')} layer(s), "
-                 f"θ = {r.attrs.get('slope_deg')}°")
-    fig.tight_layout()
-    out = args.out or str(pathlib.Path(args.run).with_suffix(".png"))
-    fig.savefig(out, dpi=110)
+    prefix = pathlib.Path(args.out) if args.out else pathlib.Path(args.run).with_suffix("")
+    prefix.parent.mkdir(parents=True, exist_ok=True)
+    written = [f"{prefix}.png"]
+    plot_main(r, args.run, args.every, written[0])
+    layers = plot_layers(r, args.run, args.x, args.times, f"{prefix}_layers.png")
+    if layers:
+        written.append(layers)
+    if args.gif:
+        written.append(f"{prefix}.gif")
+        animate(r, args.run, written[-1], args.fps)
     for k, v in sorted(r.summary.items()):
         print(f"{k:>22}: {v}")
-    print(f"plot: {out}")
+    print("plot: " + ", ".join(written))
 
 
 if __name__ == "__main__":

@@ -1,8 +1,33 @@
-//! Command-line interface (clap): `granflow run | check | sweep`.
+//! Command-line interface (clap): `granflow run | check | sweep | scenarios | init |
+//! completions`.
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// Shown by `granflow --help` (not `-h`): the first hour of a new user.
+const LONG_ABOUT: &str = "\
+Shallow-layer simulator for dry granular flows (Savage–Hutter μ(I) family): column
+collapses, avalanches and landslides on rigid or erodible beds, with the monolayer,
+multilayer and weakly non-hydrostatic models. One TOML file per scenario; results in
+HDF5 (plus a CSV of the front position).";
+
+const AFTER_LONG_HELP: &str = "\
+Getting started:
+  granflow scenarios                      list the bundled paper cases
+  granflow init my_flow                   write my_flow.toml, a commented starter
+  granflow init my_collapse --from collapse
+  granflow run my_flow.toml               writes my_flow.h5 and my_flow_front.csv
+  granflow run my_flow.toml --set domain.slope_deg=16 --output out/s16.h5
+  granflow check my_flow.toml             validate without running
+  granflow sweep slopes.toml --jobs 2     parameter sweep (docs/sweeps.md)
+
+Exit codes: 0 success, 1 solver or output failure (partial results are kept),
+2 bad input (the message names the key and its line).
+
+Shell completion: granflow completions bash > ~/.local/share/bash-completion/completions/granflow
+(zsh, fish, elvish and powershell too; see `granflow completions --help`).
+Documentation: README.md and docs/ in the source repository.";
 
 /// Exit code of a solver or output failure (a run, or a sweep or merge with failures).
 pub const EXIT_FAILURE: u8 = 1;
@@ -14,6 +39,8 @@ pub const EXIT_BAD_INPUT: u8 = 2;
     name = "granflow",
     version,
     about = "Shallow-layer simulator for dry granular flows (Savage–Hutter μ(I) family)",
+    long_about = LONG_ABOUT,
+    after_long_help = AFTER_LONG_HELP,
     propagate_version = true
 )]
 pub struct Cli {
@@ -29,6 +56,16 @@ pub enum Command {
     Check(ScenarioArgs),
     /// Run a parameter sweep in parallel (see docs/sweeps.md), or `sweep merge DIR`.
     Sweep(crate::sweep::SweepArgs),
+    /// List the scenarios bundled in this binary, with one line on each.
+    Scenarios(ScenariosArgs),
+    /// Write a commented starter scenario, or a copy of a bundled one (--from).
+    Init(InitArgs),
+    /// Print a shell completion script to stdout.
+    #[command(long_about = "Print a shell completion script to stdout.\n\n\
+                      bash:  granflow completions bash > ~/.local/share/bash-completion/completions/granflow\n\
+                      zsh:   granflow completions zsh > ~/.zfunc/_granflow   (with fpath+=~/.zfunc in ~/.zshrc)\n\
+                      fish:  granflow completions fish > ~/.config/fish/completions/granflow.fish")]
+    Completions(CompletionsArgs),
 }
 
 #[derive(Debug, Args)]
@@ -47,7 +84,52 @@ pub struct RunArgs {
     /// Output HDF5 file (overrides output.file).
     #[arg(long, short)]
     pub output: Option<PathBuf>,
-    /// No progress bar and no summary.
+    /// No progress display and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Progress display on stderr: a bar on a terminal, else a line every
+    /// --progress-every seconds (auto); or force one of them, or none.
+    #[arg(long, value_enum, default_value_t = ProgressMode::Auto, value_name = "MODE")]
+    pub progress: ProgressMode,
+    /// Seconds between two progress lines (--progress lines, or auto in a pipe).
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    pub progress_every: f64,
+}
+
+/// How `granflow run` shows its progress.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ProgressMode {
+    /// A bar when stderr is a terminal, lines otherwise.
+    Auto,
+    Bar,
+    Lines,
+    None,
+}
+
+#[derive(Debug, Args)]
+pub struct ScenariosArgs {
+    /// Print this bundled scenario's TOML instead of the list.
+    #[arg(long, value_name = "NAME")]
+    pub show: Option<String>,
+}
+
+#[derive(Debug, Args)]
+pub struct InitArgs {
+    /// Scenario to write: NAME.toml (or NAME itself if it ends in .toml).
+    #[arg(value_name = "NAME")]
+    pub name: PathBuf,
+    /// Start from this bundled scenario (see `granflow scenarios`); its CSV tables are
+    /// written under data/ next to it.
+    #[arg(long, value_name = "SCENARIO")]
+    pub from: Option<String>,
+    /// Overwrite existing files.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct CompletionsArgs {
+    /// The shell to complete for.
+    #[arg(value_enum)]
+    pub shell: clap_complete::Shell,
 }

@@ -6,13 +6,16 @@
 //! and seed 003 §4), which the generic [`simulation::Simulation`] advances in time,
 //! consulting its [`stop`] rules and reporting to an [`output::OutputSink`].
 
+pub mod catalog;
 pub mod cli;
+pub mod discover;
 pub mod mesh;
 pub mod model;
 pub mod numerics;
 pub mod output;
 pub mod physics;
 pub mod pipeline;
+pub mod progress;
 pub mod runner;
 pub mod scenario;
 pub mod setup;

@@ -1,15 +1,14 @@
 //! `granflow` binary: parse the command line, run, map errors to exit codes
 //! (0 success, 1 solver or output failure, 2 bad input).
 
-use std::io::IsTerminal;
 use std::process::ExitCode;
-use std::time::Duration;
 
 use clap::Parser;
 use granflow::cli::{Cli, Command, RunArgs, ScenarioArgs, EXIT_BAD_INPUT, EXIT_FAILURE};
+use granflow::discover;
+use granflow::progress::RunProgress;
 use granflow::runner;
 use granflow::scenario::{self, Scenario};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 fn load(args: &ScenarioArgs) -> Result<Scenario, ExitCode> {
     scenario::load_file(&args.scenario, &args.set).map_err(|e| {
@@ -35,19 +34,6 @@ fn check(args: &ScenarioArgs) -> ExitCode {
     }
 }
 
-fn progress_bar(quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40.cyan/blue} {msg} [{elapsed_precise}, ETA {eta}]")
-            .expect("valid template"),
-    );
-    bar.enable_steady_tick(Duration::from_millis(200));
-    bar
-}
-
 fn run(args: &RunArgs) -> ExitCode {
     let scn = match load(&args.scenario) {
         Ok(s) => s,
@@ -57,20 +43,14 @@ fn run(args: &RunArgs) -> ExitCode {
         .output
         .clone()
         .unwrap_or_else(|| scn.output.file.clone());
-    let bar = progress_bar(args.quiet);
-    let mut last_draw = 0u64;
-    let result = runner::run_to_files(&scn, &output, &mut |p| {
-        // Touch the bar every 64 steps: cheap, and smooth enough for a human.
-        if p.steps - last_draw >= 64 {
-            last_draw = p.steps;
-            bar.set_position((1000.0 * p.t / p.t_end) as u64);
-            bar.set_message(format!(
-                "t = {:.4} s / {} s, {} steps",
-                p.t, p.t_end, p.steps
-            ));
-        }
-    });
-    bar.finish_and_clear();
+    let mut progress = RunProgress::new(
+        args.progress,
+        args.quiet,
+        args.progress_every,
+        scn.domain.cells,
+    );
+    let result = runner::run_to_files(&scn, &output, &mut |p| progress.update(&p));
+    progress.finish();
     match result {
         Ok(report) => {
             if !args.quiet {
@@ -91,5 +71,8 @@ fn main() -> ExitCode {
         Command::Run(args) => run(args),
         Command::Check(args) => check(args),
         Command::Sweep(args) => ExitCode::from(granflow::sweep::main(args)),
+        Command::Scenarios(args) => ExitCode::from(discover::scenarios(args)),
+        Command::Init(args) => ExitCode::from(discover::init(args)),
+        Command::Completions(args) => ExitCode::from(discover::completions(args)),
     }
 }

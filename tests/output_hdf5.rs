@@ -4,7 +4,7 @@
 //! rust-hdf5 0.7.9 reads numeric attributes of datasets but not of groups or of the
 //! root (only their names, and string values), so numeric root and `/summary` values
 //! are checked through h5py in `python_reader_accepts_the_file`, which runs when
-//! `GRANFLOW_PYTHON` names a Python with h5py and numpy.
+//! a Python with h5py and numpy is found (`common::python_with_h5py`; SKIPPED otherwise).
 //! `GRANFLOW_KEEP_H5=path` keeps the file of `full_run_round_trips` for other checks.
 
 mod common;
@@ -560,7 +560,7 @@ fn run_sinks_write_both_files() {
 }
 
 /// Runs `scripts/check_output.py` and an attribute check through h5py, when
-/// `GRANFLOW_PYTHON` names a Python that has h5py and numpy.
+/// a Python with h5py and numpy is found (SKIPPED otherwise).
 #[test]
 fn python_reader_accepts_the_file() {
     let Some(python) = common::python_with_h5py() else {

@@ -1,0 +1,62 @@
+//! The commands that help a user find their way: `granflow scenarios`, `granflow init`
+//! and `granflow completions`. Each returns the process exit code.
+
+use std::io::Write;
+
+use clap::CommandFactory;
+
+use crate::catalog::{self, InitError};
+use crate::cli::{Cli, CompletionsArgs, InitArgs, ScenariosArgs, EXIT_BAD_INPUT, EXIT_FAILURE};
+
+/// `granflow scenarios [--show NAME]`.
+pub fn scenarios(args: &ScenariosArgs) -> u8 {
+    let mut out = std::io::stdout().lock();
+    if let Some(name) = &args.show {
+        let Some(b) = catalog::find(name) else {
+            eprintln!("error: no bundled scenario named '{name}' (see `granflow scenarios`)");
+            return EXIT_BAD_INPUT;
+        };
+        let _ = out.write_all(b.toml.as_bytes());
+        return 0;
+    }
+    let width = catalog::BUNDLED
+        .iter()
+        .map(|b| b.name.len())
+        .max()
+        .unwrap_or(0);
+    for b in catalog::BUNDLED {
+        let _ = writeln!(out, "{:width$}  {}", b.name, b.description());
+    }
+    let _ = writeln!(
+        out,
+        "\nCopy one to edit and run it:  granflow init my_run --from collapse\n\
+         Print one:                    granflow scenarios --show collapse"
+    );
+    0
+}
+
+/// `granflow init NAME [--from SCENARIO] [--force]`.
+pub fn init(args: &InitArgs) -> u8 {
+    match catalog::init(&args.name, args.from.as_deref(), args.force) {
+        Ok(written) => {
+            println!("{written}");
+            println!("run it:  granflow run {}", written.scenario.display());
+            0
+        }
+        Err(e @ (InitError::Unknown(_) | InitError::Exists(_))) => {
+            eprintln!("error: {e}");
+            EXIT_BAD_INPUT
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            EXIT_FAILURE
+        }
+    }
+}
+
+/// `granflow completions SHELL`: the script on stdout.
+pub fn completions(args: &CompletionsArgs) -> u8 {
+    let mut cmd = Cli::command();
+    clap_complete::generate(args.shell, &mut cmd, "granflow", &mut std::io::stdout());
+    0
+}

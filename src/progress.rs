@@ -1,0 +1,258 @@
+//! Progress of one `granflow run` on stderr: a bar on a terminal, plain lines every few
+//! seconds in a pipe or a batch log, and a warning near the start when the run will
+//! clearly take very long.
+//!
+//! The cost estimate is the pace of the first steps extrapolated to `t_end`:
+//! remaining wall ≈ (t_end − t) · Δwall/Δt over the steps after the first one (the
+//! first step also pays for the initial snapshot, 10× a step on a large grid), i.e.
+//! (estimated steps t_end/Δt̄) × (cost per step). It overestimates runs that stop at
+//! rest and underestimates flows that speed up (the CFL step shrinks), so it only
+//! warns when the estimate is far above the limit.
+
+use std::io::IsTerminal;
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use crate::cli::ProgressMode;
+use crate::simulation::Progress;
+
+/// A run whose estimate exceeds this many seconds gets a warning.
+pub const LONG_RUN_S: f64 = 1800.0;
+/// The estimate is made once this much wall time has passed since the first step…
+const ESTIMATE_AFTER_S: f64 = 1.0;
+/// …or after this many steps, whichever comes first.
+const ESTIMATE_AFTER_STEPS: u64 = 200;
+
+enum Display {
+    Bar(ProgressBar),
+    Lines { every: Duration, last: Instant },
+    Hidden,
+}
+
+/// The progress display of one run.
+pub struct RunProgress {
+    display: Display,
+    start: Instant,
+    /// Wall clock, time and steps at the first step: the pace is measured from there.
+    first: Option<(Instant, Progress)>,
+    cells: usize,
+    estimated: bool,
+    last_draw: u64,
+}
+
+impl RunProgress {
+    /// `quiet` hides the display (not the long-run warning); `every_s` is the interval of
+    /// progress lines; `cells` only goes into the warning.
+    pub fn new(mode: ProgressMode, quiet: bool, every_s: f64, cells: usize) -> Self {
+        let terminal = std::io::stderr().is_terminal();
+        let now = Instant::now();
+        let lines = || Display::Lines {
+            every: Duration::from_secs_f64(every_s.max(0.0)),
+            last: now,
+        };
+        let display = match (quiet, mode) {
+            (true, _) | (_, ProgressMode::None) => Display::Hidden,
+            (_, ProgressMode::Bar) => Display::Bar(bar()),
+            (_, ProgressMode::Lines) => lines(),
+            (_, ProgressMode::Auto) if terminal => Display::Bar(bar()),
+            (_, ProgressMode::Auto) => lines(),
+        };
+        RunProgress {
+            display,
+            start: now,
+            first: None,
+            cells,
+            estimated: false,
+            last_draw: 0,
+        }
+    }
+
+    /// Called after every time step.
+    pub fn update(&mut self, p: &Progress) {
+        let now = Instant::now();
+        let elapsed = now.duration_since(self.start).as_secs_f64();
+        let (t0, p0) = *self.first.get_or_insert((now, *p));
+        // The pace since the first step, once there is one; until then, since the start.
+        let pace = if p.t > p0.t {
+            Pace {
+                wall_s: now.duration_since(t0).as_secs_f64(),
+                sim_s: p.t - p0.t,
+                steps: p.steps - p0.steps,
+            }
+        } else {
+            Pace {
+                wall_s: elapsed,
+                sim_s: p.t,
+                steps: p.steps,
+            }
+        };
+        if !self.estimated
+            && ((pace.wall_s >= ESTIMATE_AFTER_S && p.t > p0.t) || p.steps >= ESTIMATE_AFTER_STEPS)
+        {
+            self.estimated = true;
+            if let Some(w) = long_run_warning(elapsed, &pace, p, self.cells) {
+                match &self.display {
+                    Display::Bar(bar) => bar.suspend(|| eprintln!("{w}")),
+                    _ => eprintln!("{w}"),
+                }
+            }
+        }
+        match &mut self.display {
+            Display::Bar(bar) => {
+                // Touch the bar every 64 steps: cheap, and smooth enough for a human.
+                if p.steps - self.last_draw >= 64 {
+                    self.last_draw = p.steps;
+                    bar.set_position((1000.0 * p.t / p.t_end) as u64);
+                    bar.set_message(format!(
+                        "t = {:.4} s / {} s, {} steps",
+                        p.t, p.t_end, p.steps
+                    ));
+                }
+            }
+            Display::Lines { every, last } => {
+                let now = Instant::now();
+                if now.duration_since(*last) >= *every {
+                    *last = now;
+                    eprintln!("{}", progress_line(elapsed, &pace, p));
+                }
+            }
+            Display::Hidden => {}
+        }
+    }
+
+    /// Removes the bar (lines stay in the log).
+    pub fn finish(self) {
+        if let Display::Bar(bar) = self.display {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+fn bar() -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40.cyan/blue} {msg} [{elapsed_precise}, ETA {eta}]")
+            .expect("valid template"),
+    );
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar
+}
+
+/// Wall time spent on `sim_s` of simulated time in `steps` steps.
+#[derive(Debug, Clone, Copy)]
+pub struct Pace {
+    pub wall_s: f64,
+    pub sim_s: f64,
+    pub steps: u64,
+}
+
+/// Wall time still needed to reach `t_end` at `pace` (None before any progress).
+pub fn remaining_s(pace: &Pace, p: &Progress) -> Option<f64> {
+    (pace.sim_s > 0.0 && p.t_end > p.t).then(|| pace.wall_s * (p.t_end - p.t) / pace.sim_s)
+}
+
+/// One line for a log: simulated time, steps, elapsed and remaining wall time.
+pub fn progress_line(elapsed_s: f64, pace: &Pace, p: &Progress) -> String {
+    let left = remaining_s(pace, p)
+        .map(|r| format!(", about {} to t_end", hms(r)))
+        .unwrap_or_default();
+    let t = if p.t != 0.0 && p.t.abs() < 1e-2 {
+        format!("{:.3e}", p.t)
+    } else {
+        format!("{:.4}", p.t)
+    };
+    format!(
+        "granflow: t = {t} s of {} s ({:.1} %), {} steps, {} elapsed{left}",
+        p.t_end,
+        100.0 * p.t / p.t_end,
+        p.steps,
+        hms(elapsed_s)
+    )
+}
+
+/// The warning for a run whose pace puts it beyond [`LONG_RUN_S`] in all.
+pub fn long_run_warning(elapsed_s: f64, pace: &Pace, p: &Progress, cells: usize) -> Option<String> {
+    let total = elapsed_s + remaining_s(pace, p)?;
+    (total > LONG_RUN_S).then(|| {
+        let steps = pace.steps.max(1) as f64;
+        let dt = pace.sim_s / steps;
+        format!(
+            "warning: this run will take about {} ({cells} cells, Δt ≈ {dt:.3e} s so about \
+             {:.3e} steps to t_end = {} s, {:.3e} s per step); \
+             a coarser grid (--set domain.cells=…) or a shorter time (--set time.t_end=…) \
+             is much cheaper",
+            hms(total),
+            p.t_end / dt,
+            p.t_end,
+            pace.wall_s / steps,
+        )
+    })
+}
+
+/// `1:02:03`, or `2 d 03:04:05` beyond a day.
+fn hms(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    let (d, h, m, sec) = (s / 86400, s / 3600 % 24, s / 60 % 60, s % 60);
+    if d > 0 {
+        format!("{d} d {h:02}:{m:02}:{sec:02}")
+    } else {
+        format!("{h}:{m:02}:{sec:02}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(t: f64, t_end: f64, steps: u64) -> Progress {
+        Progress { t, t_end, steps }
+    }
+
+    fn pace(wall_s: f64, sim_s: f64, steps: u64) -> Pace {
+        Pace {
+            wall_s,
+            sim_s,
+            steps,
+        }
+    }
+
+    #[test]
+    fn remaining_extrapolates_the_pace() {
+        // 2 s of wall time for 1 s of the 10 s run, 9 s left: 18 s more.
+        assert_eq!(
+            remaining_s(&pace(2.0, 1.0, 5), &p(1.0, 10.0, 5)),
+            Some(18.0)
+        );
+        assert_eq!(remaining_s(&pace(2.0, 0.0, 0), &p(0.0, 10.0, 0)), None);
+    }
+
+    #[test]
+    fn warns_only_beyond_the_limit() {
+        // 5 million cells: 4 steps of Δt = 1e-5 s took 2 s; 10 s need 1e6 steps of
+        // 0.5 s, 5e5 s = 5 d 18:53:20 (plus the 3 s already spent).
+        let w = long_run_warning(3.0, &pace(2.0, 4e-5, 4), &p(5e-5, 10.0, 5), 5_000_000).unwrap();
+        assert!(w.contains("5 d 18:53:"), "{w}");
+        assert!(
+            w.contains("5000000 cells") && w.contains("1.000e6 steps"),
+            "{w}"
+        );
+        let short = long_run_warning(1.0, &pace(1.0, 0.1, 100), &p(0.1, 10.0, 100), 640);
+        assert_eq!(short, None);
+    }
+
+    #[test]
+    fn a_line_says_where_the_run_is() {
+        let l = progress_line(65.0, &pace(65.0, 2.5, 1234), &p(2.5, 10.0, 1234));
+        assert_eq!(
+            l,
+            "granflow: t = 2.5000 s of 10 s (25.0 %), 1234 steps, 0:01:05 elapsed, \
+             about 0:03:15 to t_end"
+        );
+        let early = progress_line(5.0, &pace(2.0, 1e-5, 10), &p(2e-5, 10.0, 11));
+        assert!(
+            early.starts_with("granflow: t = 2.000e-5 s of 10 s"),
+            "{early}"
+        );
+    }
+}
