@@ -67,6 +67,48 @@ pub struct CellView {
     pub cos: f64,
     pub cos2: f64,
     pub sin: f64,
+    /// √H₁, √H₂ (Roe weights, eq. 82) and the cell's speed bounds, computed once per step.
+    pub sh1: f64,
+    pub sh2: f64,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl CellView {
+    /// The view of a cell state: velocities, Roe weights and speed bounds.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        p: &TwoLayerParams,
+        h1: f64,
+        q1: f64,
+        h2: f64,
+        q2: f64,
+        b: f64,
+        cos: f64,
+        cos2: f64,
+        sin: f64,
+    ) -> Self {
+        let u1 = crate::physics::two_layer::layer_velocity(h1, q1);
+        let u2 = crate::physics::two_layer::layer_velocity(h2, q2);
+        let (lo, hi) = speed_bounds(p, cos, h1, h2, u1, u2);
+        CellView {
+            h1,
+            q1,
+            h2,
+            q2,
+            u1,
+            u2,
+            b,
+            cos,
+            cos2,
+            sin,
+            sh1: h1.max(0.0).sqrt(),
+            sh2: h2.max(0.0).sqrt(),
+            lo,
+            hi,
+        }
+    }
 }
 
 /// What a face gives its two cells: the conservative mass fluxes Φ_k and the momentum
@@ -89,10 +131,10 @@ enum Wall {
     WetRight,
 }
 
-/// Roe-averaged velocity (eq. 82), zero where the layer is absent on both sides.
+/// Roe-averaged velocity (eq. 82) from the weights √H, zero where the layer is absent
+/// on both sides.
 #[inline(always)]
-fn roe_velocity(hl: f64, ul: f64, hr: f64, ur: f64) -> f64 {
-    let (sl, sr) = (hl.max(0.0).sqrt(), hr.max(0.0).sqrt());
+fn roe_velocity(sl: f64, ul: f64, sr: f64, ur: f64) -> f64 {
     let s = sl + sr;
     if s > 0.0 {
         (sl * ul + sr * ur) / s
@@ -113,12 +155,10 @@ fn reconstruct(dl: f64, zl: f64, dr: f64, zr: f64) -> (f64, f64) {
 #[inline(always)]
 pub fn face_speeds(p: &TwoLayerParams, l: &CellView, r: &CellView) -> (f64, f64) {
     let cf = 0.5 * (l.cos + r.cos);
-    let u1 = roe_velocity(l.h1, l.u1, r.h1, r.u1);
-    let u2 = roe_velocity(l.h2, l.u2, r.h2, r.u2);
-    let (a, b) = speed_bounds(p, l.cos, l.h1, l.h2, l.u1, l.u2);
-    let (c, d) = speed_bounds(p, r.cos, r.h1, r.h2, r.u1, r.u2);
+    let u1 = roe_velocity(l.sh1, l.u1, r.sh1, r.u1);
+    let u2 = roe_velocity(l.sh2, l.u2, r.sh2, r.u2);
     let (e, f) = speed_bounds(p, cf, 0.5 * (l.h1 + r.h1), 0.5 * (l.h2 + r.h2), u1, u2);
-    (a.min(c).min(e), b.max(d).max(f))
+    (l.lo.min(r.lo).min(e), l.hi.max(r.hi).max(f))
 }
 
 /// The face kernel: 𝒟𝓕^± of eq. (73) with the PVM upwinding (module docs).
@@ -169,8 +209,8 @@ pub fn face_flux(
     let cf = 0.5 * (l.cos + r.cos);
     let c2f = 0.5 * (l.cos2 + r.cos2);
     let (h1m, h2m) = (0.5 * (l.h1 + r.h1), 0.5 * (l.h2 + r.h2));
-    let u1 = roe_velocity(l.h1, u1l, r.h1, u1r);
-    let u2 = roe_velocity(l.h2, u2l, r.h2, u2r);
+    let u1 = roe_velocity(l.sh1, u1l, r.sh1, u1r);
+    let u2 = roe_velocity(l.sh2, u2l, r.sh2, u2r);
     let dcos = r.cos - l.cos;
     let dcos2 = r.cos2 - l.cos2;
 

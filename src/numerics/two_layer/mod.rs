@@ -21,7 +21,7 @@ pub mod geometry;
 
 pub use geometry::TwoLayerGeometry;
 
-use crate::physics::two_layer::{layer_velocity, TwoLayerParams, H_DRY_TWO_LAYER};
+use crate::physics::two_layer::{TwoLayerParams, H_DRY_TWO_LAYER};
 use crate::scenario::BoundaryKind;
 use face::{face_flux, face_speeds, CellView, FaceOut};
 
@@ -86,6 +86,9 @@ impl TwoLayerState {
 pub struct TwoLayerSolver {
     pub params: TwoLayerParams,
     pub cfl: f64,
+    /// Per cell with ghosts (nx + 2): the cells as the faces see them, built once per
+    /// step by [`Self::max_speed`].
+    views: Vec<CellView>,
     /// Per face (nx + 1): speed bounds and the face outputs.
     s_l: Vec<f64>,
     s_r: Vec<f64>,
@@ -116,23 +119,6 @@ pub fn desingularise(h: f64, q: f64, film: f64) -> f64 {
     }
 }
 
-#[inline(always)]
-fn view(st: &TwoLayerState, geom: &TwoLayerGeometry, i: usize) -> CellView {
-    let (h1, q1, h2, q2) = (st.h1[i], st.q1[i], st.h2[i], st.q2[i]);
-    CellView {
-        h1,
-        q1,
-        h2,
-        q2,
-        u1: layer_velocity(h1, q1),
-        u2: layer_velocity(h2, q2),
-        b: geom.b[i],
-        cos: geom.cos[i],
-        cos2: geom.cos2[i],
-        sin: geom.sin[i],
-    }
-}
-
 impl TwoLayerSolver {
     pub fn new(params: TwoLayerParams, cfl: f64, nx: usize) -> Self {
         TwoLayerSolver {
@@ -141,6 +127,7 @@ impl TwoLayerSolver {
             s_l: vec![0.0; nx + 1],
             s_r: vec![0.0; nx + 1],
             faces: vec![FaceOut::default(); nx + 1],
+            views: Vec::with_capacity(nx + 2),
             drain: vec![1.0; nx + 2],
             limited_steps: 0,
             film: FILM_THICKNESS,
@@ -150,16 +137,27 @@ impl TwoLayerSolver {
     /// Computes the face speed bounds of `state` (ghosts filled) and returns the
     /// largest |λ| (0 when both layers are absent everywhere).
     pub fn max_speed(&mut self, geom: &TwoLayerGeometry, state: &TwoLayerState) -> f64 {
-        let nx = geom.nx;
+        let p = &self.params;
+        self.views.clear();
+        self.views.extend((0..geom.nx + 2).map(|i| {
+            CellView::new(
+                p,
+                state.h1[i],
+                state.q1[i],
+                state.h2[i],
+                state.q2[i],
+                geom.b[i],
+                geom.cos[i],
+                geom.cos2[i],
+                geom.sin[i],
+            )
+        }));
         let mut smax = 0.0f64;
-        let mut left = view(state, geom, 0);
-        for j in 0..=nx {
-            let right = view(state, geom, j + 1);
-            let (a, b) = face_speeds(&self.params, &left, &right);
-            self.s_l[j] = a;
-            self.s_r[j] = b;
+        for ((pair, sl), sr) in self.views.windows(2).zip(&mut self.s_l).zip(&mut self.s_r) {
+            let (a, b) = face_speeds(p, &pair[0], &pair[1]);
+            *sl = a;
+            *sr = b;
             smax = smax.max(a.abs()).max(b.abs());
-            left = right;
         }
         smax
     }
@@ -182,19 +180,16 @@ impl TwoLayerSolver {
     fn advance(&mut self, geom: &TwoLayerGeometry, state: &mut TwoLayerState, dt: f64) {
         let nx = geom.nx;
         let dx = geom.dx;
-        let mut left = view(state, geom, 0);
-        for j in 0..=nx {
-            let right = view(state, geom, j + 1);
+        for (j, pair) in self.views.windows(2).enumerate() {
             self.faces[j] = face_flux(
                 &self.params,
-                &left,
-                &right,
+                &pair[0],
+                &pair[1],
                 self.s_l[j],
                 self.s_r[j],
                 dt,
                 dx,
             );
-            left = right;
         }
         let lam = dt / dx;
         let limited_1 = self.limit_layer(&state.h1, lam, nx, true);
