@@ -8,7 +8,7 @@
 //! edge cell's bed and angle, so the boundary face carries no bed jump: a free
 //! (zero-gradient) boundary lets a uniform state leave unchanged, a wall mirrors it.
 
-use crate::scenario::BoundaryKind;
+use crate::mesh::BoundaryKind;
 
 #[derive(Debug, Clone)]
 pub struct TwoLayerGeometry {

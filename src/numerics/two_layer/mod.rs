@@ -21,8 +21,8 @@ pub mod geometry;
 
 pub use geometry::TwoLayerGeometry;
 
+use crate::mesh::BoundaryKind;
 use crate::physics::two_layer::{TwoLayerParams, H_DRY_TWO_LAYER};
-use crate::scenario::BoundaryKind;
 use face::{face_flux, face_speeds, CellView, FaceOut};
 
 /// Two-layer state with one ghost cell on each side (length nx + 2).
@@ -176,6 +176,14 @@ impl TwoLayerSolver {
         dt
     }
 
+    /// Advances `state` by exactly `dt` (the caller has chosen it from the CFL
+    /// condition on the same speed bounds, [`crate::model::submarine::signal_speed`]).
+    pub fn step_with(&mut self, geom: &TwoLayerGeometry, state: &mut TwoLayerState, dt: f64) {
+        state.fill_ghosts(geom);
+        self.max_speed(geom, state);
+        self.advance(geom, state, dt);
+    }
+
     /// Both sub-steps with a given Δt (speed bounds from [`Self::max_speed`] on this state).
     fn advance(&mut self, geom: &TwoLayerGeometry, state: &mut TwoLayerState, dt: f64) {
         let nx = geom.nx;
@@ -273,3 +281,28 @@ impl TwoLayerSolver {
 
 #[cfg(test)]
 mod tests;
+
+/// The two-layer step as a pipeline stage: Δt comes from the simulation (CFL on the
+/// model's signal speed, the same face bounds), both sub-steps of §4.1 run inside.
+#[derive(Debug)]
+pub struct TwoLayerStage {
+    pub solver: TwoLayerSolver,
+    pub geometry: TwoLayerGeometry,
+}
+
+impl crate::numerics::Stage<TwoLayerState> for TwoLayerStage {
+    fn name(&self) -> &'static str {
+        "two_layer"
+    }
+
+    fn apply(
+        &mut self,
+        _mesh: &crate::mesh::Mesh,
+        dt: f64,
+        state: &mut TwoLayerState,
+    ) -> Result<(), crate::numerics::StageError> {
+        // Both sub-steps keep H ≥ 0 by construction (draining limiter): no retry needed.
+        self.solver.step_with(&self.geometry, state, dt);
+        Ok(())
+    }
+}
