@@ -14,6 +14,7 @@
 //!   monolayer model).
 
 pub mod granular;
+pub mod submarine;
 
 use crate::mesh::Mesh;
 use crate::output::{OutputError, OutputSink};
@@ -22,6 +23,8 @@ use crate::output::{OutputError, OutputSink};
 pub enum ModelKind {
     /// The layered family: Savage–Hutter, multilayer, non-hydrostatic.
     Granular,
+    /// Seed 004's two-layer water-over-grains model.
+    Submarine,
 }
 
 impl ModelKind {
@@ -29,6 +32,7 @@ impl ModelKind {
     pub fn name(self) -> &'static str {
         match self {
             ModelKind::Granular => "granular",
+            ModelKind::Submarine => "submarine",
         }
     }
 }

@@ -8,6 +8,7 @@ pub mod linalg;
 pub mod nonhydrostatic;
 pub mod projection;
 pub mod tracer;
+pub mod two_layer;
 pub mod viscous;
 
 use crate::mesh::Mesh;

@@ -5,6 +5,7 @@
 
 pub mod rheology;
 pub mod shallow;
+pub mod two_layer;
 
 /// Gravitational acceleration (m/s²), as in the seeds' experiments.
 pub const GRAVITY: f64 = 9.81;

@@ -22,6 +22,7 @@ use std::path::PathBuf;
 
 pub use crate::mesh::{BoundaryKind, Coordinates};
 pub use crate::model::granular::config::{MultilayerSpec, Pressure};
+pub use crate::model::submarine::SubmarineSpec;
 pub use crate::model::ModelKind;
 pub use crate::numerics::viscous::{BasalCondition, Regularization, Sidewall, SidewallForm};
 pub use crate::physics::rheology::FrictionLaw;
@@ -54,6 +55,9 @@ pub struct Initial {
     pub w: Profile,
     /// Uniform erodible-bed thickness h_i ≥ 0 (seed 001 §4.2).
     pub erodible_bed: f64,
+    /// Water free-surface elevation η(x) of the submarine model (no water if absent);
+    /// its `initial.h` is then the grains' vertical thickness H₂cos²θ.
+    pub eta: Option<Profile>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -99,4 +103,6 @@ pub struct Scenario {
     pub boundary: Boundaries,
     pub time: TimeSpec,
     pub output: OutputSpec,
+    /// The two-layer model's keys (`model.kind = "submarine"` only).
+    pub submarine: Option<SubmarineSpec>,
 }

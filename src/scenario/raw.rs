@@ -22,6 +22,18 @@ pub(crate) struct RawScenario {
     pub boundary: Option<RawBoundary>,
     pub time: Option<RawTime>,
     pub output: Option<RawOutput>,
+    pub submarine: Option<RawSubmarine>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawSubmarine {
+    pub r: Option<f64>,
+    pub k: Option<f64>,
+    pub lambda1: Option<f64>,
+    pub lambda2: Option<f64>,
+    pub k_in: Option<f64>,
+    pub buoyancy: Option<String>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -85,6 +97,7 @@ pub(crate) struct RawInitial {
     pub u: Option<RawProfile>,
     pub w: Option<RawProfile>,
     pub erodible_bed: Option<f64>,
+    pub eta: Option<RawProfile>,
 }
 
 #[derive(Debug, Default, Deserialize)]

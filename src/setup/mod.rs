@@ -4,6 +4,7 @@
 //! where scenarios meet models: `model/` and `numerics/` never read a scenario.
 
 mod granular;
+mod submarine;
 
 use crate::mesh::{Mesh, MeshSpec};
 use crate::model::granular::Granular;
@@ -51,10 +52,16 @@ impl<M: crate::model::Model> Run for Simulation<M> {
 pub fn build(scn: &Scenario) -> Box<dyn Run> {
     match scn.model.kind {
         ModelKind::Granular => Box::new(build_granular(scn)),
+        ModelKind::Submarine => Box::new(build_submarine(scn)),
     }
 }
 
 /// The run of a granular scenario (`model.kind = "granular"`).
+/// The submarine model's simulation (tests and benchmarks).
+pub fn build_submarine(scn: &Scenario) -> Simulation<crate::model::submarine::Submarine> {
+    submarine::build(scn)
+}
+
 pub fn build_granular(scn: &Scenario) -> Simulation<Granular> {
     granular::build(scn)
 }

@@ -89,6 +89,7 @@ impl Case {
                 u: Profile::function(move |x, _| u(x)),
                 w: Profile::constant(0.0),
                 erodible_bed: 0.0,
+                eta: None,
             },
             boundary: Boundaries {
                 left: self.mesh.left,
@@ -104,6 +105,7 @@ impl Case {
                 every: self.every,
                 front_threshold: 1e-3,
             },
+            submarine: None,
         };
         build_granular(&scn)
     }

@@ -109,7 +109,10 @@ pub(super) fn model(m: &RawModel) -> Res<ModelSpec> {
         "model.kind",
         m.kind.as_deref(),
         ModelKind::Granular,
-        &[("granular", ModelKind::Granular)],
+        &[
+            ("granular", ModelKind::Granular),
+            ("submarine", ModelKind::Submarine),
+        ],
     )?;
     let pressure = choice(
         "model.pressure",

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 mod check;
 mod granular;
+mod submarine;
 
 use super::document::{line_of, serde_error, syntax_error, KeyIndex, Locator};
 use super::error::ScenarioError;
@@ -128,7 +129,18 @@ fn validate(
     let friction = rheology(&raw_rheology)?;
     let raw_model = raw.model.unwrap_or_default();
     let model = model(&raw_model)?;
-    let initial = initial(section("initial", raw.initial)?, base_dir)?;
+    let raw_initial = section("initial", raw.initial)?;
+    let raw_w = raw_initial.w.is_some();
+    let initial = initial(raw_initial, base_dir)?;
+    let submarine = submarine::submarine(
+        raw.submarine,
+        &model,
+        &domain,
+        &friction,
+        &initial,
+        raw_w,
+        &bed,
+    )?;
     let boundary = boundary(raw.boundary.unwrap_or_default())?;
     let time = time(section("time", raw.time)?)?;
     let raw_output = raw.output.unwrap_or_default();
@@ -153,6 +165,7 @@ fn validate(
         boundary,
         time,
         output,
+        submarine,
     })
 }
 
@@ -228,11 +241,16 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
         None => Profile::constant(0.0),
     };
     let erodible_bed = non_negative("initial.erodible_bed", i.erodible_bed.unwrap_or(0.0))?;
+    let eta = match i.eta {
+        Some(v) => Some(Profile::from_toml("initial.eta", &v, base_dir, true)?),
+        None => None,
+    };
     Ok(Initial {
         h,
         u,
         w,
         erodible_bed,
+        eta,
     })
 }
 

@@ -1,0 +1,56 @@
+//! Second step of seed 004 §4.1: the Coulomb stopping rule (eq. 84–85, after
+//! Mangeney et al.), on the grain discharge only:
+//!
+//!   Q₂ⁿ⁺¹ = Q₂* − Δt N_i tan δ₀ sgn(Q₂*)   if |Q₂*| > Δt N_i tan δ₀,   0 otherwise,
+//!
+//!   N_i = g f_b H₂,i* ½(cos θ_{i−½} + cos θ_{i+½})
+//!         + H₂,i* (U₂*)² (sin θ_{i+½} − sin θ_{i−½})/Δx,   clamped ≥ 0,
+//!
+//! so the friction can stop a mass but never reverse it ([`coulomb_update`]).
+//! N_i tan δ₀ is σ*_i/cos θ_i of eq. (85) plus the curvature part T₂* of eq. (84), with
+//! the cell's own H₂ where the paper averages the two face means: step 1 gives each
+//! cell the static force g cos θ̄ H₂,i Δ(…)/2 of each face (own-depth split, [`super::face`]),
+//! so the rest criterion of Theorem 2 (eq. 86) holds face by face exactly as printed
+//! (the H₂ factor cancels on both sides).
+//!
+//! The printed eq. (84) adds (T₁* + T₂*)Δt with T₁* = −σ*_i sgn(Q₂*), while its own test
+//! uses σ*_i/cos θ_i and the Cartesian source of eq. (62) is 𝒯/cos θ: we divide T₁* by
+//! cos θ_i. The test `uniform_slide_accelerates_at_g_sin_minus_friction` decides: a
+//! uniform layer on a constant slope accelerates at g(sin θ − (1 − r) cos θ tan δ₀)
+//! along the bed (the exact solution of eq. 45), which the printed form misses by
+//! (1 − r) g cos θ(1 − cos θ) tan δ₀.
+
+use super::{TwoLayerGeometry, TwoLayerState};
+use crate::numerics::friction::coulomb_update;
+use crate::physics::two_layer::{
+    coulomb_normal_stress, layer_velocity, TwoLayerParams, H_DRY_TWO_LAYER,
+};
+
+/// Applies the stopping rule to every physical cell (ghosts must be filled).
+pub fn coulomb_step(
+    p: &TwoLayerParams,
+    geom: &TwoLayerGeometry,
+    state: &mut TwoLayerState,
+    dt: f64,
+) {
+    let nx = geom.nx;
+    let dx = geom.dx;
+    for i in 1..=nx {
+        let q = state.q2[i];
+        if q == 0.0 {
+            continue;
+        }
+        let h = state.h2[i];
+        if h <= H_DRY_TWO_LAYER {
+            state.q2[i] = 0.0;
+            continue;
+        }
+        let cl = 0.5 * (geom.cos[i - 1] + geom.cos[i]);
+        let cr = 0.5 * (geom.cos[i] + geom.cos[i + 1]);
+        let sl = 0.5 * (geom.sin[i - 1] + geom.sin[i]);
+        let sr = 0.5 * (geom.sin[i] + geom.sin[i + 1]);
+        let u = layer_velocity(h, q);
+        let n = coulomb_normal_stress(p, state.h1[i], h, 0.5 * (cl + cr), u, (sr - sl) / dx);
+        state.q2[i] = coulomb_update(q, dt * p.tan_delta * n);
+    }
+}

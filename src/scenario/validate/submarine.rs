@@ -1,0 +1,125 @@
+//! The submarine model's keys (`model.kind = "submarine"`, seed 004): `[submarine]`,
+//! `initial.eta`, and the shared keys it constrains (Cartesian domain, Coulomb
+//! friction, one hydrostatic layer, no erodible bed, no w).
+
+use super::check::*;
+use crate::model::submarine::SubmarineSpec;
+use crate::physics::two_layer::Buoyancy;
+use crate::scenario::raw::RawSubmarine;
+use crate::scenario::{Coordinates, Domain, FrictionLaw, Initial, ModelSpec, Pressure, Profile};
+
+/// Validates the `[submarine]` table and the consistency of the other keys with it.
+/// `raw_w` tells whether `initial.w` was given.
+pub(super) fn submarine(
+    s: Option<RawSubmarine>,
+    model: &ModelSpec,
+    domain: &Domain,
+    friction: &FrictionLaw,
+    initial: &Initial,
+    raw_w: bool,
+    bed: &Profile,
+) -> Res<Option<SubmarineSpec>> {
+    if model.kind != crate::model::ModelKind::Submarine {
+        if s.is_some() {
+            return err(
+                "submarine",
+                "the [submarine] table needs model.kind = \"submarine\"",
+            );
+        }
+        if initial.eta.is_some() {
+            return err(
+                "initial.eta",
+                "the water surface needs model.kind = \"submarine\"",
+            );
+        }
+        return Ok(None);
+    }
+    let s = s.unwrap_or_default();
+    if domain.coordinates != Coordinates::Cartesian {
+        return err(
+            "domain.coordinates",
+            "the submarine model is written in Cartesian coordinates (seed 004 eq. 62): set domain.coordinates = \"cartesian\" and the slope in bed.b",
+        );
+    }
+    if !matches!(friction, FrictionLaw::Coulomb { .. }) {
+        return err(
+            "rheology.law",
+            "the submarine model uses Coulomb friction (law = \"coulomb\", mu_deg = δ0)",
+        );
+    }
+    if model.layers != 1 || model.pressure != Pressure::Hydrostatic {
+        return err(
+            "model.layers",
+            "the submarine model has one hydrostatic granular layer under the water",
+        );
+    }
+    if raw_w {
+        return err(
+            "initial.w",
+            "the submarine model is hydrostatic: no normal velocity",
+        );
+    }
+    if initial.erodible_bed != 0.0 {
+        return err(
+            "initial.erodible_bed",
+            "the submarine model has no erodible bed",
+        );
+    }
+    let r = finite("submarine.r", required("submarine.r", s.r)?)?;
+    if !(0.0..1.0).contains(&r) {
+        return err(
+            "submarine.r",
+            format!("the density ratio ρ_water/ρ_grains must be in [0, 1), got {r}"),
+        );
+    }
+    let k = positive("submarine.k", s.k.unwrap_or(1.0))?;
+    let unit = |key: &str, v: Option<f64>| -> Res<f64> {
+        let v = finite(key, v.unwrap_or(0.0))?;
+        if (0.0..=1.0).contains(&v) {
+            Ok(v)
+        } else {
+            err(key, format!("must be in [0, 1], got {v}"))
+        }
+    };
+    let lambda1 = unit("submarine.lambda1", s.lambda1)?;
+    let lambda2 = unit("submarine.lambda2", s.lambda2)?;
+    if non_negative("submarine.k_in", s.k_in.unwrap_or(0.0))? != 0.0 {
+        return err(
+            "submarine.k_in",
+            "friction between the layers (K_in > 0) is not implemented; seed 004 §5 uses K_in = 0",
+        );
+    }
+    let buoyancy = choice(
+        "submarine.buoyancy",
+        s.buoyancy.as_deref(),
+        Buoyancy::Everywhere,
+        &[
+            ("everywhere", Buoyancy::Everywhere),
+            ("submerged", Buoyancy::Submerged),
+        ],
+    )?;
+    let spec = SubmarineSpec {
+        r,
+        k,
+        lambda1,
+        lambda2,
+        buoyancy,
+    };
+    if !spec.params(0.0).bound_is_proven() {
+        return err(
+            "submarine.k",
+            "A2 = rλ2 + K(1 − rλ2) must be at least r A1 = r(λ1 + K(1 − λ1)) (hyperbolicity bound of the scheme)",
+        );
+    }
+    if let Some(eta) = &initial.eta {
+        let dx = (domain.x_max - domain.x_min) / domain.cells as f64;
+        for i in 0..domain.cells {
+            let x = domain.x_min + (i as f64 + 0.5) * dx;
+            let v = eta.eval(x, bed.eval(x, 0.0));
+            if !v.is_finite() {
+                return err("initial.eta", format!("evaluates to {v} at x = {x}"));
+            }
+        }
+    }
+    Ok(Some(spec))
+}
