@@ -83,6 +83,27 @@ mod tests {
     }
 
     #[test]
+    fn unequal_coefficients_break_the_fraction_bound_beside_a_film() {
+        // A 10 cm layer beside a 1 µm film, both at φ = 0.6 (α = 2: w = φ m), face
+        // rate r ξ_c max(0, vΔz) with r max(0, vΔz) = 0.09 (parabolic CFL holds for
+        // ξ ≤ 5.5). With ξ = (2, ·, 5) the film's φ = w/m becomes ≈ 0.6 · 5/2 > 1.
+        let (m_thick, m_film) = (0.06, 6e-7);
+        let fraction_after = |xi: Viscosity| {
+            let mut m = vec![m_thick, m_thick, m_film, m_film];
+            let mut w: Vec<f64> = m.iter().map(|m| 0.6 * m).collect();
+            let mut scratch = vec![0.0; 3];
+            let rate = |x: f64| [0.0, 0.09 * x, 0.0];
+            diffuse(&mut m, &rate(xi.xi[0]), &mut scratch);
+            diffuse(&mut w, &rate(xi.xi[2]), &mut scratch);
+            w[2] / m[2]
+        };
+        let paper = fraction_after(Viscosity::paper());
+        assert!(paper > 1.0, "{paper}");
+        let ours = fraction_after(Viscosity::default());
+        assert!((ours - 0.6).abs() < 1e-14, "{ours}");
+    }
+
+    #[test]
     fn diffusion_conserves_and_stays_between_neighbours() {
         let mut u = vec![1.0, 1.0, 0.0, 0.0, 3.0, 3.0];
         let rate = [0.0, 0.5, 0.25, 0.5, 0.0];
