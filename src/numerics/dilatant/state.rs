@@ -86,31 +86,43 @@ impl DilatantState {
     /// eq. (3.14).
     pub fn update_primitives(&mut self, mesh: &Mesh) {
         self.fill_ghosts(mesh);
-        let n = self.nx + 2;
-        for j in 0..n {
-            let m = self.m[j];
-            if m > 0.0 {
-                let phi = phi_from_ratio(self.w[j] / m, self.alpha);
-                let h = m / phi;
-                self.phi[j] = phi;
-                self.h[j] = h;
-                self.v[j] = if h > H_DRY { self.q[j] / m } else { 0.0 };
-            } else {
-                self.h[j] = 0.0;
-                self.v[j] = 0.0;
-            }
+        for j in 0..self.nx + 2 {
+            self.update_cell(j);
         }
+        self.fill_dry_fractions();
+    }
+
+    /// (h, v, φ) of cell j from (m, q, w); a dry cell gets h = v = 0 and keeps φ.
+    #[inline(always)]
+    pub fn update_cell(&mut self, j: usize) {
+        let m = self.m[j];
+        if m > 0.0 {
+            let phi = phi_from_ratio(self.w[j] / m, self.alpha);
+            let h = m / phi;
+            self.phi[j] = phi;
+            self.h[j] = h;
+            self.v[j] = if h > H_DRY { self.q[j] / m } else { 0.0 };
+        } else {
+            self.h[j] = 0.0;
+            self.v[j] = 0.0;
+        }
+    }
+
+    /// φ of the dry cells from their wet neighbours (eq. 3.14), ghosts included.
+    pub fn fill_dry_fractions(&mut self) {
+        let n = self.nx + 2;
         for j in 0..n {
             if self.m[j] > 0.0 {
                 continue;
             }
-            let wet =
-                |k: Option<usize>| k.filter(|&k| k < n && self.m[k] > 0.0).map(|k| self.phi[k]);
-            let (a, b) = (wet(j.checked_sub(1)), wet(Some(j + 1)));
-            if let Some(phi) = match (a, b) {
+            let wet = |k: usize| (k < n && self.m[k] > 0.0).then(|| self.phi[k]);
+            let left = if j > 0 { wet(j - 1) } else { None };
+            let right = wet(j + 1);
+            let phi = match (left, right) {
                 (Some(a), Some(b)) => Some(a.max(b)),
                 (a, b) => a.or(b),
-            } {
+            };
+            if let Some(phi) = phi {
                 self.phi[j] = phi;
             }
         }

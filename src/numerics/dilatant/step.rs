@@ -74,7 +74,8 @@ pub struct DilatantScheme {
     drive: Vec<f64>,
     rate: Vec<f64>,
     scratch: Vec<f64>,
-    backup: Option<DilatantState>,
+    /// (m, q, w) at t^n, restored when a step fails.
+    backup: [Vec<f64>; 3],
 }
 
 impl DilatantScheme {
@@ -87,7 +88,7 @@ impl DilatantScheme {
             drive: vec![0.0; nx + 1],
             rate: vec![0.0; nx + 1],
             scratch: vec![0.0; nx + 1],
-            backup: None,
+            backup: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
         }
     }
 
@@ -112,13 +113,15 @@ impl DilatantScheme {
         t: f64,
         dt: f64,
     ) -> Result<StepReport, DilatantError> {
-        match &mut self.backup {
-            Some(b) => b.clone_from(s),
-            None => self.backup = Some(s.clone()),
-        }
+        self.backup[0].copy_from_slice(&s.m);
+        self.backup[1].copy_from_slice(&s.q);
+        self.backup[2].copy_from_slice(&s.w);
         let result = self.advance(mesh, s, t, dt);
         if result.is_err() {
-            s.clone_from(self.backup.as_ref().expect("backup taken above"));
+            s.m.copy_from_slice(&self.backup[0]);
+            s.q.copy_from_slice(&self.backup[1]);
+            s.w.copy_from_slice(&self.backup[2]);
+            s.update_primitives(mesh);
         }
         result
     }
@@ -132,16 +135,17 @@ impl DilatantScheme {
     ) -> Result<StepReport, DilatantError> {
         let t_end = t + dt;
         self.finite_volumes(mesh, s, dt);
-        check(mesh, s, t_end, "finite-volume")?;
-        s.update_primitives(mesh);
+        check_and_update(mesh, s, t_end, "finite-volume")?;
         let substeps = self.stabilise(mesh, s, dt);
         if substeps > 0 {
-            check(mesh, s, t_end, "stabilisation")?;
-            s.update_primitives(mesh);
+            check_and_update(mesh, s, t_end, "stabilisation")?;
         }
-        self.dilatancy(mesh, s, dt);
-        check(mesh, s, t_end, "dilatancy")?;
-        s.update_primitives(mesh);
+        self.dilatancy(mesh, s, t_end, dt)?;
+        s.fill_ghosts(mesh);
+        for j in [0, s.nx + 1] {
+            s.update_cell(j);
+        }
+        s.fill_dry_fractions();
         Ok(StepReport {
             viscosity_substeps: substeps,
         })
@@ -209,10 +213,17 @@ impl DilatantScheme {
         n
     }
 
-    /// (3.15)–(3.19) in every wet cell.
-    fn dilatancy(&mut self, mesh: &Mesh, s: &mut DilatantState, dt: f64) {
+    /// (3.15)–(3.19) in every wet cell; φ lands between φ* and φ_eq*, which is 0 only
+    /// where f0 or f1 underflow (then the step is refused).
+    fn dilatancy(
+        &mut self,
+        mesh: &Mesh,
+        s: &mut DilatantState,
+        t: f64,
+        dt: f64,
+    ) -> Result<(), DilatantError> {
         if self.law.k == 0.0 {
-            return;
+            return Ok(());
         }
         for j in 1..=s.nx {
             if s.m[j] <= 0.0 {
@@ -227,13 +238,24 @@ impl DilatantScheme {
                 s.v[j],
                 s.phi[j],
             );
+            if !(phi > 0.0 && phi < 1.0) {
+                return Err(DilatantError::FractionOutOfBounds {
+                    cell: j - 1,
+                    x: mesh.x[j - 1],
+                    t,
+                    phi,
+                    stage: "dilatancy",
+                });
+            }
             s.set_fraction(j, phi);
         }
+        Ok(())
     }
 }
 
-/// φh ≥ 0 (round-off below zero is set to 0), 0 < φ < 1, all finite.
-fn check(
+/// φh ≥ 0 (round-off below zero is set to 0), 0 < φ < 1, all finite; updates (h, v, φ)
+/// of the physical cells, the ghosts and the dry fractions (3.14).
+fn check_and_update(
     mesh: &Mesh,
     s: &mut DilatantState,
     t: f64,
@@ -259,18 +281,24 @@ fn check(
             s.m[j] = 0.0;
             s.q[j] = 0.0;
             s.w[j] = 0.0;
-            continue;
+        } else {
+            let phi = phi_from_ratio(w / m, s.alpha);
+            if !(phi > 0.0 && phi < 1.0) {
+                return Err(DilatantError::FractionOutOfBounds {
+                    cell: j - 1,
+                    x,
+                    t,
+                    phi,
+                    stage,
+                });
+            }
         }
-        let phi = phi_from_ratio(w / m, s.alpha);
-        if !(phi > 0.0 && phi < 1.0) {
-            return Err(DilatantError::FractionOutOfBounds {
-                cell: j - 1,
-                x,
-                t,
-                phi,
-                stage,
-            });
-        }
+        s.update_cell(j);
     }
+    s.fill_ghosts(mesh);
+    for j in [0, nx + 1] {
+        s.update_cell(j);
+    }
+    s.fill_dry_fractions();
     Ok(())
 }
