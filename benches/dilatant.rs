@@ -14,6 +14,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use granflow::mesh::{Mesh, MeshSpec};
+use granflow::model::granular::state::LayeredState as State;
 use granflow::numerics::dilatant::state::DilatantState;
 use granflow::numerics::dilatant::step::{DilatantOptions, DilatantScheme};
 use granflow::numerics::friction::CoulombFrictionStep;
@@ -22,7 +23,6 @@ use granflow::numerics::Stage;
 use granflow::physics::dilatancy::DilatantLaw;
 use granflow::physics::rheology::MuI;
 use granflow::scenario::{BoundaryKind, Coordinates};
-use granflow::state::State;
 
 const MU_I: MuI = MuI {
     mu_s: 0.48,

@@ -379,11 +379,11 @@ fn paper_viscosity_breaks_the_fraction_bound_at_the_front() {
 /// The existing Savage–Hutter μ(I) monolayer (src/numerics/hydrostatic.rs +
 /// friction.rs) on the same collapse, to t_end: returns the thickness per cell.
 fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (Mesh, Vec<f64>) {
+    use granflow::model::granular::state::LayeredState as State;
     use granflow::numerics::friction::CoulombFrictionStep;
     use granflow::numerics::hydrostatic::HydrostaticStep;
     use granflow::numerics::Stage;
     use granflow::physics::rheology::MuI;
-    use granflow::state::State;
     let mesh = collapse(slope, x_max, cells);
     let law = MuI {
         mu_s: 0.48,
@@ -450,5 +450,95 @@ fn without_dilatancy_the_model_converges_to_savage_hutter() {
     assert!(
         distances[2] < distances[1] && distances[1] < distances[0],
         "{distances:?}"
+    );
+}
+
+/// The keys of `model.kind = "dilatant"`: each wrong value is refused naming its key.
+#[test]
+fn dilatant_keys_are_validated() {
+    use granflow::scenario::load_str;
+    let base = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/dilatancy_dense.toml"
+    ))
+    .unwrap();
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scn = load_str(&base, dir, &[]).unwrap();
+    let spec = scn.dilatancy.unwrap();
+    assert_eq!(spec.law.k, 4.09);
+    assert_eq!(spec.law.mu_1, 0.48);
+    assert_eq!(spec.options.viscosity.xi, [2.0, 2.0, 2.0]);
+    let cases = [
+        ("phi = 0.62", "phi = 1.2", "initial.phi"),
+        ("phi = 0.62", "", "initial.phi"),
+        ("k = 4.09", "k = -1", "dilatancy.k"),
+        ("phi_stat = 0.582", "phi_stat = 1.5", "dilatancy.phi_stat"),
+        ("phi_eq = \"f2\"", "phi_eq = \"f7\"", "dilatancy.phi_eq"),
+        ("phi_eq = \"f2\"", "phi_eq = \"f1\"", "dilatancy.n"),
+        ("xi = [2.0, 2.0, 2.0]", "xi = [2.0, 2.0]", "dilatancy.xi"),
+        ("kind = \"dilatant\"", "kind = \"granular\"", "dilatancy"),
+        (
+            "law = \"mu_i\"\nmu_s = 0.48\nmu_2 = 0.73\ni0 = 0.279",
+            "law = \"coulomb\"\nmu = 0.5",
+            "rheology.law",
+        ),
+        (
+            "i0 = 0.279",
+            "i0 = 0.279\nchannel_width = 0.2",
+            "rheology.channel_width",
+        ),
+        (
+            "[model]\nkind = \"dilatant\"",
+            "[model]\nkind = \"dilatant\"\nlayers = 3",
+            "model.layers",
+        ),
+    ];
+    for (from, to, key) in cases {
+        assert!(base.contains(from), "{from}");
+        let text = base.replacen(from, to, 1);
+        let e = load_str(&text, dir, &[])
+            .err()
+            .unwrap_or_else(|| panic!("{to} accepted"));
+        assert_eq!(e.key(), Some(key), "{to}: {e}");
+    }
+    // Without [dilatancy] the dilatant model cannot run.
+    let start = base.find("[dilatancy]").unwrap();
+    let end = base.find("[initial]").unwrap();
+    let text = format!("{}{}", &base[..start], &base[end..]);
+    assert_eq!(
+        load_str(&text, dir, &[]).unwrap_err().key(),
+        Some("dilatancy")
+    );
+}
+
+/// `granflow run` on the shipped dense scenario writes φ per cell.
+#[test]
+fn snapshots_carry_the_volume_fraction() {
+    use granflow::output::memory::MemorySink;
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/dilatancy_dense.toml");
+    let scn = granflow::scenario::load_file(
+        &path,
+        &[
+            "domain.cells=64".into(),
+            "time.t_end=0.2".into(),
+            "output.every=0.1".into(),
+        ],
+    )
+    .unwrap();
+    let mut sim = granflow::setup::build_dilatant(&scn);
+    let m0 = sim.diagnostics().mass;
+    let mut sink = MemorySink::default();
+    sim.run(&mut sink, &mut |_| {}).unwrap();
+    let m1 = sim.diagnostics().mass;
+    assert!((m1 - m0).abs() < 1e-13 * m0, "grain volume {m0} → {m1}");
+    assert!((m0 - 0.62 * 0.14 * 0.2).abs() < 1e-12, "{m0}");
+    let last = sink.snapshots.last().unwrap();
+    let phi = last.field("phi").expect("phi field");
+    assert_eq!(phi.len(), 64);
+    assert!(phi.iter().all(|&p| p > 0.0 && p < 1.0));
+    assert!(
+        phi.iter().any(|&p| p < 0.61),
+        "the flowing dense mass dilated"
     );
 }

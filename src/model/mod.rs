@@ -12,7 +12,9 @@
 //! - [`granular`]: the layered family of seeds 000, 001 and 003 (Savage–Hutter with
 //!   Coulomb or μ(I) friction, the multilayer μ(I) model, the weakly non-hydrostatic
 //!   monolayer model).
+//! - [`dilatant`]: the compressible μ(I)–φ model of seed 002 (volume fraction φ).
 
+pub mod dilatant;
 pub mod granular;
 
 use crate::mesh::Mesh;
@@ -22,6 +24,8 @@ use crate::output::{OutputError, OutputSink};
 pub enum ModelKind {
     /// The layered family: Savage–Hutter, multilayer, non-hydrostatic.
     Granular,
+    /// The compressible μ(I)–φ model with dilatancy (seed 002).
+    Dilatant,
 }
 
 impl ModelKind {
@@ -29,6 +33,7 @@ impl ModelKind {
     pub fn name(self) -> &'static str {
         match self {
             ModelKind::Granular => "granular",
+            ModelKind::Dilatant => "dilatant",
         }
     }
 }

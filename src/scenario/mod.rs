@@ -21,6 +21,7 @@ pub use validate::{load_file, load_str};
 use std::path::PathBuf;
 
 pub use crate::mesh::{BoundaryKind, Coordinates};
+pub use crate::model::dilatant::DilatantSpec;
 pub use crate::model::granular::config::{MultilayerSpec, Pressure};
 pub use crate::model::ModelKind;
 pub use crate::numerics::viscous::{BasalCondition, Regularization, Sidewall, SidewallForm};
@@ -54,6 +55,8 @@ pub struct Initial {
     pub w: Profile,
     /// Uniform erodible-bed thickness h_i ≥ 0 (seed 001 §4.2).
     pub erodible_bed: f64,
+    /// Solid volume fraction φ(x) of the dilatant model (seed 002), in (0, 1).
+    pub phi: Option<Profile>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -95,6 +98,8 @@ pub struct Scenario {
     pub model: ModelSpec,
     /// Layer fractions and viscous options of the multilayer model.
     pub multilayer: MultilayerSpec,
+    /// Law and numerics of the dilatant model (`model.kind = "dilatant"` only).
+    pub dilatancy: Option<DilatantSpec>,
     pub initial: Initial,
     pub boundary: Boundaries,
     pub time: TimeSpec,

@@ -18,6 +18,7 @@ use super::source::{relax_fraction, DilatancyUpdate};
 use super::stabilisation::{diffuse, Viscosity};
 use super::state::DilatantState;
 use crate::mesh::Mesh;
+use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, DilatantLaw};
 
 /// A state that left the admissible set.
@@ -301,4 +302,39 @@ fn check_and_update(
     }
     s.fill_dry_fractions();
     Ok(())
+}
+
+/// The whole dilatant time step as one stage of the run loop. The loop does not pass
+/// the time, so the error carries x, the quantity and its value; the loop adds t.
+impl Stage<DilatantState> for DilatantScheme {
+    fn name(&self) -> &'static str {
+        "dilatant"
+    }
+
+    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
+        match self.step(mesh, state, f64::NAN, dt) {
+            Ok(_) => Ok(()),
+            Err(DilatantError::NegativeMass { x, m, .. }) => Err(StageError::Inadmissible {
+                x,
+                quantity: "grain mass φh",
+                value: m,
+            }),
+            Err(DilatantError::FractionOutOfBounds { x, phi, stage, .. }) => {
+                Err(StageError::Inadmissible {
+                    x,
+                    quantity: match stage {
+                        "finite-volume" => "volume fraction φ (finite-volume step)",
+                        "stabilisation" => "volume fraction φ (stabilisation step)",
+                        _ => "volume fraction φ (dilatancy step)",
+                    },
+                    value: phi,
+                })
+            }
+            Err(DilatantError::NonFinite { x, .. }) => Err(StageError::Inadmissible {
+                x,
+                quantity: "non-finite value",
+                value: f64::NAN,
+            }),
+        }
+    }
 }

@@ -109,7 +109,10 @@ pub(super) fn model(m: &RawModel) -> Res<ModelSpec> {
         "model.kind",
         m.kind.as_deref(),
         ModelKind::Granular,
-        &[("granular", ModelKind::Granular)],
+        &[
+            ("granular", ModelKind::Granular),
+            ("dilatant", ModelKind::Dilatant),
+        ],
     )?;
     let pressure = choice(
         "model.pressure",
@@ -121,6 +124,14 @@ pub(super) fn model(m: &RawModel) -> Res<ModelSpec> {
         ],
     )?;
     let layers = int_in("model.layers", m.layers.unwrap_or(1), 1, MAX_LAYERS)?;
+    if kind == ModelKind::Dilatant {
+        if pressure != Pressure::Hydrostatic {
+            return err("model.pressure", "the dilatant model is hydrostatic");
+        }
+        if layers != 1 {
+            return err("model.layers", "the dilatant model has one layer");
+        }
+    }
     if layers > 1 && pressure == Pressure::NonHydrostatic {
         return err(
             "model.pressure",
@@ -140,9 +151,9 @@ pub(super) struct ViscousKeys {
     basal: Option<String>,
     regularization: Option<String>,
     delta: Option<f64>,
-    mu_w: Option<f64>,
-    mu_w_deg: Option<f64>,
-    channel_width: Option<f64>,
+    pub(super) mu_w: Option<f64>,
+    pub(super) mu_w_deg: Option<f64>,
+    pub(super) channel_width: Option<f64>,
     sidewall: Option<String>,
     c_msm: Option<bool>,
 }

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 mod check;
+mod dilatant;
 mod granular;
 
 use super::document::{line_of, serde_error, syntax_error, KeyIndex, Locator};
@@ -22,6 +23,7 @@ use super::{
     Scenario, TimeSpec,
 };
 use check::*;
+use dilatant::{dilatancy, sample_fraction};
 use granular::{model, multilayer, rheology, ViscousKeys};
 
 /// Largest accepted `domain.cells`.
@@ -133,13 +135,32 @@ fn validate(
     let time = time(section("time", raw.time)?)?;
     let raw_output = raw.output.unwrap_or_default();
     let output = output(&raw_output, &time, default_output)?;
+    let dilatancy = dilatancy(
+        raw.dilatancy.as_ref(),
+        &raw_rheology,
+        &friction,
+        &material,
+        &model,
+        &initial,
+        &time,
+    )?;
+    let mut viscous_keys = ViscousKeys::of(&raw_rheology);
+    if dilatancy.is_some() {
+        // The wall keys belong to the dilatant law (seed 002 eq. 4.1).
+        viscous_keys.mu_w = None;
+        viscous_keys.mu_w_deg = None;
+        viscous_keys.channel_width = None;
+    }
     let multilayer = multilayer(
-        ViscousKeys::of(&raw_rheology),
+        viscous_keys,
         raw_model.layer_fractions.clone(),
         raw_output.static_threshold,
         model.layers,
     )?;
     sample_profiles(&domain, &bed, &initial, model.pressure)?;
+    if let Some(phi) = &initial.phi {
+        sample_fraction(&domain, &bed, phi)?;
+    }
     Ok(Scenario {
         source_toml,
         base_dir: base_dir.to_path_buf(),
@@ -149,6 +170,7 @@ fn validate(
         friction,
         model,
         multilayer,
+        dilatancy,
         initial,
         boundary,
         time,
@@ -228,11 +250,16 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
         None => Profile::constant(0.0),
     };
     let erodible_bed = non_negative("initial.erodible_bed", i.erodible_bed.unwrap_or(0.0))?;
+    let phi = match i.phi {
+        Some(v) => Some(Profile::from_toml("initial.phi", &v, base_dir, true)?),
+        None => None,
+    };
     Ok(Initial {
         h,
         u,
         w,
         erodible_bed,
+        phi,
     })
 }
 
