@@ -15,6 +15,8 @@ class Run:
             self.t = f["snapshots/t"][:]
             self.h = f["snapshots/h"][:]
             self.u = f["snapshots/u"][:]
+            # Volume fraction of the dilatant model (seed 002), None for the others.
+            self.phi = f["snapshots/phi"][:] if "snapshots/phi" in f else None
             self.front_t = f["front/t"][:]
             self.front_x = f["front/x"][:]
             self.summary = {k: _plain(v) for k, v in f["summary"].attrs.items()}

@@ -4,8 +4,9 @@
     python scripts/plot_run.py RUN.h5 [--out RUN.png] [--every K]
 
 Left: bed and free surface (b + h) at every K-th snapshot (normal to the reference
-plane in local coordinates). Right: front position against time. Prints the
-summary attributes.
+plane in local coordinates). Right: front position against time. Runs of the dilatant
+model (seed 002) get a third panel with the volume fraction φ of the same snapshots
+(cells thinner than 1 mm left out). Prints the summary attributes.
 """
 
 import argparse
@@ -15,6 +16,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 
 from granflow_io import Run  # noqa: E402
 
@@ -27,10 +29,19 @@ def main():
     args = p.parse_args()
     r = Run(args.run)
     every = args.every or max(1, len(r.t) // 8)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4))
+    panels = 3 if r.phi is not None else 2
+    fig, axes = plt.subplots(1, panels, figsize=(6 * panels, 4))
+    a1, a2 = axes[0], axes[1]
     a1.plot(r.x, r.b, "k-", lw=1, label="bed b")
     for k in sorted(set(range(0, len(r.t), every)) | {len(r.t) - 1}):
         a1.plot(r.x, r.b + r.h[k], lw=1, label=f"t = {r.t[k]:.2f} s")
+        if r.phi is not None:
+            phi = np.where(r.h[k] > 1e-3, r.phi[k], np.nan)
+            axes[2].plot(r.x, phi, lw=1, label=f"t = {r.t[k]:.2f} s")
+    if r.phi is not None:
+        axes[2].set_xlabel("x (m)")
+        axes[2].set_ylabel("volume fraction φ (h > 1 mm)")
+        axes[2].legend(fontsize=7)
     a1.set_xlabel("x (m)")
     a1.set_ylabel("b + h (m)")
     a1.legend(fontsize=7)
