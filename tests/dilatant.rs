@@ -594,3 +594,39 @@ mod random_states {
         }
     }
 }
+
+/// From the command line: the paper's ξ = (2, 2, 5) on the dense 0° collapse ends the
+/// run with exit code 1 and a message naming φ, the place and the time; a bad
+/// `initial.phi` is an input error (exit 2) naming the key.
+#[test]
+fn command_line_reports_inadmissible_fractions_and_bad_keys() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let scenario = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/dilatancy_dense.toml"
+    );
+    let run = |sets: &[&str]| {
+        let mut cmd = assert_cmd::Command::cargo_bin("granflow").unwrap();
+        cmd.current_dir(dir.path()).args(["run", scenario, "-q"]);
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        cmd.output().unwrap()
+    };
+    let out = run(&[
+        "domain.slope_deg=0",
+        "dilatancy.xi=[2.0, 2.0, 5.0]",
+        "domain.cells=200",
+        "domain.x_max=1.8",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("volume fraction φ (stabilisation step)") && stderr.contains("x = 0.035 m"),
+        "{stderr}"
+    );
+    let out = run(&["initial.phi=0"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("initial.phi"), "{stderr}");
+}
