@@ -21,6 +21,7 @@ pub use validate::{load_file, load_str};
 use std::path::PathBuf;
 
 pub use crate::mesh::{BoundaryKind, Coordinates};
+pub use crate::model::dilatant::DilatantSpec;
 pub use crate::model::granular::config::{MultilayerSpec, Pressure};
 pub use crate::model::submarine::SubmarineSpec;
 pub use crate::model::ModelKind;
@@ -58,6 +59,8 @@ pub struct Initial {
     /// Water free-surface elevation η(x) of the submarine model (no water if absent);
     /// its `initial.h` is then the grains' vertical thickness H₂cos²θ.
     pub eta: Option<Profile>,
+    /// Solid volume fraction φ(x) of the dilatant model (seed 002), in (0, 1).
+    pub phi: Option<Profile>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -99,6 +102,8 @@ pub struct Scenario {
     pub model: ModelSpec,
     /// Layer fractions and viscous options of the multilayer model.
     pub multilayer: MultilayerSpec,
+    /// Law and numerics of the dilatant model (`model.kind = "dilatant"` only).
+    pub dilatancy: Option<DilatantSpec>,
     pub initial: Initial,
     pub boundary: Boundaries,
     pub time: TimeSpec,

@@ -3,6 +3,7 @@
 //! one module per model that reads its part of the scenario. This is the only place
 //! where scenarios meet models: `model/` and `numerics/` never read a scenario.
 
+mod dilatant;
 mod granular;
 mod submarine;
 
@@ -53,7 +54,13 @@ pub fn build(scn: &Scenario) -> Box<dyn Run> {
     match scn.model.kind {
         ModelKind::Granular => Box::new(build_granular(scn)),
         ModelKind::Submarine => Box::new(build_submarine(scn)),
+        ModelKind::Dilatant => Box::new(build_dilatant(scn)),
     }
+}
+
+/// The run of a dilatant scenario (`model.kind = "dilatant"`, seed 002).
+pub fn build_dilatant(scn: &Scenario) -> Simulation<crate::model::dilatant::Dilatant> {
+    dilatant::build(scn)
 }
 
 /// The run of a granular scenario (`model.kind = "granular"`).

@@ -112,6 +112,7 @@ pub(super) fn model(m: &RawModel) -> Res<ModelSpec> {
         &[
             ("granular", ModelKind::Granular),
             ("submarine", ModelKind::Submarine),
+            ("dilatant", ModelKind::Dilatant),
         ],
     )?;
     let pressure = choice(
@@ -124,6 +125,14 @@ pub(super) fn model(m: &RawModel) -> Res<ModelSpec> {
         ],
     )?;
     let layers = int_in("model.layers", m.layers.unwrap_or(1), 1, MAX_LAYERS)?;
+    if kind == ModelKind::Dilatant {
+        if pressure != Pressure::Hydrostatic {
+            return err("model.pressure", "the dilatant model is hydrostatic");
+        }
+        if layers != 1 {
+            return err("model.layers", "the dilatant model has one layer");
+        }
+    }
     if layers > 1 && pressure == Pressure::NonHydrostatic {
         return err(
             "model.pressure",
@@ -143,9 +152,9 @@ pub(super) struct ViscousKeys {
     basal: Option<String>,
     regularization: Option<String>,
     delta: Option<f64>,
-    mu_w: Option<f64>,
-    mu_w_deg: Option<f64>,
-    channel_width: Option<f64>,
+    pub(super) mu_w: Option<f64>,
+    pub(super) mu_w_deg: Option<f64>,
+    pub(super) channel_width: Option<f64>,
     sidewall: Option<String>,
     c_msm: Option<bool>,
 }

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 mod check;
+mod dilatant;
 mod granular;
 mod submarine;
 
@@ -23,6 +24,7 @@ use super::{
     Scenario, TimeSpec,
 };
 use check::*;
+use dilatant::{dilatancy, sample_fraction};
 use granular::{model, multilayer, rheology, ViscousKeys};
 
 /// Largest accepted `domain.cells`.
@@ -145,13 +147,32 @@ fn validate(
     let time = time(section("time", raw.time)?)?;
     let raw_output = raw.output.unwrap_or_default();
     let output = output(&raw_output, &time, default_output)?;
+    let dilatancy = dilatancy(
+        raw.dilatancy.as_ref(),
+        &raw_rheology,
+        &friction,
+        &material,
+        &model,
+        &initial,
+        &time,
+    )?;
+    let mut viscous_keys = ViscousKeys::of(&raw_rheology);
+    if dilatancy.is_some() {
+        // The wall keys belong to the dilatant law (seed 002 eq. 4.1).
+        viscous_keys.mu_w = None;
+        viscous_keys.mu_w_deg = None;
+        viscous_keys.channel_width = None;
+    }
     let multilayer = multilayer(
-        ViscousKeys::of(&raw_rheology),
+        viscous_keys,
         raw_model.layer_fractions.clone(),
         raw_output.static_threshold,
         model.layers,
     )?;
     sample_profiles(&domain, &bed, &initial, model.pressure)?;
+    if let Some(phi) = &initial.phi {
+        sample_fraction(&domain, &bed, phi)?;
+    }
     Ok(Scenario {
         source_toml,
         base_dir: base_dir.to_path_buf(),
@@ -161,6 +182,7 @@ fn validate(
         friction,
         model,
         multilayer,
+        dilatancy,
         initial,
         boundary,
         time,
@@ -245,12 +267,17 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
         Some(v) => Some(Profile::from_toml("initial.eta", &v, base_dir, true)?),
         None => None,
     };
+    let phi = match i.phi {
+        Some(v) => Some(Profile::from_toml("initial.phi", &v, base_dir, true)?),
+        None => None,
+    };
     Ok(Initial {
         h,
         u,
         w,
         erodible_bed,
         eta,
+        phi,
     })
 }
 
