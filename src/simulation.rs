@@ -12,7 +12,7 @@
 
 use std::time::Instant;
 
-use crate::mesh::Mesh;
+use crate::mesh::{Grid, Mesh};
 use crate::model::{Diagnostics, Model};
 use crate::numerics::StageError;
 use crate::output::{GridData, OutputError, OutputSink, RunInfo, RunSummary, StepRecord};
@@ -120,7 +120,7 @@ impl<M: Model> Simulation<M> {
     /// The CFL step for the signal speed `s` (∞ when nothing moves).
     fn cfl_dt(&self, s: f64) -> f64 {
         if s > 0.0 {
-            self.config.cfl * self.mesh.dx / s
+            self.config.cfl * self.mesh.cfl_length() / s
         } else {
             f64::INFINITY
         }
@@ -188,8 +188,8 @@ impl<M: Model> Simulation<M> {
     ) -> Result<RunSummary, RunError> {
         let wall = Instant::now();
         let grid = GridData {
-            x: &self.mesh.x,
-            b: &self.mesh.b,
+            x: self.mesh.centres(),
+            b: self.mesh.bed(),
             h_bed: self.model.bed_layer(),
         };
         sink.begin(&self.info, &grid)?;
@@ -225,7 +225,7 @@ impl<M: Model> Simulation<M> {
         d0: Diagnostics,
     ) -> Result<&'static str, RunError> {
         if let Some(i) = d0.non_finite_at {
-            return Err(self.failure(FailureReason::NonFinite, Some(self.mesh.x[i])));
+            return Err(self.failure(FailureReason::NonFinite, Some(self.mesh.centres()[i])));
         }
         sink.step(&self.record(&d0, 0.0))?;
         self.snapshot(sink)?;
@@ -245,7 +245,7 @@ impl<M: Model> Simulation<M> {
                 steps: self.steps,
                 diagnostics: &d,
                 next_dt: self.cfl_dt(d.signal_speed),
-                x: &self.mesh.x,
+                x: self.mesh.centres(),
                 at_rest,
             };
             let mut stop = None;

@@ -7,7 +7,7 @@ mod dilatant;
 mod granular;
 mod submarine;
 
-use crate::mesh::{Mesh, MeshSpec};
+use crate::mesh::{Grid, Mesh, MeshSpec};
 use crate::model::granular::Granular;
 use crate::model::ModelKind;
 use crate::output::{OutputSink, RunInfo, RunSummary};
@@ -42,7 +42,7 @@ impl<M: crate::model::Model> Run for Simulation<M> {
         Simulation::stage_names(self)
     }
     fn cells(&self) -> usize {
-        self.mesh.nx
+        self.mesh.cells()
     }
     fn info(&self) -> &RunInfo {
         &self.info
