@@ -9,10 +9,12 @@
 pub mod catalog;
 pub mod cli;
 pub mod discover;
+pub mod lock;
 pub mod mesh;
 pub mod model;
 pub mod numerics;
 pub mod output;
+pub mod overwrite;
 pub mod physics;
 pub mod pipeline;
 pub mod progress;

@@ -1,37 +1,70 @@
 //! `granflow` binary: parse the command line, run, map errors to exit codes
 //! (0 success, 1 solver or output failure, 2 bad input).
 
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Parser;
-use granflow::cli::{Cli, Command, RunArgs, ScenarioArgs, EXIT_BAD_INPUT, EXIT_FAILURE};
+use granflow::cli::{
+    print_err, print_out, Cli, Command, RunArgs, ScenarioArgs, EXIT_BAD_INPUT, EXIT_FAILURE,
+};
 use granflow::discover;
+use granflow::lock::{self, Lock, LockError};
 use granflow::progress::RunProgress;
 use granflow::runner;
 use granflow::scenario::{self, Scenario};
 
 fn load(args: &ScenarioArgs) -> Result<Scenario, ExitCode> {
-    scenario::load_file(&args.scenario, &args.set).map_err(|e| {
-        eprintln!("error: {e}");
+    let scn = scenario::load_file(&args.scenario, &args.set).map_err(|e| {
+        print_err(&format!("error: {e}\n"));
         ExitCode::from(EXIT_BAD_INPUT)
-    })
+    })?;
+    for note in &scn.notes {
+        print_err(&format!("note: {note}\n"));
+    }
+    Ok(scn)
 }
 
 fn check(args: &ScenarioArgs) -> ExitCode {
     match load(args).map(|s| runner::check(&s)) {
         Ok(run) => {
-            println!(
-                "{}: ok ({} model, {} cells, {} layer(s), stages: {})",
+            print_out(&format!(
+                "{}: ok ({} model, {} cells, {} layer(s), stages: {})\n",
                 args.scenario.display(),
                 run.info().model,
                 run.cells(),
                 run.info().layers,
                 run.stage_names().join(" → ")
-            );
+            ));
             ExitCode::SUCCESS
         }
         Err(code) => code,
     }
+}
+
+/// Locks `<output>.lock` for the whole run (see `granflow::lock`).
+fn lock_output(output: &Path, wait: bool) -> Result<Lock, ExitCode> {
+    let mut name = output.as_os_str().to_owned();
+    name.push(".lock");
+    let path = PathBuf::from(name);
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        // The sink would create it anyway; the lock file needs it first.
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            print_err(&format!("error: cannot create {}: {e}\n", dir.display()));
+            return Err(ExitCode::from(EXIT_FAILURE));
+        }
+    }
+    let what = format!("the output file {}", output.display());
+    lock::acquire(&path, &what, wait, &mut |holder| {
+        print_err(&format!("waiting: {what} is in use ({holder})\n"));
+    })
+    .map_err(|e| {
+        print_err(&format!("error: {e}\n"));
+        match e {
+            LockError::Busy { .. } => ExitCode::from(EXIT_BAD_INPUT),
+            LockError::Io { .. } => ExitCode::from(EXIT_FAILURE),
+        }
+    })
 }
 
 fn run(args: &RunArgs) -> ExitCode {
@@ -43,6 +76,15 @@ fn run(args: &RunArgs) -> ExitCode {
         .output
         .clone()
         .unwrap_or_else(|| scn.output.file.clone());
+    if let Err(e) = granflow::overwrite::check_outputs(&args.scenario.scenario, &output, args.force)
+    {
+        print_err(&format!("error: {e}\n"));
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
+    let _lock = match lock_output(&output, args.wait) {
+        Ok(lock) => lock,
+        Err(code) => return code,
+    };
     let mut progress = RunProgress::new(
         args.progress,
         args.quiet,
@@ -54,12 +96,12 @@ fn run(args: &RunArgs) -> ExitCode {
     match result {
         Ok(report) => {
             if !args.quiet {
-                print!("{report}");
+                print_out(&report.to_string());
             }
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("error: {e}");
+            print_err(&format!("error: {e}\n"));
             ExitCode::from(EXIT_FAILURE)
         }
     }
