@@ -9,6 +9,7 @@
 pub mod catalog;
 pub mod cli;
 pub mod discover;
+pub mod interrupt;
 pub mod lock;
 pub mod mesh;
 pub mod model;

@@ -9,6 +9,7 @@ use granflow::cli::{
     print_err, print_out, Cli, Command, RunArgs, ScenarioArgs, EXIT_BAD_INPUT, EXIT_FAILURE,
 };
 use granflow::discover;
+use granflow::interrupt;
 use granflow::lock::{self, Lock, LockError};
 use granflow::progress::RunProgress;
 use granflow::runner;
@@ -36,6 +37,12 @@ fn check(args: &ScenarioArgs) -> ExitCode {
                 run.info().layers,
                 run.stage_names().join(" → ")
             ));
+            if run.mass() <= 0.0 {
+                print_err(&format!(
+                    "warning: {}: the initial state holds no mass (initial.h is 0 everywhere); a run will end at once with status no_mass\n",
+                    args.scenario.display()
+                ));
+            }
             ExitCode::SUCCESS
         }
         Err(code) => code,
@@ -85,6 +92,7 @@ fn run(args: &RunArgs) -> ExitCode {
         Ok(lock) => lock,
         Err(code) => return code,
     };
+    interrupt::install();
     let mut progress = RunProgress::new(
         args.progress,
         args.quiet,
@@ -94,6 +102,20 @@ fn run(args: &RunArgs) -> ExitCode {
     let result = runner::run_to_files(&scn, &output, &mut |p| progress.update(&p));
     progress.finish();
     match result {
+        Ok(report) if report.summary.status == "interrupted" => {
+            // Said even with --quiet: the user asked for the stop and needs to know
+            // what was kept.
+            print_err(&format!(
+                "granflow: interrupted at t = {} s; partial results in {} and {}\n",
+                runner::sig(report.summary.t_end),
+                report.h5.display(),
+                report.front_csv.display()
+            ));
+            if !args.quiet {
+                print_out(&report.to_string());
+            }
+            ExitCode::from(interrupt::EXIT_INTERRUPTED)
+        }
         Ok(report) => {
             if !args.quiet {
                 print_out(&report.to_string());

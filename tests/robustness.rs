@@ -660,3 +660,159 @@ fn step_records_are_flushed_between_snapshots() {
     assert_eq!((status.as_str(), nt), ("unfinished", 1));
     assert!(steps > 8192);
 }
+
+// ---------------------------------------------------------------------------------------
+// Items 5–7: honest statuses, readable numbers, Ctrl-C.
+
+const OUTFLOW: &str = r#"[domain]
+x_min = 0.0
+x_max = 1.0
+cells = 100
+slope_deg = 35
+
+[rheology]
+law = "coulomb"
+mu_deg = 10
+
+[initial]
+h = "if(x < 0.3, 0.05, 0)"
+
+[boundary]
+left = "wall"
+right = "outflow"
+
+[time]
+t_end = 20
+stop_at_rest = true
+"#;
+
+#[test]
+fn outflowed_and_no_mass_runs_say_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let scn = write(dir.path(), "out.toml", OUTFLOW);
+    let h5 = dir.path().join("out.h5");
+    let (code, stdout, stderr) = output(&os!["run", scn, "-o", h5]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("granflow: outflowed"), "{stdout}");
+    assert!(!stdout.contains("NaN"), "{stdout}");
+    assert_eq!(h5_state(&h5).0, "outflowed");
+    // Without the stop-at-rest rule too: nothing is left to simulate.
+    let (code, stdout, _) = output(&os![
+        "run",
+        scn,
+        "-o",
+        h5,
+        "--set",
+        "time.stop_at_rest=false"
+    ]);
+    assert_eq!(code, 0);
+    assert!(stdout.contains("granflow: outflowed"), "{stdout}");
+
+    let empty = write(
+        dir.path(),
+        "empty.toml",
+        &OUTFLOW.replace("\"if(x < 0.3, 0.05, 0)\"", "0"),
+    );
+    let (code, _, stderr) = output(&os!["check", empty]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stderr.contains("warning") && stderr.contains("no mass"),
+        "{stderr}"
+    );
+    let (code, stdout, stderr) = output(&os!["run", empty, "-o", h5]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("granflow: no_mass"), "{stdout}");
+    assert!(!stdout.contains("NaN"), "{stdout}");
+    assert_eq!(h5_state(&h5).0, "no_mass");
+}
+
+#[test]
+fn report_numbers_have_significant_digits() {
+    let dir = tempfile::tempdir().unwrap();
+    let wet = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/dam_break_wet.toml");
+    let (code, stdout, stderr) = output(&os![
+        "run",
+        wet,
+        "-o",
+        dir.path().join("w.h5"),
+        "--set",
+        "time.t_end=1e-5"
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("at t = 1.000e-5 s"), "{stdout}");
+    assert!(!stdout.contains("0.0000"), "{stdout}");
+    assert!(stdout.contains("the front did not move"), "{stdout}");
+}
+
+fn sigint(child: &Child) {
+    let ok = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok);
+}
+
+#[test]
+fn ctrl_c_stops_a_run_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.h5");
+    let scn = collapse();
+    let mut args = os!["run", scn, "-o", out].to_vec();
+    args.extend(SLOW.iter().map(std::ffi::OsStr::new));
+    let mut child = std::process::Command::new(bin())
+        .args(&args)
+        .current_dir(dir.path())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    assert!(wait_for(Duration::from_secs(30), || out.exists()
+        && dir.path().join("c.h5.lock").exists()));
+    std::thread::sleep(Duration::from_millis(500));
+    sigint(&child);
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    let code = child.wait().unwrap().code();
+    assert_eq!(code, Some(130), "{stderr}");
+    assert!(
+        stderr.contains("partial results in") && stderr.contains("c.h5"),
+        "{stderr}"
+    );
+    let (status, nt, steps) = h5_state(&out);
+    assert_eq!(status, "interrupted");
+    assert!(nt >= 2 && steps > 10, "{nt} snapshots, {steps} steps");
+    // The interrupted run's lock is released.
+    assert!(!dir.path().join("c.h5.lock").exists());
+}
+
+#[test]
+fn ctrl_c_stops_a_sweep_which_then_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = slow_sweep(dir.path());
+    let out = dir.path().join("out");
+    let args = os!["sweep", sweep, "-o", out, "--jobs", "1", "-q"];
+    let mut child = spawn(&args, dir.path());
+    let slow = out.join("cells=3000__t_end=10.h5");
+    assert!(wait_for(Duration::from_secs(60), || slow.exists()));
+    std::thread::sleep(Duration::from_millis(300));
+    sigint(&child);
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    assert_eq!(child.wait().unwrap().code(), Some(130), "{stderr}");
+    assert!(stderr.contains("rerun"), "{stderr}");
+    assert_eq!(h5_state(&slow).0, "interrupted");
+    let o = granflow().args(args).output().unwrap();
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(h5_state(&slow).0, "completed");
+}

@@ -321,6 +321,10 @@ fn execute(
     pool.scope(|s| {
         for _ in 0..jobs.min(todo.len()) {
             s.spawn(|_| loop {
+                // After Ctrl-C no new run starts; running ones stop by their own rule.
+                if crate::interrupt::requested() {
+                    break;
+                }
                 let i = next.fetch_add(1, Ordering::SeqCst);
                 let Some(&slot) = todo.get(i) else { break };
                 let run = mine[slot];
@@ -555,6 +559,7 @@ fn finish(report: &SweepReport, quiet: bool, merged: bool) -> u8 {
 
 /// `granflow sweep …`: returns the exit code.
 pub fn main(args: &SweepArgs) -> u8 {
+    crate::interrupt::install();
     let result = match &args.command {
         Some(SweepCommand::Merge(m)) => merge(&m.dir).map(|r| (r, m.quiet, true)),
         None => {
@@ -572,6 +577,13 @@ pub fn main(args: &SweepArgs) -> u8 {
         }
     };
     match result {
+        Ok((report, _, _)) if crate::interrupt::requested() => {
+            print_err(&format!(
+                "granflow: sweep interrupted; finished runs and the summary so far are in {} (rerun the same command to resume)\n",
+                report.dir.display()
+            ));
+            crate::interrupt::EXIT_INTERRUPTED
+        }
         Ok((report, quiet, merged)) => finish(&report, quiet, merged),
         Err(e) => {
             print_err(&format!("error: {e}\n"));
