@@ -3,7 +3,7 @@
 //! a scenario or a `ScenarioError` (exit 0 or 2), never a panic, an abort (stack
 //! overflow, out of memory) or a hang.
 //!
-//! By default a fixed number of cases runs (deterministic, a few seconds). CI runs it
+//! By default a fixed number of cases runs (deterministic, about a second). CI runs it
 //! for a time budget: `GRANFLOW_FUZZ_SECONDS=60 cargo test --release --test
 //! fuzz_scenario`. A failing input is printed (proptest shrinks it first).
 
@@ -16,6 +16,9 @@ use proptest::test_runner::{Config, TestCaseError, TestRunner};
 /// Longest a single input may take to load and set up. Far above the few milliseconds
 /// an input takes: this catches hangs, not slowness.
 const PER_INPUT: Duration = Duration::from_secs(20);
+
+/// Rounds of 256 inputs when no time budget is given.
+const DEFAULT_ROUNDS: u32 = 8;
 
 fn scenarios() -> Vec<String> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
@@ -109,8 +112,8 @@ const NASTY: &[&str] = &[
 /// Values built at run time: deep and long expressions, long numbers.
 fn huge_values() -> Vec<String> {
     vec![
-        format!("\"{}x\"", "-".repeat(5000)),
-        format!("\"{}x{}\"", "(".repeat(3000), ")".repeat(3000)),
+        format!("\"{}x\"", "-".repeat(100_000)),
+        format!("\"{}x{}\"", "(".repeat(20_000), ")".repeat(20_000)),
         format!("\"{}\"", vec!["x"; 4000].join("+")),
         format!("\"{}x{}\"", "sin(".repeat(600), ")".repeat(600)),
         format!("\"{}\"", vec!["0.01*exp(-x^2)"; 60].join("+")),
@@ -283,11 +286,35 @@ fn overrides() -> impl Strategy<Value = Vec<String>> {
     })
 }
 
+/// A real scenario with the value of one profile (`h`, `u`, `w`, `b`) replaced: the
+/// expressions are where deep input does harm, and they are only reached when the rest
+/// of the file is valid.
+fn profile_edit() -> impl Strategy<Value = String> {
+    let texts = scenarios();
+    (0..texts.len(), any::<prop::sample::Index>(), 0..N_NASTY).prop_map(move |(k, at, value)| {
+        let mut lines: Vec<String> = texts[k].lines().map(str::to_owned).collect();
+        let profiles: Vec<usize> = (0..lines.len())
+            .filter(|&i| {
+                let key = lines[i].split('=').next().unwrap_or("").trim();
+                matches!(key, "h" | "u" | "w" | "b")
+            })
+            .collect();
+        if !profiles.is_empty() {
+            let i = profiles[at.index(profiles.len())];
+            let key = lines[i].split('=').next().unwrap_or("").to_owned();
+            lines[i] = format!("{key}= {}", nasty(value));
+        }
+        lines.join("\n")
+    })
+}
+
 fn input() -> impl Strategy<Value = (String, Vec<String>)> {
     prop_oneof![
         any::<Vec<u8>>().prop_map(|b| String::from_utf8_lossy(&b).into_owned()),
         edited_scenario(),
         edited_scenario(),
+        profile_edit(),
+        profile_edit(),
         generated_document(),
     ]
     .prop_flat_map(|text| (Just(text), overrides()))
@@ -319,8 +346,10 @@ fn any_input_loads_or_is_refused_without_panic_or_hang() {
             panic!("{e}");
         }
         round += 1;
+        // Without a budget: a fixed number of rounds (about a second in a debug build).
         match budget {
             Some(seconds) if start.elapsed().as_secs_f64() < seconds => continue,
+            None if round < DEFAULT_ROUNDS => continue,
             _ => break,
         }
     }
