@@ -120,6 +120,40 @@ fn run_into_a_closed_pipe_does_not_panic() {
 }
 
 #[test]
+fn other_commands_into_a_closed_pipe_do_not_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    for args in [
+        vec!["completions", "bash"],
+        vec!["init", "mine", "--from", "collapse"],
+        vec!["scenarios"],
+        vec!["check", "mine.toml"],
+    ] {
+        // A shell that waits, so the reader is gone before granflow writes.
+        let mut child = std::process::Command::new("sh")
+            .arg("-c")
+            .arg("sleep 0.2; exec \"$0\" \"$@\"")
+            .arg(bin())
+            .args(&args)
+            .current_dir(dir.path())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let mut stderr = String::new();
+        child
+            .stderr
+            .take()
+            .unwrap()
+            .read_to_string(&mut stderr)
+            .unwrap();
+        let code = child.wait().unwrap().code();
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert_eq!(code, Some(0), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
 fn sweep_into_a_closed_pipe_does_not_panic() {
     let dir = tempfile::tempdir().unwrap();
     let sweep = write(
