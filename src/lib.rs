@@ -9,10 +9,13 @@
 pub mod catalog;
 pub mod cli;
 pub mod discover;
+pub mod interrupt;
+pub mod lock;
 pub mod mesh;
 pub mod model;
 pub mod numerics;
 pub mod output;
+pub mod overwrite;
 pub mod physics;
 pub mod pipeline;
 pub mod progress;

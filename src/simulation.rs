@@ -69,6 +69,8 @@ struct Tally {
     last: Diagnostics,
     /// First time of the current period at rest.
     rest_since: Option<f64>,
+    /// Mass of the initial state, for the stop rules.
+    mass0: f64,
 }
 
 impl<M: Model> Simulation<M> {
@@ -199,6 +201,7 @@ impl<M: Model> Simulation<M> {
             front0: d0.front_x,
             last: d0,
             rest_since: (d0.max_speed <= self.model.rest_speed()).then_some(0.0),
+            mass0: d0.mass,
         };
         let result = self.run_loop(sink, progress, &mut tally, d0);
         let status = match &result {
@@ -247,6 +250,7 @@ impl<M: Model> Simulation<M> {
                 next_dt: self.cfl_dt(d.signal_speed),
                 x: self.mesh.centres(),
                 at_rest,
+                mass0: tally.mass0,
             };
             let mut stop = None;
             for rule in &mut self.rules {

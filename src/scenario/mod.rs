@@ -15,7 +15,9 @@ mod raw;
 mod validate;
 
 pub use error::ScenarioError;
+pub(crate) use profile::read_bounded;
 pub use profile::Profile;
+pub(crate) use validate::MAX_SCENARIO_BYTES;
 pub use validate::{load_file, load_str};
 
 use std::path::PathBuf;
@@ -90,6 +92,9 @@ pub struct OutputSpec {
 /// A validated scenario: every value checked, nothing left to interpret.
 #[derive(Debug, Clone)]
 pub struct Scenario {
+    /// Things the user should know that are not errors (keys ignored after a law
+    /// switch, …), one sentence each; printed as `note: …`.
+    pub notes: Vec<String>,
     /// The TOML text as read, after `--set` overrides (stored in the output file).
     pub source_toml: String,
     /// Directory of the scenario file (tables are resolved against it).

@@ -28,6 +28,8 @@ pub trait Run: Send {
     fn cells(&self) -> usize;
     /// Run metadata (model, pressure, layers, …).
     fn info(&self) -> &RunInfo;
+    /// Mass of the current (before a run: the initial) state.
+    fn mass(&self) -> f64;
 }
 
 impl<M: crate::model::Model> Run for Simulation<M> {
@@ -43,6 +45,9 @@ impl<M: crate::model::Model> Run for Simulation<M> {
     }
     fn cells(&self) -> usize {
         self.mesh.cells()
+    }
+    fn mass(&self) -> f64 {
+        self.diagnostics().mass
     }
     fn info(&self) -> &RunInfo {
         &self.info

@@ -59,6 +59,7 @@ impl Case {
         u: impl Fn(f64) -> f64 + Send + Sync + 'static,
     ) -> Simulation<Granular> {
         let scn = Scenario {
+            notes: Vec::new(),
             source_toml: String::new(),
             base_dir: ".".into(),
             domain: Domain {

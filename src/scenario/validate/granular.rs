@@ -41,7 +41,14 @@ pub(super) fn coefficient(
     }
 }
 
-pub(super) fn rheology(r: &RawRheology) -> Res<FrictionLaw> {
+/// The friction law. Keys of the other law are an error (a mix-up in the file), unless
+/// `rheology.law` was overridden (`--set`, a sweep axis): then they are left over from
+/// the file's own law and are ignored, with a note naming them.
+pub(super) fn rheology(
+    r: &RawRheology,
+    law_overridden: bool,
+    notes: &mut Vec<String>,
+) -> Res<FrictionLaw> {
     let law = required("rheology.law", r.law.as_deref())?;
     #[derive(Clone, Copy, PartialEq)]
     enum Law {
@@ -66,7 +73,18 @@ pub(super) fn rheology(r: &RawRheology) -> Res<FrictionLaw> {
         Law::Coulomb => (&mu_i_keys, "coulomb", "mu_i"),
         Law::MuI => (&coulomb_keys, "mu_i", "coulomb"),
     };
-    if let Some((name, _)) = foreign.iter().find(|(_, given)| *given) {
+    let given: Vec<&str> = foreign
+        .iter()
+        .filter(|(_, given)| *given)
+        .map(|(name, _)| *name)
+        .collect();
+    if law_overridden && !given.is_empty() {
+        let keys: Vec<String> = given.iter().map(|n| format!("rheology.{n}")).collect();
+        notes.push(format!(
+            "{} ignored: only used by law = \"{other}\" and rheology.law was set to \"{this}\"",
+            keys.join(", ")
+        ));
+    } else if let Some(name) = given.first() {
         return err(
             &format!("rheology.{name}"),
             format!("only used by law = \"{other}\" (rheology.law is \"{this}\"); remove it"),
