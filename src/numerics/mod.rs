@@ -7,6 +7,7 @@ pub mod dilatant;
 pub mod friction;
 pub mod hydrostatic;
 pub mod linalg;
+pub mod nh_multilayer;
 pub mod nonhydrostatic;
 pub mod projection;
 pub mod tracer;

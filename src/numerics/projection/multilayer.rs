@@ -226,7 +226,7 @@ impl MultilayerOperator {
 
     /// The rows of the system for the current coefficients and the velocities of
     /// `state`.
-    fn rows<'a>(&'a self, state: &'a State) -> MultilayerRows<'a> {
+    pub fn rows<'a>(&'a self, state: &'a State) -> MultilayerRows<'a> {
         let nh = state.nh.as_ref().expect("a non-hydrostatic state");
         MultilayerRows {
             op: self,
