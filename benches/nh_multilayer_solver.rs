@@ -19,15 +19,15 @@
 
 use std::time::Instant;
 
+use granflow::mesh::{BoundaryKind, Coordinates};
 use granflow::mesh::{Mesh, MeshSpec};
+use granflow::model::granular::state::{fill_tracer_ghosts, LayeredState};
 use granflow::numerics::banded::{stencil_residual, BandedCholesky, StencilRow};
 use granflow::numerics::linalg::{thomas, PressureRows};
 use granflow::numerics::projection::multilayer::MultilayerOperator;
-use granflow::scenario::{BoundaryKind, Coordinates};
-use granflow::state::{NonHydrostatic, State};
 use nalgebra::DMatrix;
 
-fn collapse_state(cells: usize, layers: usize) -> (Mesh, State) {
+fn collapse_state(cells: usize, layers: usize) -> (Mesh, LayeredState) {
     let spec = MeshSpec {
         x_min: -0.2,
         x_max: 3.0,
@@ -44,19 +44,20 @@ fn collapse_state(cells: usize, layers: usize) -> (Mesh, State) {
         .map(|x| 0.00182 + 0.12 * (-((x - 0.1) / 0.35f64).powi(2)).exp())
         .collect();
     let l = vec![1.0 / layers as f64; layers];
-    let mut state = State::from_profiles(&mesh, &l, &h, &vec![0.0; cells]);
-    let mut nh = NonHydrostatic::from_profile(&state, &vec![0.0; cells]);
+    let mut state = LayeredState::from_profiles(&mesh, &l, &h, &vec![0.0; cells]);
+    state.add_nonhydrostatic(&vec![0.0; cells]);
+    let mut hw = state.hw().to_vec();
     for i in 0..cells {
         for a in 0..layers {
             let z = (a as f64 + 0.5) / layers as f64;
             let k = (i + 1) * layers + a;
             state.hu[k] = h[i] * 1.5 * z.sqrt() * (-((x[i] - 0.4) / 0.5f64).powi(2)).exp();
-            nh.hw[k] = -h[i] * 0.1 * z * (3.0 * x[i]).sin();
+            hw[k] = -h[i] * 0.1 * z * (3.0 * x[i]).sin();
         }
     }
     state.fill_ghosts(&mesh);
-    nh.fill_ghosts(cells, layers);
-    state.nh = Some(nh);
+    fill_tracer_ghosts(&mut hw, cells, layers);
+    *state.hw_mut() = hw;
     (mesh, state)
 }
 

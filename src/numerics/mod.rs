@@ -8,6 +8,7 @@ pub mod friction;
 pub mod hydrostatic;
 pub mod linalg;
 pub mod nh_multilayer;
+
 pub mod nonhydrostatic;
 pub mod projection;
 pub mod tracer;

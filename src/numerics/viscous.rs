@@ -288,7 +288,13 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
 
     /// [`freeze_cell`](Self::freeze_cell) with the total pressures g_n h Σ_{β>α} l_β +
     /// p^nh_{α+1/2} (module documentation); `velocity` holds u^n.
-    fn freeze_cell_nonhydrostatic(&mut self, mesh: &Mesh, state: &State, i: usize, nu_max: f64) {
+    fn freeze_cell_nonhydrostatic(
+        &mut self,
+        mesh: &Mesh,
+        state: &LayeredState,
+        i: usize,
+        nu_max: f64,
+    ) {
         let n = self.layers;
         let (g_n, l) = (mesh.g_n, &state.l);
         let h = state.h[i];
@@ -486,12 +492,11 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
                 self.freeze_cell(mesh, state, i);
             }
             cells[count] = i;
-            let p_b = if self.p_nh.is_empty() {
-                g_n * h
+            impulses[count] = if self.p_nh.is_empty() {
+                dt * self.frozen[i * n] * g_n * h
             } else {
-                (g_n * h + self.p_nh[i * n]).max(0.0)
+                dt * self.frozen[i * n] * (g_n * h + self.p_nh[i * n]).max(0.0)
             };
-            impulses[count] = dt * self.frozen[i * n] * p_b;
             count += 1;
             if count == LANES {
                 self.solve_columns(state, cells, impulses, count, dt);

@@ -64,11 +64,11 @@ use std::ops::Range;
 
 use super::monolayer::{doubled_bed, face_depth, ConstraintResidual, NH_FILM_FRACTION};
 use super::{PressureSolver, ProjectionOperator};
+use crate::mesh::BoundaryKind;
 use crate::mesh::Mesh;
+use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
 use crate::numerics::banded::{BandedCholesky, StencilRow};
 use crate::numerics::linalg::PressureRows;
-use crate::scenario::BoundaryKind;
-use crate::state::State;
 
 /// Coefficients of one layer of one cell: the impulses of its base (α − 1/2) and top
 /// (α + 1/2) interfaces at its left and right faces, in δ(h_α u_α) and δ(h_α w_α).
@@ -141,7 +141,7 @@ impl MultilayerOperator {
 
     /// Recomputes the wet faces and the coefficients of 𝒯 from the thickness of
     /// `state` (module documentation).
-    pub fn update(&mut self, mesh: &Mesh, state: &State) {
+    pub fn update(&mut self, mesh: &Mesh, state: &LayeredState) {
         let (nx, n) = (self.nx, self.layers);
         debug_assert_eq!(state.layers, n);
         let h = &state.h[..];
@@ -226,13 +226,12 @@ impl MultilayerOperator {
 
     /// The rows of the system for the current coefficients and the velocities of
     /// `state`.
-    pub fn rows<'a>(&'a self, state: &'a State) -> MultilayerRows<'a> {
-        let nh = state.nh.as_ref().expect("a non-hydrostatic state");
+    pub fn rows<'a>(&'a self, state: &'a LayeredState) -> MultilayerRows<'a> {
         MultilayerRows {
             op: self,
             h: &state.h,
             hu: &state.hu,
-            hw: &nh.hw,
+            hw: state.hw(),
         }
     }
 
@@ -240,12 +239,17 @@ impl MultilayerOperator {
     /// δ(hu_α) = (𝒯_u Π)/l_α, δ(hw_α) = (𝒯_w Π)/l_α. Used for the correction (Π =
     /// Δt p̃) and for the explicit terms of step 2 (Π = Δt pⁿ). Faces without an
     /// unknown contribute nothing (their coefficients are 0).
-    pub fn apply_impulses(&self, state: &mut State, pi: &[f64]) {
+    pub fn apply_impulses(&self, state: &mut LayeredState, pi: &[f64]) {
         let (nx, n) = (self.nx, self.layers);
         if self.span.is_empty() {
             return;
         }
-        let nh = state.nh.as_mut().expect("a non-hydrostatic state");
+        let LayeredState { hu, tracers, .. } = state;
+        let hw = &mut tracers
+            .iter_mut()
+            .find(|t| t.name == HW)
+            .expect("a non-hydrostatic state carries hw")
+            .q;
         let (c0, c1) = (self.span.start.max(1), self.span.end.min(nx));
         for c in c0..=c1 {
             let (left, right) = (&pi[(c - 1) * n..c * n], &pi[c * n..(c + 1) * n]);
@@ -256,15 +260,15 @@ impl MultilayerOperator {
                 let du: f64 = k.u.iter().zip(&p).map(|(c, p)| c * p).sum();
                 let dw: f64 = k.w.iter().zip(&p).map(|(c, p)| c * p).sum();
                 let inv_l = 1.0 / self.l[a];
-                state.hu[c * n + a] += du * inv_l;
-                nh.hw[c * n + a] += dw * inv_l;
+                hu[c * n + a] += du * inv_l;
+                hw[c * n + a] += dw * inv_l;
             }
         }
     }
 
     /// The discrete constraint 𝒞 = 𝒯ᵀ(u, w) on the faces that carry an unknown, from
     /// the coefficients of the last [`update`](Self::update).
-    pub fn residual(&self, state: &State) -> ConstraintResidual {
+    pub fn residual(&self, state: &LayeredState) -> ConstraintResidual {
         let rows = self.rows(state);
         let mut res = ConstraintResidual {
             max_abs: 0.0,
@@ -286,8 +290,8 @@ impl MultilayerOperator {
     }
 
     /// Kinetic energy Σ_i Σ_α l_α ((hu_α)² + (hw_α)²)/(2h_i) of the physical cells.
-    pub fn kinetic_energy(state: &State) -> f64 {
-        let nh = state.nh.as_ref().expect("a non-hydrostatic state");
+    pub fn kinetic_energy(state: &LayeredState) -> f64 {
+        let hw = state.hw();
         let n = state.layers;
         (1..=state.nx)
             .filter(|&i| state.h[i] > 0.0)
@@ -295,7 +299,7 @@ impl MultilayerOperator {
                 (0..n)
                     .map(|a| {
                         let k = i * n + a;
-                        state.l[a] * (state.hu[k].powi(2) + nh.hw[k].powi(2))
+                        state.l[a] * (state.hu[k].powi(2) + hw[k].powi(2))
                     })
                     .sum::<f64>()
                     / (2.0 * state.h[i])
@@ -405,7 +409,7 @@ impl ProjectionOperator for MultilayerOperator {
     fn solve<S: PressureSolver<Row = StencilRow>>(
         &mut self,
         mesh: &Mesh,
-        state: &State,
+        state: &LayeredState,
         solver: &mut S,
         pi: &mut [f64],
     ) {
@@ -414,7 +418,7 @@ impl ProjectionOperator for MultilayerOperator {
         solver.solve(&rows, pi);
     }
 
-    fn correct(&mut self, mesh: &Mesh, state: &mut State, pi: &[f64], dt: f64) {
+    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64) {
         let (nx, n) = (self.nx, self.layers);
         self.apply_impulses(state, pi);
         let nh = state.nh.as_mut().expect("a non-hydrostatic state");
@@ -435,7 +439,7 @@ impl ProjectionOperator for MultilayerOperator {
         if self.merged_right {
             nh.p.copy_within((nx - 1) * n..nx * n, nx * n);
         }
-        nh.fill_ghosts(nx, n);
+        fill_tracer_ghosts(state.hw_mut(), nx, n);
         state.fill_ghosts(mesh);
     }
 }
@@ -453,13 +457,12 @@ impl PressureSolver for BandedCholesky {
 #[allow(clippy::needless_range_loop)] // index arithmetic mirrors the matrices
 mod tests {
     use super::*;
+    use crate::mesh::Coordinates;
     use crate::mesh::MeshSpec;
     use crate::numerics::banded::stencil_residual;
     use crate::numerics::projection::monolayer::{constraint_residual, MonolayerOperator};
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
     use crate::numerics::Stage;
-    use crate::scenario::Coordinates;
-    use crate::state::NonHydrostatic;
 
     /// A wet state on a curved bed with a sheared, layer-dependent velocity field that
     /// violates the constraints; `film` puts a film just thicker than the wet threshold
@@ -470,7 +473,7 @@ mod tests {
         left: BoundaryKind,
         right: BoundaryKind,
         film: bool,
-    ) -> (Mesh, State) {
+    ) -> (Mesh, LayeredState) {
         let spec = MeshSpec {
             x_min: 0.0,
             x_max: 1.0,
@@ -488,24 +491,28 @@ mod tests {
         }
         let mesh = Mesh::new(&spec, b);
         let l = vec![1.0 / layers as f64; layers];
-        let mut state = State::from_profiles(&mesh, &l, &h, &vec![0.0; cells]);
-        let mut nh = NonHydrostatic::from_profile(&state, &vec![0.0; cells]);
+        let mut state = LayeredState::from_profiles(&mesh, &l, &h, &vec![0.0; cells]);
+        state.add_nonhydrostatic(&vec![0.0; cells]);
+        let mut hw = state.hw().to_vec();
         for i in 0..cells {
             for a in 0..layers {
                 let z = (a as f64 + 0.5) / layers as f64;
                 let u = 0.5 * (4.0 * x[i]).sin() * (0.5 + z) + 0.1 * z * z;
                 let w = 0.1 * (5.0 * x[i] + z).cos();
                 state.hu[(i + 1) * layers + a] = h[i] * u;
-                nh.hw[(i + 1) * layers + a] = h[i] * w;
+                hw[(i + 1) * layers + a] = h[i] * w;
             }
         }
         state.fill_ghosts(&mesh);
-        nh.fill_ghosts(cells, layers);
-        state.nh = Some(nh);
+        fill_tracer_ghosts(&mut hw, cells, layers);
+        *state.hw_mut() = hw;
         (mesh, state)
     }
 
-    fn stage(mesh: &Mesh, state: &State) -> ProjectionStage<MultilayerOperator, BandedCholesky> {
+    fn stage(
+        mesh: &Mesh,
+        state: &LayeredState,
+    ) -> ProjectionStage<MultilayerOperator, BandedCholesky> {
         let n = state.layers;
         ProjectionStage::new(
             MultilayerOperator::new(mesh, &state.l),
@@ -514,7 +521,7 @@ mod tests {
         )
     }
 
-    fn residual(mesh: &Mesh, state: &State) -> ConstraintResidual {
+    fn residual(mesh: &Mesh, state: &LayeredState) -> ConstraintResidual {
         let mut op = MultilayerOperator::new(mesh, &state.l);
         op.update(mesh, state);
         op.residual(state)
@@ -580,7 +587,7 @@ mod tests {
                 for i in 180..=200 {
                     a.h[i] = 0.0;
                     a.hu[i] = 0.0;
-                    a.nh.as_mut().unwrap().hw[i] = 0.0;
+                    a.hw_mut()[i] = 0.0;
                 }
                 a.fill_ghosts(&mesh);
             }
@@ -604,6 +611,7 @@ mod tests {
                 stage(&mesh, &b).apply(&mesh, 1e-3, &mut b).unwrap();
             }
             let (na, nb) = (a.nh.as_ref().unwrap(), b.nh.as_ref().unwrap());
+            let (hwa, hwb) = (a.hw(), b.hw());
             let close = |x: &[f64], y: &[f64], what: &str| {
                 let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 for (k, (x, y)) in x.iter().zip(y).enumerate() {
@@ -611,7 +619,7 @@ mod tests {
                 }
             };
             close(&a.hu, &b.hu, "hu");
-            close(&na.hw, &nb.hw, "hw");
+            close(hwa, hwb, "hw");
             close(&na.p, &nb.p, "p");
             // The monolayer's own measure of its constraint holds for our solution.
             assert!(constraint_residual(&mesh, &b).relative() < 1e-12);
@@ -703,10 +711,10 @@ mod tests {
             for (left, right) in BOUNDARIES {
                 let (mesh, mut state) = moving_state(201, layers, left, right, true);
                 let before = MultilayerOperator::kinetic_energy(&state);
-                let (hu0, hw0) = (state.hu.clone(), state.nh.as_ref().unwrap().hw.clone());
+                let (hu0, hw0) = (state.hu.clone(), state.hw().to_vec());
                 stage(&mesh, &state).apply(&mesh, 1e-3, &mut state).unwrap();
                 let after = MultilayerOperator::kinetic_energy(&state);
-                let nh = state.nh.as_ref().unwrap();
+                let hw = state.hw();
                 let n = layers;
                 let removed: f64 = (1..=mesh.nx)
                     .map(|i| {
@@ -714,7 +722,7 @@ mod tests {
                             .map(|a| {
                                 let k = i * n + a;
                                 state.l[a]
-                                    * ((state.hu[k] - hu0[k]).powi(2) + (nh.hw[k] - hw0[k]).powi(2))
+                                    * ((state.hu[k] - hu0[k]).powi(2) + (hw[k] - hw0[k]).powi(2))
                             })
                             .sum::<f64>()
                             / (2.0 * state.h[i])
@@ -736,7 +744,7 @@ mod tests {
         for i in 20..30 {
             state.h[i] = 0.0;
             state.hu[i * 3..i * 3 + 3].fill(0.0);
-            state.nh.as_mut().unwrap().hw[i * 3..i * 3 + 3].fill(0.0);
+            state.hw_mut()[i * 3..i * 3 + 3].fill(0.0);
         }
         stage(&mesh, &state).apply(&mesh, 1e-3, &mut state).unwrap();
         let p = &state.nh.as_ref().unwrap().p;
