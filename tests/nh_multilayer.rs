@@ -115,19 +115,24 @@ fn collapse_conserves_mass_and_keeps_h_nonnegative() {
 /// L1 departures from the initial state (seed 003 eq. 35), maximal over the snapshots:
 /// Δx Σ|h − h⁰|, Δx Σ h/N Σ_α |u_α|, and the same for w.
 fn departures_from_rest(sink: &MemorySink, dx: f64, layers: usize) -> [f64; 3] {
+    departures_inside(sink, dx, layers, 0)
+}
+
+/// [`departures_from_rest`] over the cells `cut..nx − cut`.
+fn departures_inside(sink: &MemorySink, dx: f64, layers: usize, cut: usize) -> [f64; 3] {
     let h0 = &sink.snapshots[0].h;
     let nx = h0.len();
+    let cells = cut..nx - cut;
     let mut worst = [0.0f64; 3];
     for snap in &sink.snapshots {
-        let eh: f64 = snap
-            .h
-            .iter()
-            .zip(h0)
-            .map(|(h, h0)| (h - h0).abs())
+        let eh: f64 = cells
+            .clone()
+            .map(|i| (snap.h[i] - h0[i]).abs())
             .sum::<f64>()
             * dx;
         let layer_sum = |v: &[f64]| -> f64 {
-            (0..nx)
+            cells
+                .clone()
                 .map(|i| {
                     snap.h[i] / layers as f64
                         * (0..layers).map(|a| v[a * nx + i].abs()).sum::<f64>()
@@ -142,14 +147,37 @@ fn departures_from_rest(sink: &MemorySink, dx: f64, layers: usize) -> [f64; 3] {
     worst
 }
 
+/// Seed 003 §5.3, Table 6 away from the outflows: without the 3 cells next to each
+/// outflow boundary the departures from rest of the NH multilayer model are those of
+/// the hydrostatic one and proportional to δ (measured h: 4.8e-4, 3.7e-9, 2.6e-14 for
+/// δ = 1e-5, 1e-10, 1e-15), within the bound the hydrostatic multilayer test uses
+/// (100 δ for h, 300 δ for u and w).
+#[test]
+fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
+    for delta in [1e-5, 1e-10, 1e-15] {
+        let mut sim = build(
+            "nh_multilayer_at_rest.toml",
+            &[&format!("rheology.delta={delta:e}")],
+        );
+        let sink = run(&mut sim);
+        let [eh, eu, ew] = departures_inside(&sink, sim.mesh.dx, sim.state.layers, 3);
+        println!("  δ = {delta:.0e}, inside: {eh:.3e} {eu:.3e} {ew:.3e}");
+        assert!(
+            eh <= 100.0 * delta && eu <= 300.0 * delta && ew <= 300.0 * delta,
+            "δ = {delta}: {eh:e} {eu:e} {ew:e}"
+        );
+    }
+}
+
 /// Seed 003 §5.3, Table 6 (a): errors of the order of δ (paper: h 5.34e-5, 5.34e-10,
 /// 2.99e-16; u 5.38e-5, 5.39e-10, 5.39e-15; w 4.21e-5, 4.21e-10, 4.21e-15).
 ///
 /// KNOWN FAILURE (issue 10, open): measured h, u, w errors 6.3e-4, 1.6e-3, 1.1e-3
-/// (δ = 1e-5) and 1.3e-8, 3.0e-8, 2.9e-8 (δ = 1e-10). Away from the two outflow
-/// boundaries (10 cells) the h error is that of the hydrostatic model (3.2e-9 at
-/// δ = 1e-10); the excess comes from the edge cells at the outflows, where the
-/// non-hydrostatic pressure (extended evenly) acts on the creeping edge column.
+/// (δ = 1e-5), 1.3e-8, 3.0e-8, 2.9e-8 (δ = 1e-10) and 1.2e-13 for h (δ = 1e-15):
+/// proportional to δ, but 130 δ for h at δ = 1e-10 against the 100 δ bound (the
+/// hydrostatic model: 63–70 δ; the paper: 5.3 δ). The excess over the hydrostatic
+/// model is in the edge cells of the two outflows, where the non-hydrostatic pressure
+/// (extended evenly) acts on the creeping edge columns; inside, see the test above.
 #[test]
 #[ignore = "known failure: outflow-boundary creep of the NH multilayer model, see doc comment"]
 fn mass_at_repose_stays_at_rest_to_order_delta() {
