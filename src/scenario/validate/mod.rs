@@ -20,8 +20,8 @@ use super::raw::{
     RawBoundary, RawDomain, RawInitial, RawMaterial, RawOutput, RawScenario, RawTime,
 };
 use super::{
-    Boundaries, BoundaryKind, Coordinates, Domain, Initial, Material, OutputSpec, Pressure,
-    Scenario, TimeSpec,
+    Boundaries, BoundaryKind, Coordinates, Domain, Initial, Material, ModelSpec, OutputSpec,
+    Pressure, Scenario, TimeSpec,
 };
 use check::*;
 use dilatant::{dilatancy, sample_fraction};
