@@ -3,6 +3,7 @@
 //! machine: docs/performance.md, "Non-hydrostatic".
 //!
 //!     CARGO_TARGET_DIR=... cargo bench --bench nonhydrostatic [-- --quick] [-- --hydrostatic-only]
+//!     cargo bench --bench nonhydrostatic -- --multilayer-only   # the 20-layer case (issue 10: target ≤ 3×)
 //!
 //! Each case is `scenarios/collapse.toml` run with `model.pressure` hydrostatic and
 //! non-hydrostatic: both are advanced (untimed) to `t0`, then `steps` steps are timed,
@@ -30,6 +31,12 @@ struct Case {
 }
 
 const CASES: &[Case] = &[
+    Case {
+        name: "collapse 22°, 640 cells, 20 layers (seed 003 Table 2 grid, issue 10), h_i = 1.82 mm, from t = 0.3 s",
+        sets: &["model.layers=20", "initial.erodible_bed=1.82e-3"],
+        t0: 0.3,
+        steps: 200,
+    },
     Case {
         name: "collapse 22°, 640 cells (seed 000 grid), from t = 0.3 s",
         sets: &[],
@@ -123,11 +130,16 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let quick = args.iter().any(|a| a == "--quick");
     let hydrostatic_only = args.iter().any(|a| a == "--hydrostatic-only");
+    let multilayer_only = args.iter().any(|a| a == "--multilayer-only");
+    let cases: Vec<&Case> = CASES
+        .iter()
+        .filter(|c| !multilayer_only || c.sets.iter().any(|s| s.starts_with("model.layers")))
+        .collect();
     let bursts = if quick { 5 } else { 40 };
     if hydrostatic_only {
         println!("| case | hydrostatic step |");
         println!("|---|---|");
-        for case in CASES {
+        for case in cases.iter().copied() {
             let (h, _) = time_models(case, &["hydrostatic"], bursts).remove(0);
             println!("| {} | {} |", case.name, micros(h));
         }
@@ -136,7 +148,7 @@ fn main() {
     println!("| case | hydrostatic step | non-hydrostatic step | NH/H |");
     println!("|---|---|---|---|");
     let mut breakdown = Vec::new();
-    for case in CASES {
+    for case in cases.iter().copied() {
         let mut t = time_models(case, &["hydrostatic", "nonhydrostatic"], bursts);
         let (nh, h) = (t.pop().unwrap(), t.pop().unwrap());
         println!(

@@ -2,10 +2,13 @@
 //! from the scenario (seed 000 §3, seed 003 §4): hyperbolic → friction or viscous
 //! (→ projection).
 
+pub mod banded;
 pub mod dilatant;
 pub mod friction;
 pub mod hydrostatic;
 pub mod linalg;
+pub mod nh_multilayer;
+
 pub mod nonhydrostatic;
 pub mod projection;
 pub mod tracer;

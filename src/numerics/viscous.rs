@@ -36,6 +36,13 @@
 //! −l_α h (2/W) μ_w p_α u_α / √(u_α² + δ_u²) with u_α^n in the denominator, which only
 //! adds to the diagonal (seed 003 eq. 36).
 //!
+//! With the non-hydrostatic pressure of seed 003 (a state carrying `nh`), the pressures
+//! are the total ones, p_{α+1/2}/ρ = g_n h Σ_{β>α} l_β + p^nh_{α+1/2} (seed 003 after
+//! eq. 10), in the viscosities, the inertial numbers, the basal friction (eq. 11) and
+//! the sidewall force (eq. 36), with p^nh at t^n averaged from the two faces of the
+//! cell; a negative total pressure (grains lifted) gives no stress. Hydrostatic states
+//! take the code path above unchanged.
+//!
 //! Cells thinner than [`THIN_LAYER`] are treated as one layer with Coulomb friction
 //! (seed 003 Remark 2): the depth-averaged discharge gets the monolayer friction update
 //! and every layer moves with it. A cell dry at t^n and wetted by step 1 freezes its
@@ -122,6 +129,9 @@ pub struct MultilayerViscousStep<L: BasalFriction + LocalFriction> {
     inv_sqrt_above: Vec<f64>,
     /// 2/(l_{a−1} + l_a): 1/h_{α+1/2} in units of 1/h (a ≥ 1).
     inv_gap: Vec<f64>,
+    /// Non-hydrostatic pressure over density at t^n at the interfaces α − 1/2 of each
+    /// cell (mean of its faces), cell-major like `frozen`; empty for hydrostatic states.
+    p_nh: Vec<f64>,
     /// Per-column scratch (N): velocities; per layer and lane, couplings
     /// Δt ν / h_{α+1/2}, reduced diagonal and rhs.
     velocity: Vec<f64>,
@@ -163,6 +173,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             above,
             inv_sqrt_above,
             inv_gap,
+            p_nh: Vec::new(),
             velocity: vec![0.0; n],
             coupling: vec![[0.0; LANES]; n],
             diag: vec![[0.0; LANES]; n],
@@ -216,6 +227,10 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             Regularization::Bound => 250.0 * (GRAVITY * h * h * h).sqrt(),
             Regularization::Delta { .. } => f64::INFINITY,
         };
+        if !self.p_nh.is_empty() {
+            self.freeze_cell_nonhydrostatic(mesh, state, i, nu_max);
+            return;
+        }
         let u = &self.velocity;
 
         // The bed.
@@ -267,6 +282,78 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
                 let p_mid = p_b * (self.above[a] - 0.5 * l_a);
                 let ua = self.velocity[a];
                 *side = 2.0 / width * mu_w * p_mid / (ua * ua + du * du).sqrt();
+            }
+        }
+    }
+
+    /// [`freeze_cell`](Self::freeze_cell) with the total pressures g_n h Σ_{β>α} l_β +
+    /// p^nh_{α+1/2} (module documentation); `velocity` holds u^n.
+    fn freeze_cell_nonhydrostatic(
+        &mut self,
+        mesh: &Mesh,
+        state: &LayeredState,
+        i: usize,
+        nu_max: f64,
+    ) {
+        let n = self.layers;
+        let (g_n, l) = (mesh.g_n, &state.l);
+        let h = state.h[i];
+        let inv_h = 1.0 / h;
+        let base = i * n;
+        let p_hydro = g_n * h;
+        let pressure = |a: usize, p_nh: &[f64]| (p_hydro * self.above[a] + p_nh[base + a]).max(0.0);
+        let u = &self.velocity;
+        let inv_h1 = inv_h / l[0];
+        let p_b = pressure(0, &self.p_nh);
+        self.frozen[base] = match self.opts.basal {
+            BasalCondition::Coulomb => {
+                let shear = (u[0] * inv_h1).abs();
+                self.law.mu_at(shear * self.law.inertial_scale(p_b)) + self.jop(h)
+            }
+            BasalCondition::NoSlip => {
+                let shear = (2.0 * u[0] * inv_h1).abs();
+                let mu = self.law.mu_at(shear * self.law.inertial_scale(p_b)) + self.jop(h);
+                self.viscosity(mu, p_b, shear, nu_max)
+            }
+        };
+        let inv_2dx = 0.5 / mesh.dx;
+        for a in 1..n {
+            let shear = (u[a] - u[a - 1]) * inv_h * self.inv_gap[a];
+            let s = if self.opts.c_msm {
+                let pair = |j: usize| {
+                    let hj = state.h[j];
+                    velocity(hj, state.hu[j * n + a - 1]) + velocity(hj, state.hu[j * n + a])
+                };
+                let dx_sum = (pair(i + 1) - pair(i - 1)) * inv_2dx;
+                (shear * shear + dx_sum * dx_sum).sqrt()
+            } else {
+                shear.abs()
+            };
+            let p = pressure(a, &self.p_nh);
+            let mu = self.law.mu_at(s * self.law.inertial_scale(p)) + self.jop(h * self.above[a]);
+            self.frozen[base + a] = self.viscosity(mu, p, s, nu_max);
+        }
+        if let Some(Sidewall {
+            mu_w,
+            width,
+            form: SidewallForm::Layer,
+        }) = self.opts.sidewall
+        {
+            let du = match self.opts.regularization {
+                Regularization::Delta { delta } => delta,
+                Regularization::Bound => SIDEWALL_DELTA_U,
+            };
+            for (a, l_a) in l.iter().enumerate() {
+                let top = if a + 1 < n {
+                    self.p_nh[base + a + 1]
+                } else {
+                    0.0
+                };
+                let p_mid = (p_hydro * (self.above[a] - 0.5 * l_a)
+                    + 0.5 * (self.p_nh[base + a] + top))
+                    .max(0.0);
+                let ua = self.velocity[a];
+                self.side[base + a] = 2.0 / width * mu_w * p_mid / (ua * ua + du * du).sqrt();
             }
         }
     }
@@ -363,6 +450,15 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
     fn prepare(&mut self, mesh: &Mesh, state: &LayeredState) {
         debug_assert_eq!(state.layers, self.layers);
         let n = self.layers;
+        if let Some(nh) = &state.nh {
+            // p^nh at t^n at the cell centres: the mean of the two faces.
+            self.p_nh.resize((mesh.nx + 2) * n, 0.0);
+            for i in 1..=mesh.nx {
+                for a in 0..n {
+                    self.p_nh[i * n + a] = 0.5 * (nh.p[(i - 1) * n + a] + nh.p[i * n + a]);
+                }
+            }
+        }
         for i in 1..=mesh.nx {
             if state.h[i] > H_DRY {
                 self.freeze_cell(mesh, state, i);
@@ -396,7 +492,11 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
                 self.freeze_cell(mesh, state, i);
             }
             cells[count] = i;
-            impulses[count] = dt * self.frozen[i * n] * g_n * h;
+            impulses[count] = if self.p_nh.is_empty() {
+                dt * self.frozen[i * n] * g_n * h
+            } else {
+                dt * self.frozen[i * n] * (g_n * h + self.p_nh[i * n]).max(0.0)
+            };
             count += 1;
             if count == LANES {
                 self.solve_columns(state, cells, impulses, count, dt);

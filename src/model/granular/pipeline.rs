@@ -8,10 +8,13 @@
 use crate::mesh::Mesh;
 use crate::model::granular::config::{MultilayerSpec, Pressure};
 use crate::model::granular::state::LayeredState;
+use crate::numerics::banded::BandedCholesky;
 use crate::numerics::friction::CoulombFrictionStep;
 use crate::numerics::hydrostatic::HydrostaticStep;
+use crate::numerics::nh_multilayer::NhViscousStep;
 use crate::numerics::nonhydrostatic::NhFrictionStep;
 use crate::numerics::projection::monolayer::MonolayerOperator;
+use crate::numerics::projection::multilayer::MultilayerOperator;
 use crate::numerics::projection::{ProjectionStage, ThomasSolver};
 use crate::numerics::viscous::{MultilayerViscousStep, ViscousOptions};
 use crate::numerics::Stage;
@@ -66,13 +69,28 @@ impl WithLaw for Stages<'_> {
                 };
                 stages.push(Box::new(MultilayerViscousStep::new(law, nx, l, opts)));
             }
-            (Pressure::NonHydrostatic, _) => {
-                // Validation admits the non-hydrostatic pressure with one layer only.
-                assert_eq!(l.len(), 1, "non-hydrostatic multilayer model");
+            (Pressure::NonHydrostatic, 1) => {
                 stages.push(Box::new(NhFrictionStep::new(law, mesh)));
                 stages.push(Box::new(ProjectionStage::new(
                     MonolayerOperator::new(mesh),
                     ThomasSolver::default(),
+                    nx,
+                )));
+            }
+            (Pressure::NonHydrostatic, n) => {
+                // Seed 003 §4: explicit p^n and the μ(I) viscous step with the total
+                // pressures, then the exact N-layer projection.
+                let opts = ViscousOptions {
+                    basal: spec.basal,
+                    regularization: spec.regularization,
+                    sidewall: spec.sidewall,
+                    c_msm: spec.c_msm,
+                };
+                let viscous = MultilayerViscousStep::new(law, nx, l, opts);
+                stages.push(Box::new(NhViscousStep::new(mesh, l, viscous)));
+                stages.push(Box::new(ProjectionStage::new(
+                    MultilayerOperator::new(mesh, l),
+                    BandedCholesky::new(n, nx + 1),
                     nx,
                 )));
             }

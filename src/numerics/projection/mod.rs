@@ -26,6 +26,7 @@
 //! eq. (28).
 
 pub mod monolayer;
+pub mod multilayer;
 
 use super::linalg::{thomas_rows, PressureRows, ScalarRow};
 use super::{Stage, StageError};

@@ -151,12 +151,6 @@ pub(super) fn model(m: &RawModel) -> Res<ModelSpec> {
             return err("model.layers", "the dilatant model has one layer");
         }
     }
-    if layers > 1 && pressure == Pressure::NonHydrostatic {
-        return err(
-            "model.pressure",
-            "the multilayer non-hydrostatic model (layers > 1 with \"nonhydrostatic\") is not available yet",
-        );
-    }
     Ok(ModelSpec {
         kind,
         pressure,

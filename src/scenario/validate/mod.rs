@@ -20,8 +20,8 @@ use super::raw::{
     RawBoundary, RawDomain, RawInitial, RawMaterial, RawOutput, RawScenario, RawTime,
 };
 use super::{
-    Boundaries, BoundaryKind, Coordinates, Domain, Initial, Material, OutputSpec, Pressure,
-    Scenario, TimeSpec,
+    Boundaries, BoundaryKind, Coordinates, Domain, Initial, Material, ModelSpec, OutputSpec,
+    Pressure, Scenario, TimeSpec,
 };
 use check::*;
 use dilatant::{dilatancy, sample_fraction};
@@ -38,6 +38,9 @@ const MIN_RELATIVE_DX: f64 = 1e-9;
 pub(crate) const MAX_SNAPSHOTS: f64 = 100_000.0;
 /// Largest accepted `model.layers`.
 pub(crate) const MAX_LAYERS: i64 = 1000;
+/// Largest memory (GiB) of the exact pressure solver of the multilayer non-hydrostatic
+/// model: the band of its Cholesky factor, (cells + 1) N (N + 2) values.
+const MAX_NH_SOLVER_GIB: f64 = 4.0;
 
 /// Reads and validates a scenario file. Tables are resolved against the file's directory
 /// and the default output file is `<file stem>.h5`.
@@ -154,6 +157,7 @@ fn validate(
             ),
         );
     }
+    nonhydrostatic_solver_fits(&domain, &model)?;
     let raw_initial = section("initial", raw.initial)?;
     let raw_w = raw_initial.w.is_some();
     let initial = initial(raw_initial, base_dir)?;
@@ -213,6 +217,26 @@ fn validate(
         output,
         submarine,
     })
+}
+
+/// The multilayer non-hydrostatic model stores the band of its pressure matrix's
+/// Cholesky factor; refuse sizes that cannot fit rather than fail allocating.
+fn nonhydrostatic_solver_fits(domain: &Domain, model: &ModelSpec) -> Res<()> {
+    if model.pressure != Pressure::NonHydrostatic || model.layers == 1 {
+        return Ok(());
+    }
+    let n = model.layers as f64;
+    let gib = (domain.cells as f64 + 1.0) * n * (n + 2.0) * 8.0 / (1u64 << 30) as f64;
+    if gib > MAX_NH_SOLVER_GIB {
+        return err(
+            "model.layers",
+            format!(
+                "{} layers on {} cells need {gib:.1} GiB for the non-hydrostatic pressure solver (at most {MAX_NH_SOLVER_GIB} GiB); use fewer layers or cells",
+                model.layers, domain.cells
+            ),
+        );
+    }
+    Ok(())
 }
 
 fn domain(d: RawDomain) -> Res<Domain> {
@@ -475,6 +499,19 @@ t_end = 2.0
     fn load_set(text: &str, sets: &[&str]) -> Res<Scenario> {
         let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
         load_str(text, Path::new("."), &sets)
+    }
+
+    #[test]
+    fn multilayer_nonhydrostatic_size_is_bounded_by_the_solver_memory() {
+        let nh = ["model.pressure=nonhydrostatic", "model.layers=100"];
+        assert!(load_set(MINIMAL, &nh).is_ok());
+        let e = load_set(MINIMAL, &[&nh[..], &["domain.cells=100000"]].concat()).unwrap_err();
+        assert!(
+            e.message().contains("GiB") && e.to_string().contains("model.layers"),
+            "{e}"
+        );
+        // The hydrostatic model stores no such band.
+        assert!(load_set(MINIMAL, &["model.layers=100", "domain.cells=100000"]).is_ok());
     }
 
     /// Loads `text`, expects an error at `key` on `line`, returns it.

@@ -1,0 +1,190 @@
+#!/usr/bin/env python3
+"""Error against run time for the granular model family (seed 003 §5.5.3, Table 9).
+
+    python scripts/error_vs_runtime.py [--granflow PATH] [--jobs N] [--out DIR]
+                                       [--slopes 0,22] [--set KEY=VALUE ...]
+
+Runs, through one `granflow sweep` per slope, the collapse of seed 003 §5.1/§5.5
+(scenarios/nh_multilayer_collapse.toml: domain [-0.2, 3] m, 640 cells, Table 1
+material, CFL 0.1) with the models of Table 9 — H-1, H-10, H-20 l. and NH-1, NH-2,
+NH-5, NH-8, NH-10 l. — and the reference NH-20 l., for
+  θ = 0°:  h_i = 1 mm,    t_ini = 0.24 s, t_fin = 1.5 s,
+  θ = 22°: h_i = 1.82 mm, t_ini = 0.32 s, t_fin = 3 s.
+It prints the relative l2 error of h against NH-20 l. at t_ini and t_fin and the
+wall time of each run beside the paper's values, writes DIR/error_vs_runtime.csv
+and DIR/error_vs_runtime.png (error against wall time, log-log, one labelled point
+per model, both slopes), and exits with 1 if a reference run failed (2 on bad
+arguments). `--set` is passed to every run (e.g. `--set domain.cells=160` for a
+quick check; the errors are then not those of the paper's grid).
+"""
+
+import argparse
+import csv
+import pathlib
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from granflow_io import Run  # noqa: E402
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+SCENARIO = ROOT / "scenarios" / "nh_multilayer_collapse.toml"
+
+# (pressure, layers, label); the reference is NH-20 l.
+MODELS = [
+    ("nonhydrostatic", 20, "NH-20 l."),
+    ("nonhydrostatic", 10, "NH-10 l."),
+    ("nonhydrostatic", 8, "NH-8 l."),
+    ("nonhydrostatic", 5, "NH-5 l."),
+    ("nonhydrostatic", 2, "NH-2 l."),
+    ("nonhydrostatic", 1, "NH-1 l."),
+    ("hydrostatic", 20, "H-20 l."),
+    ("hydrostatic", 10, "H-10 l."),
+    ("hydrostatic", 1, "H-1 l."),
+]
+
+# slope: (h_i, t_ini, t_fin, output interval, {label: (err t_ini %, err t_fin %, t_comp s)})
+CASES = {
+    0: (1e-3, 0.24, 1.5, 0.06, {
+        "NH-20 l.": (None, None, 1096.7), "NH-10 l.": (0.30, 0.33, 368.2),
+        "NH-8 l.": (0.45, 0.47, 197.7), "NH-5 l.": (0.79, 0.88, 60.1),
+        "NH-2 l.": (1.68, 1.93, 14.2), "NH-1 l.": (3.05, 2.30, 6.4),
+        "H-20 l.": (10.01, 8.32, 56.1), "H-10 l.": (10.41, 8.58, 28.8),
+        "H-1 l.": (11.65, 11.25, 4.7)}),
+    22: (1.82e-3, 0.32, 3.0, 0.04, {
+        "NH-20 l.": (None, None, 1517.4), "NH-10 l.": (0.92, 1.92, 544.6),
+        "NH-8 l.": (1.31, 2.87, 290.6), "NH-5 l.": (2.19, 5.58, 89.2),
+        "NH-2 l.": (4.70, 14.18, 21.0), "NH-1 l.": (6.47, 22.80, 9.7),
+        "H-20 l.": (7.36, 11.21, 79.4), "H-10 l.": (8.23, 12.90, 41.0),
+        "H-1 l.": (11.78, 31.93, 7.1)}),
+}
+
+
+def sweep_file(path, slope, extra_sets):
+    h_i, _, t_fin, every, _ = CASES[slope]
+    sets = [
+        "time.cfl=0.1",
+        f"domain.slope_deg={slope}",
+        f"initial.erodible_bed={h_i}",
+        f"time.t_end={t_fin}",
+        f"output.every={every}",
+        "time.stop_at_rest=false",
+    ] + list(extra_sets)
+    pressures = ", ".join(f'"{p}"' for p, _, _ in MODELS)
+    layers = ", ".join(str(n) for _, n, _ in MODELS)
+    path.write_text(
+        f'scenario = "{SCENARIO}"\n'
+        f"set = [{', '.join(repr(s).replace(chr(39), chr(34)) for s in sets)}]\n\n"
+        "[[zip]]\n"
+        f"model.pressure = [{pressures}]\n"
+        f"model.layers = [{layers}]\n"
+    )
+
+
+def h_at(run, t):
+    k = int(np.argmin(np.abs(run.t - t)))
+    if abs(run.t[k] - t) > 1e-9:
+        raise RuntimeError(f"{run.path}: no snapshot at t = {t} (nearest {run.t[k]})")
+    return run.h[k]
+
+
+def l2_percent(h, ref):
+    return 100.0 * np.linalg.norm(h - ref) / np.linalg.norm(ref)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--granflow", default=shutil.which("granflow") or str(ROOT / "target/release/granflow"))
+    ap.add_argument("--jobs", type=int, default=1, help="runs at once (default 1: timings on an idle core)")
+    ap.add_argument("--out", default="out/error_vs_runtime")
+    ap.add_argument("--slopes", default="0,22")
+    ap.add_argument("--set", action="append", default=[], dest="sets")
+    args = ap.parse_args()
+    try:
+        slopes = [int(float(s)) for s in args.slopes.split(",")]
+        if any(s not in CASES for s in slopes):
+            raise ValueError
+    except ValueError:
+        print(f"error: --slopes takes values among {sorted(CASES)}", file=sys.stderr)
+        return 2
+    if not pathlib.Path(args.granflow).exists():
+        print(f"error: granflow binary not found: {args.granflow} (cargo build --release)", file=sys.stderr)
+        return 2
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+
+    rows, failed = [], False
+    for slope in slopes:
+        _, t_ini, t_fin, _, paper = CASES[slope]
+        d = out / f"theta_{slope}"
+        d.mkdir(exist_ok=True)
+        sw = d / "sweep.toml"
+        sweep_file(sw, slope, args.sets)
+        cmd = [args.granflow, "sweep", str(sw), "--jobs", str(args.jobs), "--output", str(d), "--quiet"]
+        subprocess.run(cmd, check=False)
+        summary = {r["run"]: r for r in csv.DictReader(open(d / "summary.csv"))}
+        by_label = {}
+        for (pressure, layers, label), r in zip(MODELS, summary.values()):
+            assert r["model.pressure"] == pressure and int(r["model.layers"]) == layers, r
+            by_label[label] = r
+        ref_row = by_label["NH-20 l."]
+        if not ref_row["status"] in ("completed", "stopped_at_rest"):
+            print(f"error: θ = {slope}°: the reference NH-20 l. run failed: {ref_row['status']}", file=sys.stderr)
+            failed = True
+            continue
+        ref = Run(d / f"{ref_row['run']}.h5")
+        ref_ini, ref_fin = h_at(ref, t_ini), h_at(ref, t_fin)
+        print(f"\nθ = {slope}°  (t_ini = {t_ini} s, t_fin = {t_fin} s; paper's values in brackets)")
+        print(f"{'model':10} {'err t_ini %':>18} {'err t_fin %':>18} {'wall s':>18}")
+        for _, _, label in MODELS:
+            r = by_label[label]
+            p_ini, p_fin, p_t = paper[label]
+            ok = r["status"] in ("completed", "stopped_at_rest")
+            if ok and label != "NH-20 l.":
+                run = Run(d / f"{r['run']}.h5")
+                e_ini, e_fin = l2_percent(h_at(run, t_ini), ref_ini), l2_percent(h_at(run, t_fin), ref_fin)
+            else:
+                e_ini = e_fin = float("nan")
+            wall = float(r["wall_time_s"]) if ok else float("nan")
+            fmt = lambda v, p: f"{v:7.2f} [{p:6.2f}]" if p is not None else f"{'-':>7} [{'-':>6}]"
+            print(f"{label:10} {fmt(e_ini, p_ini):>18} {fmt(e_fin, p_fin):>18} {wall:8.2f} [{p_t:7.1f}]"
+                  + ("" if ok else f"  {r['status']}"))
+            rows.append(dict(slope_deg=slope, model=label, err_t_ini_pct=e_ini, err_t_fin_pct=e_fin,
+                             wall_s=wall, paper_err_t_ini_pct=p_ini, paper_err_t_fin_pct=p_fin,
+                             paper_t_comp_s=p_t, status=r["status"]))
+
+    with open(out / "error_vs_runtime.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else ["slope_deg"])
+        w.writeheader()
+        w.writerows(rows)
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(7, 5))
+        for slope, marker in ((0, "o"), (22, "s")):
+            pts = [r for r in rows if r["slope_deg"] == slope and np.isfinite(r["err_t_fin_pct"])]
+            if not pts:
+                continue
+            ax.loglog([r["wall_s"] for r in pts], [r["err_t_fin_pct"] for r in pts], marker,
+                      linestyle="none", label=f"θ = {slope}° (error at t_fin)")
+            for r in pts:
+                ax.annotate(r["model"], (r["wall_s"], r["err_t_fin_pct"]), fontsize=7,
+                            xytext=(3, 3), textcoords="offset points")
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("relative l2 error of h against NH-20 l. (%)")
+        ax.legend()
+        ax.grid(True, which="both", alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(out / "error_vs_runtime.png", dpi=120)
+    except ImportError:
+        print("matplotlib not installed: no plot", file=sys.stderr)
+    print(f"\nwrote {out / 'error_vs_runtime.csv'} and {out / 'error_vs_runtime.png'}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,838 @@
+//! The projection of the multilayer weakly non-hydrostatic model (seed 003 eq. 9,
+//! §4 step 3, eq. 26–33, Appendix A), for N ≥ 1 layers of thickness l_α h.
+//!
+//! Unknowns: the non-hydrostatic pressure (over density) p_{α−1/2} at the base of each
+//! layer, α = 1..N (the bed is α = 1; p_{N+1/2} = 0 at the free surface), at every face,
+//! stored face-major (`NonHydrostatic::p[k·N + α − 1]`). The model's pressure terms
+//! (eq. 9b–c) and constraints (eq. 9d) are, with h_α = l_α h, p_α = (p_{α−1/2} +
+//! p_{α+1/2})/2 and Z_{α+1/2} = b + L_{α+1/2} h, L_{α+1/2} = Σ_{β≤α} l_β,
+//!
+//!   ∂_t(h_α u_α) = −∂_X(h_α p_α) + p_{α+1/2} ∂_X Z_{α+1/2} − p_{α−1/2} ∂_X Z_{α−1/2},
+//!   ∂_t(h_α w_α) = p_{α−1/2} − p_{α+1/2},
+//!   𝒩_α = 𝓔_α − 𝓔_{α−1} = (w_α − w_{α−1}) − (u_α − u_{α−1}) ∂_X Z_{α−1/2}
+//!         + ½ (h_α ∂_X u_α + h_{α−1} ∂_X u_{α−1}) = 0,
+//!
+//! the differenced constraints of seed 003 after eq. (26) (for α = 1 the terms of
+//! layer 0 are absent). 𝒩_α is exactly minus the adjoint of the pressure force of
+//! p_{α−1/2} (integrate ∂_X(h_α p_α) u_α by parts): the continuous projection is
+//! orthogonal in the kinetic energy Σ_α h_α (u_α² + w_α²)/2, which is why the model
+//! conserves energy up to dissipation (Theorem 1). The discretisation keeps that.
+//!
+//! **Correction** 𝒯 of the face impulses Π = Δt p̃ (the unknowns), for cell i and layer
+//! α, in conservative form like the monolayer (`monolayer.rs`):
+//!
+//!   δ(h_α u_α)_i = −l_α (h_{i+1/2} Π_{α,i+1/2} − h_{i−1/2} Π_{α,i−1/2})/Δx
+//!                  + (∂_X b)_i (Π_{α+1/2,i} − Π_{α−1/2,i})
+//!                  + [Π^R_{α+1/2} L_{α+1/2} − Π^R_{α−1/2} L_{α−1/2}] (h_{i+1/2} − h_i)/Δx
+//!                  + [Π^L_{α+1/2} L_{α+1/2} − Π^L_{α−1/2} L_{α−1/2}] (h_i − h_{i−1/2})/Δx,
+//!   δ(h_α w_α)_i = Π_{α−1/2,i} − Π_{α+1/2,i},
+//!
+//! where Π_{α,f} = (Π_{α−1/2,f} + Π_{α+1/2,f})/2 is the layer mean at face f, Π_{·,i}
+//! the mean of the cell's two faces, Π^L, Π^R the values at its left and right faces,
+//! h_{i±1/2} the harmonic face depths and (∂_X b)_i centred, all as for N = 1. The
+//! depth part of ∂_X Z_{α±1/2} = ∂_X b + L_{α±1/2} ∂_X h is taken on the two half cells
+//! (h_{i+1/2} − h_i, h_i − h_{i−1/2}), each with the pressure of its face: with the
+//! harmonic face depth a film beside a thick cell sees a slope of the order of its own
+//! depth, never h_thick/Δx (the centred (h_{i+1} − h_{i−1})/(2Δx) of seed 003 eq. 22
+//! gave a film impulses ∝ h_thick, as seed 000's stencil did for N = 1). For N = 1 the
+//! depth part vanishes (L_{1/2} = 0, p_{3/2} = 0) and 𝒯 is the monolayer's.
+//!
+//! **Constraint** at face f and interface α − 1/2: the transpose, 𝒞 = 𝒯ᵀ (u, w), a
+//! consistent discretisation of 𝒩_α (seed 003 eq. 27 without the factor 2hN).
+//! Requiring 𝒞(U + M⁻¹𝒯Π) = 0, M = diag(l_α h_i), gives
+//!
+//!   A Π = −𝒞(U),   A = 𝒯ᵀ M⁻¹ 𝒯   (seed 003 eq. 31–32),
+//!
+//! symmetric positive definite, with the 3×3 stencil (faces f ± 1, interfaces α ± 1)
+//! of [`crate::numerics::banded`]: ordered face by face it is banded with half-bandwidth
+//! N + 1 and is solved exactly by [`BandedCholesky`](crate::numerics::banded::BandedCholesky).
+//! After the correction the discrete constraint holds to round-off, and the
+//! projection removes exactly the kinetic energy of its correction (KE⁺ + KE(δ) = KE⁻).
+//!
+//! **Faces and boundaries** (as `monolayer.rs`): a face is wet when both neighbouring
+//! cells are thicker than `NH_FILM_FRACTION` Δx; other faces carry p = 0 (identity
+//! rows). Only physical cells enter 𝒯: at a wall, the ghost cell's contribution is
+//! the mirror image of the edge cell's, and dropping it halves the wall row of the
+//! monolayer's system (which counts both) without changing the solution. At an outflow
+//! boundary the pressure is extended evenly, Π_{1/2} = Π_{3/2} (seed 003 eq. 37): the
+//! edge cell's left-face coefficients are added to its right-face ones, so the
+//! constraint of the merged unknown is the sum of the two faces' constraints and the
+//! system stays symmetric (the monolayer instead drops the edge face's constraint,
+//! which is not symmetric for N > 1; both are the same Neumann condition).
+
+use std::ops::Range;
+
+use super::monolayer::{doubled_bed, face_depth, ConstraintResidual, NH_FILM_FRACTION};
+use super::{PressureSolver, ProjectionOperator};
+use crate::mesh::BoundaryKind;
+use crate::mesh::Mesh;
+use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
+use crate::numerics::banded::{BandedCholesky, StencilRow};
+use crate::numerics::linalg::PressureRows;
+
+/// Coefficients of one layer of one cell: the impulses of its base (α − 1/2) and top
+/// (α + 1/2) interfaces at its left and right faces, in δ(h_α u_α) and δ(h_α w_α).
+/// Index: [left base, left top, right base, right top]. Zero for faces without
+/// pressure (and for the top of layer N, the free surface).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LayerCoefficients {
+    pub u: [f64; 4],
+    pub w: [f64; 4],
+}
+
+const LEFT: usize = 0;
+const RIGHT: usize = 2;
+
+/// The seed 003 projection operator (block N).
+#[derive(Debug)]
+pub struct MultilayerOperator {
+    layers: usize,
+    l: Vec<f64>,
+    /// L_{j−1/2} = Σ_{β<j} l_β for j = 0..=N (height fraction of interface j).
+    level: Vec<f64>,
+    two_b: Vec<f64>,
+    h_min: f64,
+    dx: f64,
+    /// Per cell (nx + 2) and layer, cell-major.
+    coef: Vec<LayerCoefficients>,
+    /// Per face: carries an unknown (wet, not merged into its neighbour).
+    wet: Vec<bool>,
+    /// Faces merged into their inner neighbour (outflow boundaries).
+    merged_left: bool,
+    merged_right: bool,
+    /// Faces that may carry an unknown (span of the mass) at the last update.
+    span: Range<usize>,
+    nx: usize,
+}
+
+impl MultilayerOperator {
+    pub fn new(mesh: &Mesh, l: &[f64]) -> Self {
+        let n = l.len();
+        assert!(n >= 1);
+        let mut level = vec![0.0; n + 1];
+        for a in 0..n {
+            level[a + 1] = level[a] + l[a];
+        }
+        level[n] = 1.0;
+        MultilayerOperator {
+            layers: n,
+            l: l.to_vec(),
+            level,
+            two_b: doubled_bed(mesh),
+            h_min: NH_FILM_FRACTION * mesh.dx,
+            dx: mesh.dx,
+            coef: vec![LayerCoefficients::default(); (mesh.nx + 2) * n],
+            wet: vec![false; mesh.nx + 1],
+            merged_left: false,
+            merged_right: false,
+            span: 0..0,
+            nx: mesh.nx,
+        }
+    }
+
+    pub fn layers(&self) -> usize {
+        self.layers
+    }
+
+    /// Faces that carry unknowns, as a range of scalar unknowns (face-major).
+    fn active_unknowns(&self) -> Range<usize> {
+        self.span.start * self.layers..self.span.end * self.layers
+    }
+
+    /// Recomputes the wet faces and the coefficients of 𝒯 from the thickness of
+    /// `state` (module documentation).
+    pub fn update(&mut self, mesh: &Mesh, state: &LayeredState) {
+        let (nx, n) = (self.nx, self.layers);
+        debug_assert_eq!(state.layers, n);
+        let h = &state.h[..];
+        let h_min = self.h_min;
+        for k in 0..=nx {
+            self.wet[k] = h[k] > h_min && h[k + 1] > h_min;
+        }
+        let first = self.wet.iter().position(|&w| w);
+        let last = self.wet.iter().rposition(|&w| w);
+        self.span = match (first, last) {
+            (Some(f), Some(l)) => f..l + 1,
+            _ => 0..0,
+        };
+        if self.span.is_empty() {
+            return;
+        }
+        let inv_dx = 1.0 / self.dx;
+        // Cells touching a face of the span.
+        let (c0, c1) = (self.span.start.max(1), self.span.end.min(nx));
+        for c in c0..=c1 {
+            let (wl, wr) = (self.wet[c - 1], self.wet[c]);
+            let hc = h[c];
+            let (hl, hr) = (face_depth(h[c - 1], hc), face_depth(hc, h[c + 1]));
+            let db = 0.25 * (self.two_b[c + 1] - self.two_b[c - 1]) * inv_dx;
+            let (dhl, dhr) = ((hc - hl) * inv_dx, (hr - hc) * inv_dx);
+            for a in 0..n {
+                let top = a + 1 < n;
+                let (lb, lt) = (self.level[a], self.level[a + 1]);
+                let la = self.l[a];
+                let mut k = LayerCoefficients::default();
+                if wl {
+                    let cons = 0.5 * la * hl * inv_dx;
+                    k.u[LEFT] = cons - 0.5 * db - lb * dhl;
+                    k.w[LEFT] = 0.5;
+                    if top {
+                        k.u[LEFT + 1] = cons + 0.5 * db + lt * dhl;
+                        k.w[LEFT + 1] = -0.5;
+                    }
+                }
+                if wr {
+                    let cons = -0.5 * la * hr * inv_dx;
+                    k.u[RIGHT] = cons - 0.5 * db - lb * dhr;
+                    k.w[RIGHT] = 0.5;
+                    if top {
+                        k.u[RIGHT + 1] = cons + 0.5 * db + lt * dhr;
+                        k.w[RIGHT + 1] = -0.5;
+                    }
+                }
+                self.coef[c * n + a] = k;
+            }
+        }
+        // Outflow: the edge face's pressure is its inner neighbour's (seed 003 eq. 37):
+        // the edge cell's coefficients of that face are moved to its other face (or
+        // dropped when that face is dry, where both pressures are 0).
+        let fold = |k: &mut LayerCoefficients, from: usize, to: usize, keep: bool| {
+            for s in 0..2 {
+                if keep {
+                    k.u[to + s] += k.u[from + s];
+                    k.w[to + s] += k.w[from + s];
+                }
+                k.u[from + s] = 0.0;
+                k.w[from + s] = 0.0;
+            }
+        };
+        self.merged_left = mesh.left == BoundaryKind::Outflow && self.wet[0];
+        if self.merged_left {
+            let keep = nx > 1 && self.wet[1];
+            self.wet[0] = false;
+            for k in &mut self.coef[n..2 * n] {
+                fold(k, LEFT, RIGHT, keep);
+            }
+        }
+        self.merged_right = mesh.right == BoundaryKind::Outflow && self.wet[nx];
+        if self.merged_right {
+            let keep = nx > 1 && self.wet[nx - 1];
+            self.wet[nx] = false;
+            for k in &mut self.coef[nx * n..(nx + 1) * n] {
+                fold(k, RIGHT, LEFT, keep);
+            }
+        }
+    }
+
+    /// The rows of the system for the current coefficients and the velocities of
+    /// `state`.
+    pub fn rows<'a>(&'a self, state: &'a LayeredState) -> MultilayerRows<'a> {
+        MultilayerRows {
+            op: self,
+            h: &state.h,
+            hu: &state.hu,
+            hw: state.hw(),
+        }
+    }
+
+    /// Adds the momentum of the face impulses `pi` (face-major, as `p`) to hu and hw:
+    /// δ(hu_α) = (𝒯_u Π)/l_α, δ(hw_α) = (𝒯_w Π)/l_α. Used for the correction (Π =
+    /// Δt p̃) and for the explicit terms of step 2 (Π = Δt pⁿ). Faces without an
+    /// unknown contribute nothing (their coefficients are 0).
+    pub fn apply_impulses(&self, state: &mut LayeredState, pi: &[f64]) {
+        let (nx, n) = (self.nx, self.layers);
+        if self.span.is_empty() {
+            return;
+        }
+        let LayeredState { hu, tracers, .. } = state;
+        let hw = &mut tracers
+            .iter_mut()
+            .find(|t| t.name == HW)
+            .expect("a non-hydrostatic state carries hw")
+            .q;
+        let (c0, c1) = (self.span.start.max(1), self.span.end.min(nx));
+        for c in c0..=c1 {
+            let (left, right) = (&pi[(c - 1) * n..c * n], &pi[c * n..(c + 1) * n]);
+            for a in 0..n {
+                let k = &self.coef[c * n + a];
+                let top = |side: &[f64]| if a + 1 < n { side[a + 1] } else { 0.0 };
+                let p = [left[a], top(left), right[a], top(right)];
+                let du: f64 = k.u.iter().zip(&p).map(|(c, p)| c * p).sum();
+                let dw: f64 = k.w.iter().zip(&p).map(|(c, p)| c * p).sum();
+                let inv_l = 1.0 / self.l[a];
+                hu[c * n + a] += du * inv_l;
+                hw[c * n + a] += dw * inv_l;
+            }
+        }
+    }
+
+    /// The discrete constraint 𝒞 = 𝒯ᵀ(u, w) on the faces that carry an unknown, from
+    /// the coefficients of the last [`update`](Self::update).
+    pub fn residual(&self, state: &LayeredState) -> ConstraintResidual {
+        let rows = self.rows(state);
+        let mut res = ConstraintResidual {
+            max_abs: 0.0,
+            scale: 0.0,
+            faces: 0,
+        };
+        for f in self.span.clone() {
+            if !self.wet[f] {
+                continue;
+            }
+            for j in 0..self.layers {
+                let (c, scale) = rows.constraint(f, j);
+                res.max_abs = res.max_abs.max(c.abs());
+                res.scale = res.scale.max(scale);
+                res.faces += 1;
+            }
+        }
+        res
+    }
+
+    /// Kinetic energy Σ_i Σ_α l_α ((hu_α)² + (hw_α)²)/(2h_i) of the physical cells.
+    pub fn kinetic_energy(state: &LayeredState) -> f64 {
+        let hw = state.hw();
+        let n = state.layers;
+        (1..=state.nx)
+            .filter(|&i| state.h[i] > 0.0)
+            .map(|i| {
+                (0..n)
+                    .map(|a| {
+                        let k = i * n + a;
+                        state.l[a] * (state.hu[k].powi(2) + hw[k].powi(2))
+                    })
+                    .sum::<f64>()
+                    / (2.0 * state.h[i])
+            })
+            .sum()
+    }
+}
+
+/// The stencil rows of A Π = −𝒞, formed on demand from the stored coefficients.
+pub struct MultilayerRows<'a> {
+    op: &'a MultilayerOperator,
+    h: &'a [f64],
+    hu: &'a [f64],
+    hw: &'a [f64],
+}
+
+impl MultilayerRows<'_> {
+    /// The cells that hold face f, with the side (LEFT/RIGHT offset) of f in each and
+    /// the face offset of the cell's other side.
+    #[inline(always)]
+    fn cells(&self, f: usize) -> [(usize, usize, bool); 2] {
+        // Cell f has face f on its right; cell f + 1 on its left.
+        [(f, RIGHT, f >= 1), (f + 1, LEFT, f < self.op.nx)]
+    }
+
+    /// 𝒞 at face f, interface j, and the larger of its u and w parts (for scaling).
+    fn constraint(&self, f: usize, j: usize) -> (f64, f64) {
+        let n = self.op.layers;
+        let (mut cu, mut cw) = (0.0, 0.0);
+        for (c, side, real) in self.cells(f) {
+            if !real {
+                continue;
+            }
+            let inv_h = 1.0 / self.h[c];
+            for a in [j.wrapping_sub(1), j] {
+                if a >= n {
+                    continue;
+                }
+                let idx = side + usize::from(j == a + 1);
+                let k = &self.op.coef[c * n + a];
+                cu += k.u[idx] * self.hu[c * n + a] * inv_h;
+                cw += k.w[idx] * self.hw[c * n + a] * inv_h;
+            }
+        }
+        (cu + cw, cu.abs().max(cw.abs()))
+    }
+}
+
+impl PressureRows for MultilayerRows<'_> {
+    type Row = StencilRow;
+
+    fn active(&self) -> Range<usize> {
+        self.op.active_unknowns()
+    }
+
+    fn row(&self, k: usize) -> StencilRow {
+        let op = self.op;
+        let n = op.layers;
+        let (f, j) = (k / n, k % n);
+        if !op.wet[f] {
+            return StencilRow::IDENTITY;
+        }
+        let mut row = StencilRow::ZERO;
+        for (c, side, real) in self.cells(f) {
+            if !real {
+                continue;
+            }
+            // Face offset of the cell's left face relative to f.
+            let left_df = if side == RIGHT { 0 } else { 1 };
+            let inv_h = 1.0 / self.h[c];
+            for a in [j.wrapping_sub(1), j] {
+                if a >= n {
+                    continue;
+                }
+                let k = &op.coef[c * n + a];
+                let idx = side + usize::from(j == a + 1);
+                let (tu, tw) = (k.u[idx], k.w[idx]);
+                if tu == 0.0 && tw == 0.0 {
+                    continue;
+                }
+                let inv_m = inv_h / op.l[a];
+                for s in [LEFT, RIGHT] {
+                    let df = left_df + s / 2; // 0, 1 or 2 (= face offset + 1)
+                    for t in 0..2 {
+                        let kk = a + t; // interface
+                        if kk >= n {
+                            continue;
+                        }
+                        let dj = kk + 1 - j; // 0, 1 or 2
+                        row.coef[df][dj] += (tu * k.u[s + t] + tw * k.w[s + t]) * inv_m;
+                    }
+                }
+                row.rhs -= tu * self.hu[c * n + a] * inv_h + tw * self.hw[c * n + a] * inv_h;
+            }
+        }
+        row
+    }
+}
+
+impl ProjectionOperator for MultilayerOperator {
+    type Row = StencilRow;
+
+    fn block(&self) -> usize {
+        self.layers
+    }
+
+    fn solve<S: PressureSolver<Row = StencilRow>>(
+        &mut self,
+        mesh: &Mesh,
+        state: &LayeredState,
+        solver: &mut S,
+        pi: &mut [f64],
+    ) {
+        self.update(mesh, state);
+        let rows = self.rows(state);
+        solver.solve(&rows, pi);
+    }
+
+    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64) {
+        let (nx, n) = (self.nx, self.layers);
+        self.apply_impulses(state, pi);
+        let nh = state.nh.as_mut().expect("a non-hydrostatic state");
+        let inv_dt = 1.0 / dt;
+        for f in 0..=nx {
+            let p = &mut nh.p[f * n..(f + 1) * n];
+            if self.wet[f] {
+                for (p, &pi) in p.iter_mut().zip(&pi[f * n..(f + 1) * n]) {
+                    *p += pi * inv_dt;
+                }
+            } else {
+                p.fill(0.0);
+            }
+        }
+        if self.merged_left {
+            nh.p.copy_within(n..2 * n, 0);
+        }
+        if self.merged_right {
+            nh.p.copy_within((nx - 1) * n..nx * n, nx * n);
+        }
+        fill_tracer_ghosts(state.hw_mut(), nx, n);
+        state.fill_ghosts(mesh);
+    }
+}
+
+/// [`BandedCholesky`] as the projection's pressure solver.
+impl PressureSolver for BandedCholesky {
+    type Row = StencilRow;
+
+    fn solve<R: PressureRows<Row = StencilRow>>(&mut self, rows: &R, x: &mut [f64]) {
+        self.solve_rows(rows, x);
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)] // index arithmetic mirrors the matrices
+mod tests {
+    use super::*;
+    use crate::mesh::Coordinates;
+    use crate::mesh::MeshSpec;
+    use crate::numerics::banded::stencil_residual;
+    use crate::numerics::projection::monolayer::{constraint_residual, MonolayerOperator};
+    use crate::numerics::projection::{ProjectionStage, ThomasSolver};
+    use crate::numerics::Stage;
+
+    /// A wet state on a curved bed with a sheared, layer-dependent velocity field that
+    /// violates the constraints; `film` puts a film just thicker than the wet threshold
+    /// 0.05 Δx next to thick cells, as at a front.
+    fn moving_state(
+        cells: usize,
+        layers: usize,
+        left: BoundaryKind,
+        right: BoundaryKind,
+        film: bool,
+    ) -> (Mesh, LayeredState) {
+        let spec = MeshSpec {
+            x_min: 0.0,
+            x_max: 1.0,
+            cells,
+            slope_deg: 0.0,
+            coordinates: Coordinates::Cartesian,
+            left,
+            right,
+        };
+        let x = spec.centres();
+        let b: Vec<f64> = x.iter().map(|x| 0.05 * (6.0 * x).sin() - 0.2 * x).collect();
+        let mut h: Vec<f64> = x.iter().map(|x| 0.1 + 0.04 * (9.0 * x).cos()).collect();
+        if film {
+            h[cells / 3] = 0.06 / cells as f64 + 1e-4; // just above the wet threshold
+        }
+        let mesh = Mesh::new(&spec, b);
+        let l = vec![1.0 / layers as f64; layers];
+        let mut state = LayeredState::from_profiles(&mesh, &l, &h, &vec![0.0; cells]);
+        state.add_nonhydrostatic(&vec![0.0; cells]);
+        let mut hw = state.hw().to_vec();
+        for i in 0..cells {
+            for a in 0..layers {
+                let z = (a as f64 + 0.5) / layers as f64;
+                let u = 0.5 * (4.0 * x[i]).sin() * (0.5 + z) + 0.1 * z * z;
+                let w = 0.1 * (5.0 * x[i] + z).cos();
+                state.hu[(i + 1) * layers + a] = h[i] * u;
+                hw[(i + 1) * layers + a] = h[i] * w;
+            }
+        }
+        state.fill_ghosts(&mesh);
+        fill_tracer_ghosts(&mut hw, cells, layers);
+        *state.hw_mut() = hw;
+        (mesh, state)
+    }
+
+    fn stage(
+        mesh: &Mesh,
+        state: &LayeredState,
+    ) -> ProjectionStage<MultilayerOperator, BandedCholesky> {
+        let n = state.layers;
+        ProjectionStage::new(
+            MultilayerOperator::new(mesh, &state.l),
+            BandedCholesky::new(n, mesh.nx + 1),
+            mesh.nx,
+        )
+    }
+
+    fn residual(mesh: &Mesh, state: &LayeredState) -> ConstraintResidual {
+        let mut op = MultilayerOperator::new(mesh, &state.l);
+        op.update(mesh, state);
+        op.residual(state)
+    }
+
+    const BOUNDARIES: [(BoundaryKind, BoundaryKind); 3] = [
+        (BoundaryKind::Wall, BoundaryKind::Wall),
+        (BoundaryKind::Wall, BoundaryKind::Outflow),
+        (BoundaryKind::Outflow, BoundaryKind::Outflow),
+    ];
+
+    #[test]
+    fn projection_enforces_the_discrete_constraints_to_round_off() {
+        for layers in [1, 2, 5, 20] {
+            for (left, right) in BOUNDARIES {
+                for film in [false, true] {
+                    let (mesh, mut state) = moving_state(160, layers, left, right, film);
+                    let before = residual(&mesh, &state);
+                    assert!(before.relative() > 1e-2, "the test state must violate (9d)");
+                    let mut st = stage(&mesh, &state);
+                    st.apply(&mesh, 1e-3, &mut state).unwrap();
+                    let after = residual(&mesh, &state);
+                    let outflows = [left, right]
+                        .iter()
+                        .filter(|&&b| b == BoundaryKind::Outflow)
+                        .count();
+                    assert_eq!(after.faces, (mesh.nx + 1 - outflows) * layers);
+                    println!(
+                        "N = {layers} {left:?}/{right:?} film {film}: {:.1e} -> {:.1e}",
+                        before.relative(),
+                        after.relative()
+                    );
+                    assert!(after.relative() <= 1e-12, "N = {layers}: {after:?}");
+                    // A second projection has nothing left to do.
+                    st.apply(&mesh, 1e-3, &mut state).unwrap();
+                    let dp = st.last_impulse().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                    let p = state
+                        .nh
+                        .as_ref()
+                        .unwrap()
+                        .p
+                        .iter()
+                        .fold(0.0f64, |m, v| m.max(v.abs()));
+                    assert!(dp <= 1e-12 * p * 1e-3, "{dp:e} vs {p:e}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn one_layer_gives_the_monolayer_projection() {
+        // Walls: the monolayer counts the ghost cell's mirror contribution in the wall
+        // row, which doubles that row; the solution is the same. An outflow face that
+        // stays dry (the collapse's downstream end) is the same too.
+        let cases = [
+            (BoundaryKind::Wall, BoundaryKind::Wall, false),
+            (BoundaryKind::Wall, BoundaryKind::Wall, true),
+            (BoundaryKind::Wall, BoundaryKind::Outflow, true),
+        ];
+        for (left, right, dry_end) in cases {
+            let (mesh, mut a) = moving_state(200, 1, left, right, true);
+            if dry_end {
+                for i in 180..=200 {
+                    a.h[i] = 0.0;
+                    a.hu[i] = 0.0;
+                    a.hw_mut()[i] = 0.0;
+                }
+                a.fill_ghosts(&mesh);
+            }
+            let mut b = a.clone();
+            let mut mono = ProjectionStage::new(
+                MonolayerOperator::new(&mesh),
+                ThomasSolver::default(),
+                mesh.nx,
+            );
+            for step in 0..2 {
+                if step > 0 {
+                    // Perturb both the same way so that the second projection has work.
+                    for s in [&mut a, &mut b] {
+                        for i in 1..=mesh.nx {
+                            s.hu[i] += 1e-3 * (i as f64).sin() * s.h[i];
+                        }
+                        s.fill_ghosts(&mesh);
+                    }
+                }
+                mono.apply(&mesh, 1e-3, &mut a).unwrap();
+                stage(&mesh, &b).apply(&mesh, 1e-3, &mut b).unwrap();
+            }
+            let (na, nb) = (a.nh.as_ref().unwrap(), b.nh.as_ref().unwrap());
+            let (hwa, hwb) = (a.hw(), b.hw());
+            let close = |x: &[f64], y: &[f64], what: &str| {
+                let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                for (k, (x, y)) in x.iter().zip(y).enumerate() {
+                    assert!((x - y).abs() <= 1e-12 * scale, "{what}[{k}]: {x} vs {y}");
+                }
+            };
+            close(&a.hu, &b.hu, "hu");
+            close(hwa, hwb, "hw");
+            close(&na.p, &nb.p, "p");
+            // The monolayer's own measure of its constraint holds for our solution.
+            assert!(constraint_residual(&mesh, &b).relative() < 1e-12);
+        }
+    }
+
+    /// The matrix of the system, dense, from its stencil rows.
+    fn dense_matrix(rows: &MultilayerRows, n: usize, total: usize) -> Vec<Vec<f64>> {
+        let mut a = vec![vec![0.0; total]; total];
+        for (k, line) in a.iter_mut().enumerate() {
+            if !rows.active().contains(&k) {
+                line[k] = 1.0;
+                continue;
+            }
+            let row = rows.row(k);
+            for df in 0..3 {
+                for dj in 0..3 {
+                    let col = (k + df * n + dj) as isize - (n + 1) as isize;
+                    if row.coef[df][dj] != 0.0 {
+                        assert!(
+                            col >= 0 && (col as usize) < total,
+                            "entry outside the system"
+                        );
+                        line[col as usize] += row.coef[df][dj];
+                    }
+                }
+            }
+        }
+        a
+    }
+
+    #[test]
+    fn the_system_is_symmetric_positive_definite() {
+        for layers in [1, 3, 6] {
+            for (left, right) in BOUNDARIES {
+                let (mesh, state) = moving_state(24, layers, left, right, true);
+                let mut op = MultilayerOperator::new(&mesh, &state.l);
+                op.update(&mesh, &state);
+                let rows = op.rows(&state);
+                let total = (mesh.nx + 1) * layers;
+                let a = dense_matrix(&rows, layers, total);
+                let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+                for i in 0..total {
+                    for j in 0..i {
+                        assert!((a[i][j] - a[j][i]).abs() <= 1e-14 * scale, "A[{i}][{j}]");
+                    }
+                }
+                // Dense Cholesky: every pivot positive, none tiny against the scale.
+                let mut l = a.clone();
+                let mut min_pivot = f64::INFINITY;
+                for c in 0..total {
+                    let d = l[c][c] - (0..c).map(|k| l[c][k] * l[c][k]).sum::<f64>();
+                    min_pivot = min_pivot.min(d);
+                    assert!(d > 0.0, "N = {layers}: pivot {c} = {d}");
+                    let d = d.sqrt();
+                    l[c][c] = d;
+                    for r in c + 1..total {
+                        let s: f64 = (0..c).map(|k| l[r][k] * l[c][k]).sum();
+                        l[r][c] = (l[r][c] - s) / d;
+                    }
+                }
+                println!("N = {layers} {left:?}/{right:?}: smallest pivot² {min_pivot:.2e}, max |A| {scale:.2e}");
+                // The banded solve matches the dense matrix.
+                let mut x = vec![0.0; total];
+                BandedCholesky::new(layers, mesh.nx + 1).solve_rows(&rows, &mut x);
+                let mut r = vec![0.0; total];
+                stencil_residual(&rows, layers, &x, &mut r);
+                let rmax = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let bmax = (0..total)
+                    .filter(|k| rows.active().contains(k))
+                    .fold(0.0f64, |m, k| m.max(rows.row(k).rhs.abs()));
+                assert!(rmax <= 1e-10 * bmax, "{rmax:e} vs {bmax:e}");
+                for k in 0..total {
+                    let ax: f64 = (0..total).map(|c| a[k][c] * x[c]).sum();
+                    let b = if rows.active().contains(&k) {
+                        rows.row(k).rhs
+                    } else {
+                        0.0
+                    };
+                    assert!((ax - b).abs() <= 1e-10 * bmax);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn projection_removes_kinetic_energy_and_never_adds_any() {
+        for layers in [1, 4, 20] {
+            for (left, right) in BOUNDARIES {
+                let (mesh, mut state) = moving_state(201, layers, left, right, true);
+                let before = MultilayerOperator::kinetic_energy(&state);
+                let (hu0, hw0) = (state.hu.clone(), state.hw().to_vec());
+                stage(&mesh, &state).apply(&mesh, 1e-3, &mut state).unwrap();
+                let after = MultilayerOperator::kinetic_energy(&state);
+                let hw = state.hw();
+                let n = layers;
+                let removed: f64 = (1..=mesh.nx)
+                    .map(|i| {
+                        (0..n)
+                            .map(|a| {
+                                let k = i * n + a;
+                                state.l[a]
+                                    * ((state.hu[k] - hu0[k]).powi(2) + (hw[k] - hw0[k]).powi(2))
+                            })
+                            .sum::<f64>()
+                            / (2.0 * state.h[i])
+                    })
+                    .sum();
+                assert!(removed > 1e-3 * before, "the state must need a correction");
+                assert!(
+                    ((after + removed) - before).abs() <= 1e-12 * before,
+                    "N = {layers}: {after} + {removed} vs {before}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn outflow_pressure_is_extended_evenly_and_dry_faces_carry_none() {
+        let (mesh, mut state) =
+            moving_state(60, 3, BoundaryKind::Outflow, BoundaryKind::Outflow, false);
+        for i in 20..30 {
+            state.h[i] = 0.0;
+            state.hu[i * 3..i * 3 + 3].fill(0.0);
+            state.hw_mut()[i * 3..i * 3 + 3].fill(0.0);
+        }
+        stage(&mesh, &state).apply(&mesh, 1e-3, &mut state).unwrap();
+        let p = &state.nh.as_ref().unwrap().p;
+        assert_eq!(&p[0..3], &p[3..6]);
+        assert_eq!(&p[60 * 3..61 * 3], &p[59 * 3..60 * 3]);
+        assert!(p[3..6].iter().any(|&v| v != 0.0));
+        // Faces 19..=29 touch a dry cell.
+        assert!(p[19 * 3..30 * 3].iter().all(|&v| v == 0.0));
+        // Dry cells receive nothing.
+        assert!(state.hu[20 * 3..30 * 3].iter().all(|&v| v == 0.0));
+    }
+
+    /// 𝒯 is consistent with the pressure force of seed 003 eq. (9b–c): for smooth h, b
+    /// and p_{α−1/2}(x), δ(h_α u_α) → −∂_X(h_α p_α) + p_{α+1/2} ∂_X Z_{α+1/2} −
+    /// p_{α−1/2} ∂_X Z_{α−1/2} at second order in Δx, δ(h_α w_α) = p_{α−1/2} − p_{α+1/2}
+    /// of the cell means. (The projection tests above hold for any 𝒯; this one pins it.)
+    #[test]
+    fn correction_is_the_discrete_pressure_force() {
+        let layers = 4;
+        let l = [0.1, 0.2, 0.3, 0.4];
+        let mut level = [0.0; 5];
+        for a in 0..layers {
+            level[a + 1] = level[a] + l[a];
+        }
+        let hf = |x: f64| 0.1 + 0.04 * (3.0 * x).cos();
+        let dh = |x: f64| -0.12 * (3.0 * x).sin();
+        let bf = |x: f64| 0.05 * (2.0 * x).sin();
+        let db = |x: f64| 0.1 * (2.0 * x).cos();
+        // p at interface j: vanishing at the surface.
+        let pf = |x: f64, j: usize| (1.0 - level[j]) * (2.0 + (4.0 * x).sin());
+        let dp = |x: f64, j: usize| (1.0 - level[j]) * 4.0 * (4.0 * x).cos();
+        let error = |cells: usize| -> f64 {
+            let spec = MeshSpec {
+                x_min: 0.0,
+                x_max: 1.0,
+                cells,
+                slope_deg: 0.0,
+                coordinates: Coordinates::Cartesian,
+                left: BoundaryKind::Wall,
+                right: BoundaryKind::Wall,
+            };
+            let x = spec.centres();
+            let mesh = Mesh::new(&spec, x.iter().map(|&x| bf(x)).collect());
+            let h: Vec<f64> = x.iter().map(|&x| hf(x)).collect();
+            let mut state = LayeredState::from_profiles(&mesh, &l, &h, &vec![0.0; cells]);
+            state.add_nonhydrostatic(&vec![0.0; cells]);
+            let mut op = MultilayerOperator::new(&mesh, &l);
+            op.update(&mesh, &state);
+            let dx = mesh.dx;
+            let mut pi = vec![0.0; (cells + 1) * layers];
+            for f in 0..=cells {
+                for j in 0..layers {
+                    pi[f * layers + j] = pf(f as f64 * dx, j);
+                }
+            }
+            op.apply_impulses(&mut state, &pi);
+            let mut worst = 0.0f64;
+            for i in cells / 10..cells - cells / 10 {
+                let xi = x[i];
+                let c = i + 1;
+                for a in 0..layers {
+                    let p = |j: usize| if j < layers { pf(xi, j) } else { 0.0 };
+                    let dpj = |j: usize| if j < layers { dp(xi, j) } else { 0.0 };
+                    let mean = 0.5 * (p(a) + p(a + 1));
+                    let dmean = 0.5 * (dpj(a) + dpj(a + 1));
+                    let dz = |j: usize| db(xi) + level[j] * dh(xi);
+                    let exact = -l[a] * (dh(xi) * mean + hf(xi) * dmean) + p(a + 1) * dz(a + 1)
+                        - p(a) * dz(a);
+                    let got = l[a] * state.hu[c * layers + a];
+                    worst = worst.max((got - exact).abs());
+                    // hw: exact for the cell means of the face values.
+                    let mean_face = |j: usize| {
+                        if j < layers {
+                            0.5 * (pi[(c - 1) * layers + j] + pi[c * layers + j])
+                        } else {
+                            0.0
+                        }
+                    };
+                    let w = l[a] * state.hw()[c * layers + a];
+                    assert!((w - (mean_face(a) - mean_face(a + 1))).abs() < 1e-14);
+                }
+            }
+            worst
+        };
+        // Measured: 5.2e-6 (200 cells), 1.3e-6 (400 cells).
+        let (e1, e2) = (error(200), error(400));
+        println!("consistency error {e1:.2e} (200 cells), {e2:.2e} (400 cells)");
+        assert!(e2 < 1e-5, "{e2:e}");
+        assert!(e1 / e2 > 3.0, "second order: {e1:e} -> {e2:e}");
+    }
+}
