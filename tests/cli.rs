@@ -10,24 +10,7 @@ mod common;
 
 use common::read_h5;
 
-const MINIMAL: &str = r#"[domain]
-x_min = -0.2
-x_max = 1.0
-cells = 60
-slope_deg = 22
-
-[rheology]
-law = "mu_i"
-mu_s_deg = 25.5
-mu_2_deg = 36
-i0 = 0.279
-
-[initial]
-h = "if(x <= 0, 0.14, 0)"
-
-[time]
-t_end = 0.05
-"#;
+use common::MINIMAL;
 
 fn granflow() -> Command {
     Command::cargo_bin("granflow").unwrap()

@@ -213,17 +213,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta() {
     assert!(eh > 1e-5 && eu > 1e-5, "{eh:e} {eu:e}");
 }
 
-/// FNV-1a over the exact bits.
-fn fingerprint<'a>(values: impl IntoIterator<Item = &'a f64>) -> u64 {
-    let mut hash = 0xcbf2_9ce4_8422_2325u64;
-    for v in values {
-        for byte in v.to_bits().to_le_bytes() {
-            hash ^= byte as u64;
-            hash = hash.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    hash
-}
+use common::fingerprint;
 
 /// (h, hu) fingerprint of the §5.1 collapse with 4 layers switched to the hydrostatic
 /// pressure, recorded with the code of main at ecc2685 (before this model): the

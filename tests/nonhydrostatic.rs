@@ -35,17 +35,7 @@ fn run(file: &str, sets: &[&str]) -> (Sim, MemorySink, RunSummary) {
     (sim, sink, summary)
 }
 
-/// FNV-1a over the exact bits of a sequence of numbers.
-fn fingerprint<'a>(values: impl IntoIterator<Item = &'a f64>) -> u64 {
-    let mut hash = 0xcbf2_9ce4_8422_2325u64;
-    for v in values {
-        for byte in v.to_bits().to_le_bytes() {
-            hash ^= byte as u64;
-            hash = hash.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    hash
-}
+use common::fingerprint;
 
 /// (h, hu, Δt series) fingerprints of a run.
 fn fingerprints(file: &str, sets: &[&str]) -> [u64; 3] {

@@ -64,20 +64,7 @@ pub fn run_one(
             return done;
         }
     }
-    let mut record = RunRecord {
-        format: RECORD_FORMAT,
-        index: run.point.index,
-        name: name.clone(),
-        scenario_hash: run.hash.clone(),
-        summary: RunSummary::not_run(String::new(), 0.0),
-        h5: format!("{name}.h5"),
-        parameters: run
-            .point
-            .params
-            .iter()
-            .map(|(k, v)| (k.clone(), v.display.clone()))
-            .collect(),
-    };
+    let mut record = failed_before_start(run, String::new());
     if let Err(e) = record::remove(dir, name) {
         record.summary.status = format!("failed: cannot remove the old result file: {e}");
         return record;
@@ -114,7 +101,7 @@ pub fn run_one(
     record
 }
 
-/// The record of a run that could not start.
+/// The record of a run that could not start (also the blank record a run fills in).
 fn failed_before_start(run: &Prepared, status: String) -> RunRecord {
     let name = &run.point.name;
     RunRecord {

@@ -202,3 +202,36 @@ pub fn check_output_with_h5py(h5: &std::path::Path, layers: usize) -> Option<Str
         .unwrap();
     Some(assert_success(&out))
 }
+
+/// FNV-1a over the exact bits of a sequence of numbers (frozen-result tests).
+pub fn fingerprint<'a>(values: impl IntoIterator<Item = &'a f64>) -> u64 {
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    for v in values {
+        for byte in v.to_bits().to_le_bytes() {
+            hash ^= byte as u64;
+            hash = hash.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    hash
+}
+
+/// A small valid scenario (a 14 cm column on 22°, μ(I), 60 cells, 0.05 s) for command-line
+/// tests to edit.
+pub const MINIMAL: &str = r#"[domain]
+x_min = -0.2
+x_max = 1.0
+cells = 60
+slope_deg = 22
+
+[rheology]
+law = "mu_i"
+mu_s_deg = 25.5
+mu_2_deg = 36
+i0 = 0.279
+
+[initial]
+h = "if(x <= 0, 0.14, 0)"
+
+[time]
+t_end = 0.05
+"#;
