@@ -9,6 +9,7 @@
 pub mod catalog;
 pub mod cli;
 pub mod discover;
+pub mod gauges;
 pub mod mesh;
 pub mod model;
 pub mod numerics;

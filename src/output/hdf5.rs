@@ -49,8 +49,11 @@ use rust_hdf5::H5File;
 
 pub use layout::stage_attr_name;
 
+use layout::GaugeRows;
+
 use super::{
-    CellField, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+    CellField, GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView,
+    StepRecord,
 };
 
 /// Writes one run to an HDF5 file, progressively (see the module docs).
@@ -61,8 +64,17 @@ pub struct Hdf5Sink {
     shape: Option<Shape>,
     /// Step records not yet on disk.
     pending: Vec<StepRecord>,
+    /// Number of gauges once `begin_gauges` ran.
+    gauges: Option<usize>,
+    /// Gauge rows not yet on disk: written with the step records, or on their own
+    /// once they hold [`GAUGE_BUFFER_VALUES`] values.
+    pending_gauges: GaugeRows,
     finished: bool,
 }
+
+/// Bound on the buffered gauge values (4 MiB): a run with gauges at every step and
+/// rare snapshots writes them in pieces of this size.
+const GAUGE_BUFFER_VALUES: usize = 1 << 19;
 
 /// What `begin` and the first snapshot fix about the file.
 #[derive(Debug, Clone)]
@@ -157,6 +169,8 @@ impl Hdf5Sink {
             path: path.to_path_buf(),
             shape: None,
             pending: Vec::new(),
+            gauges: None,
+            pending_gauges: GaugeRows::default(),
             finished: false,
         };
         let file = sink.create_file()?;
@@ -243,10 +257,12 @@ impl OutputSink for Hdf5Sink {
         layout::create_optional(&file, (nx, nl), create)
             .and_then(|()| layout::create_cell_fields(&file, nx, &create_extra))
             .and_then(|()| layout::append_steps(&file, &self.pending))
+            .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
             .and_then(|()| layout::append_snapshot(&file, snap))
             .map_err(|e| self.err(e))?;
         self.close(file, false)?;
         self.pending.clear();
+        self.pending_gauges.clear();
         Ok(())
     }
 
@@ -263,10 +279,53 @@ impl OutputSink for Hdf5Sink {
         self.finished = true;
         let file = self.open_file()?;
         layout::append_steps(&file, &self.pending)
+            .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
             .and_then(|()| layout::write_summary(&file, summary, self.shape.is_some()))
             .map_err(|e| self.err(e))?;
         self.pending.clear();
+        self.pending_gauges.clear();
         self.close(file, true)
+    }
+
+    fn begin_gauges(&mut self, x: &[f64]) -> Result<(), OutputError> {
+        self.check_open("begin_gauges")?;
+        if self.gauges.is_some() {
+            return Err(self.err("begin_gauges called twice"));
+        }
+        if x.is_empty() {
+            return Err(self.err("begin_gauges without gauges"));
+        }
+        let file = self.open_file()?;
+        layout::create_gauges(&file, x).map_err(|e| self.err(e))?;
+        self.close(file, false)?;
+        self.gauges = Some(x.len());
+        Ok(())
+    }
+
+    fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {
+        self.check_open("gauges")?;
+        let Some(n) = self.gauges else {
+            return Err(self.err("gauges before begin_gauges"));
+        };
+        if rec.eta.len() != n || rec.h_grains.len() != n {
+            return Err(self.err(format!(
+                "gauge record at t = {} has {} and {} values, expected {n}",
+                rec.t,
+                rec.eta.len(),
+                rec.h_grains.len()
+            )));
+        }
+        self.pending_gauges.push(rec);
+        if self.pending_gauges.values() >= GAUGE_BUFFER_VALUES {
+            let file = self.open_file()?;
+            layout::append_steps(&file, &self.pending)
+                .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
+                .map_err(|e| self.err(e))?;
+            self.close(file, false)?;
+            self.pending.clear();
+            self.pending_gauges.clear();
+        }
+        Ok(())
     }
 }
 
@@ -274,11 +333,14 @@ impl Drop for Hdf5Sink {
     /// A run that unwinds without calling `finish` still gets the step records it
     /// produced since its last snapshot, when the file can take them.
     fn drop(&mut self) {
-        if self.finished || self.pending.is_empty() || self.shape.is_none() {
+        let nothing = self.pending.is_empty() && self.pending_gauges.t.is_empty();
+        if self.finished || nothing || self.shape.is_none() {
             return;
         }
         let saved = self.open_file().and_then(|file| {
-            let appended = layout::append_steps(&file, &self.pending).map_err(|e| self.err(e));
+            let appended = layout::append_steps(&file, &self.pending)
+                .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
+                .map_err(|e| self.err(e));
             appended.and(self.close(file, false))
         });
         if let Err(e) = saved {

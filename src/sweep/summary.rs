@@ -193,6 +193,7 @@ mod tests {
                 t_end: 1.4258,
                 steps: 125,
                 wall_time_s: 0.019,
+                max_wave_amplitude: None,
                 stage_times: Vec::new(),
             },
             h5: "slope_deg=16.h5".into(),
