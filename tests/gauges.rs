@@ -12,8 +12,17 @@ use granflow::output::memory::MemorySink;
 use granflow::scenario::{load_str, Scenario};
 use granflow::setup::{build, build_granular, mesh_of};
 
-const LAKE: &str = include_str!("../scenarios/lake_landslide.toml");
+const LAKE_FILE: &str = include_str!("../scenarios/lake_landslide.toml");
 const COLLAPSE: &str = include_str!("../scenarios/collapse.toml");
+
+/// The lake landslide without the gauges the scenario ships with.
+static LAKE: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+    LAKE_FILE
+        .lines()
+        .filter(|l| !l.starts_with("gauge"))
+        .map(|l| format!("{l}\n"))
+        .collect()
+});
 
 fn load(text: &str, sets: &[&str]) -> Scenario {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
@@ -78,7 +87,7 @@ fn submarine_gauges_are_the_snapshot_surface_and_grain_depth() {
     for every in [None, Some("output.gauge_every=0.1")] {
         let mut sets = vec![gauges, "time.t_end=3"];
         sets.extend(every);
-        let scn = load(LAKE, &sets);
+        let scn = load(&LAKE, &sets);
         let sink = run(&scn);
         let n = gauges_match_snapshots(&sink, mesh_of(&scn).dx, |k, i| {
             sink.snapshots[k].field("eta").expect("eta")[i]
@@ -106,7 +115,7 @@ fn granular_gauges_read_the_top_of_the_flow_and_its_thickness() {
 
 #[test]
 fn without_gauge_every_every_step_is_recorded() {
-    let sink = run(&load(LAKE, &["output.gauges=[5.0]", "time.t_end=1"]));
+    let sink = run(&load(&LAKE, &["output.gauges=[5.0]", "time.t_end=1"]));
     let t_steps: Vec<f64> = sink.steps.iter().map(|r| r.t).collect();
     let t_gauges: Vec<f64> = sink.gauges.iter().map(|g| g.0).collect();
     assert_eq!(t_gauges, t_steps);
@@ -114,12 +123,12 @@ fn without_gauge_every_every_step_is_recorded() {
 
 #[test]
 fn gauge_every_sets_the_record_times_not_the_time_steps() {
-    let base = run(&load(LAKE, &["time.t_end=2"]));
+    let base = run(&load(&LAKE, &["time.t_end=2"]));
     assert!(base.gauges.is_empty() && base.gauge_x.is_empty());
     for (every, records) in [(0.25, 9), (0.01, 201), (0.3, 8)] {
         let set = format!("output.gauge_every={every}");
         let sink = run(&load(
-            LAKE,
+            &LAKE,
             &["time.t_end=2", "output.gauges=[5.0, 7.0]", &set],
         ));
         // The same steps as without gauges, to the bit.
@@ -133,7 +142,7 @@ fn gauge_every_sets_the_record_times_not_the_time_steps() {
         assert_eq!(*t.last().unwrap(), 2.0);
         // Interpolated values lie between those of the two steps around them: check
         // on the grain-free surface at 7 m against the per-step series.
-        let steps = run(&load(LAKE, &["time.t_end=2", "output.gauges=[5.0, 7.0]"]));
+        let steps = run(&load(&LAKE, &["time.t_end=2", "output.gauges=[5.0, 7.0]"]));
         for (tk, eta, _) in &sink.gauges {
             let n = steps.gauges.partition_point(|g| g.0 < *tk);
             let (hi, lo) = (&steps.gauges[n], &steps.gauges[n.saturating_sub(1)]);
@@ -149,7 +158,7 @@ fn a_lake_at_rest_reads_a_constant_surface_at_every_gauge() {
     // shore is at x = 3.25; gauges on the dry deposit, at the shoreline, beyond it and
     // over the flat floor.
     let scn = load(
-        LAKE,
+        &LAKE,
         &[
             "rheology.mu_deg=25",
             "initial.h=0.05",
@@ -176,11 +185,11 @@ fn a_lake_at_rest_reads_a_constant_surface_at_every_gauge() {
 
 #[test]
 fn the_wave_amplitude_is_in_the_submarine_summary_only() {
-    let sink = run(&load(LAKE, &["time.t_end=3"]));
+    let sink = run(&load(&LAKE, &["time.t_end=3"]));
     let amp = sink.summary.unwrap().max_wave_amplitude.unwrap();
     // The surface at the gauges moved by up to … ≤ the amplitude over all wet cells.
     let with = run(&load(
-        LAKE,
+        &LAKE,
         &["time.t_end=3", "output.gauges=[5, 6, 7, 8, 9]"],
     ));
     let seen = with
@@ -249,8 +258,10 @@ fn the_files_hold_the_documented_shapes() {
     }
     // A run without gauges writes neither.
     let plain = dir.path().join("plain.h5");
+    let scenario = dir.path().join("plain.toml");
+    std::fs::write(&scenario, LAKE.as_str()).unwrap();
     let out = granflow()
-        .args(["run", "scenarios/lake_landslide.toml", "--quiet"])
+        .args(["run", scenario.to_str().unwrap(), "--quiet"])
         .args([
             "--output",
             plain.to_str().unwrap(),
