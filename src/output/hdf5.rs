@@ -459,4 +459,59 @@ mod tests {
         let e = sink.snapshot(&view(1.0, &data, &[])).unwrap_err();
         assert!(e.to_string().contains("earlier snapshots"), "{e}");
     }
+
+    #[test]
+    fn gauge_rows_are_written_when_the_buffer_fills_and_on_drop() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("gauges.h5");
+        let mut sink = begin(&path);
+        assert!(sink
+            .gauges(&GaugeRecord {
+                t: 0.0,
+                eta: &[1.0],
+                h_grains: &[1.0]
+            })
+            .is_err());
+        sink.begin_gauges(&[0.5, 2.5]).unwrap();
+        assert!(sink.begin_gauges(&[0.5]).is_err());
+        let row = |k: usize| GaugeRecord {
+            t: k as f64,
+            eta: &[0.0, 1.0],
+            h_grains: &[2.0, 3.0],
+        };
+        let bad = GaugeRecord {
+            t: 0.0,
+            eta: &[1.0],
+            h_grains: &[1.0, 2.0],
+        };
+        assert!(sink
+            .gauges(&bad)
+            .unwrap_err()
+            .to_string()
+            .contains("expected 2"));
+        // 5 values a row (t and two per quantity): the bound is reached at this row.
+        let rows = GAUGE_BUFFER_VALUES.div_ceil(5);
+        for k in 0..rows {
+            sink.gauges(&row(k)).unwrap();
+        }
+        {
+            let file = H5File::open(&path).unwrap();
+            let t = file.dataset("gauges/t").unwrap().read_raw::<f64>().unwrap();
+            assert_eq!(t.len(), rows);
+            assert_eq!(t[rows - 1], (rows - 1) as f64);
+            let eta = file.dataset("gauges/eta").unwrap();
+            assert_eq!(eta.shape(), [rows, 2]);
+            assert_eq!(
+                file.dataset("gauges/x").unwrap().read_raw::<f64>().unwrap(),
+                [0.5, 2.5]
+            );
+        }
+        // A sink dropped without finish still saves the rows it holds.
+        sink.gauges(&row(rows)).unwrap();
+        drop(sink);
+        let file = H5File::open(&path).unwrap();
+        let h = file.dataset("gauges/h_grains").unwrap();
+        assert_eq!(h.shape(), [rows + 1, 2]);
+        assert_eq!(h.read_raw::<f64>().unwrap()[2 * rows..], [2.0, 3.0]);
+    }
 }
