@@ -1,6 +1,8 @@
 //! Fingerprints of every bundled scenario (and law/model variants), for refactors
 //! that must keep results bit-for-bit: FNV-1a over every snapshot field and step
-//! record of a run with t_end capped.
+//! record of a run with t_end capped, for any model.
+//!
+//!   cargo run --release --example fingerprints -- 0.3 scenarios/*.toml > before.txt
 use granflow::output::memory::MemorySink;
 use std::path::Path;
 
@@ -28,7 +30,7 @@ fn main() {
                 Ok(s) => s,
                 Err(_) => continue,
             };
-            let mut sim = granflow::setup::build_granular(&scn);
+            let mut sim = granflow::setup::build(&scn);
             let mut sink = MemorySink::default();
             let res = sim.run(&mut sink, &mut |_| {});
             let mut h = 0xcbf2_9ce4_8422_2325u64;

@@ -31,6 +31,8 @@ class Run:
             self.p_nh = snaps["p_nh"][:] if "p_nh" in snaps else None
             self.static_interface = (snaps["static_interface"][:]
                                      if "static_interface" in snaps else None)
+            # Volume fraction of the dilatant model (seed 002), None for the others.
+            self.phi = f["snapshots/phi"][:] if "snapshots/phi" in f else None
             self.front_t = f["front/t"][:]
             self.front_x = f["front/x"][:]
             self.front_threshold = float(f["front"].attrs.get("threshold", 1e-3))

@@ -46,8 +46,12 @@ pub const BUNDLED: &[Bundled] = &[
     bundled!("collapse_nh_gate"),
     bundled!("dam_break_dry"),
     bundled!("dam_break_wet"),
+    bundled!("dilatancy_dense"),
+    bundled!("dilatancy_dense_walls"),
+    bundled!("dilatancy_loose"),
     bundled!("erodible_bed"),
     bundled!("lake_at_rest"),
+    bundled!("lake_landslide"),
     bundled!("nh_complex_topography"),
     bundled!(
         "nh_complex_topography_local",
@@ -59,7 +63,9 @@ pub const BUNDLED: &[Bundled] = &[
     bundled!("nh_coordinates_wedge"),
     bundled!("nh_coordinates_wedge_cartesian"),
     bundled!("sidewall_channel"),
+    bundled!("submarine_landslide"),
     bundled!("transient_channel"),
+    bundled!("tsunami_30km"),
 ];
 
 /// The commented starter scenario of `granflow init NAME` (no `--from`); `THIS_FILE`

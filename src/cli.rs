@@ -94,6 +94,14 @@ pub struct RunArgs {
     /// Seconds between two progress lines (--progress lines, or auto in a pipe).
     #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
     pub progress_every: f64,
+    /// Replace the output files even when they are not granflow outputs (or are the
+    /// scenario itself).
+    #[arg(long)]
+    pub force: bool,
+    /// When another granflow process writes the same output file, wait for it instead
+    /// of failing.
+    #[arg(long)]
+    pub wait: bool,
 }
 
 /// How `granflow run` shows its progress.
@@ -132,4 +140,23 @@ pub struct CompletionsArgs {
     /// The shell to complete for.
     #[arg(value_enum)]
     pub shell: clap_complete::Shell,
+}
+
+/// Writes `text` to stdout. A reader that went away (`granflow run … | head -3`) is not
+/// an error of the run: the output is dropped quietly instead of panicking as `print!`
+/// does. Other write errors are reported on stderr.
+pub fn print_out(text: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
+        Err(e) => print_err(&format!("granflow: cannot write to stdout: {e}\n")),
+    }
+}
+
+/// Writes `text` to stderr, ignoring failures (there is nowhere left to report them).
+pub fn print_err(text: &str) {
+    use std::io::Write;
+    let _ = std::io::stderr().lock().write_all(text.as_bytes());
 }

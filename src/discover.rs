@@ -6,7 +6,9 @@ use std::io::Write;
 use clap::CommandFactory;
 
 use crate::catalog::{self, InitError};
-use crate::cli::{Cli, CompletionsArgs, InitArgs, ScenariosArgs, EXIT_BAD_INPUT, EXIT_FAILURE};
+use crate::cli::{
+    print_out, Cli, CompletionsArgs, InitArgs, ScenariosArgs, EXIT_BAD_INPUT, EXIT_FAILURE,
+};
 
 /// `granflow scenarios [--show NAME]`.
 pub fn scenarios(args: &ScenariosArgs) -> u8 {
@@ -39,8 +41,10 @@ pub fn scenarios(args: &ScenariosArgs) -> u8 {
 pub fn init(args: &InitArgs) -> u8 {
     match catalog::init(&args.name, args.from.as_deref(), args.force) {
         Ok(written) => {
-            println!("{written}");
-            println!("run it:  granflow run {}", written.scenario.display());
+            print_out(&format!(
+                "{written}\nrun it:  granflow run {}\n",
+                written.scenario.display()
+            ));
             0
         }
         Err(e @ (InitError::Unknown(_) | InitError::Exists(_))) => {
@@ -57,6 +61,10 @@ pub fn init(args: &InitArgs) -> u8 {
 /// `granflow completions SHELL`: the script on stdout.
 pub fn completions(args: &CompletionsArgs) -> u8 {
     let mut cmd = Cli::command();
-    clap_complete::generate(args.shell, &mut cmd, "granflow", &mut std::io::stdout());
+    // Into a buffer first: clap_complete panics when its writer fails, e.g. on a closed
+    // pipe (`granflow completions bash | head`).
+    let mut script = Vec::new();
+    clap_complete::generate(args.shell, &mut cmd, "granflow", &mut script);
+    print_out(&String::from_utf8_lossy(&script));
     0
 }

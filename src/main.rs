@@ -1,37 +1,77 @@
 //! `granflow` binary: parse the command line, run, map errors to exit codes
 //! (0 success, 1 solver or output failure, 2 bad input).
 
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Parser;
-use granflow::cli::{Cli, Command, RunArgs, ScenarioArgs, EXIT_BAD_INPUT, EXIT_FAILURE};
+use granflow::cli::{
+    print_err, print_out, Cli, Command, RunArgs, ScenarioArgs, EXIT_BAD_INPUT, EXIT_FAILURE,
+};
 use granflow::discover;
+use granflow::interrupt;
+use granflow::lock::{self, Lock, LockError};
 use granflow::progress::RunProgress;
 use granflow::runner;
 use granflow::scenario::{self, Scenario};
 
 fn load(args: &ScenarioArgs) -> Result<Scenario, ExitCode> {
-    scenario::load_file(&args.scenario, &args.set).map_err(|e| {
-        eprintln!("error: {e}");
+    let scn = scenario::load_file(&args.scenario, &args.set).map_err(|e| {
+        print_err(&format!("error: {e}\n"));
         ExitCode::from(EXIT_BAD_INPUT)
-    })
+    })?;
+    for note in &scn.notes {
+        print_err(&format!("note: {note}\n"));
+    }
+    Ok(scn)
 }
 
 fn check(args: &ScenarioArgs) -> ExitCode {
     match load(args).map(|s| runner::check(&s)) {
         Ok(run) => {
-            println!(
-                "{}: ok ({} model, {} cells, {} layer(s), stages: {})",
+            print_out(&format!(
+                "{}: ok ({} model, {} cells, {} layer(s), stages: {})\n",
                 args.scenario.display(),
                 run.info().model,
                 run.cells(),
                 run.info().layers,
                 run.stage_names().join(" → ")
-            );
+            ));
+            if run.mass() <= 0.0 {
+                print_err(&format!(
+                    "warning: {}: the initial state holds no mass (initial.h is 0 everywhere); a run will end at once with status no_mass\n",
+                    args.scenario.display()
+                ));
+            }
             ExitCode::SUCCESS
         }
         Err(code) => code,
     }
+}
+
+/// Locks `<output>.lock` for the whole run (see `granflow::lock`).
+fn lock_output(output: &Path, wait: bool) -> Result<Lock, ExitCode> {
+    let mut name = output.as_os_str().to_owned();
+    name.push(".lock");
+    let path = PathBuf::from(name);
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        // The sink would create it anyway; the lock file needs it first.
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            print_err(&format!("error: cannot create {}: {e}\n", dir.display()));
+            return Err(ExitCode::from(EXIT_FAILURE));
+        }
+    }
+    let what = format!("the output file {}", output.display());
+    lock::acquire(&path, &what, wait, &mut |holder| {
+        print_err(&format!("waiting: {what} is in use ({holder})\n"));
+    })
+    .map_err(|e| {
+        print_err(&format!("error: {e}\n"));
+        match e {
+            LockError::Busy { .. } => ExitCode::from(EXIT_BAD_INPUT),
+            LockError::Io { .. } => ExitCode::from(EXIT_FAILURE),
+        }
+    })
 }
 
 fn run(args: &RunArgs) -> ExitCode {
@@ -43,6 +83,16 @@ fn run(args: &RunArgs) -> ExitCode {
         .output
         .clone()
         .unwrap_or_else(|| scn.output.file.clone());
+    if let Err(e) = granflow::overwrite::check_outputs(&args.scenario.scenario, &output, args.force)
+    {
+        print_err(&format!("error: {e}\n"));
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
+    let _lock = match lock_output(&output, args.wait) {
+        Ok(lock) => lock,
+        Err(code) => return code,
+    };
+    interrupt::install();
     let mut progress = RunProgress::new(
         args.progress,
         args.quiet,
@@ -52,14 +102,28 @@ fn run(args: &RunArgs) -> ExitCode {
     let result = runner::run_to_files(&scn, &output, &mut |p| progress.update(&p));
     progress.finish();
     match result {
+        Ok(report) if report.summary.status == "interrupted" => {
+            // Said even with --quiet: the user asked for the stop and needs to know
+            // what was kept.
+            print_err(&format!(
+                "granflow: interrupted at t = {} s; partial results in {} and {}\n",
+                runner::sig(report.summary.t_end),
+                report.h5.display(),
+                report.front_csv.display()
+            ));
+            if !args.quiet {
+                print_out(&report.to_string());
+            }
+            ExitCode::from(interrupt::EXIT_INTERRUPTED)
+        }
         Ok(report) => {
             if !args.quiet {
-                print!("{report}");
+                print_out(&report.to_string());
             }
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("error: {e}");
+            print_err(&format!("error: {e}\n"));
             ExitCode::from(EXIT_FAILURE)
         }
     }

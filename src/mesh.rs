@@ -73,6 +73,36 @@ impl MeshSpec {
     }
 }
 
+/// What the generic layers (the run loop, the output sinks, the sweeps) need of a
+/// grid. A 2-D mesh would implement it with its cell list; its stages would bring
+/// their own face loops (owner/neighbour cells, normals, lengths) in place of the 1-D
+/// loops over k = 0..=nx, and its ghost fill in place of `fill_ghosts`.
+pub trait Grid {
+    /// Number of physical cells.
+    fn cells(&self) -> usize;
+    /// Cell centres (`/grid/x`).
+    fn centres(&self) -> &[f64];
+    /// Bed elevation at the centres (`/grid/b`).
+    fn bed(&self) -> &[f64];
+    /// Length in the CFL condition Δt ≤ CFL · length / speed (Δx in 1-D).
+    fn cfl_length(&self) -> f64;
+}
+
+impl Grid for Mesh {
+    fn cells(&self) -> usize {
+        self.nx
+    }
+    fn centres(&self) -> &[f64] {
+        &self.x
+    }
+    fn bed(&self) -> &[f64] {
+        &self.b
+    }
+    fn cfl_length(&self) -> f64 {
+        self.dx
+    }
+}
+
 impl Mesh {
     /// Builds the mesh with the bed `b` sampled at the centres (`b.len() == cells`).
     pub fn new(spec: &MeshSpec, b: Vec<f64>) -> Mesh {

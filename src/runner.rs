@@ -64,28 +64,47 @@ impl fmt::Display for RunReport {
         let s = &self.summary;
         writeln!(
             f,
-            "granflow: {} at t = {:.4} s after {} steps ({:.3} s wall)",
-            s.status, s.t_end, s.steps, s.wall_time_s
+            "granflow: {} at t = {} s after {} steps ({} s wall)",
+            s.status,
+            sig(s.t_end),
+            s.steps,
+            sig(s.wall_time_s)
         )?;
-        writeln!(f, "  runout        {:.4} m", s.runout)?;
+        match s.status.as_str() {
+            "no_mass" => writeln!(f, "  runout        none (the initial state holds no mass)")?,
+            "outflowed" => writeln!(
+                f,
+                "  runout        none (all the mass left through an outflow boundary)"
+            )?,
+            _ if s.runout.is_nan() => writeln!(f, "  runout        none (no front)")?,
+            // Wet or periodic domains have no front that moves: say so rather than
+            // print a runout of "0.0000 m" as if it were measured.
+            _ if s.runout == 0.0 => writeln!(f, "  runout        0 m (the front did not move)")?,
+            _ => writeln!(f, "  runout        {} m", sig(s.runout))?,
+        }
         if s.stop_time.is_nan() {
             writeln!(f, "  stop time     not at rest")?;
         } else {
-            writeln!(f, "  stop time     {:.4} s", s.stop_time)?;
+            writeln!(f, "  stop time     {} s", sig(s.stop_time))?;
         }
-        writeln!(f, "  h_max final   {:.4} m", s.h_max_final)?;
+        writeln!(f, "  h_max final   {} m", sig(s.h_max_final))?;
         if let Some(a) = s.max_wave_amplitude {
-            writeln!(f, "  max wave      {a:.4} m")?;
+            writeln!(f, "  max wave      {} m", sig(a))?;
         }
         let stages: Vec<String> = s
             .stage_times
             .iter()
-            .map(|(name, t)| format!("{name} {t:.3} s"))
+            .map(|(name, t)| format!("{name} {} s", sig(*t)))
             .collect();
         writeln!(f, "  stage times   {}", stages.join(", "))?;
+        let what = if s.status == "interrupted" {
+            "partial results"
+        } else {
+            "output"
+        };
         write!(
             f,
-            "  output        {}, {}",
+            "  {what:<13} {}, {}",
             self.h5.display(),
             self.front_csv.display()
         )?;
@@ -93,5 +112,41 @@ impl fmt::Display for RunReport {
             Some(g) => writeln!(f, ", {}", g.display()),
             None => writeln!(f),
         }
+    }
+}
+
+/// `v` with four significant digits: plain decimals between 1e-3 and 1e5, exponent
+/// form outside (so t_end = 1e-5 s is not printed as 0.0000).
+pub fn sig(v: f64) -> String {
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    if v == 0.0 {
+        return "0".to_owned();
+    }
+    let a = v.abs();
+    if (1e-3..1e5).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sig;
+
+    #[test]
+    fn four_significant_digits() {
+        assert_eq!(sig(1e-5), "1.000e-5");
+        assert_eq!(sig(1.89), "1.890");
+        assert_eq!(sig(0.0123456), "0.01235");
+        assert_eq!(sig(2.65), "2.650");
+        assert_eq!(sig(1234.5678), "1235");
+        assert_eq!(sig(0.0), "0");
+        assert_eq!(sig(-0.5), "-0.5000");
+        assert_eq!(sig(3.2e7), "3.200e7");
+        assert_eq!(sig(f64::NAN), "NaN");
     }
 }

@@ -13,7 +13,7 @@
 use std::time::Instant;
 
 use crate::gauges::Gauges;
-use crate::mesh::Mesh;
+use crate::mesh::{Grid, Mesh};
 use crate::model::{Diagnostics, Model};
 use crate::numerics::StageError;
 use crate::output::{GridData, OutputError, OutputSink, RunInfo, RunSummary, StepRecord};
@@ -76,6 +76,8 @@ struct Tally {
     rest_since: Option<f64>,
     /// Largest wave amplitude so far, for models with a water surface.
     max_wave: Option<f64>,
+    /// Mass of the initial state, for the stop rules.
+    mass0: f64,
 }
 
 impl<M: Model> Simulation<M> {
@@ -127,7 +129,7 @@ impl<M: Model> Simulation<M> {
     /// The CFL step for the signal speed `s` (∞ when nothing moves).
     fn cfl_dt(&self, s: f64) -> f64 {
         if s > 0.0 {
-            self.config.cfl * self.mesh.dx / s
+            self.config.cfl * self.mesh.cfl_length() / s
         } else {
             f64::INFINITY
         }
@@ -195,8 +197,8 @@ impl<M: Model> Simulation<M> {
     ) -> Result<RunSummary, RunError> {
         let wall = Instant::now();
         let grid = GridData {
-            x: &self.mesh.x,
-            b: &self.mesh.b,
+            x: self.mesh.centres(),
+            b: self.mesh.bed(),
             h_bed: self.model.bed_layer(),
         };
         sink.begin(&self.info, &grid)?;
@@ -207,6 +209,7 @@ impl<M: Model> Simulation<M> {
             last: d0,
             rest_since: (d0.max_speed <= self.model.rest_speed()).then_some(0.0),
             max_wave: self.model.wave_amplitude(&self.mesh, &self.state),
+            mass0: d0.mass,
         };
         let result = self.run_loop(sink, progress, &mut tally, d0);
         let status = match &result {
@@ -233,7 +236,7 @@ impl<M: Model> Simulation<M> {
         d0: Diagnostics,
     ) -> Result<&'static str, RunError> {
         if let Some(i) = d0.non_finite_at {
-            return Err(self.failure(FailureReason::NonFinite, Some(self.mesh.x[i])));
+            return Err(self.failure(FailureReason::NonFinite, Some(self.mesh.centres()[i])));
         }
         sink.step(&self.record(&d0, 0.0))?;
         let mut gauges = (!self.config.gauges.is_empty())
@@ -274,8 +277,9 @@ impl<M: Model> Simulation<M> {
                 steps: self.steps,
                 diagnostics: &d,
                 next_dt: self.cfl_dt(d.signal_speed),
-                x: &self.mesh.x,
+                x: self.mesh.centres(),
                 at_rest,
+                mass0: tally.mass0,
             };
             let mut stop = None;
             for rule in &mut self.rules {

@@ -4,7 +4,8 @@
 //! itself only advances time and writes output.
 //!
 //! The default rules ([`default_rules`]): a non-finite value fails the run, a CFL step
-//! that collapses fails it, and with `time.stop_at_rest` a mass at rest ends it.
+//! that collapses fails it, Ctrl-C ends it (`interrupted`), an empty domain ends it
+//! (`no_mass`, `outflowed`), and with `time.stop_at_rest` a mass at rest ends it.
 //! The end time is the loop's own condition.
 
 use crate::model::Diagnostics;
@@ -23,6 +24,8 @@ pub struct StepContext<'a> {
     pub x: &'a [f64],
     /// Whether the whole mass is at rest (every speed ≤ the model's rest speed).
     pub at_rest: bool,
+    /// The mass of the initial state (the same measure as `diagnostics.mass`).
+    pub mass0: f64,
 }
 
 /// Why the solver gave up: the reason, where and when.
@@ -145,9 +148,54 @@ impl StopRule for AtRest {
     }
 }
 
+/// Fraction of the initial mass below which the domain counts as emptied: the dry-cell
+/// film a shallow-water scheme leaves behind a departing mass (1e-10 m here and there)
+/// is not a deposit.
+pub const OUTFLOWED_FRACTION: f64 = 1e-6;
+
+/// Ends a run with nothing left to simulate: `no_mass` when there was none to begin
+/// with, `outflowed` when all of it (but [`OUTFLOWED_FRACTION`]) has left through an
+/// outflow boundary. (Such runs
+/// used to end "stopped_at_rest" with a NaN runout: an empty domain is at rest.)
+/// Consulted before [`AtRest`], whose status it replaces.
+#[derive(Debug, Default)]
+pub struct MassGone;
+
+impl StopRule for MassGone {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        let mass = ctx.diagnostics.mass;
+        if ctx.mass0 <= 0.0 {
+            Verdict::Stop("no_mass")
+        } else if mass <= OUTFLOWED_FRACTION * ctx.mass0 {
+            Verdict::Stop("outflowed")
+        } else {
+            Verdict::Continue
+        }
+    }
+}
+
+/// Ends the run after Ctrl-C or SIGTERM (see [`crate::interrupt`]).
+#[derive(Debug, Default)]
+pub struct Interrupted;
+
+impl StopRule for Interrupted {
+    fn check(&mut self, _ctx: &StepContext) -> Verdict {
+        if crate::interrupt::requested() {
+            Verdict::Stop("interrupted")
+        } else {
+            Verdict::Continue
+        }
+    }
+}
+
 /// The rules every run consults, in order.
 pub fn default_rules(stop_at_rest: bool) -> Vec<Box<dyn StopRule>> {
-    let mut rules: Vec<Box<dyn StopRule>> = vec![Box::new(NonFinite), Box::new(DtCollapse)];
+    let mut rules: Vec<Box<dyn StopRule>> = vec![
+        Box::new(NonFinite),
+        Box::new(DtCollapse),
+        Box::new(Interrupted),
+        Box::new(MassGone),
+    ];
     if stop_at_rest {
         rules.push(Box::new(AtRest));
     }

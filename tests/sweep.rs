@@ -492,7 +492,11 @@ fn command_line_errors_exit_2() {
 fn shipped_sweeps_expand_and_run() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/sweeps");
     let tmp = TempDir::new().unwrap();
-    for (file, runs) in [("slopes.toml", 5), ("erodible_bed.toml", 12)] {
+    for (file, runs) in [
+        ("slopes.toml", 5),
+        ("erodible_bed.toml", 12),
+        ("dilatancy.toml", 15),
+    ] {
         let out = tmp.path().join(file);
         let (code, stdout, stderr) = sweep(
             &root.join(file),

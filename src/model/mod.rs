@@ -12,7 +12,9 @@
 //! - [`granular`]: the layered family of seeds 000, 001 and 003 (Savage–Hutter with
 //!   Coulomb or μ(I) friction, the multilayer μ(I) model, the weakly non-hydrostatic
 //!   monolayer model).
+//! - [`dilatant`]: the compressible μ(I)–φ model of seed 002 (volume fraction φ).
 
+pub mod dilatant;
 pub mod granular;
 pub mod submarine;
 
@@ -25,6 +27,8 @@ pub enum ModelKind {
     Granular,
     /// Seed 004's two-layer water-over-grains model.
     Submarine,
+    /// The compressible μ(I)–φ model with dilatancy (seed 002).
+    Dilatant,
 }
 
 impl ModelKind {
@@ -33,6 +37,7 @@ impl ModelKind {
         match self {
             ModelKind::Granular => "granular",
             ModelKind::Submarine => "submarine",
+            ModelKind::Dilatant => "dilatant",
         }
     }
 }

@@ -2,6 +2,7 @@
 //! from the scenario (seed 000 §3, seed 003 §4): hyperbolic → friction or viscous
 //! (→ projection).
 
+pub mod dilatant;
 pub mod friction;
 pub mod hydrostatic;
 pub mod linalg;

@@ -34,7 +34,7 @@
 //! file h5py could not open or whose snapshots and step records disagreed.
 //!
 //! Step records are kept in memory and appended at each snapshot and at finish, never
-//! one disk write per step. File locking is disabled for the writer so that a reader
+//! one disk write per step, and on their own whenever 8192 of them are pending. File locking is disabled for the writer so that a reader
 //! holding the file open (a notebook, say) cannot make the run fail at its next
 //! snapshot; such a reader may see stale metadata and should reopen the file.
 //!
@@ -87,6 +87,11 @@ struct Shape {
     /// Names of the per-cell fields; `None` until the first snapshot.
     extra: Option<Vec<&'static str>>,
 }
+
+/// Step records kept in memory at most (~56 bytes each): beyond, they are appended on
+/// their own, so a run with rare snapshots neither grows its memory without bound nor
+/// loses more than this many records when killed. One chunk of the step datasets.
+const MAX_PENDING_STEPS: usize = 8192;
 
 /// Names of `/snapshots` datasets that a per-cell field may not take.
 const FIXED_SNAPSHOT_NAMES: [&str; 5] = ["t", "h", "u", "w", "p_nh"];
@@ -206,6 +211,16 @@ impl Hdf5Sink {
         closed.map_err(|e| self.err(e))
     }
 
+    /// Appends the buffered step records on their own (reopen, append, close), when
+    /// many steps pass between two snapshots.
+    fn flush_steps(&mut self) -> Result<(), OutputError> {
+        let file = self.open_file()?;
+        layout::append_steps(&file, &self.pending).map_err(|e| self.err(e))?;
+        self.close(file, false)?;
+        self.pending.clear();
+        Ok(())
+    }
+
     fn check_open(&self, call: &str) -> Result<Shape, OutputError> {
         if self.finished {
             return Err(self.err(format!("{call} after finish")));
@@ -269,6 +284,9 @@ impl OutputSink for Hdf5Sink {
     fn step(&mut self, rec: &StepRecord) -> Result<(), OutputError> {
         self.check_open("step")?;
         self.pending.push(*rec);
+        if self.pending.len() >= MAX_PENDING_STEPS {
+            self.flush_steps()?;
+        }
         Ok(())
     }
 

@@ -1,8 +1,10 @@
 //! Pointwise physics: no grids, no loops over cells.
 //!
+//! - [`dilatancy`]: the compressible μ(I)–φ law of seed 002 (volume fraction φ).
 //! - [`rheology`]: basal friction laws (Coulomb, μ(I)) and the inertial number.
 //! - [`shallow`]: wave speeds and velocity desingularisation of the shallow layer.
 
+pub mod dilatancy;
 pub mod rheology;
 pub mod shallow;
 pub mod two_layer;

@@ -148,7 +148,29 @@ impl Locator {
 /// A TOML syntax error, with the line the parser points at.
 pub(crate) fn syntax_error(text: &str, e: &toml_edit::TomlError) -> ScenarioError {
     let line = e.span().map(|s| line_of(text, s.start));
-    let message = e.message().trim().to_owned();
+    let mut message = e.message().trim().to_owned();
+    // toml_edit says only "duplicate key"; its span covers the repeated key or table
+    // header, which names it.
+    if message.starts_with("duplicate key") {
+        let named = e
+            .span()
+            .and_then(|s| {
+                // A table header names the whole dotted table, not just its last part.
+                let start = text.get(..s.start)?.rfind('\n').map_or(0, |i| i + 1);
+                let header = text.get(start..)?.lines().next()?.trim();
+                let header = header.split('#').next()?.trim();
+                if header.starts_with('[') {
+                    Some(header)
+                } else {
+                    text.get(s)
+                }
+            })
+            .map(|k| k.trim().trim_matches(['[', ']']).trim())
+            .filter(|k| !k.is_empty() && k.len() <= 200 && !k.contains('\n'));
+        if let Some(k) = named {
+            message = format!("duplicate key or table '{k}' (it is defined earlier in the file)");
+        }
+    }
     ScenarioError::new(format!("invalid TOML: {message}")).with_line(line)
 }
 

@@ -15,12 +15,15 @@ mod raw;
 mod validate;
 
 pub use error::ScenarioError;
+pub(crate) use profile::read_bounded;
 pub use profile::Profile;
+pub(crate) use validate::MAX_SCENARIO_BYTES;
 pub use validate::{load_file, load_str};
 
 use std::path::PathBuf;
 
 pub use crate::mesh::{BoundaryKind, Coordinates};
+pub use crate::model::dilatant::DilatantSpec;
 pub use crate::model::granular::config::{MultilayerSpec, Pressure};
 pub use crate::model::submarine::SubmarineSpec;
 pub use crate::model::ModelKind;
@@ -58,6 +61,8 @@ pub struct Initial {
     /// Water free-surface elevation η(x) of the submarine model (no water if absent);
     /// its `initial.h` is then the grains' vertical thickness H₂cos²θ.
     pub eta: Option<Profile>,
+    /// Solid volume fraction φ(x) of the dilatant model (seed 002), in (0, 1).
+    pub phi: Option<Profile>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -91,6 +96,9 @@ pub struct OutputSpec {
 /// A validated scenario: every value checked, nothing left to interpret.
 #[derive(Debug, Clone)]
 pub struct Scenario {
+    /// Things the user should know that are not errors (keys ignored after a law
+    /// switch, …), one sentence each; printed as `note: …`.
+    pub notes: Vec<String>,
     /// The TOML text as read, after `--set` overrides (stored in the output file).
     pub source_toml: String,
     /// Directory of the scenario file (tables are resolved against it).
@@ -103,6 +111,8 @@ pub struct Scenario {
     pub model: ModelSpec,
     /// Layer fractions and viscous options of the multilayer model.
     pub multilayer: MultilayerSpec,
+    /// Law and numerics of the dilatant model (`model.kind = "dilatant"` only).
+    pub dilatancy: Option<DilatantSpec>,
     pub initial: Initial,
     pub boundary: Boundaries,
     pub time: TimeSpec,

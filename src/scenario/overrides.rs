@@ -45,9 +45,19 @@ impl Override {
         }
         let key = parts.join(".");
         let value_text = value.trim();
-        let mut value = value_text
-            .parse::<Value>()
-            .unwrap_or_else(|_| Value::from(value_text));
+        let mut value = match value_text.parse::<Value>() {
+            Ok(v) => v,
+            Err(_) if looks_numeric(value_text) => {
+                return Err(ScenarioError::at(
+                    key,
+                    format!(
+                        "{value_text} is out of range for a number (floats up to ±1.8e308, integers up to ±9.2e18)"
+                    ),
+                )
+                .mark_from_set())
+            }
+            Err(_) => Value::from(value_text),
+        };
         value.decor_mut().clear();
         Ok(Override { key, parts, value })
     }
@@ -104,6 +114,14 @@ impl Override {
         }
         Ok(())
     }
+}
+
+/// Text that is meant as a number (a digit first, after an optional sign or point) but
+/// that TOML did not take as one: too large (`1e400`, twenty-digit integers).
+/// Other words (`coulomb`, `infinity`, `run 1.h5`) stay bare strings.
+fn looks_numeric(text: &str) -> bool {
+    let body = text.trim_start_matches(['+', '-']).trim_start_matches('.');
+    body.starts_with(|c: char| c.is_ascii_digit()) && text.replace('_', "").parse::<f64>().is_ok()
 }
 
 #[cfg(test)]

@@ -205,6 +205,7 @@ impl Expression {
         if source.trim().is_empty() {
             return Err("empty expression".into());
         }
+        check_size(source)?;
         let mut node = build_operator_tree::<DefaultNumericTypes>(source)
             .map_err(|e| format!("cannot parse expression \"{source}\": {}", eval_message(&e)))?;
         for op in node.iter_operators_mut() {
@@ -285,6 +286,70 @@ impl Expression {
             )),
         }
     }
+}
+
+/// Largest accepted table file (bytes): about a million rows. A bound, so that a path
+/// such as `/dev/zero` is refused instead of read until memory runs out.
+pub(crate) const MAX_TABLE_BYTES: u64 = 64 << 20;
+
+/// Reads a UTF-8 text file of at most `limit` bytes.
+pub(crate) fn read_bounded(path: &Path, limit: u64) -> std::io::Result<String> {
+    use std::io::Read;
+    let mut text = String::new();
+    std::fs::File::open(path)?
+        .take(limit + 1)
+        .read_to_string(&mut text)?;
+    if text.len() as u64 > limit {
+        return Err(std::io::Error::other(format!(
+            "the file is larger than {} MiB",
+            limit >> 20
+        )));
+    }
+    Ok(text)
+}
+
+/// Longest accepted expression (bytes): ample for a profile written by hand or by a
+/// script (thirty Gaussian bumps take about 900), small enough to parse in microseconds.
+pub(crate) const MAX_EXPR_BYTES: usize = 10_000;
+
+/// Largest accepted nesting weight, see [`nesting_weight`].
+pub(crate) const MAX_EXPR_NESTING: usize = 1000;
+
+/// An upper bound on the depth of the operator tree `evalexpr` builds for `source`:
+/// every operator character counts 1 (a chain `x+x+…+x` of n terms is a tree n deep,
+/// and so is n-fold unary minus) and every opening parenthesis 2 (the group and a
+/// possible function call). Parsing, evaluating and dropping the tree all recurse
+/// over it, so a deep tree overflows the stack and aborts the process; a weight of
+/// 1000 stays well inside the 2 MiB stack of a worker thread even in a debug build
+/// (measured: 2000-deep trees overflow there, 1000-deep ones do not).
+fn nesting_weight(source: &str) -> usize {
+    source
+        .bytes()
+        .map(|c| match c {
+            b'(' => 2,
+            b'+' | b'-' | b'*' | b'/' | b'%' | b'^' | b'<' | b'>' | b'=' | b'!' | b'&' | b'|'
+            | b',' | b';' => 1,
+            _ => 0,
+        })
+        .sum()
+}
+
+/// Refuses expressions too long or too deeply nested to handle safely, before parsing.
+/// The message does not quote the expression (it may be megabytes).
+fn check_size(source: &str) -> Result<(), String> {
+    if source.len() > MAX_EXPR_BYTES {
+        return Err(format!(
+            "expression is too long: {} bytes (at most {MAX_EXPR_BYTES}; use a table file for long profiles)",
+            source.len()
+        ));
+    }
+    let weight = nesting_weight(source);
+    if weight > MAX_EXPR_NESTING {
+        return Err(format!(
+            "expression is too deep: {weight} operators and parentheses (each parenthesis counts 2; at most {MAX_EXPR_NESTING}); split it or use a table file"
+        ));
+    }
+    Ok(())
 }
 
 /// evalexpr prefixes custom messages with "Error: "; drop it.
@@ -497,7 +562,7 @@ impl Table {
     /// Reads a CSV table; errors are messages naming the file (the caller adds the key).
     fn load(path: &Path, base_dir: &Path) -> Result<Table, String> {
         let full = base_dir.join(path);
-        let text = std::fs::read_to_string(&full)
+        let text = read_bounded(&full, MAX_TABLE_BYTES)
             .map_err(|e| format!("cannot read table file '{}': {e}", full.display()))?;
         Table::parse(&text, path).map_err(|m| format!("table file '{}': {m}", full.display()))
     }
@@ -526,7 +591,7 @@ impl Table {
         } else {
             if names.len() < 2 {
                 return Err(format!(
-                    "line {header_line}: the header needs two columns (x,value), found '{header}'"
+                    "line {header_line}: the header needs two columns (x,value), found only one"
                 ));
             }
             let find = |want: &str| names.iter().position(|n| n.eq_ignore_ascii_case(want));
@@ -542,14 +607,24 @@ impl Table {
             let field = |i: usize, what: &str| -> Result<f64, String> {
                 let s = fields
                     .get(i)
-                    .ok_or_else(|| format!("line {line}: missing the {what} column in '{row}'"))?;
-                let v: f64 = s
-                    .parse()
-                    .map_err(|_| format!("line {line}: {what} '{s}' is not a number"))?;
+                    .ok_or_else(|| {
+                        format!(
+                            "line {line}: missing the {what} column (column {} of a row with {} column{})",
+                            i + 1,
+                            fields.len(),
+                            if fields.len() == 1 { "" } else { "s" }
+                        )
+                    })?;
+                let v: f64 = s.parse().map_err(|_| {
+                    format!("line {line}: the {what} (column {}) is not a number", i + 1)
+                })?;
                 if v.is_finite() {
                     Ok(v)
                 } else {
-                    Err(format!("line {line}: {what} must be finite, got {s}"))
+                    Err(format!(
+                        "line {line}: the {what} (column {}) must be finite",
+                        i + 1
+                    ))
                 }
             };
             let x = field(ix, "x")?;
@@ -761,7 +836,11 @@ mod tests {
     #[test]
     fn table_errors_name_the_line() {
         let e = Table::parse("x,value\n0,1\n1,oops\n", Path::new("t.csv")).unwrap_err();
-        assert!(e.contains("line 3") && e.contains("oops"), "{e}");
+        assert!(
+            e.contains("line 3") && e.contains("value (column 2)"),
+            "{e}"
+        );
+        assert!(!e.contains("oops"), "file content quoted: {e}");
         let e = Table::parse("x,value\n0,1\n0,2\n", Path::new("t.csv")).unwrap_err();
         assert!(
             e.contains("line 3") && e.contains("strictly increasing"),

@@ -23,6 +23,22 @@ pub(crate) struct RawScenario {
     pub time: Option<RawTime>,
     pub output: Option<RawOutput>,
     pub submarine: Option<RawSubmarine>,
+    pub dilatancy: Option<RawDilatancy>,
+}
+
+/// `[dilatancy]`: the dilatant model's law and numerics (seed 002).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawDilatancy {
+    pub k: Option<f64>,
+    pub k_tilde: Option<f64>,
+    pub phi_stat: Option<f64>,
+    pub phi_eq: Option<String>,
+    pub n: Option<f64>,
+    pub update: Option<String>,
+    pub alpha: Option<f64>,
+    pub lambda: Option<f64>,
+    pub xi: Option<Vec<f64>>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -96,6 +112,7 @@ pub(crate) struct RawInitial {
     pub h: Option<RawProfile>,
     pub u: Option<RawProfile>,
     pub w: Option<RawProfile>,
+    pub phi: Option<RawProfile>,
     pub erodible_bed: Option<f64>,
     pub eta: Option<RawProfile>,
 }

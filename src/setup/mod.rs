@@ -3,10 +3,11 @@
 //! one module per model that reads its part of the scenario. This is the only place
 //! where scenarios meet models: `model/` and `numerics/` never read a scenario.
 
+mod dilatant;
 mod granular;
 mod submarine;
 
-use crate::mesh::{Mesh, MeshSpec};
+use crate::mesh::{Grid, Mesh, MeshSpec};
 use crate::model::granular::Granular;
 use crate::model::ModelKind;
 use crate::output::{OutputSink, RunInfo, RunSummary};
@@ -27,6 +28,8 @@ pub trait Run: Send {
     fn cells(&self) -> usize;
     /// Run metadata (model, pressure, layers, …).
     fn info(&self) -> &RunInfo;
+    /// Mass of the current (before a run: the initial) state.
+    fn mass(&self) -> f64;
 }
 
 impl<M: crate::model::Model> Run for Simulation<M> {
@@ -41,7 +44,10 @@ impl<M: crate::model::Model> Run for Simulation<M> {
         Simulation::stage_names(self)
     }
     fn cells(&self) -> usize {
-        self.mesh.nx
+        self.mesh.cells()
+    }
+    fn mass(&self) -> f64 {
+        self.diagnostics().mass
     }
     fn info(&self) -> &RunInfo {
         &self.info
@@ -53,7 +59,13 @@ pub fn build(scn: &Scenario) -> Box<dyn Run> {
     match scn.model.kind {
         ModelKind::Granular => Box::new(build_granular(scn)),
         ModelKind::Submarine => Box::new(build_submarine(scn)),
+        ModelKind::Dilatant => Box::new(build_dilatant(scn)),
     }
+}
+
+/// The run of a dilatant scenario (`model.kind = "dilatant"`, seed 002).
+pub fn build_dilatant(scn: &Scenario) -> Simulation<crate::model::dilatant::Dilatant> {
+    dilatant::build(scn)
 }
 
 /// The run of a granular scenario (`model.kind = "granular"`).

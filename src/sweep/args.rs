@@ -33,6 +33,10 @@ pub struct SweepArgs {
     /// No progress display and no table.
     #[arg(long, short)]
     pub quiet: bool,
+    /// When another sweep (or the same shard) writes into the output directory, wait
+    /// for it instead of failing.
+    #[arg(long)]
+    pub wait: bool,
 }
 
 #[derive(Debug, Subcommand)]

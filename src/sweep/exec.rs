@@ -39,10 +39,31 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 
 /// Runs `run` into `dir` and stores its result file. Never fails: what went wrong is in
 /// the record's status.
-pub fn run_one(run: &Prepared, dir: &Path, progress: &mut dyn FnMut(Progress)) -> RunRecord {
+///
+/// The run's output file is locked (`<run>.h5.lock`, as by `granflow run`) while it
+/// runs. Shards of one sweep may overlap (`--shard 0/2` beside a full sweep); a run
+/// another process is producing is waited for, and then taken as done when it is
+/// (unless `force`).
+pub fn run_one(
+    run: &Prepared,
+    dir: &Path,
+    force: bool,
+    progress: &mut dyn FnMut(Progress),
+) -> RunRecord {
     let name = &run.point.name;
     let h5 = h5_path(dir, name);
     let start = Instant::now();
+    let lock_path = dir.join(format!("{name}.h5.lock"));
+    let what = format!("the run file {}", h5.display());
+    let _lock = match crate::lock::acquire(&lock_path, &what, true, &mut |_| {}) {
+        Ok(lock) => lock,
+        Err(e) => return failed_before_start(run, format!("failed: {e}")),
+    };
+    if !force {
+        if let Some(done) = record::done(dir, name, &run.hash) {
+            return done;
+        }
+    }
     let mut record = RunRecord {
         format: RECORD_FORMAT,
         index: run.point.index,
@@ -91,6 +112,25 @@ pub fn run_one(run: &Prepared, dir: &Path, progress: &mut dyn FnMut(Progress)) -
         );
     }
     record
+}
+
+/// The record of a run that could not start.
+fn failed_before_start(run: &Prepared, status: String) -> RunRecord {
+    let name = &run.point.name;
+    RunRecord {
+        format: RECORD_FORMAT,
+        index: run.point.index,
+        name: name.clone(),
+        scenario_hash: run.hash.clone(),
+        summary: RunSummary::not_run(status, 0.0),
+        h5: format!("{name}.h5"),
+        parameters: run
+            .point
+            .params
+            .iter()
+            .map(|(k, v)| (k.clone(), v.display.clone()))
+            .collect(),
+    }
 }
 
 /// Progress display: an overall bar and one line per active run, on stderr when it is a
@@ -179,7 +219,7 @@ impl Ui {
         } else if self.tty {
             let _ = self.multi.println(line);
         } else {
-            eprintln!("{line}");
+            crate::cli::print_err(&format!("{line}\n"));
         }
     }
 

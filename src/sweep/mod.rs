@@ -48,6 +48,7 @@ use record::write_atomic;
 use spec::SweepSpec;
 use summary::{summary_file_name, to_csv, to_table, Row, SUMMARY_FILE};
 
+use crate::cli::{print_err, print_out};
 use crate::scenario::{self, ScenarioError};
 
 /// What `granflow sweep` was asked to do.
@@ -61,6 +62,8 @@ pub struct SweepOptions {
     /// `--set` overrides, applied to every run after the sweep file's `set`.
     pub set: Vec<String>,
     pub quiet: bool,
+    /// Wait for another sweep holding the directory's lock instead of failing.
+    pub wait: bool,
 }
 
 /// What a sweep (or a merge) ended with.
@@ -173,17 +176,18 @@ fn prepare(
     base: &[String],
     pool: &rayon::ThreadPool,
 ) -> Result<Vec<Prepared>, SweepError> {
-    let text = std::fs::read_to_string(&spec.scenario).map_err(|e| {
-        SweepError::file(
-            &spec.path,
-            spec.scenario_line,
-            Some("scenario"),
-            format!(
-                "cannot read the base scenario '{}': {e}",
-                spec.scenario.display()
-            ),
-        )
-    })?;
+    let text =
+        scenario::read_bounded(&spec.scenario, scenario::MAX_SCENARIO_BYTES).map_err(|e| {
+            SweepError::file(
+                &spec.path,
+                spec.scenario_line,
+                Some("scenario"),
+                format!(
+                    "cannot read the base scenario '{}': {e}",
+                    spec.scenario.display()
+                ),
+            )
+        })?;
     let base_dir = match spec.scenario.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -304,6 +308,7 @@ fn execute(
     axes: &[String],
     summary_path: &Path,
     ui: &Ui,
+    force: bool,
 ) {
     let rows_of = |records: &[Option<record::RunRecord>], pending: &str| -> Vec<Row> {
         mine.iter()
@@ -316,13 +321,17 @@ fn execute(
     pool.scope(|s| {
         for _ in 0..jobs.min(todo.len()) {
             s.spawn(|_| loop {
+                // After Ctrl-C no new run starts; running ones stop by their own rule.
+                if crate::interrupt::requested() {
+                    break;
+                }
                 let i = next.fetch_add(1, Ordering::SeqCst);
                 let Some(&slot) = todo.get(i) else { break };
                 let run = mine[slot];
                 let name = &run.point.name;
                 let bar = ui.start(name);
                 let mut drawn = 0u64;
-                let record = exec::run_one(run, dir, &mut |p| {
+                let record = exec::run_one(run, dir, force, &mut |p| {
                     if p.steps >= drawn + 64 {
                         drawn = p.steps;
                         Ui::advance(&bar, name, &p);
@@ -340,6 +349,32 @@ fn execute(
             });
         }
     });
+}
+
+/// Locks the output directory for this sweep: `DIR/sweep.lock`, or one lock per shard
+/// (`DIR/sweep.shard-K-of-N.lock`) so that the shards of a job array share a directory.
+fn lock_dir(dir: &Path, opts: &SweepOptions) -> Result<crate::lock::Lock, SweepError> {
+    let (file, what) = if opts.shard.is_partial() {
+        let (k, n) = (opts.shard.k, opts.shard.n);
+        (
+            format!("sweep.shard-{k}-of-{n}.lock"),
+            format!("shard {k}/{n} of the sweep directory {}", dir.display()),
+        )
+    } else {
+        (
+            "sweep.lock".to_owned(),
+            format!("the sweep directory {}", dir.display()),
+        )
+    };
+    crate::lock::acquire(&dir.join(file), &what, opts.wait, &mut |holder| {
+        if !opts.quiet {
+            print_err(&format!("waiting: {what} is in use ({holder})\n"));
+        }
+    })
+    .map_err(|e| match e {
+        crate::lock::LockError::Busy { .. } => SweepError::Input(e.to_string()),
+        crate::lock::LockError::Io { .. } => SweepError::Io(e.to_string()),
+    })
 }
 
 /// Runs a sweep (or one shard of it).
@@ -366,6 +401,9 @@ pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
             dir.display()
         ))
     })?;
+    // Held to the end: a second sweep into `dir` would corrupt every file (module docs
+    // of crate::lock).
+    let _lock = lock_dir(&dir, opts)?;
     let plan = plan_of(&spec, &base, &axes, &prepared);
     let replaced = plan.write(&dir).map_err(SweepError::Io)?;
 
@@ -388,6 +426,12 @@ pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
     let summary_path = dir.join(summary_file_name(opts.shard));
 
     let ui = Ui::new(todo.len() as u64, opts.quiet);
+    let mut notes: Vec<&String> = prepared.iter().flat_map(|p| &p.scenario.notes).collect();
+    notes.sort();
+    notes.dedup();
+    for note in notes {
+        ui.println(&format!("note: {note}"));
+    }
     if replaced {
         ui.println(&format!(
             "note: {} described a different sweep; it now describes this one",
@@ -419,6 +463,7 @@ pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
         &axes,
         &summary_path,
         &ui,
+        opts.force,
     );
     ui.done();
 
@@ -482,7 +527,7 @@ pub fn merge(dir: &Path) -> Result<SweepReport, SweepError> {
 fn finish(report: &SweepReport, quiet: bool, merged: bool) -> u8 {
     let failed = report.failed();
     if !quiet {
-        print!("{}", report.table());
+        print_out(&report.table());
         let counts = if merged {
             format!("{} runs", report.rows.len())
         } else {
@@ -493,19 +538,19 @@ fn finish(report: &SweepReport, quiet: bool, merged: bool) -> u8 {
                 report.skipped
             )
         };
-        println!(
-            "{}: {counts}, {failed} not ok, {:.2} s; summary in {}",
+        print_out(&format!(
+            "{}: {counts}, {failed} not ok, {:.2} s; summary in {}\n",
             if merged { "merge" } else { "sweep" },
             report.wall_time_s,
             report.summary.display()
-        );
+        ));
     }
     if failed > 0 {
-        eprintln!(
-            "error: {failed} of {} runs did not complete (see the status column of {})",
+        print_err(&format!(
+            "error: {failed} of {} runs did not complete (see the status column of {})\n",
             report.rows.len(),
             report.summary.display()
-        );
+        ));
         EXIT_FAILURE
     } else {
         0
@@ -514,6 +559,7 @@ fn finish(report: &SweepReport, quiet: bool, merged: bool) -> u8 {
 
 /// `granflow sweep …`: returns the exit code.
 pub fn main(args: &SweepArgs) -> u8 {
+    crate::interrupt::install();
     let result = match &args.command {
         Some(SweepCommand::Merge(m)) => merge(&m.dir).map(|r| (r, m.quiet, true)),
         None => {
@@ -525,14 +571,22 @@ pub fn main(args: &SweepArgs) -> u8 {
                 shard: args.shard.unwrap_or(Shard::ALL),
                 set: args.set.clone(),
                 quiet: args.quiet,
+                wait: args.wait,
             };
             run(&opts).map(|r| (r, args.quiet, false))
         }
     };
     match result {
+        Ok((report, _, _)) if crate::interrupt::requested() => {
+            print_err(&format!(
+                "granflow: sweep interrupted; finished runs and the summary so far are in {} (rerun the same command to resume)\n",
+                report.dir.display()
+            ));
+            crate::interrupt::EXIT_INTERRUPTED
+        }
         Ok((report, quiet, merged)) => finish(&report, quiet, merged),
         Err(e) => {
-            eprintln!("error: {e}");
+            print_err(&format!("error: {e}\n"));
             e.exit_code()
         }
     }

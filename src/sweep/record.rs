@@ -65,9 +65,13 @@ impl RunRecord {
     }
 }
 
-/// `completed` and `stopped_at_rest` are successes; anything else is a failure.
+/// Runs that ended normally (`completed`, `stopped_at_rest`, `outflowed`, `no_mass`) are
+/// successes; anything else (`failed: …`, `interrupted`, `unfinished`) is not.
 pub fn status_is_ok(status: &str) -> bool {
-    status == "completed" || status == "stopped_at_rest"
+    matches!(
+        status,
+        "completed" | "stopped_at_rest" | "outflowed" | "no_mass"
+    )
 }
 
 pub fn h5_path(dir: &Path, name: &str) -> PathBuf {

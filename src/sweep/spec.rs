@@ -124,9 +124,10 @@ const TOP_KEYS: &str = "scenario, output, set, axes, zip";
 
 /// Reads and checks a sweep file.
 pub fn load(path: &Path) -> Result<SweepSpec, SweepError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        SweepError::file(path, None, None, format!("cannot read the sweep file: {e}"))
-    })?;
+    let text =
+        crate::scenario::read_bounded(path, crate::scenario::MAX_SCENARIO_BYTES).map_err(|e| {
+            SweepError::file(path, None, None, format!("cannot read the sweep file: {e}"))
+        })?;
     parse(path, &text)
 }
 

@@ -59,6 +59,7 @@ impl Case {
         u: impl Fn(f64) -> f64 + Send + Sync + 'static,
     ) -> Simulation<Granular> {
         let scn = Scenario {
+            notes: Vec::new(),
             source_toml: String::new(),
             base_dir: ".".into(),
             domain: Domain {
@@ -84,12 +85,14 @@ impl Case {
                 c_msm: false,
                 static_threshold: 1e-3,
             },
+            dilatancy: None,
             initial: Initial {
                 h: Profile::function(h),
                 u: Profile::function(move |x, _| u(x)),
                 w: Profile::constant(0.0),
                 erodible_bed: 0.0,
                 eta: None,
+                phi: None,
             },
             boundary: Boundaries {
                 left: self.mesh.left,

@@ -65,9 +65,14 @@ pub(super) fn write_layout(
             attr.write_numeric(&info.front_threshold)?;
         }
     }
-    file.create_group("summary")?;
+    // Replaced by the real status at finish: a file whose writer was killed says so.
+    let summary = file.create_group("summary")?;
+    summary.set_attr_string("status", UNFINISHED)?;
     Ok(())
 }
+
+/// `/summary` `status` of a file whose run has not finished (or was killed).
+pub const UNFINISHED: &str = "unfinished";
 
 /// Creates `/snapshots/w` and `/snapshots/p_nh`, which exist only when the first
 /// snapshot carries them.

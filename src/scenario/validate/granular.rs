@@ -41,7 +41,14 @@ pub(super) fn coefficient(
     }
 }
 
-pub(super) fn rheology(r: &RawRheology) -> Res<FrictionLaw> {
+/// The friction law. Keys of the other law are an error (a mix-up in the file), unless
+/// `rheology.law` was overridden (`--set`, a sweep axis): then they are left over from
+/// the file's own law and are ignored, with a note naming them.
+pub(super) fn rheology(
+    r: &RawRheology,
+    law_overridden: bool,
+    notes: &mut Vec<String>,
+) -> Res<FrictionLaw> {
     let law = required("rheology.law", r.law.as_deref())?;
     #[derive(Clone, Copy, PartialEq)]
     enum Law {
@@ -66,7 +73,18 @@ pub(super) fn rheology(r: &RawRheology) -> Res<FrictionLaw> {
         Law::Coulomb => (&mu_i_keys, "coulomb", "mu_i"),
         Law::MuI => (&coulomb_keys, "mu_i", "coulomb"),
     };
-    if let Some((name, _)) = foreign.iter().find(|(_, given)| *given) {
+    let given: Vec<&str> = foreign
+        .iter()
+        .filter(|(_, given)| *given)
+        .map(|(name, _)| *name)
+        .collect();
+    if law_overridden && !given.is_empty() {
+        let keys: Vec<String> = given.iter().map(|n| format!("rheology.{n}")).collect();
+        notes.push(format!(
+            "{} ignored: only used by law = \"{other}\" and rheology.law was set to \"{this}\"",
+            keys.join(", ")
+        ));
+    } else if let Some(name) = given.first() {
         return err(
             &format!("rheology.{name}"),
             format!("only used by law = \"{other}\" (rheology.law is \"{this}\"); remove it"),
@@ -112,6 +130,7 @@ pub(super) fn model(m: &RawModel) -> Res<ModelSpec> {
         &[
             ("granular", ModelKind::Granular),
             ("submarine", ModelKind::Submarine),
+            ("dilatant", ModelKind::Dilatant),
         ],
     )?;
     let pressure = choice(
@@ -124,6 +143,14 @@ pub(super) fn model(m: &RawModel) -> Res<ModelSpec> {
         ],
     )?;
     let layers = int_in("model.layers", m.layers.unwrap_or(1), 1, MAX_LAYERS)?;
+    if kind == ModelKind::Dilatant {
+        if pressure != Pressure::Hydrostatic {
+            return err("model.pressure", "the dilatant model is hydrostatic");
+        }
+        if layers != 1 {
+            return err("model.layers", "the dilatant model has one layer");
+        }
+    }
     if layers > 1 && pressure == Pressure::NonHydrostatic {
         return err(
             "model.pressure",
@@ -143,9 +170,9 @@ pub(super) struct ViscousKeys {
     basal: Option<String>,
     regularization: Option<String>,
     delta: Option<f64>,
-    mu_w: Option<f64>,
-    mu_w_deg: Option<f64>,
-    channel_width: Option<f64>,
+    pub(super) mu_w: Option<f64>,
+    pub(super) mu_w_deg: Option<f64>,
+    pub(super) channel_width: Option<f64>,
     sidewall: Option<String>,
     c_msm: Option<bool>,
 }

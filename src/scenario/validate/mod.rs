@@ -8,13 +8,14 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 mod check;
+mod dilatant;
 mod granular;
 mod submarine;
 
 use super::document::{line_of, serde_error, syntax_error, KeyIndex, Locator};
 use super::error::ScenarioError;
 use super::overrides::Override;
-use super::profile::Profile;
+use super::profile::{read_bounded, Profile};
 use super::raw::{
     RawBoundary, RawDomain, RawInitial, RawMaterial, RawOutput, RawScenario, RawTime,
 };
@@ -23,17 +24,25 @@ use super::{
     Scenario, TimeSpec,
 };
 use check::*;
+use dilatant::{dilatancy, sample_fraction};
 use granular::{model, multilayer, rheology, ViscousKeys};
 
 /// Largest accepted `domain.cells`.
 pub(crate) const MAX_CELLS: i64 = 10_000_000;
+/// Largest accepted scenario file (bytes), so that `granflow check /dev/zero` ends.
+pub(crate) const MAX_SCENARIO_BYTES: u64 = 64 << 20;
+/// Smallest Δx relative to the largest |x| of the domain: Δx is then known to about
+/// 2e-7 of itself (f64 round-off 2.2e-16 |x|).
+const MIN_RELATIVE_DX: f64 = 1e-9;
+/// Largest number of snapshots a run may write (t_end / output.every).
+pub(crate) const MAX_SNAPSHOTS: f64 = 100_000.0;
 /// Largest accepted `model.layers`.
 pub(crate) const MAX_LAYERS: i64 = 1000;
 
 /// Reads and validates a scenario file. Tables are resolved against the file's directory
 /// and the default output file is `<file stem>.h5`.
 pub fn load_file(path: &Path, overrides: &[String]) -> Result<Scenario, ScenarioError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
+    let text = read_bounded(path, MAX_SCENARIO_BYTES).map_err(|e| {
         ScenarioError::new(format!(
             "cannot read scenario file '{}': {e}",
             path.display()
@@ -107,7 +116,10 @@ fn load(
             return Err(locator.locate(err));
         }
     };
-    validate(raw, source, base_dir, default_output).map_err(|e| locator.locate(e))
+    // Switching the law on the command line (or as a sweep axis) leaves the keys of the
+    // file's law behind; they are ignored with a note instead of refused.
+    let law_overridden = sets.iter().any(|s| s.key == "rheology.law");
+    validate(raw, source, base_dir, default_output, law_overridden).map_err(|e| locator.locate(e))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -118,7 +130,9 @@ fn validate(
     source_toml: String,
     base_dir: &Path,
     default_output: &str,
+    law_overridden: bool,
 ) -> Res<Scenario> {
+    let mut notes = Vec::new();
     let domain = domain(section("domain", raw.domain)?)?;
     let bed = match raw.bed.and_then(|b| b.b) {
         Some(v) => Profile::from_toml("bed.b", &v, base_dir, false)?,
@@ -126,9 +140,20 @@ fn validate(
     };
     let material = material(raw.material.unwrap_or_default())?;
     let raw_rheology = section("rheology", raw.rheology)?;
-    let friction = rheology(&raw_rheology)?;
+    let friction = rheology(&raw_rheology, law_overridden, &mut notes)?;
     let raw_model = raw.model.unwrap_or_default();
     let model = model(&raw_model)?;
+    if domain.cells.saturating_mul(model.layers) > MAX_CELLS as usize {
+        return err(
+            "model.layers",
+            format!(
+                "{} layers × {} cells = {} unknowns per field is more than {MAX_CELLS} (the state would not fit in memory); use fewer layers or domain.cells",
+                model.layers,
+                domain.cells,
+                domain.cells.saturating_mul(model.layers)
+            ),
+        );
+    }
     let raw_initial = section("initial", raw.initial)?;
     let raw_w = raw_initial.w.is_some();
     let initial = initial(raw_initial, base_dir)?;
@@ -145,14 +170,34 @@ fn validate(
     let time = time(section("time", raw.time)?)?;
     let raw_output = raw.output.unwrap_or_default();
     let output = output(&raw_output, &time, &domain, default_output)?;
+    let dilatancy = dilatancy(
+        raw.dilatancy.as_ref(),
+        &raw_rheology,
+        &friction,
+        &material,
+        &model,
+        &initial,
+        &time,
+    )?;
+    let mut viscous_keys = ViscousKeys::of(&raw_rheology);
+    if dilatancy.is_some() {
+        // The wall keys belong to the dilatant law (seed 002 eq. 4.1).
+        viscous_keys.mu_w = None;
+        viscous_keys.mu_w_deg = None;
+        viscous_keys.channel_width = None;
+    }
     let multilayer = multilayer(
-        ViscousKeys::of(&raw_rheology),
+        viscous_keys,
         raw_model.layer_fractions.clone(),
         raw_output.static_threshold,
         model.layers,
     )?;
     sample_profiles(&domain, &bed, &initial, model.pressure)?;
+    if let Some(phi) = &initial.phi {
+        sample_fraction(&domain, &bed, phi)?;
+    }
     Ok(Scenario {
+        notes,
         source_toml,
         base_dir: base_dir.to_path_buf(),
         domain,
@@ -161,6 +206,7 @@ fn validate(
         friction,
         model,
         multilayer,
+        dilatancy,
         initial,
         boundary,
         time,
@@ -187,6 +233,19 @@ fn domain(d: RawDomain) -> Res<Domain> {
         1,
         MAX_CELLS,
     )?;
+    // Cell centres x_min + (i + ½)Δx must be distinct and their spacing accurate: a Δx
+    // at the round-off of |x| makes neighbouring centres equal (or Δx wrong by whole
+    // ulps), and every flux difference over them meaningless.
+    let dx = (x_max - x_min) / cells as f64;
+    let scale = x_min.abs().max(x_max.abs());
+    if dx < MIN_RELATIVE_DX * scale {
+        return err(
+            "domain.cells",
+            format!(
+                "cells of Δx = {dx:e} m are at the round-off of the coordinates (|x| up to {scale:e} m): cell centres would not be distinct; need Δx ≥ {MIN_RELATIVE_DX:e}·max(|x_min|, |x_max|), so use fewer cells or shift the domain towards 0"
+            ),
+        );
+    }
     let coordinates = choice(
         "domain.coordinates",
         d.coordinates.as_deref(),
@@ -245,12 +304,17 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
         Some(v) => Some(Profile::from_toml("initial.eta", &v, base_dir, true)?),
         None => None,
     };
+    let phi = match i.phi {
+        Some(v) => Some(Profile::from_toml("initial.phi", &v, base_dir, true)?),
+        None => None,
+    };
     Ok(Initial {
         h,
         u,
         w,
         erodible_bed,
         eta,
+        phi,
     })
 }
 
@@ -294,6 +358,16 @@ fn output(o: &RawOutput, time: &TimeSpec, domain: &Domain, default_file: &str) -
         return err("output.file", "must not be empty");
     }
     let every = positive("output.every", o.every.unwrap_or(time.t_end / 20.0))?;
+    let snapshots = time.t_end / every;
+    if snapshots > MAX_SNAPSHOTS {
+        return err(
+            "output.every",
+            format!(
+                "{every:e} s gives {snapshots:.3e} snapshots over time.t_end = {} s (at most {MAX_SNAPSHOTS}): each snapshot is a full frame on disk and the time step is shortened to land on it; use a larger interval",
+                time.t_end
+            ),
+        );
+    }
     let front_threshold = positive("output.front_threshold", o.front_threshold.unwrap_or(1e-3))?;
     let gauges = gauges(o.gauges.as_deref().unwrap_or(&[]), domain)?;
     let gauge_every = match o.gauge_every {
@@ -930,11 +1004,22 @@ front_threshold = 2e-3
             "law = \"coulomb\"\nmu = 0.5",
             "law = \"mu_i\"\nmu_s = 0.4\nmu_2 = 0.6\ni0 = 0.3",
         );
-        // Leftover μ(I) keys in the file: a clear error on the first of them, with its line.
-        let e = load_set(&mu_i, &["rheology.law=coulomb", "rheology.mu=0.5"]).unwrap_err();
-        assert_eq!(e.key(), Some("rheology.mu_s"));
-        assert_eq!(e.line(), Some(8));
-        assert!(e.message().contains("only used by law = \"mu_i\""), "{e}");
+        // Leftover μ(I) keys in the file are ignored, with a note naming them (issue 13).
+        let s = load_set(&mu_i, &["rheology.law=coulomb", "rheology.mu=0.5"]).unwrap();
+        assert_eq!(s.friction, FrictionLaw::Coulomb { mu: 0.5 });
+        assert_eq!(s.notes.len(), 1);
+        assert!(
+            s.notes[0].contains("rheology.mu_s, rheology.mu_2, rheology.i0 ignored"),
+            "{:?}",
+            s.notes
+        );
+        // Without an override of the law, they are still an error, with its line.
+        let e = load_set(&mu_i.replace("i0 = 0.3", "i0 = 0.3\nmu = 0.5"), &[]).unwrap_err();
+        assert_eq!(e.key(), Some("rheology.mu"));
+        assert!(
+            e.message().contains("only used by law = \"coulomb\""),
+            "{e}"
+        );
         // From a Coulomb file the switch works (mu set from the file).
         let s = load_set(MINIMAL, &["rheology.law=coulomb", "rheology.mu=0.25"]).unwrap();
         assert_eq!(s.friction, FrictionLaw::Coulomb { mu: 0.25 });

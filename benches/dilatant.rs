@@ -1,0 +1,134 @@
+//! Cost of a time step of the dilatant μ(I)–φ model (seed 002, issue 11) relative to a
+//! step of the hydrostatic Savage–Hutter μ(I) monolayer on the same grid (not a test:
+//! nothing is asserted; target ≤ 1.5×).
+//!
+//!   cargo bench --bench dilatant
+//!
+//! Both models run the seed 002 §4 collapse (14 cm × 20 cm column, 22°, Δx = 5 mm on
+//! [−0.2, 3] m, 640 cells; the dilatant one dense, φ0 = 0.62, Table 1) to t0 untimed,
+//! then steps (CFL + all stages) are timed in bursts that alternate between the two;
+//! the best burst of each is kept (the machine is shared). Second case: the same with
+//! a 1 cm layer everywhere (every cell wet), 640 and 64 000 cells.
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use granflow::mesh::{Mesh, MeshSpec};
+use granflow::model::granular::state::LayeredState as State;
+use granflow::numerics::dilatant::state::DilatantState;
+use granflow::numerics::dilatant::step::{DilatantOptions, DilatantScheme};
+use granflow::numerics::friction::CoulombFrictionStep;
+use granflow::numerics::hydrostatic::HydrostaticStep;
+use granflow::numerics::Stage;
+use granflow::physics::dilatancy::DilatantLaw;
+use granflow::physics::rheology::MuI;
+use granflow::scenario::{BoundaryKind, Coordinates};
+
+const MU_I: MuI = MuI {
+    mu_s: 0.48,
+    mu_2: 0.73,
+    i0: 0.279,
+    d_s: 7e-4,
+    phi: 0.62,
+};
+
+struct SavageHutter {
+    state: State,
+    hyperbolic: HydrostaticStep<MuI>,
+    friction: CoulombFrictionStep<MuI>,
+}
+
+impl SavageHutter {
+    fn step(&mut self, mesh: &Mesh) {
+        let s = &self.state;
+        let speed = (1..=mesh.nx)
+            .map(|j| s.mean_velocity(j).abs() + (mesh.g_n * s.h[j]).sqrt())
+            .fold(0.0, f64::max);
+        let dt = 0.5 * mesh.dx / speed;
+        self.hyperbolic.apply(mesh, dt, &mut self.state).unwrap();
+        self.friction.apply(mesh, dt, &mut self.state).unwrap();
+    }
+}
+
+struct Dilatant {
+    state: DilatantState,
+    scheme: DilatantScheme,
+}
+
+impl Dilatant {
+    fn step(&mut self, mesh: &Mesh) {
+        let dt = self.scheme.max_dt(mesh, &self.state);
+        self.scheme.step(mesh, &mut self.state, 0.0, dt).unwrap();
+    }
+}
+
+fn case(cells: usize, layer: f64, t0: f64) {
+    let spec = MeshSpec {
+        x_min: -0.2,
+        x_max: -0.2 + cells as f64 * 0.005,
+        cells,
+        slope_deg: 22.0,
+        coordinates: Coordinates::Local,
+        left: BoundaryKind::Wall,
+        right: BoundaryKind::Outflow,
+    };
+    let mesh = Mesh::new(&spec, vec![0.0; cells]);
+    let h: Vec<f64> = mesh
+        .x
+        .iter()
+        .map(|&x| if x <= 0.0 { 0.14 } else { layer })
+        .collect();
+    let zero = vec![0.0; cells];
+    let mut sh = SavageHutter {
+        state: State::from_profiles(&mesh, &[1.0], &h, &zero),
+        hyperbolic: HydrostaticStep::new(MU_I, cells),
+        friction: CoulombFrictionStep::new(MU_I),
+    };
+    let mut dil = Dilatant {
+        state: DilatantState::from_profiles(&mesh, 2.0, &h, &zero, &vec![0.62; cells]),
+        scheme: DilatantScheme::new(DilatantLaw::table1(), DilatantOptions::default(), cells),
+    };
+    // Advance both to about t0 (their own Δt), untimed.
+    let steps_to_t0 = (t0 / (0.5 * mesh.dx / (9.81f64 * 0.14).sqrt())) as usize;
+    for _ in 0..steps_to_t0 {
+        sh.step(&mesh);
+        dil.step(&mesh);
+    }
+    let burst = (200_000 / cells).clamp(5, 400);
+    let (mut best_sh, mut best_dil) = (f64::INFINITY, f64::INFINITY);
+    for _ in 0..15 {
+        let start = Instant::now();
+        for _ in 0..burst {
+            sh.step(&mesh);
+        }
+        best_sh = best_sh.min(start.elapsed().as_secs_f64() / burst as f64);
+        let start = Instant::now();
+        for _ in 0..burst {
+            dil.step(&mesh);
+        }
+        best_dil = best_dil.min(start.elapsed().as_secs_f64() / burst as f64);
+    }
+    black_box((&sh.state.h, &dil.state.m));
+    let wet_sh = sh.state.h[1..=cells].iter().filter(|&&h| h > 0.0).count();
+    let wet_dil = dil.state.m[1..=cells].iter().filter(|&&m| m > 0.0).count();
+    let dt = dil.scheme.max_dt(&mesh, &dil.state);
+    let substeps = dil
+        .scheme
+        .step(&mesh, &mut dil.state, 0.0, dt)
+        .unwrap()
+        .viscosity_substeps;
+    println!(
+        "collapse 22°, {cells} cells, layer {layer} m, from ≈ {t0} s: SH {:.2} µs/step ({wet_sh} wet cells), \
+         dilatant {:.2} µs/step ({wet_dil} wet cells, {substeps} viscosity sub-steps), ratio {:.2}×, per wet cell {:.2}×",
+        best_sh * 1e6,
+        best_dil * 1e6,
+        best_dil / best_sh,
+        (best_dil / wet_dil as f64) / (best_sh / wet_sh as f64)
+    );
+}
+
+fn main() {
+    case(640, 0.0, 0.3);
+    case(640, 0.01, 0.3);
+    case(64_000, 0.01, 0.0);
+}

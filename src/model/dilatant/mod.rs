@@ -1,0 +1,124 @@
+//! The dilatant μ(I)–φ model of seed 002 (`model.kind = "dilatant"`): one granular
+//! layer whose solid volume fraction φ evolves with the dilatancy law (eq. 2.2–2.15).
+//! Its state is [`DilatantState`] (φh, φhv, φ^α h), its time step the single stage
+//! [`DilatantScheme`] (finite volumes with the Appendix B fluxes → stabilisation →
+//! semi-implicit dilatancy, `numerics/dilatant/`), its set-up `setup/dilatant.rs`.
+//!
+//! Diagnostics: `mass` is the grain volume ∫φh dx (conserved), the kinetic energy
+//! ∫½ φh v² dx, the front the largest x with h above the threshold, the largest speed
+//! over cells at least one grain thick; snapshots carry φ per cell as the extra field
+//! `phi`.
+
+use crate::mesh::Mesh;
+use crate::model::{Diagnostics, Model};
+use crate::numerics::dilatant::state::DilatantState;
+use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
+
+pub use crate::numerics::dilatant::step::{DilatantOptions, DilatantScheme};
+pub use crate::physics::dilatancy::DilatantLaw;
+
+/// The validated `[dilatancy]` table with the μ(I) and wall keys of `[rheology]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DilatantSpec {
+    pub law: DilatantLaw,
+    pub options: DilatantOptions,
+}
+
+/// Largest speed (m/s) of a mass that counts as at rest.
+pub const REST_SPEED: f64 = 1e-6;
+
+/// Run-time parameters of the dilatant model.
+#[derive(Debug, Clone)]
+pub struct Dilatant {
+    /// Zeros: the model has no erodible bed.
+    pub h_bed: Vec<f64>,
+    /// Thickness from which a cell counts for the front (m).
+    pub front_threshold: f64,
+    /// Thickness (m) below which a cell's speed does not count for the rest test: the
+    /// grain diameter d. The stabilisation viscosity (seed 002 eq. 3.20) spreads films
+    /// of ~1e-10 m ahead of a deposit that keep a speed of order 0.1 m/s; seed 002 §3.3
+    /// calls layers thinner than a few grains physically meaningless.
+    pub rest_depth: f64,
+}
+
+impl Model for Dilatant {
+    type State = DilatantState;
+
+    fn kind(&self) -> &'static str {
+        "dilatant"
+    }
+
+    fn diagnose(&self, mesh: &Mesh, s: &DilatantState) -> Diagnostics {
+        let (mut mass, mut ke, mut max_speed, mut signal, mut h_max) =
+            (0.0, 0.0, 0.0f64, 0.0f64, 0.0f64);
+        let mut front = None;
+        for j in 1..=s.nx {
+            let (m, h, v) = (s.m[j], s.h[j], s.v[j]);
+            mass += m;
+            ke += m * v * v;
+            if h >= self.rest_depth {
+                max_speed = max_speed.max(v.abs());
+            }
+            signal = signal.max(v.abs() + (mesh.g_n * h).sqrt());
+            h_max = h_max.max(h);
+            if h > self.front_threshold {
+                front = Some(j - 1);
+            }
+        }
+        let non_finite_at = if (mass + s.q[1..=s.nx].iter().sum::<f64>()).is_finite() {
+            None
+        } else {
+            (1..=s.nx)
+                .position(|j| !(s.m[j].is_finite() && s.q[j].is_finite() && s.w[j].is_finite()))
+                .or(Some(0))
+        };
+        Diagnostics {
+            mass: mass * mesh.dx,
+            kinetic_energy: 0.5 * ke * mesh.dx,
+            max_speed,
+            signal_speed: signal,
+            front_x: front.map_or(f64::NAN, |i| mesh.x[i]),
+            h_max,
+            non_finite_at,
+        }
+    }
+
+    /// The apparent-topography friction (seed 002 eq. 3.10) stops a mass to round-off,
+    /// not exactly as the monolayer's friction step does.
+    fn rest_speed(&self) -> f64 {
+        REST_SPEED
+    }
+
+    fn bed_layer(&self) -> &[f64] {
+        &self.h_bed
+    }
+
+    /// The top of the mixture b + h and its thickness h, as for the granular model.
+    fn gauge_cell(&self, mesh: &Mesh, s: &DilatantState, i: usize) -> Option<(f64, f64)> {
+        Some((mesh.b[i] + s.h[i + 1], s.h[i + 1]))
+    }
+
+    fn snapshot(
+        &self,
+        _mesh: &Mesh,
+        s: &DilatantState,
+        t: f64,
+        sink: &mut dyn OutputSink,
+    ) -> Result<(), OutputError> {
+        let nx = s.nx;
+        let extra = [CellField {
+            name: "phi",
+            units: "1",
+            data: &s.phi[1..=nx],
+        }];
+        sink.snapshot(&SnapshotView {
+            t,
+            h: &s.h[1..=nx],
+            u: &s.v[1..=nx],
+            w: None,
+            p_nh: None,
+            layers: 1,
+            extra: &extra,
+        })
+    }
+}

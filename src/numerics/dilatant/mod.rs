@@ -1,0 +1,20 @@
+//! Numerics of the dilatant μ(I)–φ model (seed 002 §3): a two-step splitting of the
+//! system (3.1)–(3.3) plus the stabilising viscosity of (3.20),
+//!
+//! 1. finite volumes (3.5) with the well-balanced, energy-satisfying left/right fluxes
+//!    of Appendix B ([`reconstruction`], [`flux`]) and the basal friction as an
+//!    apparent topography (3.6)–(3.12);
+//! 2. the stabilisation viscosity (3.20)–(3.22) ([`stabilisation`]), sub-cycled so
+//!    that it never shortens Δt;
+//! 3. the semi-implicit dilatancy step (3.15)–(3.19) ([`source`]), unconditionally
+//!    stable: it never shortens Δt, whatever K and d.
+//!
+//! [`state`] holds the conservative variables and [`step`] runs one time step,
+//! refusing any state with φh < 0 or φ ∉ (0, 1) with the cell and the time.
+
+pub mod flux;
+pub mod reconstruction;
+pub mod source;
+pub mod stabilisation;
+pub mod state;
+pub mod step;

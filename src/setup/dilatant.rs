@@ -1,0 +1,40 @@
+//! From a validated [`Scenario`] with `model.kind = "dilatant"` to a ready
+//! [`Simulation`] of the dilatant model (seed 002): samples h, u and φ at the cell
+//! centres and builds the one-stage pipeline. Everything that can be wrong with the
+//! scenario was refused by its validation.
+
+use crate::model::dilatant::{Dilatant, DilatantScheme};
+use crate::numerics::dilatant::state::DilatantState;
+use crate::pipeline::Pipeline;
+use crate::scenario::Scenario;
+use crate::setup::{mesh_of, run_config, run_info};
+use crate::simulation::Simulation;
+
+pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
+    let spec = scn
+        .dilatancy
+        .expect("validation requires [dilatancy] for model.kind = \"dilatant\"");
+    let phi0 = scn
+        .initial
+        .phi
+        .as_ref()
+        .expect("validation requires initial.phi for model.kind = \"dilatant\"");
+    let mesh = mesh_of(scn);
+    let sample = |f: &dyn Fn(f64, f64) -> f64| -> Vec<f64> {
+        mesh.x.iter().zip(&mesh.b).map(|(&x, &b)| f(x, b)).collect()
+    };
+    let h = sample(&|x, b| scn.initial.h.eval(x, b));
+    let u = sample(&|x, b| scn.initial.u.eval(x, b));
+    let phi = sample(&|x, b| phi0.eval(x, b));
+    let state = DilatantState::from_profiles(&mesh, spec.options.flux.alpha, &h, &u, &phi);
+    let scheme = DilatantScheme::new(spec.law, spec.options, mesh.nx);
+    let model = Dilatant {
+        h_bed: vec![0.0; mesh.nx],
+        front_threshold: scn.output.front_threshold,
+        rest_depth: spec.law.d,
+    };
+    let info = run_info(scn, "hydrostatic", 1);
+    let rules = crate::stop::default_rules(scn.time.stop_at_rest);
+    let pipeline = Pipeline::new(vec![Box::new(scheme)]);
+    Simulation::new(mesh, model, state, pipeline, rules, run_config(scn), info)
+}

@@ -1,0 +1,632 @@
+//! The dilatant μ(I)–φ model of seed 002 (issue 11), driven through its stepper
+//! (`granflow::numerics::dilatant`): well-balance at rest, conservation of grains,
+//! energy, stiff dilatancy, the uniform steady flow on an incline, and the collapse
+//! results of seed 002 §4.3.
+
+use granflow::mesh::{Mesh, MeshSpec};
+use granflow::numerics::dilatant::stabilisation::Viscosity;
+use granflow::numerics::dilatant::state::DilatantState;
+use granflow::numerics::dilatant::step::{DilatantError, DilatantOptions, DilatantScheme};
+use granflow::physics::dilatancy::DilatantLaw;
+use granflow::scenario::{BoundaryKind, Coordinates};
+
+fn mesh(x_min: f64, x_max: f64, cells: usize, slope_deg: f64, walls: (bool, bool)) -> Mesh {
+    let kind = |wall: bool| {
+        if wall {
+            BoundaryKind::Wall
+        } else {
+            BoundaryKind::Outflow
+        }
+    };
+    let spec = MeshSpec {
+        x_min,
+        x_max,
+        cells,
+        slope_deg,
+        coordinates: Coordinates::Local,
+        left: kind(walls.0),
+        right: kind(walls.1),
+    };
+    Mesh::new(&spec, vec![0.0; cells])
+}
+
+fn state(
+    mesh: &Mesh,
+    h: impl Fn(f64) -> f64,
+    v: impl Fn(f64) -> f64,
+    phi: impl Fn(f64) -> f64,
+) -> DilatantState {
+    let hs: Vec<f64> = mesh.x.iter().map(|&x| h(x)).collect();
+    let vs: Vec<f64> = mesh.x.iter().map(|&x| v(x)).collect();
+    let ps: Vec<f64> = mesh.x.iter().map(|&x| phi(x)).collect();
+    DilatantState::from_profiles(mesh, 2.0, &hs, &vs, &ps)
+}
+
+/// Runs to `t_end` with the CFL step, calling `each` after every step with (t, dt).
+fn run(
+    scheme: &mut DilatantScheme,
+    mesh: &Mesh,
+    s: &mut DilatantState,
+    t_end: f64,
+    mut each: impl FnMut(&DilatantState, f64, f64),
+) -> Result<usize, DilatantError> {
+    let mut t = 0.0;
+    let mut steps = 0;
+    while t < t_end - 1e-12 {
+        let dt = scheme.max_dt(mesh, s).min(t_end - t);
+        scheme.step(mesh, s, t, dt)?;
+        t += dt;
+        steps += 1;
+        each(s, t, dt);
+    }
+    Ok(steps)
+}
+
+fn assert_admissible(s: &DilatantState) {
+    for j in 1..=s.nx {
+        assert!(s.m[j] >= 0.0, "φh = {} in cell {}", s.m[j], j - 1);
+        if s.m[j] > 0.0 {
+            assert!(
+                s.phi[j] > 0.0 && s.phi[j] < 1.0,
+                "φ = {} in cell {}",
+                s.phi[j],
+                j - 1
+            );
+        }
+    }
+}
+
+#[test]
+fn masses_at_rest_below_repose_stay_at_rest() {
+    // Both families of seed 002 eq. (3.13), with |X| below μ_eff at rest
+    // (μ_1 + K(φ − φ_stat) ≥ 0.349 for φ ≥ 0.55):
+    // (a) φ = 0.6 uniform on a 10° plane, free surface sloping at +0.2 − tan 10°;
+    // (b) φ ∝ h (h φ^{−1} constant, α = 2) on a horizontal bed.
+    let law = DilatantLaw::table1();
+    // Family (b) sits exactly on the switch of (B.20)/(B.21): a round-off perturbation
+    // grows by ≈ 1.16 per step (1e-10 after 111 steps, 0.5 s), so it is held to
+    // round-off for 0.2 s (≈ 45 steps) only; family (a) for 2 s.
+    type Profile = Box<dyn Fn(f64) -> f64>;
+    let cases: [(f64, f64, Profile, Profile); 2] = [
+        (10.0, 2.0, Box::new(|x| 0.1 + 0.2 * x), Box::new(|_| 0.6)),
+        (
+            0.0,
+            0.2,
+            Box::new(|x| 0.2 * (0.55 + 0.14 * x)),
+            Box::new(|x| 0.55 + 0.14 * x),
+        ),
+    ];
+    for (slope, t_end, h, phi) in cases {
+        let mesh = mesh(0.0, 0.5, 50, slope, (true, true));
+        let mut s = state(&mesh, &h, |_| 0.0, &phi);
+        let start = s.clone();
+        let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), mesh.nx);
+        let mut worst_v: f64 = 0.0;
+        let steps = run(&mut scheme, &mesh, &mut s, t_end, |s, _, _| {
+            worst_v = s.v.iter().fold(worst_v, |a, v| a.max(v.abs()));
+        })
+        .unwrap();
+        let dm = (1..=mesh.nx)
+            .map(|j| (s.m[j] - start.m[j]).abs() / start.m[j])
+            .fold(0.0, f64::max);
+        let dphi = (1..=mesh.nx)
+            .map(|j| (s.phi[j] - start.phi[j]).abs())
+            .fold(0.0, f64::max);
+        println!("at rest, slope {slope}°: {steps} steps, max |v| {worst_v:e}, max rel |Δφh| {dm:e}, max |Δφ| {dphi:e}");
+        assert!(worst_v < 1e-13, "velocity {worst_v}");
+        assert!(dm < 1e-13 && dphi < 1e-13, "{dm} {dphi}");
+    }
+}
+
+#[test]
+fn mass_above_repose_moves() {
+    // The well-balance test must be able to fail: the same plane at 30° (tan 30° =
+    // 0.577 > μ_eff at rest = 0.554) sets the mass in motion.
+    let law = DilatantLaw::table1();
+    let mesh = mesh(0.0, 0.5, 50, 30.0, (true, true));
+    let mut s = state(&mesh, |_| 0.1, |_| 0.0, |_| 0.6);
+    let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), mesh.nx);
+    run(&mut scheme, &mesh, &mut s, 0.1, |_, _, _| {}).unwrap();
+    let vmax = s.v.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(vmax > 1e-3, "{vmax}");
+}
+
+/// Column collapse of seed 002 §4: 14 cm × 20 cm behind a wall at x = −0.2 m.
+fn collapse(slope: f64, x_max: f64, cells: usize) -> Mesh {
+    mesh(-0.2, x_max, cells, slope, (true, false))
+}
+
+fn column(mesh: &Mesh, phi0: f64) -> DilatantState {
+    state(
+        mesh,
+        |x| if x <= 0.0 { 0.14 } else { 0.0 },
+        |_| 0.0,
+        |_| phi0,
+    )
+}
+
+#[test]
+fn grains_are_conserved_and_energy_decays() {
+    // Walls on both sides: ∫φh is conserved to round-off. Without dilatancy (K = 0)
+    // and on a flat bed the total energy must not increase (seed 002 eq. 2.7, B.5);
+    // with K > 0 dilation may raise it by ∫ g_c φh²/2 γ̇ tan ψ (eq. 2.7's source).
+    for (k, phi0) in [(0.0, 0.6), (4.09, 0.62), (4.09, 0.55)] {
+        let law = DilatantLaw {
+            k,
+            ..DilatantLaw::table1()
+        };
+        let mesh = mesh(-0.2, 0.8, 100, 0.0, (true, true));
+        let mut s = column(&mesh, phi0);
+        let mass0 = s.grain_volume(&mesh);
+        let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), mesh.nx);
+        let mut energy = s.energy(&mesh);
+        let energy0 = energy;
+        let mut worst_rise: f64 = 0.0;
+        let mut worst_mass: f64 = 0.0;
+        let steps = run(&mut scheme, &mesh, &mut s, 0.3, |s, _, _| {
+            let e = s.energy(&mesh);
+            worst_rise = worst_rise.max((e - energy) / energy0);
+            energy = e;
+            worst_mass = worst_mass.max((s.grain_volume(&mesh) - mass0).abs() / mass0);
+            assert_admissible(s);
+        })
+        .unwrap();
+        println!(
+            "K = {k}, φ0 = {phi0}: {steps} steps, max rel. mass error {worst_mass:e}, \
+             largest one-step energy rise {worst_rise:e} of E0, E(0.3 s)/E0 = {}",
+            energy / energy0
+        );
+        assert!(worst_mass < 1e-13, "{worst_mass}");
+        if k == 0.0 {
+            assert!(worst_rise <= 1e-12, "energy rose by {worst_rise} E0");
+        }
+        assert!(energy < energy0);
+    }
+}
+
+#[test]
+fn stiff_dilatancy_does_not_shorten_the_step() {
+    // K up to 1e3 and d down to 1e-9 m: the step stays the CFL step, φ stays in (0, 1).
+    for (k, d) in [(4.09, 7e-4), (1e3, 7e-4), (1e3, 1e-9)] {
+        let law = DilatantLaw {
+            k,
+            d,
+            ..DilatantLaw::table1()
+        };
+        let mesh = collapse(0.0, 0.8, 100);
+        let mut s = column(&mesh, 0.62);
+        let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), mesh.nx);
+        let mut cfl_dt = Vec::new();
+        let mut prev = s.clone();
+        let steps = run(&mut scheme, &mesh, &mut s, 0.2, |s, _, dt| {
+            cfl_dt.push((dt, scheme_cfl(&mesh, &prev)));
+            prev.clone_from(s);
+            assert_admissible(s);
+        })
+        .unwrap();
+        // Every step but the last (cut to land on t_end) is the full CFL step.
+        for (dt, bound) in &cfl_dt[..cfl_dt.len() - 1] {
+            assert_eq!(dt, bound);
+        }
+        let phi_min = (1..=mesh.nx)
+            .filter(|&j| s.m[j] > 0.0)
+            .map(|j| s.phi[j])
+            .fold(1.0, f64::min);
+        println!("K = {k}, d = {d}: {steps} steps to 0.2 s, min φ {phi_min}");
+    }
+}
+
+fn scheme_cfl(mesh: &Mesh, s: &DilatantState) -> f64 {
+    let scheme = DilatantScheme::new(DilatantLaw::table1(), DilatantOptions::default(), mesh.nx);
+    scheme.max_dt(mesh, s)
+}
+
+#[test]
+fn uniform_flow_on_an_incline_reaches_the_critical_state() {
+    // A uniform layer on a 28° plane: the steady state has tan ψ = 0, i.e.
+    // φ = φ_eq(I), and μ(I) = tan θ, so I* = I_0 (tan θ − μ_1)/(μ_2 − tan θ) and
+    // φ* = φ_eq(I*) (f2, N = 1); v follows from I* = (5/2) v d/(h √(φ* g_c h)).
+    let law = DilatantLaw::table1();
+    let theta: f64 = 28.0;
+    let tan = theta.to_radians().tan();
+    let i_star = law.i0 * (tan - law.mu_1) / (law.mu_2 - tan);
+    let phi_star = law.phi_eq(i_star);
+    for phi0 in [0.62, 0.55] {
+        let mesh = mesh(0.0, 0.2, 4, theta, (false, false));
+        // Start at the steady speed of the critical state (a dense layer started at rest
+        // on 28° is held by its dilatant friction μ_1 + K(φ0 − φ_stat) = 0.635 > tan θ).
+        let (g_c, m) = (mesh.g_n, phi0 * 0.01);
+        let h_star = m / phi_star;
+        let v_star = i_star * h_star * (phi_star * g_c * h_star).sqrt() / (2.5 * law.d);
+        let mut s = state(&mesh, |_| 0.01, |_| v_star, |_| phi0);
+        let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), mesh.nx);
+        let steps = run(&mut scheme, &mesh, &mut s, 40.0, |_, _, _| {}).unwrap();
+        let j = 2;
+        let i = law.inertial_number(mesh.g_n, s.h[j], s.v[j], s.phi[j]);
+        println!(
+            "φ0 = {phi0}: {steps} steps, I = {i} (I* = {i_star}), φ = {} (φ_eq(I*) = {phi_star}), v = {} m/s, h = {} m",
+            s.phi[j], s.v[j], s.h[j]
+        );
+        assert!((i - i_star).abs() < 1e-6 * i_star, "I {i} vs {i_star}");
+        assert!(
+            (s.phi[j] - phi_star).abs() < 1e-8,
+            "φ {} vs {phi_star}",
+            s.phi[j]
+        );
+        // The grain volume φh per cell never changed.
+        assert!((s.m[j] - phi0 * 0.01).abs() < 1e-15);
+    }
+}
+
+/// Front position (largest x with h > 1 mm) and maximum thickness.
+fn front_and_max(mesh: &Mesh, s: &DilatantState) -> (f64, f64) {
+    let mut front = mesh.x_min;
+    let mut h_max: f64 = 0.0;
+    for j in 1..=s.nx {
+        if s.h[j] > 1e-3 {
+            front = mesh.x[j - 1] + 0.5 * mesh.dx;
+        }
+        h_max = h_max.max(s.h[j]);
+    }
+    (front, h_max)
+}
+
+#[test]
+fn dense_and_loose_collapses_follow_section_4_3() {
+    // Seed 002 §4.3: the maximum thickness (at the rear) is larger for the dense
+    // column than for K = 0, and smaller for the loose one; the dense mass dilates
+    // where it starts to flow. Δx = 1 cm (the paper's figures use finer grids).
+    for (slope, x_max, cells, times) in [
+        (0.0, 0.8, 100, [0.06, 0.36, 0.48]),
+        (22.0, 1.8, 200, [0.06, 0.48, 0.9]),
+    ] {
+        let mut rows = Vec::new();
+        for (label, k, phi0) in [
+            ("K = 0", 0.0, 0.62),
+            ("dense", 4.09, 0.62),
+            ("loose", 4.09, 0.55),
+        ] {
+            let law = DilatantLaw {
+                k,
+                ..DilatantLaw::table1()
+            };
+            let mesh = collapse(slope, x_max, cells);
+            let mut s = column(&mesh, phi0);
+            let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), mesh.nx);
+            let mut t = 0.0;
+            let mut out = Vec::new();
+            for &t_out in &times {
+                run(&mut scheme, &mesh, &mut s, t_out - t, |s, _, _| {
+                    assert_admissible(s)
+                })
+                .unwrap();
+                t = t_out;
+                let (front, h_max) = front_and_max(&mesh, &s);
+                let phi_min = (1..=s.nx)
+                    .filter(|&j| s.h[j] > 1e-3)
+                    .map(|j| s.phi[j])
+                    .fold(1.0, f64::min);
+                out.push((front, h_max, phi_min));
+            }
+            rows.push((label, out));
+        }
+        for (label, out) in &rows {
+            for (t, (front, h_max, phi_min)) in times.iter().zip(out) {
+                println!(
+                    "θ = {slope}°, {label}, t = {t} s: front {front:.3} m, max h {h_max:.4} m, min φ {phi_min:.4}"
+                );
+            }
+        }
+        let (k0, dense, loose) = (&rows[0].1, &rows[1].1, &rows[2].1);
+        for n in 1..times.len() {
+            assert!(
+                dense[n].1 > k0[n].1,
+                "θ {slope}, t {}: dense max h",
+                times[n]
+            );
+            assert!(
+                loose[n].1 < k0[n].1,
+                "θ {slope}, t {}: loose max h",
+                times[n]
+            );
+        }
+        // Dilation where the dense mass starts to flow.
+        assert!(dense[0].2 < 0.62 - 1e-3, "{}", dense[0].2);
+        // Early on the loose front is not behind the dense one (issue 11: "the dense
+        // front is slower early on and the loose one faster").
+        assert!(
+            dense[0].0 <= loose[0].0,
+            "θ {slope}: fronts {} {}",
+            dense[0].0,
+            loose[0].0
+        );
+    }
+}
+
+#[test]
+fn paper_viscosity_breaks_the_fraction_bound_at_the_front() {
+    // ξ = (2, 2, 5) of seed 002 §3.3 diffuses φ^α h 2.5 times faster than φh, which has
+    // no maximum principle for φ (`stabilisation.rs`): on the dense collapse at 0° the
+    // film at the front reaches φ > 1 within the first 0.02 s and the stepper refuses
+    // it, naming the stage, cell and time. Our default ξ = (2, 2, 2) runs.
+    let law = DilatantLaw::table1();
+    let mesh = collapse(0.0, 1.8, 200);
+    let paper = DilatantOptions {
+        viscosity: Viscosity::paper(),
+        ..DilatantOptions::default()
+    };
+    let mut scheme = DilatantScheme::new(law, paper, mesh.nx);
+    let mut s = column(&mesh, 0.62);
+    let result = run(&mut scheme, &mesh, &mut s, 0.36, |_, _, _| {});
+    println!("ξ = (2, 2, 5), θ = 0°: {result:?}");
+    match result {
+        Err(DilatantError::FractionOutOfBounds { stage, phi, .. }) => {
+            assert_eq!(stage, "stabilisation");
+            assert!(phi >= 1.0);
+        }
+        other => panic!("expected φ ≥ 1 from the stabilisation, got {other:?}"),
+    }
+    // The refused step left the state admissible.
+    assert_admissible(&s);
+    let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), mesh.nx);
+    let mut s = column(&mesh, 0.62);
+    run(&mut scheme, &mesh, &mut s, 0.36, |s, _, _| {
+        assert_admissible(s)
+    })
+    .unwrap();
+}
+
+/// The existing Savage–Hutter μ(I) monolayer (src/numerics/hydrostatic.rs +
+/// friction.rs) on the same collapse, to t_end: returns the thickness per cell.
+fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (Mesh, Vec<f64>) {
+    use granflow::model::granular::state::LayeredState as State;
+    use granflow::numerics::friction::CoulombFrictionStep;
+    use granflow::numerics::hydrostatic::HydrostaticStep;
+    use granflow::numerics::Stage;
+    use granflow::physics::rheology::MuI;
+    let mesh = collapse(slope, x_max, cells);
+    let law = MuI {
+        mu_s: 0.48,
+        mu_2: 0.73,
+        i0: 0.279,
+        d_s: 7e-4,
+        phi: 0.62,
+    };
+    let h: Vec<f64> = mesh
+        .x
+        .iter()
+        .map(|&x| if x <= 0.0 { 0.14 } else { 0.0 })
+        .collect();
+    let mut state = State::from_profiles(&mesh, &[1.0], &h, &vec![0.0; cells]);
+    let mut hyperbolic = HydrostaticStep::new(law, cells);
+    let mut friction = CoulombFrictionStep::new(law);
+    let mut t = 0.0;
+    while t < t_end - 1e-12 {
+        let speed = (1..=cells)
+            .map(|j| state.mean_velocity(j).abs() + (mesh.g_n * state.h[j]).sqrt())
+            .fold(0.0, f64::max);
+        let dt = (0.5 * mesh.dx / speed).min(t_end - t);
+        hyperbolic.apply(&mesh, dt, &mut state).unwrap();
+        friction.apply(&mesh, dt, &mut state).unwrap();
+        t += dt;
+    }
+    (mesh, state.h[1..=cells].to_vec())
+}
+
+#[test]
+fn without_dilatancy_the_model_converges_to_savage_hutter() {
+    // K = 0 with uniform φ is the incompressible μ(I) model. Its Appendix B scheme
+    // (hydrostatic reconstruction + HLL + apparent-topography friction) is not the
+    // seed 000 scheme of the Savage–Hutter model (PVM + Coulomb-aware ΔC + friction
+    // step), so the two agree to the discretisation error, not to round-off: the L1
+    // distance of the thickness at 22°, t = 0.48 s must fall with Δx.
+    let law = DilatantLaw {
+        k: 0.0,
+        ..DilatantLaw::table1()
+    };
+    let mut distances = Vec::new();
+    for cells in [100, 200, 400] {
+        let (sh_mesh, h_sh) = savage_hutter_collapse(22.0, 1.8, cells, 0.48);
+        let mesh = collapse(22.0, 1.8, cells);
+        let mut s = column(&mesh, 0.62);
+        let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), cells);
+        run(&mut scheme, &mesh, &mut s, 0.48, |_, _, _| {}).unwrap();
+        let l1: f64 = (1..=cells)
+            .map(|j| (s.h[j] - h_sh[j - 1]).abs())
+            .sum::<f64>()
+            * mesh.dx;
+        let mass: f64 = h_sh.iter().sum::<f64>() * sh_mesh.dx;
+        let mut sh_state = s.clone();
+        sh_state.h[1..=cells].copy_from_slice(&h_sh);
+        let (f_sh, m_sh) = front_and_max(&mesh, &sh_state);
+        let (f_d, m_d) = front_and_max(&mesh, &s);
+        println!(
+            "Δx = {:.4} m: L1(h − h_SH)/∫h = {:.4e}; front {f_d:.3} vs SH {f_sh:.3} m; max h {m_d:.4} vs SH {m_sh:.4} m",
+            mesh.dx,
+            l1 / mass
+        );
+        distances.push(l1 / mass);
+    }
+    assert!(
+        distances[2] < distances[1] && distances[1] < distances[0],
+        "{distances:?}"
+    );
+}
+
+/// The keys of `model.kind = "dilatant"`: each wrong value is refused naming its key.
+#[test]
+fn dilatant_keys_are_validated() {
+    use granflow::scenario::load_str;
+    let base = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/dilatancy_dense.toml"
+    ))
+    .unwrap();
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scn = load_str(&base, dir, &[]).unwrap();
+    let spec = scn.dilatancy.unwrap();
+    assert_eq!(spec.law.k, 4.09);
+    assert_eq!(spec.law.mu_1, 0.48);
+    assert_eq!(spec.options.viscosity.xi, [2.0, 2.0, 2.0]);
+    let cases = [
+        ("phi = 0.62", "phi = 1.2", "initial.phi"),
+        ("phi = 0.62", "", "initial.phi"),
+        ("k = 4.09", "k = -1", "dilatancy.k"),
+        ("phi_stat = 0.582", "phi_stat = 1.5", "dilatancy.phi_stat"),
+        ("phi_eq = \"f2\"", "phi_eq = \"f7\"", "dilatancy.phi_eq"),
+        ("phi_eq = \"f2\"", "phi_eq = \"f1\"", "dilatancy.n"),
+        ("xi = [2.0, 2.0, 2.0]", "xi = [2.0, 2.0]", "dilatancy.xi"),
+        ("kind = \"dilatant\"", "kind = \"granular\"", "dilatancy"),
+        (
+            "law = \"mu_i\"\nmu_s = 0.48\nmu_2 = 0.73\ni0 = 0.279",
+            "law = \"coulomb\"\nmu = 0.5",
+            "rheology.law",
+        ),
+        (
+            "i0 = 0.279",
+            "i0 = 0.279\nchannel_width = 0.2",
+            "rheology.channel_width",
+        ),
+        (
+            "[model]\nkind = \"dilatant\"",
+            "[model]\nkind = \"dilatant\"\nlayers = 3",
+            "model.layers",
+        ),
+    ];
+    for (from, to, key) in cases {
+        assert!(base.contains(from), "{from}");
+        let text = base.replacen(from, to, 1);
+        let e = load_str(&text, dir, &[])
+            .err()
+            .unwrap_or_else(|| panic!("{to} accepted"));
+        assert_eq!(e.key(), Some(key), "{to}: {e}");
+    }
+    // Without [dilatancy] the dilatant model cannot run.
+    let start = base.find("[dilatancy]").unwrap();
+    let end = base.find("[initial]").unwrap();
+    let text = format!("{}{}", &base[..start], &base[end..]);
+    assert_eq!(
+        load_str(&text, dir, &[]).unwrap_err().key(),
+        Some("dilatancy")
+    );
+}
+
+/// `granflow run` on the shipped dense scenario writes φ per cell.
+#[test]
+fn snapshots_carry_the_volume_fraction() {
+    use granflow::output::memory::MemorySink;
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/dilatancy_dense.toml");
+    let scn = granflow::scenario::load_file(
+        &path,
+        &[
+            "domain.cells=64".into(),
+            "time.t_end=0.2".into(),
+            "output.every=0.1".into(),
+        ],
+    )
+    .unwrap();
+    let mut sim = granflow::setup::build_dilatant(&scn);
+    let m0 = sim.diagnostics().mass;
+    let mut sink = MemorySink::default();
+    sim.run(&mut sink, &mut |_| {}).unwrap();
+    let m1 = sim.diagnostics().mass;
+    assert!((m1 - m0).abs() < 1e-13 * m0, "grain volume {m0} → {m1}");
+    assert!((m0 - 0.62 * 0.14 * 0.2).abs() < 1e-12, "{m0}");
+    let last = sink.snapshots.last().unwrap();
+    let phi = last.field("phi").expect("phi field");
+    assert_eq!(phi.len(), 64);
+    assert!(phi.iter().all(|&p| p > 0.0 && p < 1.0));
+    assert!(
+        phi.iter().any(|&p| p < 0.61),
+        "the flowing dense mass dilated"
+    );
+}
+
+mod random_states {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(512))]
+
+        /// Random thicknesses (with dry cells), velocities, fractions, slopes and K,
+        /// between walls, 40 CFL steps: every step either keeps φh ≥ 0 and 0 < φ < 1
+        /// with ∫φh conserved to 1e-13, or is refused with a named error (never a NaN,
+        /// never a panic).
+        #[test]
+        fn random_states_stay_admissible(
+            h in prop::collection::vec(prop_oneof![Just(0.0), 0.0f64..0.2], 24),
+            v in prop::collection::vec(-2.0f64..2.0, 24),
+            phi in prop::collection::vec(0.45f64..0.65, 24),
+            slope in 0.0f64..30.0,
+            k in prop_oneof![Just(0.0), 0.0f64..20.0],
+        ) {
+            let law = DilatantLaw { k, ..DilatantLaw::table1() };
+            let mesh = mesh(0.0, 0.24, 24, slope, (true, true));
+            let mut s = DilatantState::from_profiles(&mesh, 2.0, &h, &v, &phi);
+            let mass0 = s.grain_volume(&mesh);
+            let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), mesh.nx);
+            let mut t = 0.0;
+            for _ in 0..40 {
+                let dt = scheme.max_dt(&mesh, &s);
+                if !dt.is_finite() {
+                    break;
+                }
+                match scheme.step(&mesh, &mut s, t, dt) {
+                    Ok(_) => {}
+                    Err(e) => {
+                        // Refused: the state is the admissible one of t^n.
+                        prop_assert!(matches!(e, DilatantError::FractionOutOfBounds { .. }
+                            | DilatantError::NegativeMass { .. }), "{e}");
+                        assert_admissible(&s);
+                        return Err(TestCaseError::fail(format!("refused: {e}")));
+                    }
+                }
+                t += dt;
+                assert_admissible(&s);
+                for j in 1..=s.nx {
+                    prop_assert!(s.q[j].is_finite());
+                }
+            }
+            let mass = s.grain_volume(&mesh);
+            prop_assert!((mass - mass0).abs() <= 1e-13 * mass0.max(1e-300), "{mass0} → {mass}");
+        }
+    }
+}
+
+/// From the command line: the paper's ξ = (2, 2, 5) on the dense 0° collapse ends the
+/// run with exit code 1 and a message naming φ, the place and the time; a bad
+/// `initial.phi` is an input error (exit 2) naming the key.
+#[test]
+fn command_line_reports_inadmissible_fractions_and_bad_keys() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let scenario = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/dilatancy_dense.toml"
+    );
+    let run = |sets: &[&str]| {
+        let mut cmd = assert_cmd::Command::cargo_bin("granflow").unwrap();
+        cmd.current_dir(dir.path()).args(["run", scenario, "-q"]);
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        cmd.output().unwrap()
+    };
+    let out = run(&[
+        "domain.slope_deg=0",
+        "dilatancy.xi=[2.0, 2.0, 5.0]",
+        "domain.cells=200",
+        "domain.x_max=1.8",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("volume fraction φ (stabilisation step)") && stderr.contains("x = 0.035 m"),
+        "{stderr}"
+    );
+    let out = run(&["initial.phi=0"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("initial.phi"), "{stderr}");
+}

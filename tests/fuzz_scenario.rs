@@ -1,0 +1,363 @@
+//! Fuzzing the scenario loader and the run setup (issue 13): any byte string, any edit
+//! of a real scenario and any combination of schema keys with hostile values must give
+//! a scenario or a `ScenarioError` (exit 0 or 2), never a panic, an abort (stack
+//! overflow, out of memory) or a hang.
+//!
+//! By default a fixed number of cases runs (deterministic, about a second). CI runs it
+//! for a time budget: `GRANFLOW_FUZZ_SECONDS=60 cargo test --release --test
+//! fuzz_scenario`. A failing input is printed (proptest shrinks it first).
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use proptest::prelude::*;
+use proptest::test_runner::{Config, TestCaseError, TestRunner};
+
+/// Longest a single input may take to load and set up. Far above the few milliseconds
+/// an input takes: this catches hangs, not slowness.
+const PER_INPUT: Duration = Duration::from_secs(20);
+
+/// Rounds of 256 inputs when no time budget is given.
+const DEFAULT_ROUNDS: u32 = 8;
+
+fn scenarios() -> Vec<String> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let mut texts: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| std::fs::read_to_string(p).unwrap())
+        .collect();
+    texts.sort();
+    texts
+}
+
+/// Values that have broken parsers and validators before, or might.
+const NASTY: &[&str] = &[
+    "0",
+    "-0",
+    "1",
+    "-1",
+    "1e400",
+    "-1e400",
+    "1e-400",
+    "nan",
+    "inf",
+    "-inf",
+    "1e308",
+    "5e-324",
+    "9223372036854775807",
+    "-9223372036854775808",
+    "99999999999999999999",
+    "0x10",
+    "1_000",
+    "\"\"",
+    "\" \"",
+    "\"x\"",
+    "\"1/0\"",
+    "\"0/0\"",
+    "\"ln(x)\"",
+    "\"((((\"",
+    "\"x +\"",
+    "\"a = 1\"",
+    "\"b\"",
+    "\"if(x, 1, 2)\"",
+    "\"noise(x, 1)\"",
+    "\"sqrt(-1)\"",
+    "\"pow(10, 400)\"",
+    "\"max()\"",
+    "\"tuple(1, 2)\"",
+    "\"x; 1\"",
+    "\"---------x\"",
+    "true",
+    "false",
+    "[]",
+    "[1, 2]",
+    "{}",
+    "{ table = \"/dev/null\" }",
+    "{ table = \"nowhere.csv\" }",
+    "{ table = \"\" }",
+    "{ table = 1 }",
+    "{ other = 1 }",
+    "\"coulomb\"",
+    "\"mu_i\"",
+    "\"wall\"",
+    "\"outflow\"",
+    "\"cartesian\"",
+    "\"local\"",
+    "\"nonhydrostatic\"",
+    "\"hydrostatic\"",
+    "\"jop\"",
+    "\"layer\"",
+    "\"no_slip\"",
+    "\"bound\"",
+    "2",
+    "20",
+    "1000",
+    "1001",
+    "100000",
+    "1e-12",
+    "0.5",
+    "89.999999",
+    "90",
+    "-90",
+    "1e20",
+    "1.0000000000001e20",
+    "2024-01-01",
+    "\"\\u0000\"",
+    "'''x'''",
+];
+
+/// Values built at run time: deep and long expressions, long numbers.
+fn huge_values() -> Vec<String> {
+    vec![
+        format!("\"{}x\"", "-".repeat(100_000)),
+        format!("\"{}x{}\"", "(".repeat(20_000), ")".repeat(20_000)),
+        format!("\"{}\"", vec!["x"; 4000].join("+")),
+        format!("\"{}x{}\"", "sin(".repeat(600), ")".repeat(600)),
+        format!("\"{}\"", vec!["0.01*exp(-x^2)"; 60].join("+")),
+        "9".repeat(400),
+        format!("[{}]", vec!["0.1"; 2000].join(", ")),
+    ]
+}
+
+/// A hostile value: one of [`NASTY`] or of [`huge_values`].
+fn nasty(i: usize) -> String {
+    if i < NASTY.len() {
+        NASTY[i].to_owned()
+    } else {
+        let h = huge_values();
+        h[(i - NASTY.len()) % h.len()].clone()
+    }
+}
+
+const N_NASTY: usize = NASTY.len() + 7;
+
+/// Keys of the schema (and some that are not).
+const KEYS: &[&str] = &[
+    "domain.x_min",
+    "domain.x_max",
+    "domain.cells",
+    "domain.slope_deg",
+    "domain.coordinates",
+    "bed.b",
+    "material.rho_s",
+    "material.phi",
+    "material.d_s",
+    "rheology.law",
+    "rheology.mu",
+    "rheology.mu_deg",
+    "rheology.mu_s",
+    "rheology.mu_s_deg",
+    "rheology.mu_2",
+    "rheology.mu_2_deg",
+    "rheology.i0",
+    "rheology.basal",
+    "rheology.regularization",
+    "rheology.delta",
+    "rheology.c_msm",
+    "rheology.mu_w",
+    "rheology.width",
+    "rheology.sidewall",
+    "model.kind",
+    "model.pressure",
+    "model.layers",
+    "model.layer_fractions",
+    "initial.h",
+    "initial.u",
+    "initial.w",
+    "initial.erodible_bed",
+    "boundary.left",
+    "boundary.right",
+    "time.t_end",
+    "time.cfl",
+    "time.stop_at_rest",
+    "output.file",
+    "output.every",
+    "output.front_threshold",
+    "output.static_threshold",
+    "domain",
+    "x",
+    "domain.x_min.y",
+    "a.b.c.d",
+];
+
+/// Inputs refused and accepted.
+static COUNTS: [std::sync::atomic::AtomicUsize; 2] = [
+    std::sync::atomic::AtomicUsize::new(0),
+    std::sync::atomic::AtomicUsize::new(0),
+];
+
+/// Loads `text` (with `sets`) and, when it is valid and small, builds the run.
+fn exercise(text: &str, sets: &[String]) -> Result<(), TestCaseError> {
+    let dir = std::env::temp_dir();
+    let start = Instant::now();
+    let loaded = granflow::scenario::load_str(text, &dir, sets);
+    COUNTS[usize::from(loaded.is_ok())].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    if let Ok(scn) = loaded {
+        // Setup allocates per cell and layer; validation bounds that product, but the
+        // largest scenarios would take gigabytes here, which is not what is tested.
+        if scn.domain.cells * scn.model.layers <= 200_000 {
+            let _ = granflow::runner::check(&scn);
+        }
+    }
+    let took = start.elapsed();
+    prop_assert!(took < PER_INPUT, "took {took:?}");
+    Ok(())
+}
+
+/// An edit of a real scenario: a value replaced, a line dropped or doubled, bytes
+/// inserted.
+fn edited_scenario() -> impl Strategy<Value = String> {
+    let texts = scenarios();
+    (
+        0..texts.len(),
+        prop::collection::vec(
+            (
+                0u8..5,
+                any::<prop::sample::Index>(),
+                0..N_NASTY,
+                any::<Vec<u8>>(),
+            ),
+            1..6,
+        ),
+    )
+        .prop_map(move |(k, edits)| {
+            let mut lines: Vec<String> = texts[k].lines().map(str::to_owned).collect();
+            for (kind, at, value, bytes) in edits {
+                if lines.is_empty() {
+                    break;
+                }
+                let i = at.index(lines.len());
+                match kind {
+                    0 => {
+                        if let Some((key, _)) = lines[i].split_once('=') {
+                            lines[i] = format!("{key}= {}", nasty(value));
+                        }
+                    }
+                    1 => {
+                        lines.remove(i);
+                    }
+                    2 => {
+                        let l = lines[i].clone();
+                        lines.insert(i, l);
+                    }
+                    3 => {
+                        let junk = String::from_utf8_lossy(&bytes).into_owned();
+                        lines.insert(i, junk);
+                    }
+                    _ => {
+                        let cut = (bytes.len() % (lines[i].len() + 1)).min(lines[i].len());
+                        let cut = (0..=cut)
+                            .rev()
+                            .find(|&c| lines[i].is_char_boundary(c))
+                            .unwrap_or(0);
+                        lines[i].truncate(cut);
+                    }
+                }
+            }
+            lines.join("\n")
+        })
+}
+
+/// A document built from schema keys and hostile values, as dotted keys.
+fn generated_document() -> impl Strategy<Value = String> {
+    prop::collection::vec((0..KEYS.len(), 0..N_NASTY), 0..30).prop_map(|pairs| {
+        pairs
+            .into_iter()
+            .map(|(k, v)| format!("{} = {}\n", KEYS[k], nasty(v)))
+            .collect()
+    })
+}
+
+/// `--set` overrides built the same way.
+fn overrides() -> impl Strategy<Value = Vec<String>> {
+    prop::collection::vec((0..KEYS.len(), 0..N_NASTY, any::<String>()), 0..4).prop_map(|v| {
+        v.into_iter()
+            .map(|(k, n, junk)| {
+                if junk.len() % 3 == 0 {
+                    format!("{}={}", KEYS[k], nasty(n))
+                } else {
+                    junk
+                }
+            })
+            .collect()
+    })
+}
+
+/// A real scenario with the value of one profile (`h`, `u`, `w`, `b`) replaced: the
+/// expressions are where deep input does harm, and they are only reached when the rest
+/// of the file is valid.
+fn profile_edit() -> impl Strategy<Value = String> {
+    let texts = scenarios();
+    (0..texts.len(), any::<prop::sample::Index>(), 0..N_NASTY).prop_map(move |(k, at, value)| {
+        let mut lines: Vec<String> = texts[k].lines().map(str::to_owned).collect();
+        let profiles: Vec<usize> = (0..lines.len())
+            .filter(|&i| {
+                let key = lines[i].split('=').next().unwrap_or("").trim();
+                matches!(key, "h" | "u" | "w" | "b")
+            })
+            .collect();
+        if !profiles.is_empty() {
+            let i = profiles[at.index(profiles.len())];
+            let key = lines[i].split('=').next().unwrap_or("").to_owned();
+            lines[i] = format!("{key}= {}", nasty(value));
+        }
+        lines.join("\n")
+    })
+}
+
+fn input() -> impl Strategy<Value = (String, Vec<String>)> {
+    prop_oneof![
+        any::<Vec<u8>>().prop_map(|b| String::from_utf8_lossy(&b).into_owned()),
+        edited_scenario(),
+        edited_scenario(),
+        profile_edit(),
+        profile_edit(),
+        generated_document(),
+    ]
+    .prop_flat_map(|text| (Just(text), overrides()))
+}
+
+#[test]
+fn any_input_loads_or_is_refused_without_panic_or_hang() {
+    let budget = std::env::var("GRANFLOW_FUZZ_SECONDS")
+        .ok()
+        .and_then(|s| s.parse::<f64>().ok());
+    let start = Instant::now();
+    let mut round = 0u32;
+    loop {
+        // Each round a new deterministic seed, so a budgeted run keeps finding new cases.
+        let config = Config {
+            cases: 256,
+            failure_persistence: None,
+            rng_algorithm: proptest::test_runner::RngAlgorithm::ChaCha,
+            ..Config::default()
+        };
+        let seed = [round as u8; 32];
+        let rng = proptest::test_runner::TestRng::from_seed(
+            proptest::test_runner::RngAlgorithm::ChaCha,
+            &seed,
+        );
+        let mut runner = TestRunner::new_with_rng(config, rng);
+        let result = runner.run(&input(), |(text, sets)| exercise(&text, &sets));
+        if let Err(e) = result {
+            panic!("{e}");
+        }
+        round += 1;
+        // Without a budget: a fixed number of rounds (about a second in a debug build).
+        match budget {
+            Some(seconds) if start.elapsed().as_secs_f64() < seconds => continue,
+            None if round < DEFAULT_ROUNDS => continue,
+            _ => break,
+        }
+    }
+    let [refused, accepted] = &COUNTS;
+    eprintln!(
+        "fuzz: {round} rounds, {} inputs refused and {} accepted, in {:.1} s",
+        refused.load(std::sync::atomic::Ordering::Relaxed),
+        accepted.load(std::sync::atomic::Ordering::Relaxed),
+        start.elapsed().as_secs_f64()
+    );
+}
