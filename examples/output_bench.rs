@@ -92,6 +92,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         steps: step,
         wall_time_s: 0.0,
         status: "completed".into(),
+        max_wave_amplitude: None,
         stage_times: Vec::new(),
     })?;
     let finish = start.elapsed();

@@ -127,6 +127,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         steps: steps as u64,
         wall_time_s: 0.0,
         status: "completed".into(),
+        max_wave_amplitude: None,
         stage_times: vec![("hyperbolic".into(), 0.0), ("friction".into(), 0.0)],
     })?;
     println!("wrote {}", args.path.display());

@@ -175,7 +175,33 @@ class Checker:
             t = f[name][:]
             if np.isnan(t).any() or (np.diff(t) < 0).any():
                 self.fail(f"/{name} is not a non-decreasing time series")
+        if "gauges" in f:
+            self.gauges(x)
         return x, h
+
+    def gauges(self, x):
+        """/gauges (runs with output.gauges): shapes, positions in the domain, finite
+        values, increasing times, non-negative grain depth."""
+        g = self.f["gauges"]
+        missing = [n for n in ("x", "t", "eta", "h_grains") if n not in g]
+        if missing:
+            self.fail(f"/gauges lacks {missing}")
+            return
+        gx, t = g["x"][:], g["t"][:]
+        n, nt = len(gx), len(t)
+        for name in ("eta", "h_grains"):
+            if g[name].shape != (nt, n):
+                self.fail(f"/gauges/{name} has shape {g[name].shape}, expected ({nt}, {n})")
+                return
+            if not np.isfinite(g[name][:]).all():
+                self.fail(f"/gauges/{name} has non-finite values")
+        dx = x[1] - x[0] if len(x) > 1 else 0.0
+        if n == 0 or (gx < x[0] - dx).any() or (gx > x[-1] + dx).any():
+            self.fail(f"/gauges/x {gx} is empty or outside the domain")
+        if np.isnan(t).any() or (np.diff(t) <= 0).any():
+            self.fail("/gauges/t is not an increasing time series")
+        if (g["h_grains"][:] < 0).any():
+            self.fail("/gauges/h_grains has negative values")
 
     def mass(self, x, h, nx):
         """Mass = sum(h) dx at snapshot times that are also diagnostics times."""

@@ -9,6 +9,7 @@
 pub mod catalog;
 pub mod cli;
 pub mod discover;
+pub mod gauges;
 pub mod interrupt;
 pub mod lock;
 pub mod mesh;

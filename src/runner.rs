@@ -4,9 +4,8 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use crate::output::csv::{front_csv_path, FrontCsvSink};
-use crate::output::hdf5::Hdf5Sink;
-use crate::output::{OutputError, RunSummary, Tee};
+use crate::output::csv::front_csv_path;
+use crate::output::{create_run_sinks, OutputError, RunSummary};
 use crate::scenario::Scenario;
 use crate::setup::{build, Run};
 use crate::simulation::{Progress, RunError};
@@ -27,6 +26,8 @@ pub struct RunReport {
     pub summary: RunSummary,
     pub h5: PathBuf,
     pub front_csv: PathBuf,
+    /// The gauge series, when the run has gauges.
+    pub gauge_csv: Option<PathBuf>,
 }
 
 /// Builds the run without executing it (`granflow check`).
@@ -42,12 +43,13 @@ pub fn run_to_files(
 ) -> Result<RunReport, RunFailure> {
     let mut sim = build(scn);
     let front_csv = front_csv_path(h5);
-    let mut sink = Tee::new(Hdf5Sink::create(h5)?, FrontCsvSink::create(&front_csv)?);
+    let mut sink = create_run_sinks(h5)?;
     match sim.run(&mut sink, progress) {
         Ok(summary) => Ok(RunReport {
             summary,
             h5: h5.to_path_buf(),
             front_csv,
+            gauge_csv: sink.b.b.path().map(Path::to_path_buf),
         }),
         Err(RunError::Output(e)) => Err(RunFailure::Output(e)),
         Err(error) => Err(RunFailure::Run {
@@ -86,6 +88,9 @@ impl fmt::Display for RunReport {
             writeln!(f, "  stop time     {} s", sig(s.stop_time))?;
         }
         writeln!(f, "  h_max final   {} m", sig(s.h_max_final))?;
+        if let Some(a) = s.max_wave_amplitude {
+            writeln!(f, "  max wave      {} m", sig(a))?;
+        }
         let stages: Vec<String> = s
             .stage_times
             .iter()
@@ -97,12 +102,16 @@ impl fmt::Display for RunReport {
         } else {
             "output"
         };
-        writeln!(
+        write!(
             f,
             "  {what:<13} {}, {}",
             self.h5.display(),
             self.front_csv.display()
-        )
+        )?;
+        match &self.gauge_csv {
+            Some(g) => writeln!(f, ", {}", g.display()),
+            None => writeln!(f),
+        }
     }
 }
 

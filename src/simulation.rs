@@ -12,6 +12,7 @@
 
 use std::time::Instant;
 
+use crate::gauges::Gauges;
 use crate::mesh::{Grid, Mesh};
 use crate::model::{Diagnostics, Model};
 use crate::numerics::StageError;
@@ -25,6 +26,10 @@ pub struct RunConfig {
     pub t_end: f64,
     pub cfl: f64,
     pub output_every: f64,
+    /// Gauge positions (m); empty: no gauges ([`crate::gauges`]).
+    pub gauges: Vec<f64>,
+    /// Gauge interval (s); `None`: every step.
+    pub gauge_every: Option<f64>,
 }
 
 /// Reported to the progress callback after every step.
@@ -69,6 +74,8 @@ struct Tally {
     last: Diagnostics,
     /// First time of the current period at rest.
     rest_since: Option<f64>,
+    /// Largest wave amplitude so far, for models with a water surface.
+    max_wave: Option<f64>,
     /// Mass of the initial state, for the stop rules.
     mass0: f64,
 }
@@ -201,6 +208,7 @@ impl<M: Model> Simulation<M> {
             front0: d0.front_x,
             last: d0,
             rest_since: (d0.max_speed <= self.model.rest_speed()).then_some(0.0),
+            max_wave: self.model.wave_amplitude(&self.mesh, &self.state),
             mass0: d0.mass,
         };
         let result = self.run_loop(sink, progress, &mut tally, d0);
@@ -231,8 +239,29 @@ impl<M: Model> Simulation<M> {
             return Err(self.failure(FailureReason::NonFinite, Some(self.mesh.centres()[i])));
         }
         sink.step(&self.record(&d0, 0.0))?;
+        let mut gauges = (!self.config.gauges.is_empty())
+            .then(|| Gauges::new(&self.mesh, &self.config.gauges, self.config.gauge_every));
+        if let Some(g) = gauges.as_mut() {
+            g.begin(&self.model, &self.mesh, &self.state, sink)?;
+        }
         self.snapshot(sink)?;
+        let status = self.time_loop(sink, progress, tally, gauges.as_mut());
+        // A run that ends (not one that fails, whose state may hold NaN) records its
+        // last state.
+        if let (Ok(_), Some(g)) = (&status, gauges.as_mut()) {
+            g.end(self.t, sink)?;
+        }
+        status
+    }
 
+    /// The steps of [`Simulation::run_loop`] after t = 0.
+    fn time_loop(
+        &mut self,
+        sink: &mut dyn OutputSink,
+        progress: &mut dyn FnMut(Progress),
+        tally: &mut Tally,
+        mut gauges: Option<&mut Gauges>,
+    ) -> Result<&'static str, RunError> {
         let cfg = self.config.clone();
         let mut next_output = cfg.output_every.min(cfg.t_end);
         let mut output_index = 1u64;
@@ -263,6 +292,12 @@ impl<M: Model> Simulation<M> {
                 }
             }
             sink.step(&self.record(&d, dt))?;
+            if let Some(g) = gauges.as_deref_mut() {
+                g.after_step(&self.model, &self.mesh, &self.state, self.t, sink)?;
+            }
+            if let Some(a) = self.model.wave_amplitude(&self.mesh, &self.state) {
+                tally.max_wave = Some(tally.max_wave.map_or(a, |m| m.max(a)));
+            }
             tally.rest_since = if at_rest {
                 tally.rest_since.or(Some(self.t))
             } else {
@@ -297,6 +332,7 @@ impl<M: Model> Simulation<M> {
             steps: self.steps,
             wall_time_s: tally.wall.elapsed().as_secs_f64(),
             status,
+            max_wave_amplitude: tally.max_wave,
             stage_times: self.stage_times(),
         }
     }

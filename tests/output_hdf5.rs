@@ -101,6 +101,7 @@ impl Synth {
             steps: STEPS as u64,
             wall_time_s: 0.75,
             status: status.into(),
+            max_wave_amplitude: None,
             stage_times: vec![("hyperbolic".into(), 0.5), ("friction".into(), 0.25)],
         }
     }

@@ -81,6 +81,21 @@ pub trait Model: Send + 'static {
     /// Thickness of the initial erodible bed per cell (`/grid/h_bed`), zeros if none.
     fn bed_layer(&self) -> &[f64];
 
+    /// Gauge values of physical cell `i` (0-based): (free-surface elevation, grain
+    /// depth), in m. The run loop interpolates them linearly between cell centres
+    /// ([`crate::gauges`]). `None` (the default): the model records no gauges, and a
+    /// run that asks for them fails before its first step.
+    fn gauge_cell(&self, _mesh: &Mesh, _state: &Self::State, _i: usize) -> Option<(f64, f64)> {
+        None
+    }
+
+    /// For models with a water surface: the largest |η − η₀| over the cells wet now and
+    /// at t = 0 (m), η₀ the initial surface. The run loop reports its maximum over time
+    /// as the summary's `max_wave_amplitude`. `None` (the default): no water surface.
+    fn wave_amplitude(&self, _mesh: &Mesh, _state: &Self::State) -> Option<f64> {
+        None
+    }
+
     /// Hands the snapshot of `state` at time `t` to `sink`.
     fn snapshot(
         &self,

@@ -82,7 +82,7 @@ impl OutputSink for FrontCsvSink {
 
 /// A float that reads back exactly: shortest round-trip digits, in exponent form
 /// outside [1e-4, 1e15) so tiny or huge values stay short; `nan`, `inf`, `-inf`.
-fn number(v: f64) -> String {
+pub(super) fn number(v: f64) -> String {
     if v.is_nan() {
         "nan".to_string()
     } else if v == 0.0 || v.is_infinite() || (1e-4..1e15).contains(&v.abs()) {

@@ -49,8 +49,11 @@ use rust_hdf5::H5File;
 
 pub use layout::stage_attr_name;
 
+use layout::GaugeRows;
+
 use super::{
-    CellField, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+    CellField, GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView,
+    StepRecord,
 };
 
 /// Writes one run to an HDF5 file, progressively (see the module docs).
@@ -61,8 +64,17 @@ pub struct Hdf5Sink {
     shape: Option<Shape>,
     /// Step records not yet on disk.
     pending: Vec<StepRecord>,
+    /// Number of gauges once `begin_gauges` ran.
+    gauges: Option<usize>,
+    /// Gauge rows not yet on disk: written with the step records, or on their own
+    /// once they hold [`GAUGE_BUFFER_VALUES`] values.
+    pending_gauges: GaugeRows,
     finished: bool,
 }
+
+/// Bound on the buffered gauge values (4 MiB): a run with gauges at every step and
+/// rare snapshots writes them in pieces of this size.
+const GAUGE_BUFFER_VALUES: usize = 1 << 19;
 
 /// What `begin` and the first snapshot fix about the file.
 #[derive(Debug, Clone)]
@@ -162,6 +174,8 @@ impl Hdf5Sink {
             path: path.to_path_buf(),
             shape: None,
             pending: Vec::new(),
+            gauges: None,
+            pending_gauges: GaugeRows::default(),
             finished: false,
         };
         let file = sink.create_file()?;
@@ -258,10 +272,12 @@ impl OutputSink for Hdf5Sink {
         layout::create_optional(&file, (nx, nl), create)
             .and_then(|()| layout::create_cell_fields(&file, nx, &create_extra))
             .and_then(|()| layout::append_steps(&file, &self.pending))
+            .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
             .and_then(|()| layout::append_snapshot(&file, snap))
             .map_err(|e| self.err(e))?;
         self.close(file, false)?;
         self.pending.clear();
+        self.pending_gauges.clear();
         Ok(())
     }
 
@@ -281,10 +297,53 @@ impl OutputSink for Hdf5Sink {
         self.finished = true;
         let file = self.open_file()?;
         layout::append_steps(&file, &self.pending)
+            .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
             .and_then(|()| layout::write_summary(&file, summary, self.shape.is_some()))
             .map_err(|e| self.err(e))?;
         self.pending.clear();
+        self.pending_gauges.clear();
         self.close(file, true)
+    }
+
+    fn begin_gauges(&mut self, x: &[f64]) -> Result<(), OutputError> {
+        self.check_open("begin_gauges")?;
+        if self.gauges.is_some() {
+            return Err(self.err("begin_gauges called twice"));
+        }
+        if x.is_empty() {
+            return Err(self.err("begin_gauges without gauges"));
+        }
+        let file = self.open_file()?;
+        layout::create_gauges(&file, x).map_err(|e| self.err(e))?;
+        self.close(file, false)?;
+        self.gauges = Some(x.len());
+        Ok(())
+    }
+
+    fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {
+        self.check_open("gauges")?;
+        let Some(n) = self.gauges else {
+            return Err(self.err("gauges before begin_gauges"));
+        };
+        if rec.eta.len() != n || rec.h_grains.len() != n {
+            return Err(self.err(format!(
+                "gauge record at t = {} has {} and {} values, expected {n}",
+                rec.t,
+                rec.eta.len(),
+                rec.h_grains.len()
+            )));
+        }
+        self.pending_gauges.push(rec);
+        if self.pending_gauges.values() >= GAUGE_BUFFER_VALUES {
+            let file = self.open_file()?;
+            layout::append_steps(&file, &self.pending)
+                .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
+                .map_err(|e| self.err(e))?;
+            self.close(file, false)?;
+            self.pending.clear();
+            self.pending_gauges.clear();
+        }
+        Ok(())
     }
 }
 
@@ -292,11 +351,14 @@ impl Drop for Hdf5Sink {
     /// A run that unwinds without calling `finish` still gets the step records it
     /// produced since its last snapshot, when the file can take them.
     fn drop(&mut self) {
-        if self.finished || self.pending.is_empty() || self.shape.is_none() {
+        let nothing = self.pending.is_empty() && self.pending_gauges.t.is_empty();
+        if self.finished || nothing || self.shape.is_none() {
             return;
         }
         let saved = self.open_file().and_then(|file| {
-            let appended = layout::append_steps(&file, &self.pending).map_err(|e| self.err(e));
+            let appended = layout::append_steps(&file, &self.pending)
+                .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
+                .map_err(|e| self.err(e));
             appended.and(self.close(file, false))
         });
         if let Err(e) = saved {
@@ -414,5 +476,60 @@ mod tests {
             .unwrap();
         let e = sink.snapshot(&view(1.0, &data, &[])).unwrap_err();
         assert!(e.to_string().contains("earlier snapshots"), "{e}");
+    }
+
+    #[test]
+    fn gauge_rows_are_written_when_the_buffer_fills_and_on_drop() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("gauges.h5");
+        let mut sink = begin(&path);
+        assert!(sink
+            .gauges(&GaugeRecord {
+                t: 0.0,
+                eta: &[1.0],
+                h_grains: &[1.0]
+            })
+            .is_err());
+        sink.begin_gauges(&[0.5, 2.5]).unwrap();
+        assert!(sink.begin_gauges(&[0.5]).is_err());
+        let row = |k: usize| GaugeRecord {
+            t: k as f64,
+            eta: &[0.0, 1.0],
+            h_grains: &[2.0, 3.0],
+        };
+        let bad = GaugeRecord {
+            t: 0.0,
+            eta: &[1.0],
+            h_grains: &[1.0, 2.0],
+        };
+        assert!(sink
+            .gauges(&bad)
+            .unwrap_err()
+            .to_string()
+            .contains("expected 2"));
+        // 5 values a row (t and two per quantity): the bound is reached at this row.
+        let rows = GAUGE_BUFFER_VALUES.div_ceil(5);
+        for k in 0..rows {
+            sink.gauges(&row(k)).unwrap();
+        }
+        {
+            let file = H5File::open(&path).unwrap();
+            let t = file.dataset("gauges/t").unwrap().read_raw::<f64>().unwrap();
+            assert_eq!(t.len(), rows);
+            assert_eq!(t[rows - 1], (rows - 1) as f64);
+            let eta = file.dataset("gauges/eta").unwrap();
+            assert_eq!(eta.shape(), [rows, 2]);
+            assert_eq!(
+                file.dataset("gauges/x").unwrap().read_raw::<f64>().unwrap(),
+                [0.5, 2.5]
+            );
+        }
+        // A sink dropped without finish still saves the rows it holds.
+        sink.gauges(&row(rows)).unwrap();
+        drop(sink);
+        let file = H5File::open(&path).unwrap();
+        let h = file.dataset("gauges/h_grains").unwrap();
+        assert_eq!(h.shape(), [rows + 1, 2]);
+        assert_eq!(h.read_raw::<f64>().unwrap()[2 * rows..], [2.0, 3.0]);
     }
 }

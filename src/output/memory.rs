@@ -1,7 +1,9 @@
 //! An in-memory sink: keeps every snapshot and step record. Used by tests and by
 //! callers that post-process a run without touching the disk.
 
-use super::{GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord};
+use super::{
+    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+};
 
 /// One stored snapshot (owned copy of a [`SnapshotView`]).
 #[derive(Debug, Clone, PartialEq)]
@@ -35,6 +37,10 @@ pub struct MemorySink {
     pub snapshots: Vec<Snapshot>,
     pub steps: Vec<StepRecord>,
     pub summary: Option<RunSummary>,
+    /// Gauge positions, empty without gauges.
+    pub gauge_x: Vec<f64>,
+    /// (t, η per gauge, grain depth per gauge) at every gauge time.
+    pub gauges: Vec<(f64, Vec<f64>, Vec<f64>)>,
 }
 
 impl OutputSink for MemorySink {
@@ -69,6 +75,17 @@ impl OutputSink for MemorySink {
 
     fn finish(&mut self, summary: &RunSummary) -> Result<(), OutputError> {
         self.summary = Some(summary.clone());
+        Ok(())
+    }
+
+    fn begin_gauges(&mut self, x: &[f64]) -> Result<(), OutputError> {
+        self.gauge_x = x.to_vec();
+        Ok(())
+    }
+
+    fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {
+        self.gauges
+            .push((rec.t, rec.eta.to_vec(), rec.h_grains.to_vec()));
         Ok(())
     }
 }

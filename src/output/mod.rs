@@ -6,6 +6,7 @@
 //! when the call returns, so a run that dies later keeps it.
 
 pub mod csv;
+pub mod gauges;
 pub mod hdf5;
 pub mod memory;
 pub mod tee;
@@ -15,6 +16,7 @@ use std::path::Path;
 use thiserror::Error;
 
 pub use csv::{front_csv_path, FrontCsvSink};
+pub use gauges::{gauge_csv_path, GaugeCsvSink};
 pub use hdf5::Hdf5Sink;
 pub use tee::Tee;
 
@@ -99,6 +101,18 @@ pub struct StepRecord {
     pub front_x: f64,
 }
 
+/// The gauge values at one time, `/gauges/*[k]`: one value per gauge, in the order
+/// of the positions handed to [`OutputSink::begin_gauges`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GaugeRecord<'a> {
+    pub t: f64,
+    /// Free-surface elevation: the water surface η of the submarine model, the top of
+    /// the flow b + h of the granular model (m).
+    pub eta: &'a [f64],
+    /// Grain depth: the submarine model's H₂, the granular flow thickness h (m).
+    pub h_grains: &'a [f64],
+}
+
 /// End-of-run summary, `/summary` attributes (and, without the stage times, the
 /// outcome part of a sweep's result file).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -112,6 +126,10 @@ pub struct RunSummary {
     pub wall_time_s: f64,
     /// "completed" | "stopped_at_rest" | "failed: …".
     pub status: String,
+    /// Models with a water surface (submarine): max over time and wet cells of
+    /// |η − η₀| (m), η₀ the initial surface. `None` for the others.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_wave_amplitude: Option<f64>,
     /// (stage name, wall seconds), written as `time_<stage>_s`.
     #[serde(skip)]
     pub stage_times: Vec<(String, f64)>,
@@ -128,6 +146,7 @@ impl RunSummary {
             steps: 0,
             wall_time_s,
             status,
+            max_wave_amplitude: None,
             stage_times: Vec::new(),
         }
     }
@@ -141,13 +160,29 @@ pub trait OutputSink {
     fn step(&mut self, rec: &StepRecord) -> Result<(), OutputError>;
     /// Called once, also after a failure, so what is valid stays readable.
     fn finish(&mut self, summary: &RunSummary) -> Result<(), OutputError>;
+    /// Called once after `begin` when the run has gauges, with their positions (m).
+    /// Sinks that do not record gauges keep this default.
+    fn begin_gauges(&mut self, _x: &[f64]) -> Result<(), OutputError> {
+        Ok(())
+    }
+    /// Called at every gauge time (after `begin_gauges`), in increasing t.
+    fn gauges(&mut self, _rec: &GaugeRecord) -> Result<(), OutputError> {
+        Ok(())
+    }
 }
 
-/// The outputs of one `granflow run`: the HDF5 file at `h5` and the front series
-/// next to it ([`front_csv_path`]).
-pub fn create_run_sinks(h5: &Path) -> Result<Tee<Hdf5Sink, FrontCsvSink>, OutputError> {
+/// The outputs of one `granflow run`: the HDF5 file at `h5`, the front series next to
+/// it ([`front_csv_path`]) and, when the run has gauges, their series
+/// ([`gauge_csv_path`], created at [`OutputSink::begin_gauges`]).
+pub type RunSinks = Tee<Hdf5Sink, Tee<FrontCsvSink, GaugeCsvSink>>;
+
+/// The sinks of [`RunSinks`] for the HDF5 file `h5`.
+pub fn create_run_sinks(h5: &Path) -> Result<RunSinks, OutputError> {
     Ok(Tee::new(
         Hdf5Sink::create(h5)?,
-        FrontCsvSink::create(&front_csv_path(h5))?,
+        Tee::new(
+            FrontCsvSink::create(&front_csv_path(h5))?,
+            GaugeCsvSink::new(&gauge_csv_path(h5)),
+        ),
     ))
 }

@@ -1,6 +1,8 @@
 //! Fan-out of one run to two sinks, e.g. the HDF5 file and the front CSV.
 
-use super::{GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord};
+use super::{
+    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+};
 
 /// Forwards every call to `a`, then to `b`. Both are called even when `a` fails, so
 /// one broken output does not starve the other; the first error is returned.
@@ -43,6 +45,14 @@ impl<A: OutputSink, B: OutputSink> OutputSink for Tee<A, B> {
 
     fn finish(&mut self, summary: &RunSummary) -> Result<(), OutputError> {
         both(self.a.finish(summary), self.b.finish(summary))
+    }
+
+    fn begin_gauges(&mut self, x: &[f64]) -> Result<(), OutputError> {
+        both(self.a.begin_gauges(x), self.b.begin_gauges(x))
+    }
+
+    fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {
+        both(self.a.gauges(rec), self.b.gauges(rec))
     }
 }
 

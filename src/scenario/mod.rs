@@ -87,6 +87,10 @@ pub struct OutputSpec {
     pub every: f64,
     /// Thickness above which a cell counts as flowing mass for the front position (m).
     pub front_threshold: f64,
+    /// Gauge positions (m), inside the domain; empty: no gauges.
+    pub gauges: Vec<f64>,
+    /// Gauge interval (s); `None`: every time step.
+    pub gauge_every: Option<f64>,
 }
 
 /// A validated scenario: every value checked, nothing left to interpret.

@@ -139,4 +139,6 @@ pub(crate) struct RawOutput {
     pub every: Option<f64>,
     pub front_threshold: Option<f64>,
     pub static_threshold: Option<f64>,
+    pub gauges: Option<Vec<f64>>,
+    pub gauge_every: Option<f64>,
 }

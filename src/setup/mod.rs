@@ -104,6 +104,8 @@ pub fn run_config(scn: &Scenario) -> RunConfig {
         t_end: scn.time.t_end,
         cfl: scn.time.cfl,
         output_every: scn.output.every,
+        gauges: scn.output.gauges.clone(),
+        gauge_every: scn.output.gauge_every,
     }
 }
 

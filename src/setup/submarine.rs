@@ -38,11 +38,13 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
         geometry: geometry.clone(),
     };
     let stages: Vec<Box<dyn Stage<TwoLayerState>>> = vec![Box::new(stage)];
+    let eta0 = Submarine::initial_surface(&geometry, &state, scn.output.front_threshold);
     let model = Submarine {
         params,
         geometry,
         front_threshold: scn.output.front_threshold,
         h_bed: vec![0.0; mesh.nx],
+        eta0,
     };
     // Snapshots carry the grain layer in h, u (one layer) and the water in extra fields.
     let info = run_info(scn, "hydrostatic", 1);

@@ -171,6 +171,7 @@ mod tests {
                 t_end: 1e300,
                 steps: 12,
                 wall_time_s: 2.5e-7,
+                max_wave_amplitude: None,
                 stage_times: Vec::new(),
             },
             h5: "slope_deg=16.h5".into(),

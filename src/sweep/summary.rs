@@ -2,7 +2,8 @@
 //!
 //! One row per run in sweep order. Columns: `index`, `run` (the file stem), one column
 //! per axis (named by its dotted key, canonical values), then `runout`, `stop_time`,
-//! `h_max_final`, `t_end`, `steps`, `wall_time_s`, `status`. Floats are written in their
+//! `h_max_final`, `t_end`, `steps`, `wall_time_s`, `status`, and `max_wave_amplitude`
+//! when a run has one (submarine sweeps; empty for runs without). Floats are written in their
 //! shortest exact form (`nan` when not at rest); a run without a result has empty
 //! numbers and a status that says why (`pending`, `missing`, `stale: …`). Fields are
 //! quoted as in RFC 4180 when they hold a comma, a quote or a line break.
@@ -67,14 +68,21 @@ pub const METRICS: [&str; 7] = [
     "status",
 ];
 
+/// The run's wave amplitude, if it has one.
+fn wave(row: &Row) -> Option<f64> {
+    row.record.as_ref()?.summary.max_wave_amplitude
+}
+
 /// The CSV text of `rows` for a sweep over `axes`.
 pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
     let mut out = String::new();
+    let waves = rows.iter().any(|r| wave(r).is_some());
     let header: Vec<String> = ["index", "run"]
         .iter()
         .map(|s| s.to_string())
         .chain(axes.iter().map(|a| csv_field(a)))
         .chain(METRICS.iter().map(|s| s.to_string()))
+        .chain(waves.then(|| "max_wave_amplitude".to_string()))
         .collect();
     out.push_str(&header.join(","));
     out.push('\n');
@@ -99,6 +107,9 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
             None => fields.extend(std::iter::repeat_n(String::new(), 6)),
         }
         fields.push(csv_field(row.status()));
+        if waves {
+            fields.push(wave(row).map_or_else(String::new, format_float));
+        }
         out.push_str(&fields.join(","));
         out.push('\n');
     }
@@ -193,6 +204,7 @@ mod tests {
                 t_end: 1.4258,
                 steps: 125,
                 wall_time_s: 0.019,
+                max_wave_amplitude: None,
                 stage_times: Vec::new(),
             },
             h5: "slope_deg=16.h5".into(),
@@ -244,6 +256,26 @@ mod tests {
             lines[3]
         );
         assert!(rows()[0].is_ok() && !rows()[1].is_ok() && !rows()[2].is_ok());
+    }
+
+    #[test]
+    fn wave_amplitude_column_only_when_a_run_has_one() {
+        let mut rows = rows();
+        let record = rows[0].record.as_mut().unwrap();
+        record.summary.max_wave_amplitude = Some(0.03125);
+        let csv = to_csv(&["rheology.mu_deg".into()], &rows);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert!(
+            lines[0].ends_with(",status,max_wave_amplitude"),
+            "{}",
+            lines[0]
+        );
+        assert!(
+            lines[1].ends_with(",stopped_at_rest,0.03125"),
+            "{}",
+            lines[1]
+        );
+        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,missing,");
     }
 
     #[test]

@@ -107,6 +107,8 @@ impl Case {
                 file: "test.h5".into(),
                 every: self.every,
                 front_threshold: 1e-3,
+                gauges: Vec::new(),
+                gauge_every: None,
             },
             submarine: None,
         };

@@ -93,6 +93,11 @@ impl Model for Dilatant {
         &self.h_bed
     }
 
+    /// The top of the mixture b + h and its thickness h, as for the granular model.
+    fn gauge_cell(&self, mesh: &Mesh, s: &DilatantState, i: usize) -> Option<(f64, f64)> {
+        Some((mesh.b[i] + s.h[i + 1], s.h[i + 1]))
+    }
+
     fn snapshot(
         &self,
         _mesh: &Mesh,

@@ -62,6 +62,12 @@ impl Model for Granular {
         &self.h_bed
     }
 
+    /// The top of the flow b + h and the flow thickness h.
+    fn gauge_cell(&self, mesh: &Mesh, state: &LayeredState, i: usize) -> Option<(f64, f64)> {
+        let h = state.h[i + 1];
+        Some((mesh.b[i] + h, h))
+    }
+
     fn snapshot(
         &self,
         mesh: &Mesh,

@@ -23,6 +23,24 @@ pub struct Submarine {
     pub front_threshold: f64,
     /// No erodible bed: zeros (nx).
     pub h_bed: Vec<f64>,
+    /// Initial water surface η₀ per cell (nx) where the water is deeper than the front
+    /// threshold at t = 0, NaN elsewhere: the reference of the wave amplitude.
+    pub eta0: Vec<f64>,
+}
+
+impl Submarine {
+    /// η₀ of [`Submarine::eta0`] for the initial state `s`.
+    pub fn initial_surface(g: &TwoLayerGeometry, s: &TwoLayerState, threshold: f64) -> Vec<f64> {
+        (1..=g.nx)
+            .map(|i| {
+                if s.h1[i] > threshold {
+                    s.eta(g, i)
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect()
+    }
 }
 
 fn view(p: &TwoLayerParams, g: &TwoLayerGeometry, s: &TwoLayerState, i: usize) -> CellView {
@@ -84,6 +102,24 @@ impl Model for Submarine {
 
     fn bed_layer(&self) -> &[f64] {
         &self.h_bed
+    }
+
+    /// The water surface η = b + (H₁ + H₂)cos²θ (the grain top where there is no
+    /// water) and the grain depth H₂ (the `h` of the snapshots).
+    fn gauge_cell(&self, _mesh: &Mesh, s: &TwoLayerState, i: usize) -> Option<(f64, f64)> {
+        Some((s.eta(&self.geometry, i + 1), s.h2[i + 1]))
+    }
+
+    /// max |η − η₀| over the cells with H₁ above the front threshold now and at t = 0.
+    fn wave_amplitude(&self, _mesh: &Mesh, s: &TwoLayerState) -> Option<f64> {
+        let g = &self.geometry;
+        let mut a = 0.0f64;
+        for (i, &eta0) in self.eta0.iter().enumerate() {
+            if s.h1[i + 1] > self.front_threshold && eta0.is_finite() {
+                a = a.max((s.eta(g, i + 1) - eta0).abs());
+            }
+        }
+        Some(a)
     }
 
     fn snapshot(

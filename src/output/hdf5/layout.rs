@@ -5,7 +5,7 @@
 use rust_hdf5::{H5Dataset, H5File, H5Group, VarLenUnicode};
 
 use crate::output::{
-    CellField, GridData, RunInfo, RunSummary, SnapshotView, StepRecord, FORMAT_VERSION,
+    CellField, GaugeRecord, GridData, RunInfo, RunSummary, SnapshotView, StepRecord, FORMAT_VERSION,
 };
 
 /// Rows per chunk of the per-step series (`/diagnostics/*`, `/front/*`): 64 KiB.
@@ -108,6 +108,68 @@ pub(super) fn create_cell_fields(
     Ok(())
 }
 
+/// Values per chunk of the gauge datasets: 32 KiB.
+const GAUGE_CHUNK_VALUES: usize = 4096;
+
+/// Creates `/gauges` with the positions `x` and empty `t`, `eta`, `h_grains`.
+pub(super) fn create_gauges(file: &H5File, x: &[f64]) -> rust_hdf5::Result<()> {
+    let n = x.len();
+    let g = file.create_group("gauges")?;
+    let ds = g.new_dataset::<f64>().shape([n]).create("x")?;
+    ds.write_raw(x)?;
+    units(&ds, "m")?;
+    let rows = (GAUGE_CHUNK_VALUES / n.max(1)).max(1);
+    let t = series(&g, "t", rows)?;
+    units(&t, "s")?;
+    for name in ["eta", "h_grains"] {
+        let ds = g
+            .new_dataset::<f64>()
+            .shape([0, n])
+            .chunk(&[rows, n])
+            .max_shape(&[None, Some(n)])
+            .create(name)?;
+        units(&ds, "m")?;
+    }
+    Ok(())
+}
+
+/// Gauge rows waiting for the next write: times and row-major (row, gauge) values.
+#[derive(Debug, Default)]
+pub(super) struct GaugeRows {
+    pub t: Vec<f64>,
+    pub eta: Vec<f64>,
+    pub h_grains: Vec<f64>,
+}
+
+impl GaugeRows {
+    pub fn push(&mut self, rec: &GaugeRecord) {
+        self.t.push(rec.t);
+        self.eta.extend_from_slice(rec.eta);
+        self.h_grains.extend_from_slice(rec.h_grains);
+    }
+
+    pub fn clear(&mut self) {
+        self.t.clear();
+        self.eta.clear();
+        self.h_grains.clear();
+    }
+
+    pub fn values(&self) -> usize {
+        self.t.len() + self.eta.len() + self.h_grains.len()
+    }
+}
+
+/// Appends the pending gauge rows to `/gauges/{t, eta, h_grains}`.
+pub(super) fn append_gauges(file: &H5File, rows: &GaugeRows) -> rust_hdf5::Result<()> {
+    if rows.t.is_empty() {
+        return Ok(());
+    }
+    file.dataset_writer("gauges/t")?.append(&rows.t)?;
+    file.dataset_writer("gauges/eta")?.append(&rows.eta)?;
+    file.dataset_writer("gauges/h_grains")?
+        .append(&rows.h_grains)
+}
+
 /// Appends step records to `/diagnostics/*` and `/front/*`.
 pub(super) fn append_steps(file: &H5File, recs: &[StepRecord]) -> rust_hdf5::Result<()> {
     if recs.is_empty() {
@@ -162,6 +224,9 @@ pub(super) fn write_summary(
     set("wall_time_s", summary.wall_time_s)?;
     group.set_attr_numeric("steps", &(summary.steps as i64))?;
     group.set_attr_string("status", &summary.status)?;
+    if let Some(a) = summary.max_wave_amplitude {
+        set("max_wave_amplitude", a)?;
+    }
     for (stage, seconds) in &summary.stage_times {
         set(&stage_attr_name(stage), *seconds)?;
     }

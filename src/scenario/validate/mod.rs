@@ -173,7 +173,7 @@ fn validate(
     let boundary = boundary(raw.boundary.unwrap_or_default())?;
     let time = time(section("time", raw.time)?)?;
     let raw_output = raw.output.unwrap_or_default();
-    let output = output(&raw_output, &time, default_output)?;
+    let output = output(&raw_output, &time, &domain, default_output)?;
     let dilatancy = dilatancy(
         raw.dilatancy.as_ref(),
         &raw_rheology,
@@ -376,7 +376,7 @@ fn time(t: RawTime) -> Res<TimeSpec> {
     })
 }
 
-fn output(o: &RawOutput, time: &TimeSpec, default_file: &str) -> Res<OutputSpec> {
+fn output(o: &RawOutput, time: &TimeSpec, domain: &Domain, default_file: &str) -> Res<OutputSpec> {
     let file = o.file.clone().unwrap_or_else(|| default_file.to_owned());
     if file.trim().is_empty() {
         return err("output.file", "must not be empty");
@@ -393,11 +393,52 @@ fn output(o: &RawOutput, time: &TimeSpec, default_file: &str) -> Res<OutputSpec>
         );
     }
     let front_threshold = positive("output.front_threshold", o.front_threshold.unwrap_or(1e-3))?;
+    let gauges = gauges(o.gauges.as_deref().unwrap_or(&[]), domain)?;
+    let gauge_every = match o.gauge_every {
+        Some(_) if gauges.is_empty() => {
+            return err(
+                "output.gauge_every",
+                "needs output.gauges (no gauge is set)",
+            )
+        }
+        Some(v) => Some(positive("output.gauge_every", v)?),
+        None => None,
+    };
     Ok(OutputSpec {
         file: PathBuf::from(file),
         every,
         front_threshold,
+        gauges,
+        gauge_every,
     })
+}
+
+/// `output.gauges`: finite positions inside [x_min, x_max], each at most once.
+fn gauges(xs: &[f64], domain: &Domain) -> Res<Vec<f64>> {
+    const KEY: &str = "output.gauges";
+    for (k, &x) in xs.iter().enumerate() {
+        if !x.is_finite() {
+            return err(
+                KEY,
+                format!("gauge {} must be a finite number, got {x}", k + 1),
+            );
+        }
+        if x < domain.x_min || x > domain.x_max {
+            return err(
+                KEY,
+                format!(
+                    "gauge {} at x = {x} lies outside the domain [{}, {}]",
+                    k + 1,
+                    domain.x_min,
+                    domain.x_max
+                ),
+            );
+        }
+        if xs[..k].contains(&x) {
+            return err(KEY, format!("gauge {} at x = {x} is given twice", k + 1));
+        }
+    }
+    Ok(xs.to_vec())
 }
 
 /// Evaluates `bed.b`, then `initial.h`, `initial.u` and `initial.w` at every cell centre:
@@ -587,7 +628,9 @@ t_end = 2.0
             OutputSpec {
                 file: PathBuf::from("granflow.h5"),
                 every: 0.1,
-                front_threshold: 1e-3
+                front_threshold: 1e-3,
+                gauges: Vec::new(),
+                gauge_every: None,
             }
         );
         assert_eq!(s.base_dir, PathBuf::from("."));

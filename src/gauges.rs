@@ -1,0 +1,213 @@
+//! Gauges: time series of the free surface and the grain depth at fixed points, the
+//! way tide gauges are recorded by tsunami codes (`output.gauges`, `output.gauge_every`).
+//!
+//! **In space**, a gauge at x between the cell centres x_i ≤ x ≤ x_{i+1} reads
+//! v = (1 − w) v_i + w v_{i+1}, w = (x − x_i)/Δx, from the model's cell values
+//! ([`Model::gauge_cell`]); a gauge in the outer half cell of the domain (x < x_0 or
+//! x > x_{nx−1}) reads the boundary cell's value. So a gauge at a cell centre reads
+//! exactly that cell, and the gauge series at a snapshot time is the snapshot's field
+//! interpolated by [`interpolation`].
+//!
+//! **In time**, without `gauge_every` a record is taken at t = 0 and after every step.
+//! With it, records are taken at t = k·gauge_every without touching the time step:
+//! the values at t_k are interpolated linearly between the two steps around it
+//! (t_n < t_k ≤ t_{n+1}), a t_k on a step end (to rounding, as for snapshots) takes
+//! that step's values exactly; the last time of the run is recorded too when it is
+//! not already.
+
+use crate::mesh::Mesh;
+use crate::model::Model;
+use crate::output::{GaugeRecord, OutputError, OutputSink};
+
+/// Left cell and weight of the linear interpolation at `xg` between the cell centres
+/// `x` (uniform spacing `dx`): v(xg) = (1 − w) v[i] + w v[i + 1] (v[i] alone when
+/// w = 0, which is also the answer outside the centres).
+pub fn interpolation(x: &[f64], dx: f64, xg: f64) -> (usize, f64) {
+    let n = x.len();
+    if n < 2 || xg <= x[0] {
+        return (0, 0.0);
+    }
+    if xg >= x[n - 1] {
+        return (n - 1, 0.0);
+    }
+    let mut i = (((xg - x[0]) / dx).floor() as usize).min(n - 2);
+    // Guard the floor against rounding of the centres.
+    if xg < x[i] && i > 0 {
+        i -= 1;
+    } else if xg >= x[i + 1] {
+        i += 1;
+    }
+    if xg == x[i] {
+        return (i, 0.0);
+    }
+    (i, ((xg - x[i]) / dx).clamp(0.0, 1.0))
+}
+
+/// The gauges of one run: positions, interpolation weights and the buffers of the
+/// current and previous values (allocated once).
+#[derive(Debug, Clone)]
+pub struct Gauges {
+    x: Vec<f64>,
+    at: Vec<(usize, f64)>,
+    every: Option<f64>,
+    /// Values after the current step: free surface, grain depth.
+    eta: Vec<f64>,
+    h: Vec<f64>,
+    /// Values after the previous step, and its time (gauge_every only).
+    prev_eta: Vec<f64>,
+    prev_h: Vec<f64>,
+    prev_t: f64,
+    /// Scratch for time-interpolated rows.
+    row_eta: Vec<f64>,
+    row_h: Vec<f64>,
+    /// Index k of the next record time k·gauge_every.
+    next: u64,
+    last_recorded: f64,
+}
+
+impl Gauges {
+    /// Gauges at `x` (inside the mesh), recorded every step or every `every` seconds.
+    pub fn new(mesh: &Mesh, x: &[f64], every: Option<f64>) -> Gauges {
+        let n = x.len();
+        Gauges {
+            x: x.to_vec(),
+            at: x
+                .iter()
+                .map(|&xg| interpolation(&mesh.x, mesh.dx, xg))
+                .collect(),
+            every,
+            eta: vec![0.0; n],
+            h: vec![0.0; n],
+            prev_eta: vec![0.0; n],
+            prev_h: vec![0.0; n],
+            prev_t: 0.0,
+            row_eta: vec![0.0; n],
+            row_h: vec![0.0; n],
+            next: 0,
+            last_recorded: f64::NEG_INFINITY,
+        }
+    }
+
+    /// The positions (m).
+    pub fn x(&self) -> &[f64] {
+        &self.x
+    }
+
+    /// Reads the gauges of `state` into the current values; false if the model has no
+    /// gauge values.
+    fn read<M: Model>(&mut self, model: &M, mesh: &Mesh, state: &M::State) -> bool {
+        std::mem::swap(&mut self.eta, &mut self.prev_eta);
+        std::mem::swap(&mut self.h, &mut self.prev_h);
+        for (k, &(i, w)) in self.at.iter().enumerate() {
+            let Some((eta, h)) = model.gauge_cell(mesh, state, i) else {
+                return false;
+            };
+            (self.eta[k], self.h[k]) = if w == 0.0 {
+                (eta, h)
+            } else {
+                let (eta1, h1) = model
+                    .gauge_cell(mesh, state, i + 1)
+                    .unwrap_or((f64::NAN, f64::NAN));
+                ((1.0 - w) * eta + w * eta1, (1.0 - w) * h + w * h1)
+            };
+        }
+        true
+    }
+
+    /// Starts the series: announces the positions to `sink` and records t = 0.
+    pub fn begin<M: Model>(
+        &mut self,
+        model: &M,
+        mesh: &Mesh,
+        state: &M::State,
+        sink: &mut dyn OutputSink,
+    ) -> Result<(), OutputError> {
+        if !self.read(model, mesh, state) {
+            return Err(OutputError::Io {
+                path: "output.gauges".into(),
+                message: format!("the {} model records no gauges", model.kind()),
+            });
+        }
+        sink.begin_gauges(&self.x)?;
+        self.prev_t = 0.0;
+        self.next = 1;
+        self.emit_current(0.0, sink)
+    }
+
+    fn emit_current(&mut self, t: f64, sink: &mut dyn OutputSink) -> Result<(), OutputError> {
+        self.last_recorded = t;
+        sink.gauges(&GaugeRecord {
+            t,
+            eta: &self.eta,
+            h_grains: &self.h,
+        })
+    }
+
+    /// Records what falls in the step that ended at `t`.
+    pub fn after_step<M: Model>(
+        &mut self,
+        model: &M,
+        mesh: &Mesh,
+        state: &M::State,
+        t: f64,
+        sink: &mut dyn OutputSink,
+    ) -> Result<(), OutputError> {
+        self.read(model, mesh, state);
+        let Some(every) = self.every else {
+            return self.emit_current(t, sink);
+        };
+        loop {
+            let tk = self.next as f64 * every;
+            if tk >= t * (1.0 - 1e-14) {
+                if tk <= t * (1.0 + 1e-14) {
+                    self.next += 1;
+                    self.emit_current(tk, sink)?;
+                }
+                break;
+            }
+            let w = (tk - self.prev_t) / (t - self.prev_t);
+            for k in 0..self.x.len() {
+                self.row_eta[k] = (1.0 - w) * self.prev_eta[k] + w * self.eta[k];
+                self.row_h[k] = (1.0 - w) * self.prev_h[k] + w * self.h[k];
+            }
+            self.next += 1;
+            self.last_recorded = tk;
+            sink.gauges(&GaugeRecord {
+                t: tk,
+                eta: &self.row_eta,
+                h_grains: &self.row_h,
+            })?;
+        }
+        self.prev_t = t;
+        Ok(())
+    }
+
+    /// Records the last state of the run at `t` unless it was just recorded.
+    pub fn end(&mut self, t: f64, sink: &mut dyn OutputSink) -> Result<(), OutputError> {
+        if self.last_recorded < t * (1.0 - 1e-14) {
+            self.emit_current(t, sink)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::interpolation;
+
+    #[test]
+    fn weights_between_centres() {
+        let x = [0.5, 1.5, 2.5, 3.5];
+        assert_eq!(interpolation(&x, 1.0, 0.0), (0, 0.0));
+        assert_eq!(interpolation(&x, 1.0, 0.5), (0, 0.0));
+        assert_eq!(interpolation(&x, 1.0, 1.5), (1, 0.0));
+        assert_eq!(interpolation(&x, 1.0, 1.75), (1, 0.25));
+        assert_eq!(interpolation(&x, 1.0, 3.5), (3, 0.0));
+        assert_eq!(interpolation(&x, 1.0, 4.0), (3, 0.0));
+        // Centres with rounding: 0.1·(i + ½).
+        let x: Vec<f64> = (0..100).map(|i| 0.1 * (i as f64 + 0.5)).collect();
+        for (i, &xi) in x.iter().enumerate() {
+            assert_eq!(interpolation(&x, 0.1, xi), (i, 0.0));
+        }
+    }
+}
