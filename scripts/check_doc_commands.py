@@ -12,7 +12,8 @@ fragments (with alternatives `a | b | c`) are checked as
 `granflow check SCENARIO --set …`: check loads the scenario and builds the whole
 simulation (every key, profile and table), without the run.
 
-How it runs them: in order (README, docs, scenarios), in one scratch directory that
+How it runs them: in order (README, docs, scenarios; fenced and four-space indented
+code blocks, and inline `granflow …` spans), in one scratch directory that
 holds symbolic links to the repository's scenarios/, scripts/, examples/ and docs/, so
 that every output lands in the scratch directory, with `granflow` (--granflow, default
 target/release/granflow) and this script's Python (as `python` and `python3`) first
@@ -118,7 +119,9 @@ def from_markdown(path):
         if fence is not None:
             block.append((n, l))
             continue
-        if path.name == "README.md" and l.startswith("    ") and starts_with_command(l.strip()):
+        # Indented code blocks (four spaces after a blank or indented line).
+        prev_blank_or_code = n == 1 or not lines[n - 2].strip() or lines[n - 2].startswith("    ")
+        if l.startswith("    ") and prev_blank_or_code and starts_with_command(l.strip()):
             cmds.append(Cmd(path, n, l))
             continue
         for span in re.findall(r"`([^`]+)`", l):
