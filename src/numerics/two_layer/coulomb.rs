@@ -6,7 +6,8 @@
 //!   N_i = g f_b H₂,i* ½(cos θ_{i−½} + cos θ_{i+½})
 //!         + H₂,i* (U₂*)² (sin θ_{i+½} − sin θ_{i−½})/Δx,   clamped ≥ 0,
 //!
-//! so the friction can stop a mass but never reverse it ([`coulomb_update`]).
+//! so the friction can stop a mass but never reverse it (as
+//! [`crate::numerics::friction::coulomb_update`]).
 //! N_i tan δ₀ is σ*_i/cos θ_i of eq. (85) plus the curvature part T₂* of eq. (84), with
 //! the cell's own H₂ where the paper averages the two face means: step 1 gives each
 //! cell the static force g cos θ̄ H₂,i Δ(…)/2 of each face (own-depth split, [`super::face`]),
@@ -21,7 +22,6 @@
 //! (1 − r) g cos θ(1 − cos θ) tan δ₀.
 
 use super::{TwoLayerGeometry, TwoLayerState};
-use crate::numerics::friction::coulomb_update;
 use crate::physics::two_layer::{
     coulomb_normal_stress, layer_velocity, TwoLayerParams, H_DRY_TWO_LAYER,
 };
@@ -68,5 +68,12 @@ pub fn coulomb_cell(
     }
     let u = layer_velocity(h2, q2);
     let n = coulomb_normal_stress(p, h1, h2, cos_mean, u, dsin_dx);
-    coulomb_update(q2, dt * p.tan_delta * n)
+    // coulomb_update with copysign for signum (the same for every number; one
+    // instruction instead of signum's NaN test).
+    let dt_sigma = dt * p.tan_delta * n;
+    if dt_sigma >= q2.abs() {
+        0.0
+    } else {
+        q2 - dt_sigma * 1.0f64.copysign(q2)
+    }
 }

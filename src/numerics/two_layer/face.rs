@@ -397,7 +397,10 @@ fn grain_rows(
     // Moving: R₂ = R₁ − TΔx carries the friction; stuck: T = τ_crit = [R₁]₄ˢ cancels
     // the static part, so R₂ keeps only the dynamic part.
     let extra4 = if moving {
-        coulomb_normal_stress(p, k.h1m, h2m, cf, u2, fg.dsin_dx) * p.tan_delta * dx * q2m.signum()
+        coulomb_normal_stress(p, k.h1m, h2m, cf, u2, fg.dsin_dx)
+            * p.tan_delta
+            * dx
+            * 1.0f64.copysign(q2m)
     } else {
         0.0
     };

@@ -255,14 +255,16 @@ impl TwoLayerSolver {
         // Whether some cell would lose more of a layer than it holds (the draining
         // limiter's test, done for each cell as soon as both its faces are known).
         let mut drained = false;
+        // Φ₁, Φ₂ of the previous face (the left face of cell j).
+        let mut phi_left = (0.0, 0.0);
         for_each_face(&p, geom, state, |j, l, r, roe, s_l, s_r| {
             let f = face_flux(&p, &face_geom[j], l, r, roe, s_l, s_r, dt, dx);
             if j > 0 {
-                let fl = &faces[j - 1];
-                let out1 = lam * (max_num(f.phi1, 0.0) + max_num(-fl.phi1, 0.0));
-                let out2 = lam * (max_num(f.phi2, 0.0) + max_num(-fl.phi2, 0.0));
+                let out1 = lam * (max_num(f.phi1, 0.0) + max_num(-phi_left.0, 0.0));
+                let out2 = lam * (max_num(f.phi2, 0.0) + max_num(-phi_left.1, 0.0));
                 drained |= out1 > h1[j] || out2 > h2[j];
             }
+            phi_left = (f.phi1, f.phi2);
             faces[j] = f;
         });
         if drained {
@@ -273,31 +275,34 @@ impl TwoLayerSolver {
             }
         }
         let (cos_mean, dsin_dx) = geom.coulomb_terms();
-        let (cos_mean, dsin_dx) = (&cos_mean[..nx + 2], &dsin_dx[..nx + 2]);
-        let faces = &self.faces[..nx + 1];
         let s = state;
-        let (h1, q1) = (&mut s.h1[..nx + 2], &mut s.q1[..nx + 2]);
-        let (h2, q2) = (&mut s.h2[..nx + 2], &mut s.q2[..nx + 2]);
-        for i in 1..=nx {
-            let (fl, fr) = (&faces[i - 1], &faces[i]);
-            let h1n = h1[i] - lam * (fr.phi1 - fl.phi1);
-            let h2n = h2[i] - lam * (fr.phi2 - fl.phi2);
+        let cells = s.h1[1..=nx]
+            .iter_mut()
+            .zip(&mut s.q1[1..=nx])
+            .zip(s.h2[1..=nx].iter_mut().zip(&mut s.q2[1..=nx]))
+            .zip(cos_mean[1..=nx].iter().zip(&dsin_dx[1..=nx]));
+        for ((((h1, q1), (h2, q2)), (&cos_mean, &dsin_dx)), pair) in
+            cells.zip(self.faces[..nx + 1].windows(2))
+        {
+            let (fl, fr) = (&pair[0], &pair[1]);
+            let h1n = *h1 - lam * (fr.phi1 - fl.phi1);
+            let h2n = *h2 - lam * (fr.phi2 - fl.phi2);
             // The limiter leaves at most a round-off negative residue.
             let (h1n, h2n) = (max_num(h1n, 0.0), max_num(h2n, 0.0));
-            h1[i] = h1n;
-            h2[i] = h2n;
-            q1[i] = if h1n > H_DRY_TWO_LAYER {
-                desingularise(h1n, q1[i] - lam * (fl.d2_plus + fr.d2_minus), film)
+            *h1 = h1n;
+            *h2 = h2n;
+            *q1 = if h1n > H_DRY_TWO_LAYER {
+                desingularise(h1n, *q1 - lam * (fl.d2_plus + fr.d2_minus), film)
             } else {
                 0.0
             };
             let q2n = if h2n > H_DRY_TWO_LAYER {
-                desingularise(h2n, q2[i] - lam * (fl.d4_plus + fr.d4_minus), film)
+                desingularise(h2n, *q2 - lam * (fl.d4_plus + fr.d4_minus), film)
             } else {
                 0.0
             };
             // Second step of §4.1 (eq. 84–85).
-            q2[i] = coulomb::coulomb_cell(&p, h1n, h2n, q2n, cos_mean[i], dsin_dx[i], dt);
+            *q2 = coulomb::coulomb_cell(&p, h1n, h2n, q2n, cos_mean, dsin_dx, dt);
         }
         s.fill_ghosts(geom);
     }
