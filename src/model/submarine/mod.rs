@@ -11,7 +11,7 @@
 
 use crate::mesh::Mesh;
 use crate::model::{Diagnostics, Model};
-use crate::numerics::two_layer::{for_each_face, max_face_speed, TwoLayerGeometry, TwoLayerState};
+use crate::numerics::two_layer::{max_face_speed, sweep_speeds, TwoLayerGeometry, TwoLayerState};
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
 use crate::physics::two_layer::{layer_velocity, max_num, TwoLayerParams};
 
@@ -54,8 +54,8 @@ impl Model for Submarine {
         "submarine"
     }
 
-    /// One sweep over the faces ([`for_each_face`]): the signal speed from the face
-    /// bounds, the per-cell sums from the right cell's view of each face.
+    /// One sweep over the cells and faces ([`sweep_speeds`]): the signal speed of the
+    /// face bounds, and the per-cell sums from the same views.
     fn diagnose(&self, mesh: &Mesh, s: &TwoLayerState) -> Diagnostics {
         let g = &self.geometry;
         let nx = g.nx;
@@ -69,20 +69,16 @@ impl Model for Submarine {
             h_max: 0.0,
             non_finite_at: None,
         };
-        let (mut smax, mut front, mut all) = (0.0f64, None, 0.0);
-        for_each_face(&self.params, g, s, |j, _, c, _, a, b| {
-            smax = max_num(max_num(smax, a.abs()), b.abs());
-            if j == nx {
-                return; // the right ghost
-            }
-            // Physical cell j + 1 (the view's velocities are those of layer_velocity).
+        let (mut front, mut all) = (None, 0.0f64);
+        let smax = sweep_speeds(&self.params, g, s, |i, c| {
+            // The view's velocities are those of layer_velocity.
             all += c.h1 + c.q1 + c.h2 + c.q2;
             d.mass += c.h2 * dx;
             d.kinetic_energy += 0.5 * (c.h2 * c.u2 * c.u2 + r * c.h1 * c.u1 * c.u1) * dx;
             d.max_speed = max_num(max_num(d.max_speed, c.u1.abs()), c.u2.abs());
             d.h_max = max_num(d.h_max, c.h2);
             if c.h2 > self.front_threshold {
-                front = Some(j);
+                front = Some(i - 1);
             }
         });
         d.signal_speed = smax;

@@ -186,6 +186,28 @@ pub fn face_speeds_with(
     )
 }
 
+/// The constants of a step that every face uses: Δt, Δx and the cap
+/// f_b tan δ₀ Δx/A₂ of the Coulomb-aware correction for both values of the buoyancy
+/// factor f_b (1 − r and 1), evaluated as the face would.
+#[derive(Debug, Clone, Copy)]
+pub struct StepTerms {
+    pub dt: f64,
+    pub dx: f64,
+    cap_reduced: f64,
+    cap_full: f64,
+}
+
+impl StepTerms {
+    pub fn new(p: &TwoLayerParams, dt: f64, dx: f64) -> Self {
+        StepTerms {
+            dt,
+            dx,
+            cap_reduced: (1.0 - p.r) * p.tan_delta * dx / p.a2,
+            cap_full: 1.0 * p.tan_delta * dx / p.a2,
+        }
+    }
+}
+
 /// One layer's part of a face: its mass flux Φ and momentum 𝒟⁻, 𝒟⁺.
 #[derive(Debug, Clone, Copy, Default)]
 struct LayerOut {
@@ -211,8 +233,7 @@ pub fn face_flux(
     roe: (f64, f64),
     s_l: f64,
     s_r: f64,
-    dt: f64,
-    dx: f64,
+    step: &StepTerms,
 ) -> FaceOut {
     let (d1l, d1r) = (l.h1 * l.cos2, r.h1 * r.cos2);
     let (d2l, d2r) = (l.h2 * l.cos2, r.h2 * r.cos2);
@@ -247,7 +268,7 @@ pub fn face_flux(
     let grains = if absent(l.h2, l.q2, r.h2, r.q2) {
         LayerOut::default()
     } else {
-        grain_rows(p, &k, l, r, roe.1, dt, dx)
+        grain_rows(p, &k, l, r, roe.1, step)
     };
     FaceOut {
         phi1: water.phi,
@@ -350,10 +371,10 @@ fn grain_rows(
     l: &CellView,
     r: &CellView,
     u_roe: f64,
-    dt: f64,
-    dx: f64,
+    step: &StepTerms,
 ) -> LayerOut {
     let g = p.g;
+    let (dt, dx) = (step.dt, step.dx);
     let (fg, (d1l, d1r), (d2l, d2r), h2m) = (k.fg, k.d1, k.d2, k.h2m);
     let (mut q2l, mut q2r) = (l.q2, r.q2);
     let (mut u2l, mut u2r) = (l.u2, r.u2);
@@ -415,7 +436,11 @@ fn grain_rows(
         // units), towards stopping ū₂ within Δt. A stuck face (the τ_crit branch)
         // has no grain component in R₂, hence none in 𝒜⁻¹R₂: J₃ = J₄ = 0 below.
         let dc = if moving {
-            let cap = fb * p.tan_delta * dx / p.a2;
+            let cap = if fb == 1.0 {
+                step.cap_full
+            } else {
+                step.cap_reduced
+            };
             (u2 * dx / (g * cf * p.a2 * dt)).clamp(-cap, cap)
         } else {
             0.0

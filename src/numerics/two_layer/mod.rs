@@ -29,8 +29,8 @@ pub mod geometry;
 pub use geometry::TwoLayerGeometry;
 
 use crate::mesh::BoundaryKind;
-use crate::physics::two_layer::{max_num, TwoLayerParams, H_DRY_TWO_LAYER};
-use face::{face_flux, face_speeds_with, roe_velocities, CellView, FaceOut};
+use crate::physics::two_layer::{max_num, speed_bounds, TwoLayerParams, H_DRY_TWO_LAYER};
+use face::{face_flux, face_speeds_with, roe_velocities, CellView, FaceOut, StepTerms};
 
 /// Two-layer state with one ghost cell on each side (length nx + 2).
 #[derive(Debug, Clone, PartialEq)]
@@ -193,10 +193,48 @@ pub fn for_each_face(
 /// The largest |λ| of the face speed bounds of `state` (ghosts filled; 0 when both
 /// layers are absent everywhere): the CFL speed of the scheme.
 pub fn max_face_speed(p: &TwoLayerParams, geom: &TwoLayerGeometry, state: &TwoLayerState) -> f64 {
-    let mut smax = 0.0f64;
-    for_each_face(p, geom, state, |_, _, _, _, a, b| {
-        smax = max_num(max_num(smax, a.abs()), b.abs());
-    });
+    sweep_speeds(p, geom, state, |_, _| {})
+}
+
+/// [`max_face_speed`], calling `per_cell(i, view)` for each physical cell i = 1..=nx on
+/// the way (the model's diagnostics).
+///
+/// The face bounds are S_L = min(λ⁻_L, λ⁻_R, e), S_R = max(λ⁺_L, λ⁺_R, f) with (λ⁻, λ⁺)
+/// the cells' bounds and (e, f) those at the face means ([`face::face_speeds`]). Since
+/// λ⁻ ≤ λ⁺ and e ≤ f (also in floating point: c ≥ 0 and cos θ > 0), S_L ≤ S_R and
+/// max(|S_L|, |S_R|) = max(−S_L, S_R) = max(−λ⁻_L, −λ⁻_R, −e, λ⁺_L, λ⁺_R, f): the largest
+/// |λ| is the largest of −λ⁻, λ⁺ over the cells and of −e, f over the faces, the same
+/// number without forming S_L, S_R.
+#[inline(always)]
+pub fn sweep_speeds(
+    p: &TwoLayerParams,
+    geom: &TwoLayerGeometry,
+    state: &TwoLayerState,
+    mut per_cell: impl FnMut(usize, &CellView),
+) -> f64 {
+    let nx = geom.nx;
+    let faces = &geom.faces()[..nx + 1];
+    let cells = Cells::new(geom, state);
+    let mut left = cells.view(p, 0);
+    let mut smax = max_num(max_num(0.0, -left.lo), left.hi);
+    for (j, fg) in faces.iter().enumerate() {
+        let right = cells.view(p, j + 1);
+        smax = max_num(max_num(smax, -right.lo), right.hi);
+        let (u1, u2) = roe_velocities(&left, &right);
+        let (e, f) = speed_bounds(
+            p,
+            fg.cos,
+            0.5 * (left.h1 + right.h1),
+            0.5 * (left.h2 + right.h2),
+            u1,
+            u2,
+        );
+        smax = max_num(max_num(smax, -e), f);
+        if j < nx {
+            per_cell(j + 1, &right);
+        }
+        left = right;
+    }
     smax
 }
 
@@ -254,11 +292,12 @@ impl TwoLayerSolver {
         let (h1, h2) = (&state.h1[..nx + 2], &state.h2[..nx + 2]);
         // Whether some cell would lose more of a layer than it holds (the draining
         // limiter's test, done for each cell as soon as both its faces are known).
+        let terms = StepTerms::new(&p, dt, dx);
         let mut drained = false;
         // Φ₁, Φ₂ of the previous face (the left face of cell j).
         let mut phi_left = (0.0, 0.0);
         for_each_face(&p, geom, state, |j, l, r, roe, s_l, s_r| {
-            let f = face_flux(&p, &face_geom[j], l, r, roe, s_l, s_r, dt, dx);
+            let f = face_flux(&p, &face_geom[j], l, r, roe, s_l, s_r, &terms);
             if j > 0 {
                 let out1 = lam * (max_num(f.phi1, 0.0) + max_num(-phi_left.0, 0.0));
                 let out2 = lam * (max_num(f.phi2, 0.0) + max_num(-phi_left.1, 0.0));
