@@ -174,7 +174,9 @@ pub fn speed_bounds(
     u2: f64,
 ) -> (f64, f64) {
     let c = cos * cos * (p.g * (max_num(h1, 0.0) + p.a2 * max_num(h2, 0.0))).sqrt();
-    let (lo, hi) = if u1 <= u2 { (u1, u2) } else { (u2, u1) };
+    // Branch-free min/max (the same numbers as sorting u1, u2; a −0/+0 tie may give
+    // hi = −0, which c ≥ 0 turns into the same bound).
+    let (lo, hi) = (min_num(u1, u2), max_num(u1, u2));
     (lo * cos - c, hi * cos + c)
 }
 
