@@ -67,7 +67,6 @@ pub struct CellView {
     pub b: f64,
     pub cos: f64,
     pub cos2: f64,
-    pub sin: f64,
     /// √H₁, √H₂ (Roe weights, eq. 82) and the cell's speed bounds, computed once per step.
     pub sh1: f64,
     pub sh2: f64,
@@ -88,7 +87,6 @@ impl CellView {
         b: f64,
         cos: f64,
         cos2: f64,
-        sin: f64,
     ) -> Self {
         let u1 = crate::physics::two_layer::layer_velocity(h1, q1);
         let u2 = crate::physics::two_layer::layer_velocity(h2, q2);
@@ -103,7 +101,6 @@ impl CellView {
             b,
             cos,
             cos2,
-            sin,
             sh1: max_num(h1, 0.0).sqrt(),
             sh2: max_num(h2, 0.0).sqrt(),
             lo,

@@ -131,7 +131,6 @@ struct Cells<'a> {
     b: &'a [f64],
     cos: &'a [f64],
     cos2: &'a [f64],
-    sin: &'a [f64],
 }
 
 impl<'a> Cells<'a> {
@@ -146,7 +145,6 @@ impl<'a> Cells<'a> {
             b: &geom.b[..n],
             cos: &geom.cos[..n],
             cos2: &geom.cos2[..n],
-            sin: &geom.sin[..n],
         }
     }
 
@@ -161,7 +159,6 @@ impl<'a> Cells<'a> {
             self.b[i],
             self.cos[i],
             self.cos2[i],
-            self.sin[i],
         )
     }
 }

@@ -419,7 +419,7 @@ fn fused_sweeps_give_the_separate_passes_results_to_the_bit() {
         let p = TwoLayerParams::isotropic(0.2, 5.0 + 20.0 * rand());
         let view = |i: usize| {
             face::CellView::new(
-                &p, s.h1[i], s.q1[i], s.h2[i], s.q2[i], g.b[i], g.cos[i], g.cos2[i], g.sin[i],
+                &p, s.h1[i], s.q1[i], s.h2[i], s.q2[i], g.b[i], g.cos[i], g.cos2[i],
             )
         };
         let mut direct = 0.0f64;
