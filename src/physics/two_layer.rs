@@ -118,6 +118,28 @@ impl TwoLayerParams {
     }
 }
 
+/// max(a, b) of two numbers by one comparison. `f64::max` also returns the number
+/// when the other is NaN, which costs four more instructions per call in the hot loops
+/// (x86) and hides a NaN; here a NaN `a` is returned (b > NaN is false).
+#[inline(always)]
+pub fn max_num(a: f64, b: f64) -> f64 {
+    if b > a {
+        b
+    } else {
+        a
+    }
+}
+
+/// min(a, b) of two numbers by one comparison (see [`max_num`]).
+#[inline(always)]
+pub fn min_num(a: f64, b: f64) -> f64 {
+    if b < a {
+        b
+    } else {
+        a
+    }
+}
+
 /// Layer velocity U = Q/H, zero where the layer is absent.
 #[inline(always)]
 pub fn layer_velocity(h: f64, q: f64) -> f64 {
@@ -151,8 +173,10 @@ pub fn speed_bounds(
     u1: f64,
     u2: f64,
 ) -> (f64, f64) {
-    let c = cos * cos * (p.g * (h1.max(0.0) + p.a2 * h2.max(0.0))).sqrt();
-    let (lo, hi) = if u1 <= u2 { (u1, u2) } else { (u2, u1) };
+    let c = cos * cos * (p.g * (max_num(h1, 0.0) + p.a2 * max_num(h2, 0.0))).sqrt();
+    // Branch-free min/max (the same numbers as sorting u1, u2; a −0/+0 tie may give
+    // hi = −0, which c ≥ 0 turns into the same bound).
+    let (lo, hi) = (min_num(u1, u2), max_num(u1, u2));
     (lo * cos - c, hi * cos + c)
 }
 
@@ -212,7 +236,10 @@ pub fn coulomb_normal_stress(
     u2: f64,
     dsin_dx: f64,
 ) -> f64 {
-    (p.g * p.buoyancy_factor(h1) * h2 * cos + h2 * u2 * u2 * dsin_dx).max(0.0)
+    max_num(
+        p.g * p.buoyancy_factor(h1) * h2 * cos + h2 * u2 * u2 * dsin_dx,
+        0.0,
+    )
 }
 
 #[cfg(test)]

@@ -11,10 +11,9 @@
 
 use crate::mesh::Mesh;
 use crate::model::{Diagnostics, Model};
-use crate::numerics::two_layer::face::{face_speeds, CellView};
-use crate::numerics::two_layer::{TwoLayerGeometry, TwoLayerState};
+use crate::numerics::two_layer::{max_face_speed, sweep_speeds, TwoLayerGeometry, TwoLayerState};
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
-use crate::physics::two_layer::{layer_velocity, TwoLayerParams};
+use crate::physics::two_layer::{layer_velocity, max_num, TwoLayerParams};
 
 #[derive(Debug, Clone)]
 pub struct Submarine {
@@ -43,23 +42,9 @@ impl Submarine {
     }
 }
 
-fn view(p: &TwoLayerParams, g: &TwoLayerGeometry, s: &TwoLayerState, i: usize) -> CellView {
-    CellView::new(
-        p, s.h1[i], s.q1[i], s.h2[i], s.q2[i], g.b[i], g.cos[i], g.cos2[i], g.sin[i],
-    )
-}
-
 /// The largest |λ| over the faces, from the same bounds the scheme upwinds with.
 pub fn signal_speed(p: &TwoLayerParams, g: &TwoLayerGeometry, s: &TwoLayerState) -> f64 {
-    let mut left = view(p, g, s, 0);
-    let mut smax = 0.0f64;
-    for j in 0..=g.nx {
-        let right = view(p, g, s, j + 1);
-        let (a, b) = face_speeds(p, &left, &right);
-        smax = smax.max(a.abs()).max(b.abs());
-        left = right;
-    }
-    smax
+    max_face_speed(p, g, s)
 }
 
 impl Model for Submarine {
@@ -69,8 +54,12 @@ impl Model for Submarine {
         "submarine"
     }
 
+    /// One sweep over the cells and faces ([`sweep_speeds`]): the signal speed of the
+    /// face bounds, and the per-cell sums from the same views.
     fn diagnose(&self, mesh: &Mesh, s: &TwoLayerState) -> Diagnostics {
         let g = &self.geometry;
+        let nx = g.nx;
+        let (r, dx) = (self.params.r, mesh.dx);
         let mut d = Diagnostics {
             mass: 0.0,
             kinetic_energy: 0.0,
@@ -80,23 +69,30 @@ impl Model for Submarine {
             h_max: 0.0,
             non_finite_at: None,
         };
-        for i in 1..=g.nx {
-            let (h1, q1, h2, q2) = (s.h1[i], s.q1[i], s.h2[i], s.q2[i]);
-            if d.non_finite_at.is_none()
-                && !(h1.is_finite() && q1.is_finite() && h2.is_finite() && q2.is_finite())
-            {
-                d.non_finite_at = Some(i - 1);
+        let (mut front, mut all) = (None, 0.0f64);
+        let smax = sweep_speeds(&self.params, g, s, |i, c| {
+            // The view's velocities are those of layer_velocity.
+            all += c.h1 + c.q1 + c.h2 + c.q2;
+            d.mass += c.h2 * dx;
+            d.kinetic_energy += 0.5 * (c.h2 * c.u2 * c.u2 + r * c.h1 * c.u1 * c.u1) * dx;
+            d.max_speed = max_num(max_num(d.max_speed, c.u1.abs()), c.u2.abs());
+            d.h_max = max_num(d.h_max, c.h2);
+            if c.h2 > self.front_threshold {
+                front = Some(i - 1);
             }
-            let (u1, u2) = (layer_velocity(h1, q1), layer_velocity(h2, q2));
-            d.mass += h2 * mesh.dx;
-            d.kinetic_energy += 0.5 * (h2 * u2 * u2 + self.params.r * h1 * u1 * u1) * mesh.dx;
-            d.max_speed = d.max_speed.max(u1.abs()).max(u2.abs());
-            d.h_max = d.h_max.max(h2);
-            if h2 > self.front_threshold {
-                d.front_x = mesh.x[i - 1];
-            }
+        });
+        d.signal_speed = smax;
+        d.front_x = front.map_or(f64::NAN, |i| mesh.x[i]);
+        // A non-finite value poisons the sum; only then search for the cell (a sum of
+        // finite values that overflows finds none).
+        if !all.is_finite() {
+            d.non_finite_at = (1..=nx).position(|i| {
+                !(s.h1[i].is_finite()
+                    && s.q1[i].is_finite()
+                    && s.h2[i].is_finite()
+                    && s.q2[i].is_finite())
+            });
         }
-        d.signal_speed = signal_speed(&self.params, g, s);
         d
     }
 

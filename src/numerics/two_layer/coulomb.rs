@@ -6,7 +6,8 @@
 //!   N_i = g f_b H₂,i* ½(cos θ_{i−½} + cos θ_{i+½})
 //!         + H₂,i* (U₂*)² (sin θ_{i+½} − sin θ_{i−½})/Δx,   clamped ≥ 0,
 //!
-//! so the friction can stop a mass but never reverse it ([`coulomb_update`]).
+//! so the friction can stop a mass but never reverse it (as
+//! [`crate::numerics::friction::coulomb_update`]).
 //! N_i tan δ₀ is σ*_i/cos θ_i of eq. (85) plus the curvature part T₂* of eq. (84), with
 //! the cell's own H₂ where the paper averages the two face means: step 1 gives each
 //! cell the static force g cos θ̄ H₂,i Δ(…)/2 of each face (own-depth split, [`super::face`]),
@@ -21,36 +22,58 @@
 //! (1 − r) g cos θ(1 − cos θ) tan δ₀.
 
 use super::{TwoLayerGeometry, TwoLayerState};
-use crate::numerics::friction::coulomb_update;
 use crate::physics::two_layer::{
     coulomb_normal_stress, layer_velocity, TwoLayerParams, H_DRY_TWO_LAYER,
 };
 
-/// Applies the stopping rule to every physical cell (ghosts must be filled).
+/// Applies the stopping rule to every physical cell (ghosts must be filled). The
+/// solver applies [`coulomb_cell`] inside its update pass instead (the same operations).
 pub fn coulomb_step(
     p: &TwoLayerParams,
     geom: &TwoLayerGeometry,
     state: &mut TwoLayerState,
     dt: f64,
 ) {
-    let nx = geom.nx;
-    let dx = geom.dx;
-    for i in 1..=nx {
-        let q = state.q2[i];
-        if q == 0.0 {
-            continue;
-        }
-        let h = state.h2[i];
-        if h <= H_DRY_TWO_LAYER {
-            state.q2[i] = 0.0;
-            continue;
-        }
-        let cl = 0.5 * (geom.cos[i - 1] + geom.cos[i]);
-        let cr = 0.5 * (geom.cos[i] + geom.cos[i + 1]);
-        let sl = 0.5 * (geom.sin[i - 1] + geom.sin[i]);
-        let sr = 0.5 * (geom.sin[i] + geom.sin[i + 1]);
-        let u = layer_velocity(h, q);
-        let n = coulomb_normal_stress(p, state.h1[i], h, 0.5 * (cl + cr), u, (sr - sl) / dx);
-        state.q2[i] = coulomb_update(q, dt * p.tan_delta * n);
+    let (cos_mean, dsin_dx) = geom.coulomb_terms();
+    for i in 1..=geom.nx {
+        state.q2[i] = coulomb_cell(
+            p,
+            state.h1[i],
+            state.h2[i],
+            state.q2[i],
+            cos_mean[i],
+            dsin_dx[i],
+            dt,
+        );
+    }
+}
+
+/// Q₂ⁿ⁺¹ of one cell from its H₁, H₂, Q₂* and the bed terms ½(cos θ_{i−½} + cos θ_{i+½})
+/// and (sin θ_{i+½} − sin θ_{i−½})/Δx ([`TwoLayerGeometry::coulomb_terms`]).
+#[inline(always)]
+pub fn coulomb_cell(
+    p: &TwoLayerParams,
+    h1: f64,
+    h2: f64,
+    q2: f64,
+    cos_mean: f64,
+    dsin_dx: f64,
+    dt: f64,
+) -> f64 {
+    if q2 == 0.0 {
+        return q2;
+    }
+    if h2 <= H_DRY_TWO_LAYER {
+        return 0.0;
+    }
+    let u = layer_velocity(h2, q2);
+    let n = coulomb_normal_stress(p, h1, h2, cos_mean, u, dsin_dx);
+    // coulomb_update with copysign for signum (the same for every number; one
+    // instruction instead of signum's NaN test).
+    let dt_sigma = dt * p.tan_delta * n;
+    if dt_sigma >= q2.abs() {
+        0.0
+    } else {
+        q2 - dt_sigma * 1.0f64.copysign(q2)
     }
 }

@@ -7,6 +7,12 @@
 //! Arrays have one ghost cell on each side (index 0 and nx + 1). A ghost copies the
 //! edge cell's bed and angle, so the boundary face carries no bed jump: a free
 //! (zero-gradient) boundary lets a uniform state leave unchanged, a wall mirrors it.
+//!
+//! The face means and differences of cos θ, cos²θ and sin θ that the face kernel
+//! ([`super::face`]) and the Coulomb step ([`super::coulomb`]) use are computed here
+//! once, with the same operations as those kernels would do per step (so results do
+//! not depend on where they are computed): [`FaceGeometry`] per face, and per cell the
+//! mean cos θ and ∂ₓ sin θ of the Coulomb step.
 
 use crate::mesh::BoundaryKind;
 
@@ -23,6 +29,25 @@ pub struct TwoLayerGeometry {
     pub sin: Vec<f64>,
     pub left: BoundaryKind,
     pub right: BoundaryKind,
+    /// Per face j (between cells j and j + 1, nx + 1 faces): derived from `cos`,
+    /// `cos2`, `sin` by [`TwoLayerGeometry::new`] (do not edit those afterwards).
+    faces: Vec<FaceGeometry>,
+    /// Per cell with ghosts (nx + 2, interior filled): ½(cos θ_{i−½} + cos θ_{i+½}) and
+    /// (sin θ_{i+½} − sin θ_{i−½})/Δx of the Coulomb step.
+    coulomb_cos: Vec<f64>,
+    coulomb_dsin: Vec<f64>,
+}
+
+/// What a face needs of the bed angle: the means cos θ_{j+½} = ½(cos θ_j + cos θ_{j+1}),
+/// (cos²θ)_{j+½} and its inverse, and the differences Δcos θ, Δcos²θ, Δsin θ/Δx.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FaceGeometry {
+    pub cos: f64,
+    pub cos2: f64,
+    pub inv_cos2: f64,
+    pub dcos: f64,
+    pub dcos2: f64,
+    pub dsin_dx: f64,
 }
 
 impl TwoLayerGeometry {
@@ -56,6 +81,29 @@ impl TwoLayerGeometry {
             cos2[g] = cos2[e];
             sin[g] = sin[e];
         }
+        let faces = (0..=nx)
+            .map(|j| {
+                let c2f = 0.5 * (cos2[j] + cos2[j + 1]);
+                FaceGeometry {
+                    cos: 0.5 * (cos[j] + cos[j + 1]),
+                    cos2: c2f,
+                    inv_cos2: 1.0 / c2f,
+                    dcos: cos[j + 1] - cos[j],
+                    dcos2: cos2[j + 1] - cos2[j],
+                    dsin_dx: (sin[j + 1] - sin[j]) / dx,
+                }
+            })
+            .collect();
+        let mut coulomb_cos = vec![0.0; nx + 2];
+        let mut coulomb_dsin = vec![0.0; nx + 2];
+        for i in 1..=nx {
+            let cl = 0.5 * (cos[i - 1] + cos[i]);
+            let cr = 0.5 * (cos[i] + cos[i + 1]);
+            let sl = 0.5 * (sin[i - 1] + sin[i]);
+            let sr = 0.5 * (sin[i] + sin[i + 1]);
+            coulomb_cos[i] = 0.5 * (cl + cr);
+            coulomb_dsin[i] = (sr - sl) / dx;
+        }
         TwoLayerGeometry {
             nx,
             dx,
@@ -66,7 +114,22 @@ impl TwoLayerGeometry {
             sin,
             left,
             right,
+            faces,
+            coulomb_cos,
+            coulomb_dsin,
         }
+    }
+
+    /// The nx + 1 faces' angle terms.
+    #[inline(always)]
+    pub fn faces(&self) -> &[FaceGeometry] {
+        &self.faces
+    }
+
+    /// Mean cos θ and ∂ₓ sin θ of the Coulomb step at each cell (with ghosts, nx + 2).
+    #[inline(always)]
+    pub fn coulomb_terms(&self) -> (&[f64], &[f64]) {
+        (&self.coulomb_cos, &self.coulomb_dsin)
     }
 
     /// Centre of physical cell i (1-based, as in the arrays).
