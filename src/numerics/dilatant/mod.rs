@@ -15,6 +15,7 @@
 pub mod flux;
 pub mod reconstruction;
 pub mod source;
+pub mod split;
 pub mod stabilisation;
 pub mod state;
 pub mod step;

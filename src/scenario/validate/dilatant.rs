@@ -12,7 +12,7 @@ use super::granular::coefficient;
 use crate::numerics::dilatant::flux::FluxOptions;
 use crate::numerics::dilatant::source::DilatancyUpdate;
 use crate::numerics::dilatant::stabilisation::Viscosity;
-use crate::numerics::dilatant::step::DilatantOptions;
+use crate::numerics::dilatant::step::{DilatantOptions, SchemeKind};
 use crate::physics::dilatancy::{DilatantLaw, PhiEq};
 
 /// The dilatant model's keys (`[dilatancy]`, `initial.phi`, the μ(I) law of
@@ -173,7 +173,17 @@ pub(super) fn dilatancy(
         mu_w,
         width,
     };
+    let scheme = choice(
+        "dilatancy.scheme",
+        d.scheme.as_deref(),
+        SchemeKind::Split,
+        &[
+            ("split", SchemeKind::Split),
+            ("appendix_b", SchemeKind::AppendixB),
+        ],
+    )?;
     let options = DilatantOptions {
+        scheme,
         flux: FluxOptions { alpha, lambda },
         viscosity: Viscosity { xi },
         update,
