@@ -33,9 +33,7 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
     let (stage, rest_depth, rest_speed): (Box<dyn Stage<DilatantState>>, f64, f64) =
         match spec.options.scheme {
             SchemeKind::Split => {
-                let phi_max = phi.iter().cloned().fold(0.0, f64::max);
-                let scheme =
-                    SplitScheme::new(spec.law, spec.options, mesh.nx, scn.material.phi, phi_max);
+                let scheme = SplitScheme::new(spec.law, spec.options, mesh.nx, scn.material.phi);
                 (Box::new(scheme), 0.0, 0.0)
             }
             SchemeKind::AppendixB => (

@@ -27,7 +27,7 @@
 //!    𝓕_{i−1/2})) rearranged: ∫φh is conserved to round-off, φ_i^{n+1} is a convex
 //!    combination of φ_{i−1}, φ_i, φ_{i+1} while the outflow of a cell does not exceed
 //!    its content, and a uniform φ stays uniform bit for bit (every difference is 0).
-//!    Cells left with h ≤ 10⁻¹⁰ m keep their φ (seed 002 eq. 3.14 is not needed: the
+//!    Cells left with h = 0 keep their φ (seed 002 eq. 3.14 is not needed: the
 //!    hyperbolic step never asks a dry cell for φ).
 //! 3. **cell pass**: the φ-gradient pressure −g_c h²/(2φ) (φ_{i+1} − φ_{i−1})/(2Δx)
 //!    (a neighbour with h ≤ 10⁻¹⁰ m counts with the cell's own φ); the friction step of
@@ -85,51 +85,48 @@ pub struct SplitScheme {
     cons: [Vec<f64>; 3],
 }
 
-/// The μ(I) law of the hyperbolic step's Coulomb-aware reconstruction: Savage–Hutter's
-/// (φ = `phi_ref`, the material's) with μ_1, μ_2 raised by the largest static dilatant
-/// excess max(0, K(φ_max − φ_stat)); unchanged for K = 0.
-pub fn reconstruction_law(law: &DilatantLaw, phi_ref: f64, phi_max: f64) -> MuI {
-    let excess = (law.k * (phi_max - law.phi_stat)).max(0.0);
-    let (mu_s, mu_2) = if excess > 0.0 {
-        (law.mu_1 + excess, law.mu_2 + excess)
-    } else {
-        (law.mu_1, law.mu_2)
-    };
+/// The μ(I) law of the hyperbolic step's Coulomb-aware reconstruction: the
+/// Savage–Hutter law (φ = `phi_ref`, the material's), whatever K.
+pub fn reconstruction_law(law: &DilatantLaw, phi_ref: f64) -> MuI {
     MuI {
-        mu_s,
-        mu_2,
+        mu_s: law.mu_1,
+        mu_2: law.mu_2,
         i0: law.i0,
         d_s: law.d,
         phi: phi_ref,
     }
 }
 
-/// μ_eff of a cell with speed |v|, thickness h and fraction φ: μ(I) computed with the
-/// operations of the Savage–Hutter friction step (`MuI::mu` with p/ρ = g_c h), plus
-/// tan ψ = K(φ − φ_eq(I)) when K > 0 (cut at 0, eq. 2.13) and μ_w h/W with walls (4.1).
+/// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ:
+/// first the monolayer's (`friction.rs`) with μ(I) (I of eq. 2.10–2.11 with the cell's
+/// φ, the operations of `MuI::mu` with p/ρ = g_c h) plus μ_w h/W with walls (4.1); then,
+/// for K > 0 and a mass still moving, the dilatant part tan ψ = K(φ − φ_eq(I)) (2.13–2.14,
+/// cut so that μ_eff ≥ 0): a further Coulomb impulse when ψ > 0, a push along the motion
+/// when ψ < 0. A moving mass thus feels μ_eff g_c h; a mass is stopped when the impulse
+/// of μ(I) (ψ < 0) or of μ_eff (ψ > 0) exceeds its momentum.
 #[inline(always)]
-pub fn cell_friction(law: &DilatantLaw, g_c: f64, speed: f64, h: f64, phi: f64) -> f64 {
+pub fn cell_friction(law: &DilatantLaw, g_c: f64, dt: f64, h: f64, q: f64, phi: f64) -> f64 {
+    let speed = velocity(h, q).abs();
     let i = inertial_number(law.d, phi, speed, h, g_c * h);
     let mut mu = law.mu_of_i(i);
-    if law.k != 0.0 {
-        mu = (mu + law.tan_psi(phi, law.phi_eq(i))).max(0.0);
-    }
     if law.mu_w > 0.0 {
         mu += law.mu_w * h / law.width;
     }
-    mu
+    let q = coulomb_update(q, dt * mu * g_c * h);
+    if law.k == 0.0 || q == 0.0 {
+        return q;
+    }
+    let tan_psi = law.tan_psi(phi, law.phi_eq(i)).max(-mu);
+    if tan_psi >= 0.0 {
+        coulomb_update(q, dt * tan_psi * g_c * h)
+    } else {
+        q - dt * tan_psi * g_c * h * q.signum()
+    }
 }
 
 impl SplitScheme {
-    /// `phi_ref`: the material's φ (the Savage–Hutter law's); `phi_max`: the largest
-    /// initial φ.
-    pub fn new(
-        law: DilatantLaw,
-        opt: DilatantOptions,
-        nx: usize,
-        phi_ref: f64,
-        phi_max: f64,
-    ) -> Self {
+    /// `phi_ref`: the material's φ (the Savage–Hutter law's).
+    pub fn new(law: DilatantLaw, opt: DilatantOptions, nx: usize, phi_ref: f64) -> Self {
         let shell = LayeredState {
             nx,
             layers: 1,
@@ -142,7 +139,7 @@ impl SplitScheme {
         SplitScheme {
             law,
             opt,
-            hyperbolic: HydrostaticStep::new(reconstruction_law(&law, phi_ref, phi_max), nx),
+            hyperbolic: HydrostaticStep::new(reconstruction_law(&law, phi_ref), nx),
             shell,
             phi_new: vec![0.0; nx + 2],
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
@@ -193,7 +190,7 @@ impl SplitScheme {
         let upwind = |k: usize| if flux[k] > 0.0 { phi[k] } else { phi[k + 1] };
         for i in 1..=nx {
             let (hi, p) = (h[i], phi[i]);
-            if hi <= H_DRY {
+            if hi <= 0.0 {
                 self.phi_new[i] = p;
                 continue;
             }
@@ -240,8 +237,7 @@ impl SplitScheme {
                 if !wet {
                     q = 0.0;
                 } else {
-                    let mu = cell_friction(law, g_c, velocity(hi, q).abs(), hi, p);
-                    q = coulomb_update(q, dt * mu * g_c * hi);
+                    q = cell_friction(law, g_c, dt, hi, q, p);
                 }
             }
             hu[i] = q;
