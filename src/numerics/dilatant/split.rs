@@ -50,10 +50,8 @@
 //! (the run retries with a smaller Δt); φ outside (0, 1) after a sub-step is an error
 //! naming the place and the stage. Either way the state is left as it was at t^n.
 
-use super::flux::total_topography_jump;
-use super::flux::FaceGrid;
-use super::reconstruction::Side;
-use super::source::relax_fraction;
+use super::flux::proj_friction;
+use super::source::relax_towards;
 use super::stabilisation::diffuse;
 use super::state::DilatantState;
 use super::step::DilatantOptions;
@@ -65,6 +63,7 @@ use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
 use crate::physics::rheology::{inertial_number, MuI};
 use crate::physics::shallow::{velocity, H_DRY};
+use std::ops::RangeInclusive;
 
 /// The split dilatant stepper with its work arrays (allocated once).
 #[derive(Debug)]
@@ -81,6 +80,8 @@ pub struct SplitScheme {
     /// Stabilisation: per face drive max(0, vΔz) and rate; (φh, φhv, φ^α h).
     drive: Vec<f64>,
     rate: Vec<f64>,
+    /// μ_eff of every wet cell after the friction step (nx + 2), K > 0 only.
+    mu: Vec<f64>,
     scratch: Vec<f64>,
     cons: [Vec<f64>; 3],
 }
@@ -104,8 +105,18 @@ pub fn reconstruction_law(law: &DilatantLaw, phi_ref: f64) -> MuI {
 /// cut so that μ_eff ≥ 0): a further Coulomb impulse when ψ > 0, a push along the motion
 /// when ψ < 0. A moving mass thus feels μ_eff g_c h; a mass is stopped when the impulse
 /// of μ(I) (ψ < 0) or of μ_eff (ψ > 0) exceeds its momentum.
+///
+/// Returns the new discharge, the inertial number I of the incoming discharge and, for
+/// K > 0, μ_eff at that I (μ(I) + walls where the mass stops).
 #[inline(always)]
-pub fn cell_friction(law: &DilatantLaw, g_c: f64, dt: f64, h: f64, q: f64, phi: f64) -> f64 {
+pub fn cell_friction(
+    law: &DilatantLaw,
+    g_c: f64,
+    dt: f64,
+    h: f64,
+    q: f64,
+    phi: f64,
+) -> (f64, f64, f64) {
     let speed = velocity(h, q).abs();
     let i = inertial_number(law.d, phi, speed, h, g_c * h);
     let mut mu = law.mu_of_i(i);
@@ -114,14 +125,15 @@ pub fn cell_friction(law: &DilatantLaw, g_c: f64, dt: f64, h: f64, q: f64, phi: 
     }
     let q = coulomb_update(q, dt * mu * g_c * h);
     if law.k == 0.0 || q == 0.0 {
-        return q;
+        return (q, i, mu);
     }
     let tan_psi = law.tan_psi(phi, law.phi_eq(i)).max(-mu);
-    if tan_psi >= 0.0 {
+    let q = if tan_psi >= 0.0 {
         coulomb_update(q, dt * tan_psi * g_c * h)
     } else {
         q - dt * tan_psi * g_c * h * q.signum()
-    }
+    };
+    (q, i, mu + tan_psi)
 }
 
 impl SplitScheme {
@@ -144,6 +156,7 @@ impl SplitScheme {
             phi_new: vec![0.0; nx + 2],
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
+            mu: vec![0.0; nx + 2],
             rate: vec![0.0; nx + 1],
             scratch: vec![0.0; nx + 1],
             cons: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
@@ -172,53 +185,77 @@ impl SplitScheme {
     fn advance(&mut self, mesh: &Mesh, s: &DilatantState, dt: f64) -> Result<(), StageError> {
         self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
         let r = dt / mesh.dx;
-        self.transport(mesh, &s.phi, r)?;
+        self.phi_new.copy_from_slice(&s.phi);
+        // Cells holding mass after the step: every pass below is restricted to them (a
+        // cell outside keeps h = 0, hv = 0 and its φ).
+        let nx = mesh.nx;
+        let h = &self.shell.h[1..=nx];
+        let Some(first) = h.iter().position(|&h| h > 0.0) else {
+            return Ok(());
+        };
+        let last = nx - 1 - h.iter().rev().position(|&h| h > 0.0).unwrap_or(0);
+        let wet = first + 1..=last + 1;
+        self.transport(mesh, &s.phi, r, wet.clone())?;
         fill_fraction_ghosts(&mut self.phi_new);
-        self.cells(mesh, dt)?;
+        self.cells(mesh, dt, wet.clone())?;
         self.shell.fill_ghosts(mesh);
         if self.law.k != 0.0 && !self.opt.viscosity.is_off() {
-            self.stabilise(mesh, dt)?;
+            self.stabilise(mesh, dt, wet)?;
         }
         Ok(())
     }
 
     /// Step 2: φ^{n+1} from the mass fluxes of the hyperbolic step.
-    fn transport(&mut self, mesh: &Mesh, phi: &[f64], r: f64) -> Result<(), StageError> {
-        let nx = self.shell.nx;
-        let flux = self.hyperbolic.mass_flux();
-        let h = &self.shell.h;
-        let upwind = |k: usize| if flux[k] > 0.0 { phi[k] } else { phi[k + 1] };
-        for i in 1..=nx {
-            let (hi, p) = (h[i], phi[i]);
-            if hi <= 0.0 {
-                self.phi_new[i] = p;
+    fn transport(
+        &mut self,
+        mesh: &Mesh,
+        phi: &[f64],
+        r: f64,
+        wet: RangeInclusive<usize>,
+    ) -> Result<(), StageError> {
+        let (lo, hi) = (*wet.start(), *wet.end());
+        // Faces lo − 1..=hi, cells lo − 1..=hi + 1: equal-length windows, no bounds checks.
+        let flux = &self.hyperbolic.mass_flux()[lo - 1..=hi];
+        let phi = &phi[lo - 1..=hi + 1];
+        let h = &self.shell.h[lo..=hi];
+        let out = &mut self.phi_new[lo..=hi];
+        let faces = flux.windows(2).zip(phi.windows(3));
+        for (j, ((f, p3), (&hj, next))) in faces.zip(h.iter().zip(out)).enumerate() {
+            let p = p3[1];
+            if hj <= 0.0 {
                 continue;
             }
-            let (f_in, f_out) = (flux[i - 1], flux[i]);
-            let change = f_out * (upwind(i) - p) - f_in * (upwind(i - 1) - p);
-            let next = p - r * change / hi;
-            if !(next > 0.0 && next < 1.0) {
+            let up_out = if f[1] > 0.0 { p } else { p3[2] };
+            let up_in = if f[0] > 0.0 { p3[0] } else { p };
+            let change = f[1] * (up_out - p) - f[0] * (up_in - p);
+            let value = p - r * change / hj;
+            if !(value > 0.0 && value < 1.0) {
                 return Err(StageError::Inadmissible {
-                    x: mesh.x[i - 1],
+                    x: mesh.x[lo + j - 1],
                     quantity: "volume fraction φ (transport)",
-                    value: next,
+                    value,
                 });
             }
-            self.phi_new[i] = next;
+            *next = value;
         }
         Ok(())
     }
 
     /// Step 3: φ-gradient pressure, friction, dilatancy, cell by cell.
-    fn cells(&mut self, mesh: &Mesh, dt: f64) -> Result<(), StageError> {
+    fn cells(
+        &mut self,
+        mesh: &Mesh,
+        dt: f64,
+        wet: RangeInclusive<usize>,
+    ) -> Result<(), StageError> {
         let (nx, g_c, dx) = (self.shell.nx, mesh.g_n, mesh.dx);
         let law = &self.law;
         let dilatant = law.k != 0.0;
         let (h, hu, phi) = (&mut self.shell.h, &mut self.shell.hu, &mut self.phi_new);
         let gradient_factor = 0.5 * g_c * dt / (2.0 * dx);
         // φ and wetness of the left neighbour before its dilatancy step.
-        let mut left = (phi[0], h[0] > H_DRY);
-        for i in 1..=nx {
+        let mut left = (phi[wet.start() - 1], h[wet.start() - 1] > H_DRY);
+        for i in wet {
             let hi = h[i];
             let p = phi[i];
             let wet = hi > H_DRY;
@@ -233,57 +270,90 @@ impl SplitScheme {
             }
             left = (p, wet);
             // The friction step of the monolayer (friction.rs), with μ_eff.
+            let q_in = q;
+            let (mut i_in, mut mu) = (0.0, f64::NAN);
             if q != 0.0 {
                 if !wet {
                     q = 0.0;
                 } else {
-                    q = cell_friction(law, g_c, dt, hi, q, p);
+                    (q, i_in, mu) = cell_friction(law, g_c, dt, hi, q, p);
                 }
             }
             hu[i] = q;
-            if dilatant && q != 0.0 && wet {
-                let v = q / hi;
-                let next = relax_fraction(law, self.opt.update, g_c, dt, hi, v, p);
-                if !(next > 0.0 && next < 1.0) {
-                    return Err(StageError::Inadmissible {
-                        x: mesh.x[i - 1],
-                        quantity: "volume fraction φ (dilatancy step)",
-                        value: next,
-                    });
+            if dilatant && wet {
+                if mu.is_nan() {
+                    // At rest: μ_eff = μ_1 + K(φ − φ_stat) (I = 0), plus the walls.
+                    mu = (law.mu_1 + law.tan_psi(p, law.phi_stat)).max(0.0);
+                    if law.mu_w > 0.0 {
+                        mu += law.mu_w * hi / law.width;
+                    }
                 }
-                if next != p {
-                    let h_next = p * hi / next;
-                    phi[i] = next;
-                    h[i] = h_next;
-                    hu[i] = h_next * v;
+                // μ_eff at the incoming state, for the stabilisation's faces.
+                self.mu[i] = mu;
+                // I scales with |v| at fixed h and φ (eq. 2.10, 2.15).
+                let i_out = if q == 0.0 {
+                    0.0
+                } else {
+                    i_in * (q / q_in).abs()
+                };
+                let phi_eq = law.phi_eq(i_out);
+                if q != 0.0 {
+                    // (3.15)–(3.19) with γ̇* = (5/2)|v*|/h*, φ_eq* = φ_eq(I*).
+                    let v = q / hi;
+                    let rate = 2.5 * v.abs() / hi;
+                    let next = relax_towards(law, self.opt.update, dt, rate, p, phi_eq);
+                    if !(next > 0.0 && next < 1.0) {
+                        return Err(StageError::Inadmissible {
+                            x: mesh.x[i - 1],
+                            quantity: "volume fraction φ (dilatancy step)",
+                            value: next,
+                        });
+                    }
+                    if next != p {
+                        let h_next = p * hi / next;
+                        phi[i] = next;
+                        h[i] = h_next;
+                        hu[i] = h_next * v;
+                    }
                 }
             }
         }
         fill_fraction_ghosts(phi);
+        self.mu[0] = self.mu[1];
+        self.mu[nx + 1] = self.mu[nx];
         Ok(())
     }
 
     /// Step 4: the viscosity (3.20)–(3.22) on wet–wet faces.
-    fn stabilise(&mut self, mesh: &Mesh, dt: f64) -> Result<(), StageError> {
+    fn stabilise(
+        &mut self,
+        mesh: &Mesh,
+        dt: f64,
+        wet: RangeInclusive<usize>,
+    ) -> Result<(), StageError> {
         let (nx, g_c, dx) = (self.shell.nx, mesh.g_n, mesh.dx);
         let alpha = self.opt.flux.alpha;
         let (h, hu, phi) = (&self.shell.h, &self.shell.hu, &self.phi_new);
         let mut largest: f64 = 0.0;
         let (mut first, mut last) = (usize::MAX, 0);
-        let grid = FaceGrid { g_c, dx, dt };
-        for k in 0..=nx {
+        let alpha_term = 0.5 / (alpha - 1.0);
+        // Faces next to the wet range have no drive; those inside may.
+        self.drive[wet.start() - 1] = 0.0;
+        self.drive[*wet.end()] = 0.0;
+        for k in *wet.start()..*wet.end() {
             self.drive[k] = 0.0;
-            if h[k] <= H_DRY || h[k + 1] <= H_DRY {
+            let (hl, hr) = (h[k], h[k + 1]);
+            if hl <= H_DRY || hr <= H_DRY || (hu[k] == 0.0 && hu[k + 1] == 0.0) {
                 continue;
             }
-            let side = |j: usize| Side {
-                h: h[j],
-                v: hu[j] / h[j],
-                phi: phi[j],
-            };
-            let (l, r) = (side(k), side(k + 1));
+            // v_interf (3.8), X_interf Δx (3.12), μ_eff^interf as the mean of the cells'.
+            let (ml, mr) = (phi[k] * hl, phi[k + 1] * hr);
+            let v = (phi[k] * hu[k] + phi[k + 1] * hu[k + 1]) / (ml + mr);
             let db_hat = mesh.z[k + 1] - mesh.z[k];
-            let (dz, v) = total_topography_jump(&self.law, l, r, db_hat, grid, alpha);
+            let (al, ar) = (phi_power(phi[k], alpha), phi_power(phi[k + 1], alpha));
+            let x = (hl - hr - db_hat + alpha_term * (hl + hr) * (al - ar) / (al + ar)) / dx;
+            let mu = 0.5 * (self.mu[k] + self.mu[k + 1]);
+            let dz = db_hat + dx * proj_friction(mu, x, v / (g_c * dt));
             let d = (v * dz).max(0.0);
             if d > 0.0 {
                 self.drive[k] = d;

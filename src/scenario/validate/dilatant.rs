@@ -129,7 +129,18 @@ pub(super) fn dilatancy(
         );
     }
     let lambda = non_negative("dilatancy.lambda", d.lambda.unwrap_or(0.0))?;
+    let scheme = choice(
+        "dilatancy.scheme",
+        d.scheme.as_deref(),
+        SchemeKind::Split,
+        &[
+            ("split", SchemeKind::Split),
+            ("appendix_b", SchemeKind::AppendixB),
+        ],
+    )?;
     let xi = match &d.xi {
+        // The split scheme needs no stabilisation (docs/numerics.md); Appendix B does.
+        None if scheme == SchemeKind::Split => [0.0; 3],
         None => Viscosity::default().xi,
         Some(v) if v.len() == 3 => {
             for x in v {
@@ -173,15 +184,6 @@ pub(super) fn dilatancy(
         mu_w,
         width,
     };
-    let scheme = choice(
-        "dilatancy.scheme",
-        d.scheme.as_deref(),
-        SchemeKind::Split,
-        &[
-            ("split", SchemeKind::Split),
-            ("appendix_b", SchemeKind::AppendixB),
-        ],
-    )?;
     let options = DilatantOptions {
         scheme,
         flux: FluxOptions { alpha, lambda },
