@@ -251,6 +251,7 @@ impl SplitScheme {
         let (nx, g_c, dx) = (self.shell.nx, mesh.g_n, mesh.dx);
         let law = &self.law;
         let dilatant = law.k != 0.0;
+        let stabilise = !self.opt.viscosity.is_off();
         let (h, hu, phi) = (&mut self.shell.h, &mut self.shell.hu, &mut self.phi_new);
         let gradient_factor = 0.5 * g_c * dt / (2.0 * dx);
         // φ and wetness of the left neighbour before its dilatancy step.
@@ -281,40 +282,40 @@ impl SplitScheme {
             }
             hu[i] = q;
             if dilatant && wet {
-                if mu.is_nan() {
-                    // At rest: μ_eff = μ_1 + K(φ − φ_stat) (I = 0), plus the walls.
-                    mu = (law.mu_1 + law.tan_psi(p, law.phi_stat)).max(0.0);
-                    if law.mu_w > 0.0 {
-                        mu += law.mu_w * hi / law.width;
+                if stabilise {
+                    if mu.is_nan() {
+                        // At rest: μ_eff = μ_1 + K(φ − φ_stat) (I = 0), plus the walls.
+                        mu = (law.mu_1 + law.tan_psi(p, law.phi_stat)).max(0.0);
+                        if law.mu_w > 0.0 {
+                            mu += law.mu_w * hi / law.width;
+                        }
                     }
+                    // μ_eff at the incoming state, for the stabilisation's faces.
+                    self.mu[i] = mu;
                 }
-                // μ_eff at the incoming state, for the stabilisation's faces.
-                self.mu[i] = mu;
+                if q == 0.0 {
+                    continue;
+                }
                 // I scales with |v| at fixed h and φ (eq. 2.10, 2.15).
-                let i_out = if q == 0.0 {
-                    0.0
-                } else {
-                    i_in * (q / q_in).abs()
-                };
+                let i_out = i_in * (q / q_in).abs();
                 let phi_eq = law.phi_eq(i_out);
-                if q != 0.0 {
-                    // (3.15)–(3.19) with γ̇* = (5/2)|v*|/h*, φ_eq* = φ_eq(I*).
-                    let v = q / hi;
-                    let rate = 2.5 * v.abs() / hi;
-                    let next = relax_towards(law, self.opt.update, dt, rate, p, phi_eq);
-                    if !(next > 0.0 && next < 1.0) {
-                        return Err(StageError::Inadmissible {
-                            x: mesh.x[i - 1],
-                            quantity: "volume fraction φ (dilatancy step)",
-                            value: next,
-                        });
-                    }
-                    if next != p {
-                        let h_next = p * hi / next;
-                        phi[i] = next;
-                        h[i] = h_next;
-                        hu[i] = h_next * v;
-                    }
+                // (3.15)–(3.19) with γ̇* = (5/2)|v*|/h*, φ_eq* = φ_eq(I*).
+                let inv_h = 1.0 / hi;
+                let v = q * inv_h;
+                let rate = 2.5 * v.abs() * inv_h;
+                let next = relax_towards(law, self.opt.update, dt, rate, p, phi_eq);
+                if !(next > 0.0 && next < 1.0) {
+                    return Err(StageError::Inadmissible {
+                        x: mesh.x[i - 1],
+                        quantity: "volume fraction φ (dilatancy step)",
+                        value: next,
+                    });
+                }
+                if next != p {
+                    let h_next = p * hi / next;
+                    phi[i] = next;
+                    h[i] = h_next;
+                    hu[i] = h_next * v;
                 }
             }
         }
