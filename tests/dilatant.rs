@@ -749,7 +749,7 @@ fn scenario_series(file: &str, sets: &[String]) -> (Vec<Row>, f64) {
 #[test]
 fn section_4_3_with_the_default_scheme() {
     // Seed 002 §4.3 with the shipped scenarios (Δx = 5 mm, split scheme), K = 0, dense
-    // and loose, at 0° (to rest) and 22° (to 0.9 s). Asserted, as in the paper:
+    // and loose, at 0° (to rest) and 22° (to 1.8 s). Asserted, as in the paper:
     // - max thickness dense > K = 0 > loose at every snapshot from 0.24 s (Fig. 5–6),
     //   dense = K = 0 = 0.14 m while neither rear has dropped;
     // - the dense mass dilates where it starts to flow (min φ at 0.06 s well below 0.62);
@@ -759,7 +759,7 @@ fn section_4_3_with_the_default_scheme() {
     //   dense front is slower early on"; the loose one is slower too, and §4.3.1 has both
     //   slightly ahead: docs/numerics.md);
     // - at 0° every run is at rest by 0.48 s (§4.3.1: "simulations stopped at 0.48 s").
-    for (slope, t_end) in [(0.0, 0.6), (22.0, 0.9)] {
+    for (slope, t_end) in [(0.0, 0.6), (22.0, 1.8)] {
         let mut rows = Vec::new();
         for (label, file, k) in [
             ("K = 0", "dilatancy_dense.toml", 0.0),
@@ -781,7 +781,7 @@ fn section_4_3_with_the_default_scheme() {
                 .find(|r| (r.0 - t).abs() < 1e-9)
                 .unwrap_or_else(|| series.last().unwrap())
         };
-        let times = [0.06, 0.12, 0.24, 0.36, 0.48, 0.6, 0.9];
+        let times = [0.06, 0.12, 0.24, 0.36, 0.48, 0.6, 0.9, 1.38, 1.8];
         for &t in times.iter().filter(|&&t| t <= t_end + 1e-9) {
             let mut line = String::new();
             for (label, series, _) in &rows {
