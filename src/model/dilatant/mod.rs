@@ -1,12 +1,14 @@
 //! The dilatant μ(I)–φ model of seed 002 (`model.kind = "dilatant"`): one granular
 //! layer whose solid volume fraction φ evolves with the dilatancy law (eq. 2.2–2.15).
-//! Its state is [`DilatantState`] (φh, φhv, φ^α h), its time step the single stage
-//! [`DilatantScheme`] (finite volumes with the Appendix B fluxes → stabilisation →
-//! semi-implicit dilatancy, `numerics/dilatant/`), its set-up `setup/dilatant.rs`.
+//! Its state is [`DilatantState`] ((h, hv, φ), and (φh, φhv, φ^α h) for the Appendix B
+//! scheme), its time step a single stage: `numerics/dilatant/split.rs` by default (the
+//! Savage–Hutter μ(I) step with φ carried by its mass fluxes, then the dilatant terms),
+//! or [`DilatantScheme`] (seed 002 §3: Appendix B fluxes → stabilisation → dilatancy)
+//! with `dilatancy.scheme = "appendix_b"`; its set-up `setup/dilatant.rs`.
 //!
 //! Diagnostics: `mass` is the grain volume ∫φh dx (conserved), the kinetic energy
-//! ∫½ φh v² dx, the front the largest x with h above the threshold, the largest speed
-//! over cells at least one grain thick; snapshots carry φ per cell as the extra field
+//! ∫½ φh v² dx, the others the monolayer's (same operations); the largest speed counts
+//! cells at least `rest_depth` thick; snapshots carry φ per cell as the extra field
 //! `phi`.
 
 use crate::mesh::Mesh;
