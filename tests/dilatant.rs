@@ -942,6 +942,40 @@ mod split_scheme {
         }
     }
 
+    #[test]
+    fn energy_without_dilatancy_does_not_increase() {
+        // K = 0 (the Savage–Hutter step) and K = 4.09 on a flat bed between walls:
+        // report the largest one-step rise of the total energy (seed 002 eq. 2.7); for
+        // K = 0 there is no source and it must not rise beyond round-off.
+        for (k, phi0) in [(0.0, 0.62), (4.09, 0.62), (4.09, 0.55)] {
+            let law = DilatantLaw {
+                k,
+                ..DilatantLaw::table1()
+            };
+            let mesh = mesh(-0.2, 0.8, 100, 0.0, (true, true));
+            let mut s = column(&mesh, phi0);
+            let mut opt = DilatantOptions::default();
+            opt.viscosity.xi = [0.0; 3];
+            let mut scheme = SplitScheme::new(law, opt, mesh.nx, 0.62);
+            let e0 = s.energy(&mesh);
+            let mut e = e0;
+            let mut worst: f64 = f64::NEG_INFINITY;
+            run_split(&mut scheme, &mesh, &mut s, 0.3, |s| {
+                let next = s.energy(&mesh);
+                worst = worst.max((next - e) / e0);
+                e = next;
+            });
+            println!(
+                "split, K = {k}, φ0 = {phi0}: largest one-step energy change {worst:e} of E0, E(0.3 s)/E0 = {}",
+                e / e0
+            );
+            if k == 0.0 {
+                assert!(worst <= 1e-12, "energy rose by {worst} E0");
+            }
+            assert!(e < e0);
+        }
+    }
+
     use granflow::numerics::StageError;
     use proptest::prelude::*;
 
