@@ -14,10 +14,10 @@
 //!
 //! 1. **hyperbolic**: the monolayer's [`HydrostaticStep`] (seed 000 §3 step 1: HLL/PVM,
 //!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. Its
-//!    ΔC uses the μ(I) law with φ = `material.phi` and μ_1, μ_2 raised by the largest
-//!    static dilatant excess max(0, K(φ_max(0) − φ_stat)), so that a dense mass at rest
-//!    up to its own repose angle μ_1 + K(φ − φ_stat) sees no mass diffusion (φ never
-//!    exceeds max(φ_max(0), φ_stat)); for K = 0 it is the Savage–Hutter law itself.
+//!    ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`) whatever K: its friction
+//!    law sees (|u|, h, p) only, not φ. The friction step below therefore decides
+//!    stopping with μ(I) too (and with μ_eff where ψ > 0); with μ_eff alone the two
+//!    thresholds differ at rest and a deposit keeps creeping (docs/numerics.md).
 //! 2. **volume fraction** (2.3): φ rides the step's mass fluxes 𝓕 with the upwind
 //!    value, written for φ rather than φh,
 //!
@@ -32,14 +32,18 @@
 //! 3. **cell pass**: the φ-gradient pressure −g_c h²/(2φ) (φ_{i+1} − φ_{i−1})/(2Δx)
 //!    (a neighbour with h ≤ 10⁻¹⁰ m counts with the cell's own φ); the friction step of
 //!    the monolayer (`friction.rs`: the impulse Δt μ g_c h stops but never reverses)
-//!    with μ_eff(I, φ) (2.13–2.14, I of 2.10–2.11 with the cell's φ, plus μ_w h/W of 4.1);
-//!    then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19): φ from (3.17) or
-//!    (3.18), φh and v kept, so h ← φh/φ and hv ← h v.
-//! 4. **stabilisation** (K > 0 only, seed 002 §3.3 introduces it for the coupling of the
-//!    dilatancy source with the topography): (φh, φhv, φ^α h) diffuse with
-//!    ι = max(0, ξ v Δz) (3.20–3.21), Δz = Δb̂ + Δx Proj_μ(X, v/(g_c Δt)) (3.6–3.12), on
-//!    faces whose two cells are wet (h > 10⁻¹⁰ m): the viscosity never wets a dry cell, so
-//!    it cannot spread films ahead of a deposit. Sub-cycled to meet (3.22).
+//!    with μ(I) (I of 2.10–2.11 with the cell's φ, plus μ_w h/W of 4.1), then for a mass
+//!    still moving the dilatant part tan ψ of μ_eff (2.13–2.14) ([`cell_friction`]);
+//!    then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the state after
+//!    friction: φ from (3.17) or (3.18), φh and v kept, so h ← φh/φ and hv ← h v.
+//! 4. **stabilisation** (K > 0 and ξ ≠ 0 only; off in the scenarios, the split scheme
+//!    needs none; seed 002 §3.3 introduces it for its own scheme): (φh, φhv, φ^α h)
+//!    diffuse with ι = max(0, ξ v Δz) (3.20–3.21), Δz = Δb̂ + Δx Proj_μ(X, v/(g_c Δt))
+//!    (3.6–3.12), μ the mean of the two cells' μ_eff, on faces whose two cells are wet
+//!    (h > 10⁻¹⁰ m): the viscosity never wets a dry cell, so it cannot spread films
+//!    ahead of a deposit. Sub-cycled to meet (3.22).
+//!
+//! Steps 2–4 run over the cells that hold mass after step 1 only.
 //!
 //! With K = 0 and uniform φ, steps 2–4 change nothing (every φ difference is exactly 0,
 //! tan ψ is not added, no dilatancy, no stabilisation) and step 3's friction performs
