@@ -12,6 +12,7 @@ h5py, numpy and matplotlib.
 """
 
 import argparse
+import os
 import pathlib
 import subprocess
 
@@ -24,7 +25,7 @@ import numpy as np  # noqa: E402
 from granflow_io import Run  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-BIN = ROOT / "target" / "release" / "granflow"
+BIN = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "release" / "granflow"
 CASES = [
     ("dense", "dilatancy_dense.toml", []),
     ("loose", "dilatancy_loose.toml", []),

@@ -73,6 +73,10 @@ CHECKS = {
         "nonhydrostatic", "gate_slows_the_start_and_raises_the_peak_of_the_front_velocity"),
     "nh_deposits": cargo_test(
         "nonhydrostatic", "nh_cartesian_and_h_local_deposits_are_close_while_dynamics_differ"),
+    "dil_k0": cargo_test("dilatant", "without_dilatancy_the_run_is_the_savage_hutter_run_bit_for_bit"),
+    "dil_rest": cargo_test("dilatant", "split_scheme::masses_at_rest_below_repose_stay_exactly_at_rest"),
+    "dil_mass": cargo_test("dilatant", "split_scheme::grains_are_conserved_and_fractions_stay_admissible"),
+    "dil_collapse": cargo_test("dilatant", "section_4_3_with_the_default_scheme"),
     "collapse_pins": cargo_test("scenarios", "collapse_regression_norms"),
     "frozen_hashes": cargo_test("multilayer", "monolayer_numbers_are_frozen"),
     "film_speed": cargo_test("properties", "thin_cell_next_to_a_bed_step_keeps_a_bounded_speed"),

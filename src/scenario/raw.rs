@@ -39,6 +39,7 @@ pub(crate) struct RawDilatancy {
     pub alpha: Option<f64>,
     pub lambda: Option<f64>,
     pub xi: Option<Vec<f64>>,
+    pub scheme: Option<String>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -3,8 +3,11 @@
 //! centres and builds the one-stage pipeline. Everything that can be wrong with the
 //! scenario was refused by its validation.
 
-use crate::model::dilatant::{Dilatant, DilatantScheme};
+use crate::model::dilatant::{Dilatant, DilatantScheme, REST_SPEED};
+use crate::numerics::dilatant::split::SplitScheme;
 use crate::numerics::dilatant::state::DilatantState;
+use crate::numerics::dilatant::step::SchemeKind;
+use crate::numerics::Stage;
 use crate::pipeline::Pipeline;
 use crate::scenario::Scenario;
 use crate::setup::{mesh_of, run_config, run_info};
@@ -27,14 +30,26 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
     let u = sample(&|x, b| scn.initial.u.eval(x, b));
     let phi = sample(&|x, b| phi0.eval(x, b));
     let state = DilatantState::from_profiles(&mesh, spec.options.flux.alpha, &h, &u, &phi);
-    let scheme = DilatantScheme::new(spec.law, spec.options, mesh.nx);
+    let (stage, rest_depth, rest_speed): (Box<dyn Stage<DilatantState>>, f64, f64) =
+        match spec.options.scheme {
+            SchemeKind::Split => {
+                let scheme = SplitScheme::new(spec.law, spec.options, mesh.nx, scn.material.phi);
+                (Box::new(scheme), 0.0, 0.0)
+            }
+            SchemeKind::AppendixB => (
+                Box::new(DilatantScheme::new(spec.law, spec.options, mesh.nx)),
+                spec.law.d,
+                REST_SPEED,
+            ),
+        };
     let model = Dilatant {
         h_bed: vec![0.0; mesh.nx],
         front_threshold: scn.output.front_threshold,
-        rest_depth: spec.law.d,
+        rest_depth,
+        rest_speed,
     };
     let info = run_info(scn, "hydrostatic", 1);
     let rules = crate::stop::default_rules(scn.time.stop_at_rest);
-    let pipeline = Pipeline::new(vec![Box::new(scheme)]);
+    let pipeline = Pipeline::new(vec![stage]);
     Simulation::new(mesh, model, state, pipeline, rules, run_config(scn), info)
 }

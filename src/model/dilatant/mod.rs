@@ -1,18 +1,21 @@
 //! The dilatant μ(I)–φ model of seed 002 (`model.kind = "dilatant"`): one granular
 //! layer whose solid volume fraction φ evolves with the dilatancy law (eq. 2.2–2.15).
-//! Its state is [`DilatantState`] (φh, φhv, φ^α h), its time step the single stage
-//! [`DilatantScheme`] (finite volumes with the Appendix B fluxes → stabilisation →
-//! semi-implicit dilatancy, `numerics/dilatant/`), its set-up `setup/dilatant.rs`.
+//! Its state is [`DilatantState`] ((h, hv, φ), and (φh, φhv, φ^α h) for the Appendix B
+//! scheme), its time step a single stage: `numerics/dilatant/split.rs` by default (the
+//! Savage–Hutter μ(I) step with φ carried by its mass fluxes, then the dilatant terms),
+//! or [`DilatantScheme`] (seed 002 §3: Appendix B fluxes → stabilisation → dilatancy)
+//! with `dilatancy.scheme = "appendix_b"`; its set-up `setup/dilatant.rs`.
 //!
 //! Diagnostics: `mass` is the grain volume ∫φh dx (conserved), the kinetic energy
-//! ∫½ φh v² dx, the front the largest x with h above the threshold, the largest speed
-//! over cells at least one grain thick; snapshots carry φ per cell as the extra field
+//! ∫½ φh v² dx, the others the monolayer's (same operations); the largest speed counts
+//! cells at least `rest_depth` thick; snapshots carry φ per cell as the extra field
 //! `phi`.
 
 use crate::mesh::Mesh;
 use crate::model::{Diagnostics, Model};
 use crate::numerics::dilatant::state::DilatantState;
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
+use crate::physics::shallow::{celerity, velocity};
 
 pub use crate::numerics::dilatant::step::{DilatantOptions, DilatantScheme};
 pub use crate::physics::dilatancy::DilatantLaw;
@@ -34,11 +37,14 @@ pub struct Dilatant {
     pub h_bed: Vec<f64>,
     /// Thickness from which a cell counts for the front (m).
     pub front_threshold: f64,
-    /// Thickness (m) below which a cell's speed does not count for the rest test: the
-    /// grain diameter d. The stabilisation viscosity (seed 002 eq. 3.20) spreads films
-    /// of ~1e-10 m ahead of a deposit that keep a speed of order 0.1 m/s; seed 002 §3.3
-    /// calls layers thinner than a few grains physically meaningless.
+    /// Thickness (m) below which a cell's speed does not count for the rest test: 0 for
+    /// the split scheme (every cell counts, as in the monolayer), the grain diameter d
+    /// for the Appendix B scheme, whose stabilisation viscosity (seed 002 eq. 3.20)
+    /// spreads films of ~1e-10 m ahead of a deposit that keep a speed of order 0.1 m/s
+    /// (seed 002 §3.3 calls layers thinner than a few grains physically meaningless).
     pub rest_depth: f64,
+    /// Largest speed of a mass at rest (m/s).
+    pub rest_speed: f64,
 }
 
 impl Model for Dilatant {
@@ -48,45 +54,54 @@ impl Model for Dilatant {
         "dilatant"
     }
 
+    /// The monolayer's diagnostics (`model/granular/diagnostics.rs`, N = 1) with the
+    /// same operations, so that a K = 0 run takes the Savage–Hutter run's time steps,
+    /// plus the grain volume ∫φh as `mass`. Cells thinner than `rest_depth` do not count
+    /// for the largest speed.
     fn diagnose(&self, mesh: &Mesh, s: &DilatantState) -> Diagnostics {
-        let (mut mass, mut ke, mut max_speed, mut signal, mut h_max) =
-            (0.0, 0.0, 0.0f64, 0.0f64, 0.0f64);
+        let nx = s.nx;
+        let (mut mass, mut ke, mut q_sum, mut max_speed, mut h_max) =
+            (0.0, 0.0, 0.0, 0.0f64, 0.0f64);
+        let mut cell_max = 0.0f64;
         let mut front = None;
-        for j in 1..=s.nx {
-            let (m, h, v) = (s.m[j], s.h[j], s.v[j]);
-            mass += m;
-            ke += m * v * v;
-            if h >= self.rest_depth {
-                max_speed = max_speed.max(v.abs());
-            }
-            signal = signal.max(v.abs() + (mesh.g_n * h).sqrt());
+        let cells = s.h[1..=nx].iter().zip(&s.hu[1..=nx]).zip(&s.phi[1..=nx]);
+        for (i, ((&h, &q), &phi)) in cells.enumerate() {
+            mass += phi * h;
             h_max = h_max.max(h);
+            q_sum += q;
+            let u = velocity(h, q);
+            ke += phi * h * u * u;
+            if h >= self.rest_depth {
+                max_speed = max_speed.max(u.abs());
+            }
+            cell_max = cell_max.max(u.abs() + celerity(mesh.g_n, h));
             if h > self.front_threshold {
-                front = Some(j - 1);
+                front = Some(i);
             }
         }
-        let non_finite_at = if (mass + s.q[1..=s.nx].iter().sum::<f64>()).is_finite() {
+        let non_finite_at = if (mass + q_sum).is_finite() {
             None
         } else {
-            (1..=s.nx)
-                .position(|j| !(s.m[j].is_finite() && s.q[j].is_finite() && s.w[j].is_finite()))
+            (1..=nx)
+                .position(|j| !(s.h[j].is_finite() && s.hu[j].is_finite() && s.phi[j].is_finite()))
                 .or(Some(0))
         };
         Diagnostics {
             mass: mass * mesh.dx,
             kinetic_energy: 0.5 * ke * mesh.dx,
             max_speed,
-            signal_speed: signal,
+            signal_speed: cell_max,
             front_x: front.map_or(f64::NAN, |i| mesh.x[i]),
             h_max,
             non_finite_at,
         }
     }
 
-    /// The apparent-topography friction (seed 002 eq. 3.10) stops a mass to round-off,
-    /// not exactly as the monolayer's friction step does.
+    /// 0 for the split scheme, whose friction step stops a mass exactly (as the
+    /// monolayer's); [`REST_SPEED`] for the Appendix B scheme, whose apparent-topography
+    /// friction (seed 002 eq. 3.10) stops it to round-off.
     fn rest_speed(&self) -> f64 {
-        REST_SPEED
+        self.rest_speed
     }
 
     fn bed_layer(&self) -> &[f64] {
@@ -106,6 +121,7 @@ impl Model for Dilatant {
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
         let nx = s.nx;
+        let u: Vec<f64> = (1..=nx).map(|j| velocity(s.h[j], s.hu[j])).collect();
         let extra = [CellField {
             name: "phi",
             units: "1",
@@ -114,7 +130,7 @@ impl Model for Dilatant {
         sink.snapshot(&SnapshotView {
             t,
             h: &s.h[1..=nx],
-            u: &s.v[1..=nx],
+            u: &u,
             w: None,
             p_nh: None,
             layers: 1,

@@ -1,5 +1,9 @@
-//! Numerics of the dilatant μ(I)–φ model (seed 002 §3): a two-step splitting of the
-//! system (3.1)–(3.3) plus the stabilising viscosity of (3.20),
+//! Numerics of the dilatant μ(I)–φ model (seed 002). The default time step is
+//! [`split`]: the Savage–Hutter μ(I) hyperbolic step with φ carried by its mass fluxes,
+//! then the φ-gradient pressure, the dilatant friction and the dilatancy step of §3.2
+//! (K = 0 with uniform φ is the Savage–Hutter step bit for bit). The scheme of seed 002
+//! §3 as printed (`dilatancy.scheme = "appendix_b"`, [`step`]) is a two-step splitting
+//! of the system (3.1)–(3.3) plus the stabilising viscosity of (3.20),
 //!
 //! 1. finite volumes (3.5) with the well-balanced, energy-satisfying left/right fluxes
 //!    of Appendix B ([`reconstruction`], [`flux`]) and the basal friction as an
@@ -15,6 +19,7 @@
 pub mod flux;
 pub mod reconstruction;
 pub mod source;
+pub mod split;
 pub mod stabilisation;
 pub mod state;
 pub mod step;

@@ -40,7 +40,19 @@ pub fn relax_fraction(
         return phi;
     }
     let i = rate * law.d / (phi * g_c * h).sqrt();
-    let phi_eq = law.phi_eq(i);
+    relax_towards(law, update, dt, rate, phi, law.phi_eq(i))
+}
+
+/// (3.17) or (3.18) for a shear rate γ̇* = `rate` and φ_eq* = `phi_eq` already known.
+#[inline(always)]
+pub fn relax_towards(
+    law: &DilatantLaw,
+    update: DilatancyUpdate,
+    dt: f64,
+    rate: f64,
+    phi: f64,
+    phi_eq: f64,
+) -> f64 {
     let stiffness = dt * rate * law.k * phi;
     match update {
         DilatancyUpdate::Implicit => phi_eq + (phi - phi_eq) / (1.0 + stiffness),

@@ -8,7 +8,7 @@
 
 use crate::mesh::Mesh;
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, Conserved, Primitive};
-use crate::physics::shallow::H_DRY;
+use crate::physics::shallow::{velocity, H_DRY};
 use crate::scenario::BoundaryKind;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -24,6 +24,10 @@ pub struct DilatantState {
     pub h: Vec<f64>,
     pub v: Vec<f64>,
     pub phi: Vec<f64>,
+    /// Thickness discharge hv with ghosts. The split scheme (`split.rs`) advances
+    /// (h, hv, φ) only and leaves m, q, w, v stale; the Appendix B scheme keeps hv = h v.
+    /// Diagnostics, snapshots and [`Self::grain_volume`], [`Self::energy`] read (h, hv, φ).
+    pub hu: Vec<f64>,
 }
 
 impl DilatantState {
@@ -40,6 +44,7 @@ impl DilatantState {
             h: vec![0.0; nx + 2],
             v: vec![0.0; nx + 2],
             phi: vec![0.0; nx + 2],
+            hu: vec![0.0; nx + 2],
         };
         for i in 0..nx {
             let u = Primitive {
@@ -54,7 +59,29 @@ impl DilatantState {
             s.phi[i + 1] = phi[i];
         }
         s.update_primitives(mesh);
+        // h and hv exactly as given (as the monolayer's state has them), not m/φ.
+        for i in 0..nx {
+            s.h[i + 1] = h[i];
+            s.hu[i + 1] = h[i] * v[i];
+        }
+        s.fill_thickness_ghosts(mesh);
+        s.phi[0] = s.phi[1];
+        s.phi[nx + 1] = s.phi[nx];
         s
+    }
+
+    /// Ghosts of (h, hv) as the monolayer's: h copied, hv copied (outflow) or
+    /// reversed (wall).
+    pub fn fill_thickness_ghosts(&mut self, mesh: &Mesh) {
+        let nx = self.nx;
+        self.h[0] = self.h[1];
+        self.h[nx + 1] = self.h[nx];
+        let sign = |kind: BoundaryKind| match kind {
+            BoundaryKind::Wall => -1.0,
+            BoundaryKind::Outflow => 1.0,
+        };
+        self.hu[0] = sign(mesh.left) * self.hu[1];
+        self.hu[nx + 1] = sign(mesh.right) * self.hu[nx];
     }
 
     /// Conservative variables of cell j.
@@ -102,9 +129,11 @@ impl DilatantState {
             self.phi[j] = phi;
             self.h[j] = h;
             self.v[j] = if h > H_DRY { self.q[j] / m } else { 0.0 };
+            self.hu[j] = h * self.v[j];
         } else {
             self.h[j] = 0.0;
             self.v[j] = 0.0;
+            self.hu[j] = 0.0;
         }
     }
 
@@ -135,12 +164,13 @@ impl DilatantState {
         self.w[j] = self.m[j] * phi_power(phi, self.alpha);
         if self.m[j] > 0.0 {
             self.h[j] = self.m[j] / phi;
+            self.hu[j] = self.h[j] * self.v[j];
         }
     }
 
     /// Mass of grains ∫φh dx over the physical cells (per unit width, per ρ_s).
     pub fn grain_volume(&self, mesh: &Mesh) -> f64 {
-        self.m[1..=self.nx].iter().sum::<f64>() * mesh.dx
+        (1..=self.nx).map(|j| self.phi[j] * self.h[j]).sum::<f64>() * mesh.dx
     }
 
     /// Total energy ∫(φh v²/2 + g_c φh²/2 + g_c φh b̂) dx (seed 002 eq. 2.7, per ρ_s).
@@ -149,7 +179,7 @@ impl DilatantState {
             .map(|j| {
                 Primitive {
                     h: self.h[j],
-                    v: self.v[j],
+                    v: velocity(self.h[j], self.hu[j]),
                     phi: self.phi[j],
                 }
                 .energy(mesh.g_n, mesh.z[j])

@@ -38,9 +38,22 @@ pub enum DilatantError {
     NonFinite { cell: usize, x: f64, t: f64 },
 }
 
+/// Which time step the dilatant model takes (`dilatancy.scheme`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SchemeKind {
+    /// The Savage–Hutter μ(I) step with φ carried by its mass fluxes, then the
+    /// φ-gradient, dilatant friction, dilatancy and stabilisation terms (`split.rs`).
+    #[default]
+    Split,
+    /// Seed 002 §3 as printed: Appendix B fluxes with apparent-topography friction (this
+    /// file).
+    AppendixB,
+}
+
 /// Options of the scheme.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DilatantOptions {
+    pub scheme: SchemeKind,
     pub flux: FluxOptions,
     pub viscosity: Viscosity,
     pub update: DilatancyUpdate,
@@ -50,6 +63,7 @@ pub struct DilatantOptions {
 impl Default for DilatantOptions {
     fn default() -> Self {
         DilatantOptions {
+            scheme: SchemeKind::default(),
             flux: FluxOptions::default(),
             viscosity: Viscosity::default(),
             update: DilatancyUpdate::Implicit,

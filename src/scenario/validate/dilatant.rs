@@ -12,7 +12,7 @@ use super::granular::coefficient;
 use crate::numerics::dilatant::flux::FluxOptions;
 use crate::numerics::dilatant::source::DilatancyUpdate;
 use crate::numerics::dilatant::stabilisation::Viscosity;
-use crate::numerics::dilatant::step::DilatantOptions;
+use crate::numerics::dilatant::step::{DilatantOptions, SchemeKind};
 use crate::physics::dilatancy::{DilatantLaw, PhiEq};
 
 /// The dilatant model's keys (`[dilatancy]`, `initial.phi`, the μ(I) law of
@@ -129,7 +129,18 @@ pub(super) fn dilatancy(
         );
     }
     let lambda = non_negative("dilatancy.lambda", d.lambda.unwrap_or(0.0))?;
+    let scheme = choice(
+        "dilatancy.scheme",
+        d.scheme.as_deref(),
+        SchemeKind::Split,
+        &[
+            ("split", SchemeKind::Split),
+            ("appendix_b", SchemeKind::AppendixB),
+        ],
+    )?;
     let xi = match &d.xi {
+        // The split scheme needs no stabilisation (docs/numerics.md); Appendix B does.
+        None if scheme == SchemeKind::Split => [0.0; 3],
         None => Viscosity::default().xi,
         Some(v) if v.len() == 3 => {
             for x in v {
@@ -174,6 +185,7 @@ pub(super) fn dilatancy(
         width,
     };
     let options = DilatantOptions {
+        scheme,
         flux: FluxOptions { alpha, lambda },
         viscosity: Viscosity { xi },
         update,
