@@ -874,9 +874,10 @@ fn collapse_times(cells: usize, sets: &[&str]) -> (f64, f64, f64) {
 /// from 19 s, full stop at 40 s, deposit as at 1.8 s). No grid reaches exact rest at a
 /// converged time: a finer grid resolves the creeping front longer. With a constant
 /// Coulomb coefficient (tan 27°, same scheme, same column) the friction does not vanish
-/// and the exact stop time converges. What converges for μ(I) is the time at which the
-/// mass has settled (kinetic energy below 1e-6 of its peak: 1.748 / 1.786 / 1.800 /
-/// 1.799 / 1.789 s on 640 … 10240 cells) and the runout.
+/// and the exact stop time moves by 1–2 % per refinement (2.158 / 2.196 / 2.220 / 2.248 s
+/// on 640 … 5120 cells), not by seconds. What converges for μ(I) is the time at which
+/// the mass has settled (kinetic energy below 1e-6 of its peak: 1.750 / 1.787 / 1.800 /
+/// 1.798 s on 640 … 5120 cells, `examples/refine_stop.rs`) and the runout.
 #[test]
 fn collapse_settling_time_and_runout_converge_and_the_mu_i_creep_is_the_late_stop() {
     let grids = [640, 1280, 2560];
@@ -898,10 +899,13 @@ fn collapse_settling_time_and_runout_converge_and_the_mu_i_creep_is_the_late_sto
     );
     let runout = change(&mu_i, |r| r.2);
     assert!(runout[1] < 0.75 * runout[0], "runouts {mu_i:?}");
-    // Coulomb: the exact stop time converges too (all three at rest by 3 s).
+    // Coulomb: all three at rest by 3 s, the exact stop moving by less than 2 %.
     assert!(coulomb.iter().all(|r| r.0.is_finite()), "{coulomb:?}");
     let stop = change(&coulomb, |r| r.0);
-    assert!(stop[1] < stop[0], "Coulomb stop times {coulomb:?}");
+    assert!(
+        stop[0] < 0.02 * coulomb[1].0 && stop[1] < 0.02 * coulomb[2].0,
+        "Coulomb stop times {coulomb:?}"
+    );
     // μ(I): the exact stop is the end of the creep, later on every finer grid (2560
     // cells: not at rest by 3 s) although the mass settled at the same time.
     assert!(mu_i[1].0 > mu_i[0].0 + 0.5, "{mu_i:?}");
