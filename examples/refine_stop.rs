@@ -3,6 +3,8 @@
 //!
 //!   cargo run --release --example refine_stop -- scenarios/collapse.toml 640 1280 2560 5120
 //!
+//! (docs/validation.md quotes it without `--release`, which CI's doc check adds).
+//!
 //! Arguments with an `=` are `--set` overrides for every run (e.g. `time.t_end=4`).
 //! For each number of cells, one run to the scenario's t_end (or its rest), printing
 //! the time of exact rest (the run's stop time; "-" if not at rest by t_end), the
