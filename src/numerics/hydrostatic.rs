@@ -49,8 +49,8 @@
 //! thinner than the bed step (h_L < Δb, or h_R < −Δb), h^± is clipped at 0 and 𝓢 sees
 //! the lower side's surface raised to the higher side's bed: a layer of depth h on a
 //! bed sampled with steps Δb = b' Δx > h felt g_n h²/(2Δx) per face instead of
-//! g_n h b'/2, so a Coulomb film of 0.3–1.7 mm stayed exactly at rest on 25–55° slopes
-//! with δ = 24° (4.6 % of the mass at 300 cells). The clipping is right only for the
+//! g_n h b'/2, so Coulomb films up to 3.6 mm thick stayed exactly at rest on 25–55°
+//! slopes with δ = 24° (5.4 % of the mass at 300 cells, `tests/well_balanced.rs`). The clipping is right only for the
 //! lower side of a shoreline (a layer against a bed that rises above its surface, the
 //! lake at rest). So at a clipped face:
 //! - the higher side takes its share of the unclipped g_n h̄ (η_R − η_L + Δb̃): its
@@ -69,7 +69,7 @@
 //! taken back): the impulse goes to the mass that stayed in the cell for the whole
 //! step. With h^n, a draining cell at the trailing edge of a
 //! film on a 30° plane (h^{n+1} ≈ 0.7 h^n) gave the gravity impulse of the departed mass
-//! to what remained, and its speed grew to 2.2–2.8 m/s against the bulk's 1.81 m/s
+//! to what remained, and its speed grew to 2.2–2.5 m/s against the bulk's 1.81 m/s
 //! (`tests/properties.rs`). Now each remaining parcel gets g_n tan θ Δt, so after the
 //! upwinded transport (a mass-weighted mean of the velocities that enter) no cell is
 //! faster than its inflow plus the physical acceleration. At rest, and wherever the
