@@ -117,9 +117,12 @@ fn monolayer_reference_runs() -> Vec<(
 /// re-recorded once, deliberately, when step 1 moved to the own-depth split of the
 /// pressure source (was (318, 0xf1f8_66d0_d9fc_dc2a), (138, 0xbed4_8c8e_e000_f4f9)), and
 /// once more when the CFL step moved to the per-cell signal speed of issue 9 (was
-/// (316, 0x94a4_269f_c278_0f41), (137, 0x7120_5480_a0e0_2e80)).
+/// (316, 0x94a4_269f_c278_0f41), (137, 0x7120_5480_a0e0_2e80)), and once more when the
+/// gravity source of a draining cell moved to the mass that stays in it and thin layers
+/// on steep beds kept the full slope force (issue 13 items 2–3; was
+/// (260, 0xde0e_176e_1b18_e79d), (107, 0x4a7c_00e0_9ebe_fc35)).
 const MONOLAYER_REFERENCE: [(u64, u64); 2] =
-    [(260, 0xde0e_176e_1b18_e79d), (107, 0x4a7c_00e0_9ebe_fc35)];
+    [(260, 0x7e95_9f8e_eecc_22ca), (107, 0xb42e_9a6c_9d2f_fa22)];
 
 #[test]
 fn monolayer_numbers_are_frozen() {

@@ -127,16 +127,20 @@ fn granular_mass_at_rest_keeps_q_exactly_zero() {
 /// own-depth split of the pressure source (docs/numerics.md), and once more when the
 /// CFL step moved to the per-cell signal speed (issue 9: same scheme, larger Δt; was
 /// [0x5557abb381e6e51f, 0x2d04cd9bc92a65bd, 0x65031aecc88d73bf] and
-/// [0x9bdff5447baf3c4d, 0x1a7e609655d584c3, 0xed47d875d2e9bfe7]).
+/// [0x9bdff5447baf3c4d, 0x1a7e609655d584c3, 0xed47d875d2e9bfe7]), and once more when
+/// the gravity source of a draining cell moved to the mass that stays in it and thin
+/// layers on steep beds kept the full slope force (issue 13 items 2–3; was
+/// [0x4dc79ac88a90f46f, 0xde5509ebe0f91886, 0xdc8397765a2f2c34] and
+/// [0x88096342af8e6dc6, 0x2d7a4a447fc6fa22, 0xb2f6b4677d2f1901]).
 const GOLDEN_COLLAPSE: [u64; 3] = [
-    0x4dc7_9ac8_8a90_f46f,
-    0xde55_09eb_e0f9_1886,
-    0xdc83_9776_5a2f_2c34,
+    0x1c39_a627_bf28_1095,
+    0x3751_453d_193b_449d,
+    0x02f5_3c7b_8799_b719,
 ];
 const GOLDEN_RANDOM_BED: [u64; 3] = [
-    0x8809_6342_af8e_6dc6,
-    0x2d7a_4a44_7fc6_fa22,
-    0xb2f6_b467_7d2f_1901,
+    0xcd18_6051_8733_4e11,
+    0xde3a_94e3_e24e_7c08,
+    0x0c72_fbff_be37_a104,
 ];
 const COLLAPSE_SETS: [&str; 2] = ["time.t_end=0.4", "time.stop_at_rest=false"];
 const RANDOM_BED_SETS: [&str; 2] = [
