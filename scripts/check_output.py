@@ -36,6 +36,9 @@ SUMMARY_ATTRS = {
     "wall_time_s": "float",
     "status": "str",
 }
+
+# The statuses a finished run can have (docs/output-format.md, /summary).
+FINAL_STATUSES = ("completed", "stopped_at_rest", "outflowed", "no_mass", "interrupted")
 UNITS = {
     "grid/x": "m",
     "grid/b": "m",
@@ -257,10 +260,11 @@ class Checker:
                       "(pass --unfinished to check such a file)")
             return None
         self.attrs("/summary", f["summary"], SUMMARY_ATTRS)
-        if status is not None and not (status in ("completed", "stopped_at_rest")
+        if status is not None and not (status in FINAL_STATUSES
                                        or status.startswith("failed")):
-            self.fail(f"/summary status {status!r} is not completed | stopped_at_rest | failed: ...")
-        if status in ("completed", "stopped_at_rest") and nt == 0:
+            self.fail(f"/summary status {status!r} is not "
+                      f"{' | '.join(FINAL_STATUSES)} | failed: ...")
+        if status in FINAL_STATUSES and nt == 0:
             self.fail(f"status is {status!r} but there are no snapshots")
         for name in f["summary"].attrs:
             if name.startswith("time_") and not name.endswith("_s"):
