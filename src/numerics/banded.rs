@@ -220,16 +220,9 @@ fn factor_solve(band: &mut [f64], y: &mut [f64], col: &mut [f64], xs: &mut [f64]
             for i in 1..=below {
                 let ci = *cp.add(PAD + i);
                 let len = (i + 3) & !3;
-                let row = bp.add((k + i) * w + d0 + 1 - len);
-                let c = cp.add(PAD + i + 1 - len);
-                let mut t = 0;
-                while t < len {
-                    *row.add(t) -= ci * *c.add(t);
-                    *row.add(t + 1) -= ci * *c.add(t + 1);
-                    *row.add(t + 2) -= ci * *c.add(t + 2);
-                    *row.add(t + 3) -= ci * *c.add(t + 3);
-                    t += 4;
-                }
+                let row = std::slice::from_raw_parts_mut(bp.add((k + i) * w + d0 + 1 - len), len);
+                let c = std::slice::from_raw_parts(cp.add(PAD + i + 1 - len), len);
+                axpy_chunks(row, c, ci);
             }
         }
     }
@@ -244,6 +237,20 @@ fn factor_solve(band: &mut [f64], y: &mut [f64], col: &mut [f64], xs: &mut [f64]
         for (yc, &l) in yc.iter_mut().zip(lr) {
             *yc -= l * xr;
         }
+    }
+}
+
+/// row −= ci · c, both of a length that is a multiple of 4, as 4-wide chunks (two
+/// slices, so the compiler knows they do not overlap).
+#[inline(always)]
+fn axpy_chunks(row: &mut [f64], c: &[f64], ci: f64) {
+    let (r4, _) = row.as_chunks_mut::<4>();
+    let (c4, _) = c.as_chunks::<4>();
+    for (a, b) in r4.iter_mut().zip(c4) {
+        a[0] -= ci * b[0];
+        a[1] -= ci * b[1];
+        a[2] -= ci * b[2];
+        a[3] -= ci * b[3];
     }
 }
 
