@@ -142,6 +142,11 @@ pub struct HydrostaticStep<L: BasalFriction> {
     /// N > 1, the exchange term 𝓑.
     flux_hu: Vec<f64>,
     exchange: Vec<f64>,
+    /// N > 1 with tracers: per interface and layer, the layer's departure from the
+    /// mean mass flux, ½(d_L + d_R) with d_α = h(u_α − ū) (sides as the fluxes see
+    /// them); empty otherwise. The tracers' layer fluxes and vertical exchange follow
+    /// from it ([`TracerTransport::after_step`]).
+    layer_flux: Vec<f64>,
     h_new: Vec<f64>,
     /// Draining factors θ_j ∈ [0, 1] (nx + 2), used only when a cell would empty. The
     /// ghost entries stay 1; the interior ones are all rewritten by each use.
@@ -474,6 +479,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             } else {
                 Vec::new()
             },
+            layer_flux: Vec::new(),
             h_new: vec![0.0; nx + 2],
             drain: vec![1.0; nx + 2],
             tracers: TracerTransport::default(),
@@ -546,6 +552,9 @@ impl<L: BasalFriction> HydrostaticStep<L> {
                 self.body_right[k] = 0.0;
                 fluxes.fill(0.0);
                 self.exchange[k * n..(k + 1) * n].fill(0.0);
+                if !self.layer_flux.is_empty() {
+                    self.layer_flux[k * n..(k + 1) * n].fill(0.0);
+                }
                 left = right;
                 continue;
             };
@@ -572,6 +581,15 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             for a in 0..n {
                 let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
                 fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur, Some(exchange[a]));
+            }
+            if !self.layer_flux.is_empty() {
+                // d_α = h(u_α − ū) of each side as the fluxes see it (0 at rest).
+                let (ml, mr) = (l.u, r.u);
+                let out = &mut self.layer_flux[k * n..(k + 1) * n];
+                for a in 0..n {
+                    let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
+                    out[a] = 0.5 * (l.h * (ul - ml) + r.h * (ur - mr));
+                }
             }
             left = right;
         }
@@ -710,6 +728,11 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             for f in &mut self.flux_hu[k * n..(k + 1) * n] {
                 *f *= theta;
             }
+            if !self.layer_flux.is_empty() {
+                for f in &mut self.layer_flux[k * n..(k + 1) * n] {
+                    *f *= theta;
+                }
+            }
         }
     }
 }
@@ -724,6 +747,9 @@ impl<L: BasalFriction> Stage<LayeredState> for HydrostaticStep<L> {
         let (nx, n) = (mesh.nx, self.layers);
         if !state.tracers.is_empty() {
             self.tracers.before_step(&state.h, n, &state.tracers);
+            if n > 1 && self.layer_flux.is_empty() {
+                self.layer_flux = vec![0.0; (nx + 1) * n];
+            }
         }
         // Mass first; limit the fluxes of cells that would empty, then refuse the step
         // (state untouched) if anything is still negative beyond round-off.
@@ -753,8 +779,9 @@ impl<L: BasalFriction> Stage<LayeredState> for HydrostaticStep<L> {
         }
         state.fill_ghosts(mesh);
         if !state.tracers.is_empty() {
+            let layers = (n > 1).then_some((self.layer_flux.as_slice(), state.l.as_slice()));
             self.tracers
-                .after_step(&self.flux_h, &state.h, r, n, &mut state.tracers);
+                .after_step(&self.flux_h, layers, &state.h, r, n, &mut state.tracers);
         }
         Ok(())
     }

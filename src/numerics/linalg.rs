@@ -22,6 +22,21 @@ pub trait PressureRows {
     /// Row k, for k in [`active`](Self::active). The coupling of the first active row
     /// to k − 1 and of the last to k + 1 are ignored (those unknowns are 0).
     fn row(&self, k: usize) -> Self::Row;
+    /// For banded solvers (`banded.rs`): writes the lower band of the active rows and
+    /// their right-hand sides into `rhs`, and returns true. Row r takes `stride` ≥ p + 1
+    /// values from `band[r·stride]`, its band right-aligned: entry q (column r − p + q,
+    /// the diagonal at q = p) at `r·stride + stride − p − 1 + q`, zeros before. The
+    /// default returns false and the solver forms the rows one by one with
+    /// [`row`](Self::row).
+    fn assemble_band(
+        &self,
+        _band: &mut [f64],
+        _rhs: &mut [f64],
+        _p: usize,
+        _stride: usize,
+    ) -> bool {
+        false
+    }
 }
 
 /// A row of a scalar tridiagonal system: lower x_{k−1} + diag x_k + upper x_{k+1} = rhs.

@@ -6,9 +6,34 @@
 //!
 //!   q_i ← q_i − Δt/Δx (𝓕^h_{i+1/2} c^up_{i+1/2} − 𝓕^h_{i−1/2} c^up_{i−1/2}),
 //!
-//! and q = 0 in cells that are dry after the step. With N > 1 layers every layer's
-//! tracer rides the total mass flux with its own concentration (the exchange terms of
-//! seed 003 eq. 5 do not move tracers). A run without tracers builds nothing here.
+//! and q = 0 in cells that are dry after the step. A run without tracers builds
+//! nothing here.
+//!
+//! With N > 1 layers a tracer of layer α (h w_α for the non-hydrostatic model) obeys
+//! seed 003 eq. (9c) without its pressure terms,
+//!
+//!   ∂_t(h c_α) + ∂_X(h u_α c_α) = (c_{α+1/2} G_{α+1/2} − c_{α−1/2} G_{α−1/2})/l_α,
+//!
+//! with the mass exchange G of eq. (5), G_{1/2} = G_{N+1/2} = 0. Each layer moves with
+//! its own mass flux
+//!
+//!   𝓕^h_{α,i+1/2} = 𝓕^h_{i+1/2} + ½(d_{α,i} + d_{α,i+1}),   d_α = h(u_α − ū),
+//!
+//! (the step's total flux plus the layer's departure from it, [`HydrostaticStep`]), and
+//! the exchange through the interface Z_{α+1/2} of cell i is what keeps each layer's
+//! mass l_α h consistent with the total one:
+//!
+//!   Δt G_{α+1/2,i} = Δt/Δx Σ_{β≤α} l_β (𝓕^h_{β,i+1/2} − 𝓕^h_{β,i−1/2} − (𝓕^h_{i+1/2} − 𝓕^h_{i−1/2})),
+//!
+//! which is, face by face, the ½(ΔG_{i+1/2} + ΔG_{i−1/2}) the momentum's exchange term
+//! 𝓑 uses (`hydrostatic.rs`). Both transports are upwind: horizontally with the sign
+//! of 𝓕^h_α, vertically c_{α+1/2} = c_{α+1} where G_{α+1/2} > 0 (mass entering layer
+//! α from above) and c_α otherwise (the printed scheme centres c_{α+1/2}; upwinding
+//! keeps a tracer within the range of its neighbours). A uniform c stays uniform, and
+//! Σ_α l_α q_α changes only by the horizontal fluxes (conservative; tested). For N = 1,
+//! d = 0 and G = 0: the monolayer transport above, the same code.
+//!
+//! [`HydrostaticStep`]: super::hydrostatic::HydrostaticStep
 
 use crate::model::granular::state::{fill_tracer_ghosts, Tracer};
 use crate::physics::shallow::H_DRY;
@@ -19,6 +44,8 @@ pub struct TracerTransport {
     /// c = q/h per tracer, cell and layer (with ghosts), before the step.
     concentration: Vec<Vec<f64>>,
     flux: Vec<f64>,
+    /// N > 1: Δt G_{α+1/2} of one cell, α = 0..=N (bed and surface 0).
+    exchange: Vec<f64>,
 }
 
 impl TracerTransport {
@@ -41,27 +68,75 @@ impl TracerTransport {
     }
 
     /// Transports every tracer with the mass fluxes `mass_flux` (faces 0..=nx) of the
-    /// step just taken; `h` is the thickness after it, `r` = Δt/Δx.
+    /// step just taken; `h` is the thickness after it, `r` = Δt/Δx. With N > 1,
+    /// `layers` carries each layer's departure from the mean flux ½(d_L + d_R) per face
+    /// and layer and the layer fractions l_α (module documentation); `None` for N = 1.
     pub fn after_step(
         &mut self,
         mass_flux: &[f64],
+        layers: Option<(&[f64], &[f64])>,
         h: &[f64],
         r: f64,
-        layers: usize,
+        n: usize,
         tracers: &mut [Tracer],
     ) {
         let nx = mass_flux.len() - 1;
-        let n = layers;
         self.flux.resize(mass_flux.len() * n, 0.0);
-        for (c, tracer) in self.concentration.iter().zip(tracers) {
-            for (k, &f) in mass_flux.iter().enumerate() {
-                let donor = if f > 0.0 { k } else { k + 1 };
-                for a in 0..n {
-                    self.flux[k * n + a] = f * c[donor * n + a];
+        self.exchange.resize(n + 1, 0.0);
+        for (c, tracer) in self.concentration.iter().zip(tracers.iter_mut()) {
+            match layers {
+                None => {
+                    for (k, &f) in mass_flux.iter().enumerate() {
+                        let donor = if f > 0.0 { k } else { k + 1 };
+                        for a in 0..n {
+                            self.flux[k * n + a] = f * c[donor * n + a];
+                        }
+                    }
+                }
+                Some((departure, _)) => {
+                    for (k, &f) in mass_flux.iter().enumerate() {
+                        for a in 0..n {
+                            let fa = f + departure[k * n + a];
+                            let donor = if fa > 0.0 { k } else { k + 1 };
+                            self.flux[k * n + a] = fa * c[donor * n + a];
+                        }
+                    }
                 }
             }
             for (i, &hi) in h.iter().enumerate().take(nx + 1).skip(1) {
                 let wet = hi > H_DRY;
+                if let (Some((departure, l)), true) = (layers, wet) {
+                    // Δt G_{α+1/2} from the layers' flux departures (running sum).
+                    let (right, left) = (
+                        &departure[i * n..(i + 1) * n],
+                        &departure[(i - 1) * n..i * n],
+                    );
+                    let mut g = 0.0;
+                    self.exchange[0] = 0.0;
+                    for a in 0..n - 1 {
+                        g += r * l[a] * (right[a] - left[a]);
+                        self.exchange[a + 1] = g;
+                    }
+                    self.exchange[n] = 0.0;
+                    let conc = &c[i * n..(i + 1) * n];
+                    // Upwind concentration at the interface above layer a (a + 1/2).
+                    let at = |a: usize, g: f64| -> f64 {
+                        if a == 0 || a == n {
+                            0.0
+                        } else if g > 0.0 {
+                            conc[a]
+                        } else {
+                            conc[a - 1]
+                        }
+                    };
+                    for (a, la) in l.iter().enumerate() {
+                        let (below, above) = (self.exchange[a], self.exchange[a + 1]);
+                        let vertical = (at(a + 1, above) * above - at(a, below) * below) / la;
+                        let q = &mut tracer.q[i * n + a];
+                        *q += vertical - r * (self.flux[i * n + a] - self.flux[(i - 1) * n + a]);
+                    }
+                    continue;
+                }
                 for a in 0..n {
                     let q = &mut tracer.q[i * n + a];
                     let v = *q - r * (self.flux[i * n + a] - self.flux[(i - 1) * n + a]);
@@ -69,6 +144,140 @@ impl TracerTransport {
                 }
             }
             fill_tracer_ghosts(&mut tracer.q, nx, n);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::mesh::{BoundaryKind, Coordinates, Mesh, MeshSpec};
+    use crate::model::granular::state::LayeredState;
+    use crate::numerics::hydrostatic::HydrostaticStep;
+    use crate::numerics::Stage;
+    use crate::physics::rheology::Coulomb;
+    use std::f64::consts::PI;
+
+    const N: usize = 4;
+    const NX: usize = 400;
+
+    fn mesh() -> Mesh {
+        let spec = MeshSpec {
+            x_min: 0.0,
+            x_max: 1.0,
+            cells: NX,
+            slope_deg: 0.0,
+            coordinates: Coordinates::Local,
+            left: BoundaryKind::Wall,
+            right: BoundaryKind::Wall,
+        };
+        Mesh::new(&spec, vec![0.0; NX])
+    }
+
+    /// A sheared column: u_α = ū + s_α sin(2πx), Σ l_α s_α = 0, w_α given per layer.
+    fn state(mesh: &Mesh, h: impl Fn(f64) -> f64, u_mean: f64, w: [f64; N]) -> LayeredState {
+        let l = vec![1.0 / N as f64; N];
+        let x = &mesh.x;
+        let hs: Vec<f64> = x.iter().map(|&x| h(x)).collect();
+        let us: Vec<f64> = x.iter().map(|_| u_mean).collect();
+        let mut s = LayeredState::from_profiles(mesh, &l, &hs, &us);
+        for i in 1..=NX {
+            for a in 0..N {
+                let shear = 0.2 * (a as f64 - 1.5) * (2.0 * PI * x[i - 1]).sin();
+                s.hu[i * N + a] = s.h[i] * (u_mean + shear);
+            }
+        }
+        s.fill_ghosts(mesh);
+        s.add_nonhydrostatic(&vec![0.0; NX]);
+        for i in 0..NX + 2 {
+            for (a, wa) in w.iter().enumerate() {
+                s.hw_mut()[i * N + a] = s.h[i] * wa;
+            }
+        }
+        s
+    }
+
+    fn step(mesh: &Mesh, s: &mut LayeredState, dt: f64) {
+        // μ = 0: no Coulomb-aware diffusion, so that only the transport acts on hw.
+        let mut hyp = HydrostaticStep::with_layers(Coulomb { mu: 0.0 }, NX, N);
+        hyp.apply(mesh, dt, s).unwrap();
+    }
+
+    /// Seed 003 eq. (9c) without pressure: over a uniform depth H with ū = 0 and
+    /// layer velocities s_α sin(2πx), a w_α uniform in x changes only through the layer
+    /// fluxes and the exchange, ∂_t(H w_α) = −H w_α ∂_X u_α + (w_{α+1/2} G_{α+1/2} −
+    /// w_{α−1/2} G_{α−1/2})/l_α, G_{α+1/2} = Σ_{β≤α} l_β H ∂_X u_β (upwind w_{α+1/2}).
+    /// One step matches it to O(Δx²); transporting hw with the mean flux alone (the
+    /// transport before issue 10's fix) leaves every w_α unchanged and fails.
+    #[test]
+    fn layered_tracer_follows_the_layer_fluxes_and_the_exchange() {
+        let mesh = mesh();
+        let big_h = 0.1;
+        let w = [0.3, -0.1, 0.5, 0.2];
+        let mut s = state(&mesh, |_| big_h, 0.0, w);
+        let before = s.clone();
+        let dt = 1e-4;
+        step(&mesh, &mut s, dt);
+        let l = 1.0 / N as f64;
+        let (mut worst, mut scale) = (0.0f64, 0.0f64);
+        for i in 1..=NX {
+            let x = mesh.x[i - 1];
+            let du = |a: usize| 0.2 * (a as f64 - 1.5) * 2.0 * PI * (2.0 * PI * x).cos();
+            // G at the interfaces 0..=N (bed and surface 0).
+            let mut g = [0.0; N + 1];
+            for a in 0..N - 1 {
+                g[a + 1] = g[a] + l * big_h * du(a);
+            }
+            let up = |j: usize| {
+                if j == 0 || j == N {
+                    0.0
+                } else if g[j] > 0.0 {
+                    w[j]
+                } else {
+                    w[j - 1]
+                }
+            };
+            for a in 0..N {
+                let rhs = -big_h * w[a] * du(a) + (up(a + 1) * g[a + 1] - up(a) * g[a]) / l;
+                let change = s.hw()[i * N + a] - before.hw()[i * N + a];
+                worst = worst.max((change - dt * rhs).abs());
+                scale = scale.max((dt * rhs).abs());
+            }
+        }
+        println!("largest departure {worst:.3e} of changes up to {scale:.3e}");
+        assert!(scale > 1e-5);
+        assert!(worst <= 1e-3 * scale, "{worst:e} vs {scale:e}");
+    }
+
+    /// Σ_α l_α h w_α is conserved between walls, and a w uniform in x and z stays
+    /// uniform over a varying depth with a mean flow.
+    #[test]
+    fn layered_tracer_is_conservative_and_keeps_a_uniform_value() {
+        let mesh = mesh();
+        let depth = |x: f64| 0.1 + 0.03 * (3.0 * x).sin();
+        let w = [0.3, -0.1, 0.5, 0.2];
+        let mut s = state(&mesh, depth, 0.2, w);
+        let total =
+            |s: &LayeredState| -> f64 { s.hw()[N..(NX + 1) * N].iter().sum::<f64>() / N as f64 };
+        let t0 = total(&s);
+        for _ in 0..20 {
+            step(&mesh, &mut s, 1e-4);
+        }
+        let t1 = total(&s);
+        assert!(
+            (t1 - t0).abs() <= 1e-14 * t0.abs().max(1e-3),
+            "{t0} -> {t1}"
+        );
+        assert!(s.hw() != state(&mesh, depth, 0.2, w).hw());
+
+        let mut s = state(&mesh, depth, 0.2, [0.7; N]);
+        for _ in 0..20 {
+            step(&mesh, &mut s, 1e-4);
+        }
+        for i in 1..=NX {
+            for a in 0..N {
+                let w = s.hw()[i * N + a] / s.h[i];
+                assert!((w - 0.7).abs() < 1e-13, "cell {i}, layer {a}: {w}");
+            }
         }
     }
 }

@@ -1,0 +1,39 @@
+//! Driver for instruction counts of the multilayer non-hydrostatic step against the
+//! hydrostatic one (issue 10, docs/performance.md): the §5.1 collapse (640 cells,
+//! 20 layers, h_i = 1.82 mm) advanced to t = 0.3 s, then `steps` more steps.
+//!
+//!   valgrind --tool=callgrind target/release/examples/nh_step_cost nonhydrostatic 60
+//!
+//! Run it twice with different `steps` and difference the totals, or read the stages'
+//! inclusive counts (`callgrind_annotate --inclusive=yes`) divided by their calls.
+use granflow::scenario::load_file;
+use granflow::setup::build_granular;
+use std::path::Path;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let pressure = args.get(1).map(String::as_str).unwrap_or("nonhydrostatic");
+    let steps: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(40);
+    let layers = args.get(3).map(String::as_str).unwrap_or("20");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/nh_multilayer_collapse.toml");
+    let sets = vec![
+        format!("model.pressure={pressure}"),
+        format!("model.layers={layers}"),
+        "time.stop_at_rest=false".to_string(),
+    ];
+    let scn = load_file(&path, &sets).expect("scenario");
+    let mut sim = build_granular(&scn);
+    while sim.t < 0.3 {
+        let dt = sim.step(0.3 - sim.t).expect("step");
+        sim.t += dt;
+    }
+    let warm = sim.steps;
+    for _ in 0..steps {
+        let dt = sim.step(f64::INFINITY).expect("step");
+        sim.t += dt;
+    }
+    println!(
+        "{pressure}: {warm} warm-up steps, then {steps} (t = {:.4})",
+        sim.t
+    );
+}
