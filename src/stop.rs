@@ -5,7 +5,9 @@
 //!
 //! The default rules ([`default_rules`]): a non-finite value fails the run, a CFL step
 //! that collapses fails it, Ctrl-C ends it (`interrupted`), an empty domain ends it
-//! (`no_mass`, `outflowed`), and with `time.stop_at_rest` a mass at rest ends it.
+//! (`no_mass`, `outflowed`), with `time.stop_at_rest` a mass at rest ends it and with
+//! `time.stop_when_settled` a mass whose kinetic energy has fallen to
+//! `time.settle_fraction` of its peak ends it (`settled`).
 //! The end time is the loop's own condition.
 
 use crate::model::Diagnostics;
@@ -188,16 +190,60 @@ impl StopRule for Interrupted {
     }
 }
 
+/// Whether a kinetic energy `ke` counts as settled for the peak `peak` so far:
+/// `ke` ≤ `fraction` × `peak` (a mass that never moved, ke = peak = 0, is settled).
+#[inline]
+pub fn settled(ke: f64, peak: f64, fraction: f64) -> bool {
+    ke <= fraction * peak
+}
+
+/// Ends the run with status `settled` once the kinetic energy has fallen to
+/// `time.settle_fraction` × its peak (`time.stop_when_settled`). For μ(I), whose
+/// friction tends to μ_s as the speed vanishes, a released mass creeps long after it
+/// has practically stopped (seed 002 §4: 40 s to stop fully at 22°, under 1 mm/s from
+/// 19 s), and the exact-rest time grows without bound under refinement
+/// (docs/validation.md "Stop time and runout under refinement"); the settled time
+/// converges. Consulted after [`AtRest`], whose status wins on the same step.
+#[derive(Debug)]
+pub struct Settled {
+    fraction: f64,
+    peak: f64,
+}
+
+impl Settled {
+    pub fn new(fraction: f64) -> Settled {
+        Settled {
+            fraction,
+            peak: 0.0,
+        }
+    }
+}
+
+impl StopRule for Settled {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        let ke = ctx.diagnostics.kinetic_energy;
+        self.peak = self.peak.max(ke);
+        if settled(ke, self.peak, self.fraction) {
+            Verdict::Stop("settled")
+        } else {
+            Verdict::Continue
+        }
+    }
+}
+
 /// The rules every run consults, in order.
-pub fn default_rules(stop_at_rest: bool) -> Vec<Box<dyn StopRule>> {
+pub fn default_rules(time: &crate::scenario::TimeSpec) -> Vec<Box<dyn StopRule>> {
     let mut rules: Vec<Box<dyn StopRule>> = vec![
         Box::new(NonFinite),
         Box::new(DtCollapse),
         Box::new(Interrupted),
         Box::new(MassGone),
     ];
-    if stop_at_rest {
+    if time.stop_at_rest {
         rules.push(Box::new(AtRest));
+    }
+    if time.stop_when_settled {
+        rules.push(Box::new(Settled::new(time.settle_fraction)));
     }
     rules
 }

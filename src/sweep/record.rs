@@ -60,6 +60,7 @@ impl RunRecord {
             && a.steps == b.steps
             && same(a.runout, b.runout)
             && same(a.stop_time, b.stop_time)
+            && same(a.settled_time, b.settled_time)
             && same(a.h_max_final, b.h_max_final)
             && same(a.t_end, b.t_end)
     }
@@ -167,6 +168,7 @@ mod tests {
                 status: "failed: x, \"y\"".into(),
                 runout: 0.1 + 0.2,
                 stop_time: f64::NAN,
+                settled_time: f64::NAN,
                 h_max_final: 1.0 / 3.0,
                 t_end: 1e300,
                 steps: 12,

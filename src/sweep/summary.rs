@@ -58,9 +58,10 @@ pub fn summary_file_name(shard: super::Shard) -> String {
     }
 }
 
-pub const METRICS: [&str; 7] = [
+pub const METRICS: [&str; 8] = [
     "runout",
     "stop_time",
+    "settled_time",
     "h_max_final",
     "t_end",
     "steps",
@@ -95,6 +96,7 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
                     [
                         r.summary.runout,
                         r.summary.stop_time,
+                        r.summary.settled_time,
                         r.summary.h_max_final,
                         r.summary.t_end,
                     ]
@@ -104,7 +106,7 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
                 fields.push(r.summary.steps.to_string());
                 fields.push(format_float(r.summary.wall_time_s));
             }
-            None => fields.extend(std::iter::repeat_n(String::new(), 6)),
+            None => fields.extend(std::iter::repeat_n(String::new(), 7)),
         }
         fields.push(csv_field(row.status()));
         if waves {
@@ -200,6 +202,7 @@ mod tests {
                 status: "stopped_at_rest".into(),
                 runout: 0.832,
                 stop_time: f64::NAN,
+                settled_time: f64::NAN,
                 h_max_final: 0.0417,
                 t_end: 1.4258,
                 steps: 125,
@@ -243,7 +246,7 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(
             lines[0],
-            "index,run,domain.slope_deg,runout,stop_time,h_max_final,t_end,steps,wall_time_s,status"
+            "index,run,domain.slope_deg,runout,stop_time,settled_time,h_max_final,t_end,steps,wall_time_s,status"
         );
         assert_eq!(
             lines[1],

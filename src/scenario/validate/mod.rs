@@ -369,10 +369,21 @@ fn time(t: RawTime) -> Res<TimeSpec> {
     if cfl > 1.0 {
         return err("time.cfl", format!("must be in (0, 1], got {cfl}"));
     }
+    let settle_fraction = positive("time.settle_fraction", t.settle_fraction.unwrap_or(1e-6))?;
+    if settle_fraction >= 1.0 {
+        return err(
+            "time.settle_fraction",
+            format!(
+                "must be in (0, 1) (a fraction of the peak kinetic energy), got {settle_fraction}"
+            ),
+        );
+    }
     Ok(TimeSpec {
         t_end,
         cfl,
         stop_at_rest: t.stop_at_rest.unwrap_or(false),
+        settle_fraction,
+        stop_when_settled: t.stop_when_settled.unwrap_or(false),
     })
 }
 
@@ -620,7 +631,9 @@ t_end = 2.0
             TimeSpec {
                 t_end: 2.0,
                 cfl: 0.5,
-                stop_at_rest: false
+                stop_at_rest: false,
+                settle_fraction: 1e-6,
+                stop_when_settled: false
             }
         );
         assert_eq!(
