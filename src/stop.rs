@@ -247,3 +247,65 @@ pub fn default_rules(time: &crate::scenario::TimeSpec) -> Vec<Box<dyn StopRule>>
     }
     rules
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn verdicts(rule: &mut dyn StopRule, energies: &[f64]) -> Vec<Verdict> {
+        energies
+            .iter()
+            .enumerate()
+            .map(|(k, &ke)| {
+                let d = Diagnostics {
+                    mass: 1.0,
+                    kinetic_energy: ke,
+                    max_speed: ke.sqrt(),
+                    signal_speed: 1.0,
+                    front_x: 0.0,
+                    h_max: 1.0,
+                    non_finite_at: None,
+                };
+                rule.check(&StepContext {
+                    t: k as f64,
+                    t_end: 100.0,
+                    steps: k as u64,
+                    diagnostics: &d,
+                    next_dt: 1.0,
+                    x: &[0.0],
+                    at_rest: false,
+                    mass0: 1.0,
+                })
+            })
+            .collect()
+    }
+
+    #[test]
+    fn settled_rule_stops_once_the_energy_falls_to_the_fraction_of_its_peak() {
+        let mut rule = Settled::new(1e-3);
+        let v = verdicts(&mut rule, &[1.0, 4.0, 1e-2, 4.1e-3, 4e-3, 1e-9]);
+        // Growth and decay above 1e-3 × peak (4e-3) go on; 4e-3 itself is settled.
+        assert_eq!(v[..4], vec![Verdict::Continue; 4][..]);
+        assert_eq!(v[4], Verdict::Stop("settled"));
+        assert_eq!(v[5], Verdict::Stop("settled"));
+        // The peak is the running one: a slow start is not "settled".
+        let mut rule = Settled::new(1e-3);
+        let v = verdicts(&mut rule, &[1e-12, 1e-6, 1.0]);
+        assert!(v.iter().all(|v| *v == Verdict::Continue), "{v:?}");
+        assert!(settled(0.0, 0.0, 1e-6) && !settled(1e-9, 0.0, 1e-6));
+    }
+
+    #[test]
+    fn settled_rule_is_only_in_the_rules_when_asked_for() {
+        let mut time = crate::scenario::TimeSpec {
+            t_end: 1.0,
+            cfl: 0.5,
+            stop_at_rest: false,
+            settle_fraction: 1e-6,
+            stop_when_settled: false,
+        };
+        let n = default_rules(&time).len();
+        time.stop_when_settled = true;
+        assert_eq!(default_rules(&time).len(), n + 1);
+    }
+}

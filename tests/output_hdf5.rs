@@ -295,6 +295,7 @@ fn check_summary(f: &H5File, status: &str) {
     let mut want = vec![
         "h_max_final",
         "runout",
+        "settled_time",
         "status",
         "steps",
         "stop_time",

@@ -202,7 +202,7 @@ mod tests {
                 status: "stopped_at_rest".into(),
                 runout: 0.832,
                 stop_time: f64::NAN,
-                settled_time: f64::NAN,
+                settled_time: 0.8125,
                 h_max_final: 0.0417,
                 t_end: 1.4258,
                 steps: 125,
@@ -250,9 +250,9 @@ mod tests {
         );
         assert_eq!(
             lines[1],
-            "0,slope_deg=16,16,0.832,nan,0.0417,1.4258,125,0.019,stopped_at_rest"
+            "0,slope_deg=16,16,0.832,nan,0.8125,0.0417,1.4258,125,0.019,stopped_at_rest"
         );
-        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,missing");
+        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,,missing");
         assert!(
             lines[3].ends_with(",\"failed: a, \"\"b\"\"\""),
             "{}",
@@ -278,7 +278,7 @@ mod tests {
             "{}",
             lines[1]
         );
-        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,missing,");
+        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,,missing,");
     }
 
     #[test]
