@@ -126,6 +126,7 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
         [
             "runout_m",
             "stop_time_s",
+            "settled_s",
             "h_max_final_m",
             "steps",
             "wall_s",
@@ -150,11 +151,12 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
             Some(r) => line.extend([
                 num(r.summary.runout),
                 num(r.summary.stop_time),
+                num(r.summary.settled_time),
                 num(r.summary.h_max_final),
                 r.summary.steps.to_string(),
                 format!("{:.2}", r.summary.wall_time_s),
             ]),
-            None => line.extend(std::iter::repeat_n(String::new(), 5)),
+            None => line.extend(std::iter::repeat_n(String::new(), 6)),
         }
         let status: String = row.status().chars().take(70).collect();
         line.push(status.replace('\n', " "));
