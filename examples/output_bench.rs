@@ -87,6 +87,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     sink.finish(&RunSummary {
         runout: 0.0,
         stop_time: f64::NAN,
+        settled_time: f64::NAN,
         h_max_final: 1.0,
         t_end: step as f64 * 1e-3,
         steps: step,

@@ -122,6 +122,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     sink.finish(&RunSummary {
         runout: steps as f64 * dt,
         stop_time: f64::NAN,
+        settled_time: f64::NAN,
         h_max_final: 1.0,
         t_end: steps as f64 * dt,
         steps: steps as u64,

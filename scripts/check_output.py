@@ -30,6 +30,7 @@ ROOT_ATTRS = {
 SUMMARY_ATTRS = {
     "runout": "float",
     "stop_time": "float",
+    "settled_time": "float",
     "h_max_final": "float",
     "t_end": "float",
     "steps": "int",
@@ -38,7 +39,8 @@ SUMMARY_ATTRS = {
 }
 
 # The statuses a finished run can have (docs/output-format.md, /summary).
-FINAL_STATUSES = ("completed", "stopped_at_rest", "outflowed", "no_mass", "interrupted")
+FINAL_STATUSES = ("completed", "stopped_at_rest", "settled", "outflowed", "no_mass",
+                  "interrupted")
 UNITS = {
     "grid/x": "m",
     "grid/b": "m",

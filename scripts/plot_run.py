@@ -79,8 +79,12 @@ def plot_main(r, path, every, out):
     a_front.set_xlabel("t (s)")
     a_front.set_ylabel("front position (m)")
     stop = r.summary.get("stop_time")
+    settled = r.summary.get("settled_time")
     if stop is not None and np.isfinite(stop):
         a_front.axvline(stop, color="0.5", ls="--", lw=1, label=f"at rest, t = {stop:.3f} s")
+    if settled is not None and np.isfinite(settled):
+        a_front.axvline(settled, color="0.5", ls=":", lw=1, label=f"settled, t = {settled:.3f} s")
+    if any(v is not None and np.isfinite(v) for v in (stop, settled)):
         a_front.legend(fontsize=8)
 
     plot_xt(a_xt, r, fig)

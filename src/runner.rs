@@ -87,6 +87,11 @@ impl fmt::Display for RunReport {
         } else {
             writeln!(f, "  stop time     {} s", sig(s.stop_time))?;
         }
+        if s.settled_time.is_nan() {
+            writeln!(f, "  settled       not settled")?;
+        } else {
+            writeln!(f, "  settled       {} s", sig(s.settled_time))?;
+        }
         writeln!(f, "  h_max final   {} m", sig(s.h_max_final))?;
         if let Some(a) = s.max_wave_amplitude {
             writeln!(f, "  max wave      {} m", sig(a))?;

@@ -30,6 +30,9 @@ pub struct RunConfig {
     pub gauges: Vec<f64>,
     /// Gauge interval (s); `None`: every step.
     pub gauge_every: Option<f64>,
+    /// Fraction of the peak kinetic energy below which the run counts as settled
+    /// (`settled_time`).
+    pub settle_fraction: f64,
 }
 
 /// Reported to the progress callback after every step.
@@ -78,6 +81,23 @@ struct Tally {
     max_wave: Option<f64>,
     /// Mass of the initial state, for the stop rules.
     mass0: f64,
+    /// Peak kinetic energy so far.
+    ke_peak: f64,
+    /// First time of the current period with kinetic energy ≤ settle_fraction × peak.
+    settled_since: Option<f64>,
+}
+
+impl Tally {
+    /// Updates the peak kinetic energy and the settled period with the state at `t`
+    /// (the same test as [`crate::stop::Settled`]).
+    fn settle(&mut self, d: &Diagnostics, t: f64, fraction: f64) {
+        self.ke_peak = self.ke_peak.max(d.kinetic_energy);
+        self.settled_since = if crate::stop::settled(d.kinetic_energy, self.ke_peak, fraction) {
+            self.settled_since.or(Some(t))
+        } else {
+            None
+        };
+    }
 }
 
 impl<M: Model> Simulation<M> {
@@ -210,7 +230,10 @@ impl<M: Model> Simulation<M> {
             rest_since: (d0.max_speed <= self.model.rest_speed()).then_some(0.0),
             max_wave: self.model.wave_amplitude(&self.mesh, &self.state),
             mass0: d0.mass,
+            ke_peak: d0.kinetic_energy,
+            settled_since: None,
         };
+        tally.settle(&d0, 0.0, self.config.settle_fraction);
         let result = self.run_loop(sink, progress, &mut tally, d0);
         let status = match &result {
             Ok(status) => status.to_string(),
@@ -303,6 +326,7 @@ impl<M: Model> Simulation<M> {
             } else {
                 None
             };
+            tally.settle(&d, self.t, cfg.settle_fraction);
             tally.last = d;
             if at_output || stop.is_some() {
                 self.snapshot(sink)?;
@@ -327,6 +351,7 @@ impl<M: Model> Simulation<M> {
         RunSummary {
             runout: tally.last.front_x - tally.front0,
             stop_time: tally.rest_since.unwrap_or(f64::NAN),
+            settled_time: tally.settled_since.unwrap_or(f64::NAN),
             h_max_final: tally.last.h_max,
             t_end: self.t,
             steps: self.steps,

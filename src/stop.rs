@@ -5,7 +5,9 @@
 //!
 //! The default rules ([`default_rules`]): a non-finite value fails the run, a CFL step
 //! that collapses fails it, Ctrl-C ends it (`interrupted`), an empty domain ends it
-//! (`no_mass`, `outflowed`), and with `time.stop_at_rest` a mass at rest ends it.
+//! (`no_mass`, `outflowed`), with `time.stop_at_rest` a mass at rest ends it and with
+//! `time.stop_when_settled` a mass whose kinetic energy has fallen to
+//! `time.settle_fraction` of its peak ends it (`settled`).
 //! The end time is the loop's own condition.
 
 use crate::model::Diagnostics;
@@ -188,16 +190,122 @@ impl StopRule for Interrupted {
     }
 }
 
+/// Whether a kinetic energy `ke` counts as settled for the peak `peak` so far:
+/// `ke` ≤ `fraction` × `peak` (a mass that never moved, ke = peak = 0, is settled).
+#[inline]
+pub fn settled(ke: f64, peak: f64, fraction: f64) -> bool {
+    ke <= fraction * peak
+}
+
+/// Ends the run with status `settled` once the kinetic energy has fallen to
+/// `time.settle_fraction` × its peak (`time.stop_when_settled`). For μ(I), whose
+/// friction tends to μ_s as the speed vanishes, a released mass creeps long after it
+/// has practically stopped (seed 002 §4: 40 s to stop fully at 22°, under 1 mm/s from
+/// 19 s), and the exact-rest time grows without bound under refinement
+/// (docs/validation.md "Stop time and runout under refinement"); the settled time
+/// converges. Consulted after [`AtRest`], whose status wins on the same step.
+#[derive(Debug)]
+pub struct Settled {
+    fraction: f64,
+    peak: f64,
+}
+
+impl Settled {
+    pub fn new(fraction: f64) -> Settled {
+        Settled {
+            fraction,
+            peak: 0.0,
+        }
+    }
+}
+
+impl StopRule for Settled {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        let ke = ctx.diagnostics.kinetic_energy;
+        self.peak = self.peak.max(ke);
+        if settled(ke, self.peak, self.fraction) {
+            Verdict::Stop("settled")
+        } else {
+            Verdict::Continue
+        }
+    }
+}
+
 /// The rules every run consults, in order.
-pub fn default_rules(stop_at_rest: bool) -> Vec<Box<dyn StopRule>> {
+pub fn default_rules(time: &crate::scenario::TimeSpec) -> Vec<Box<dyn StopRule>> {
     let mut rules: Vec<Box<dyn StopRule>> = vec![
         Box::new(NonFinite),
         Box::new(DtCollapse),
         Box::new(Interrupted),
         Box::new(MassGone),
     ];
-    if stop_at_rest {
+    if time.stop_at_rest {
         rules.push(Box::new(AtRest));
     }
+    if time.stop_when_settled {
+        rules.push(Box::new(Settled::new(time.settle_fraction)));
+    }
     rules
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn verdicts(rule: &mut dyn StopRule, energies: &[f64]) -> Vec<Verdict> {
+        energies
+            .iter()
+            .enumerate()
+            .map(|(k, &ke)| {
+                let d = Diagnostics {
+                    mass: 1.0,
+                    kinetic_energy: ke,
+                    max_speed: ke.sqrt(),
+                    signal_speed: 1.0,
+                    front_x: 0.0,
+                    h_max: 1.0,
+                    non_finite_at: None,
+                };
+                rule.check(&StepContext {
+                    t: k as f64,
+                    t_end: 100.0,
+                    steps: k as u64,
+                    diagnostics: &d,
+                    next_dt: 1.0,
+                    x: &[0.0],
+                    at_rest: false,
+                    mass0: 1.0,
+                })
+            })
+            .collect()
+    }
+
+    #[test]
+    fn settled_rule_stops_once_the_energy_falls_to_the_fraction_of_its_peak() {
+        let mut rule = Settled::new(1e-3);
+        let v = verdicts(&mut rule, &[1.0, 4.0, 1e-2, 4.1e-3, 4e-3, 1e-9]);
+        // Growth and decay above 1e-3 × peak (4e-3) go on; 4e-3 itself is settled.
+        assert_eq!(v[..4], vec![Verdict::Continue; 4][..]);
+        assert_eq!(v[4], Verdict::Stop("settled"));
+        assert_eq!(v[5], Verdict::Stop("settled"));
+        // The peak is the running one: a slow start is not "settled".
+        let mut rule = Settled::new(1e-3);
+        let v = verdicts(&mut rule, &[1e-12, 1e-6, 1.0]);
+        assert!(v.iter().all(|v| *v == Verdict::Continue), "{v:?}");
+        assert!(settled(0.0, 0.0, 1e-6) && !settled(1e-9, 0.0, 1e-6));
+    }
+
+    #[test]
+    fn settled_rule_is_only_in_the_rules_when_asked_for() {
+        let mut time = crate::scenario::TimeSpec {
+            t_end: 1.0,
+            cfl: 0.5,
+            stop_at_rest: false,
+            settle_fraction: 1e-6,
+            stop_when_settled: false,
+        };
+        let n = default_rules(&time).len();
+        time.stop_when_settled = true;
+        assert_eq!(default_rules(&time).len(), n + 1);
+    }
 }

@@ -173,6 +173,8 @@ const KEYS: &[&str] = &[
     "time.t_end",
     "time.cfl",
     "time.stop_at_rest",
+    "time.settle_fraction",
+    "time.stop_when_settled",
     "output.file",
     "output.every",
     "output.front_threshold",

@@ -120,9 +120,12 @@ fn monolayer_reference_runs() -> Vec<(
 /// (316, 0x94a4_269f_c278_0f41), (137, 0x7120_5480_a0e0_2e80)), and once more when the
 /// gravity source of a draining cell moved to the mass that stays in it and thin layers
 /// on steep beds kept the full slope force (issue 13 items 2–3; was
-/// (260, 0xde0e_176e_1b18_e79d), (107, 0x4a7c_00e0_9ebe_fc35)).
+/// (260, 0xde0e_176e_1b18_e79d), (107, 0x4a7c_00e0_9ebe_fc35)), and once more when the
+/// μ(I) friction step became backward Euler in the speed (issue 13 item 1: μ at the
+/// pre-friction speed overstated the friction; the μ(I) collapse changes, the Coulomb
+/// dam break does not; was (260, 0x7e95_9f8e_eecc_22ca)).
 const MONOLAYER_REFERENCE: [(u64, u64); 2] =
-    [(260, 0x7e95_9f8e_eecc_22ca), (107, 0xb42e_9a6c_9d2f_fa22)];
+    [(260, 0x91df_bd5e_8015_2868), (107, 0xb42e_9a6c_9d2f_fa22)];
 
 #[test]
 fn monolayer_numbers_are_frozen() {

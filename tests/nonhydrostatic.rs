@@ -131,16 +131,20 @@ fn granular_mass_at_rest_keeps_q_exactly_zero() {
 /// the gravity source of a draining cell moved to the mass that stays in it and thin
 /// layers on steep beds kept the full slope force (issue 13 items 2–3; was
 /// [0x4dc79ac88a90f46f, 0xde5509ebe0f91886, 0xdc8397765a2f2c34] and
-/// [0x88096342af8e6dc6, 0x2d7a4a447fc6fa22, 0xb2f6b4677d2f1901]).
+/// [0x88096342af8e6dc6, 0x2d7a4a447fc6fa22, 0xb2f6b4677d2f1901]), and once more when
+/// the μ(I) friction step became backward Euler in the speed (issue 13 item 1: μ at
+/// the pre-friction speed overstated the friction; was
+/// [0x1c39a627bf281095, 0x3751453d193b449d, 0x02f53c7b8799b719] and
+/// [0xcd18605187334e11, 0xde3a94e3e24e7c08, 0x0c72fbffbe37a104]).
 const GOLDEN_COLLAPSE: [u64; 3] = [
-    0x1c39_a627_bf28_1095,
-    0x3751_453d_193b_449d,
-    0x02f5_3c7b_8799_b719,
+    0x16d8_2230_b402_7c0d,
+    0xba6c_de95_a81b_17f2,
+    0xc2ba_11f4_c17d_6226,
 ];
 const GOLDEN_RANDOM_BED: [u64; 3] = [
-    0xcd18_6051_8733_4e11,
-    0xde3a_94e3_e24e_7c08,
-    0x0c72_fbff_be37_a104,
+    0x1c92_df88_10dd_ae5e,
+    0xa38a_5e56_8689_3f45,
+    0x80ab_67f7_c422_86e1,
 ];
 const COLLAPSE_SETS: [&str; 2] = ["time.t_end=0.4", "time.stop_at_rest=false"];
 const RANDOM_BED_SETS: [&str; 2] = [

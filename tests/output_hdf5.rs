@@ -96,6 +96,7 @@ impl Synth {
         RunSummary {
             runout: 1.25,
             stop_time: f64::NAN,
+            settled_time: f64::NAN,
             h_max_final: 1.5,
             t_end: Self::t(STEPS - 1),
             steps: STEPS as u64,
@@ -294,6 +295,7 @@ fn check_summary(f: &H5File, status: &str) {
     let mut want = vec![
         "h_max_final",
         "runout",
+        "settled_time",
         "status",
         "steps",
         "stop_time",

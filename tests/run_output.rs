@@ -40,7 +40,8 @@ fn collapse_output_honours_the_contract() {
     let toml = std::fs::read_to_string(&scenario).unwrap();
     assert_eq!(f.attr_string("scenario_toml").unwrap(), toml);
     let summary = f.root_group().group("summary").unwrap();
-    assert_eq!(summary.attr_string("status").unwrap(), "stopped_at_rest");
+    // μ(I) creeps: collapse.toml ends when the mass has settled (issue 13 item 1).
+    assert_eq!(summary.attr_string("status").unwrap(), "settled");
 
     // Grid.
     let nx = 640;
@@ -53,7 +54,7 @@ fn collapse_output_honours_the_contract() {
     assert_eq!(read(&f, "grid/b"), vec![0.0; nx]);
     assert_eq!(read(&f, "grid/h_bed"), vec![0.0; nx]);
 
-    // Snapshots: every 0.05 s, plus the final state at rest.
+    // Snapshots: every 0.05 s, plus the final, settled state.
     let t = read(&f, "snapshots/t");
     let nt = t.len();
     assert_eq!(t[0], 0.0);
@@ -65,9 +66,14 @@ fn collapse_output_honours_the_contract() {
     let h = read(&f, "snapshots/h");
     let u = read(&f, "snapshots/u");
     assert!(h.iter().all(|&v| v >= 0.0 && v.is_finite()));
+    // Settled (kinetic energy, below), not at exact rest: the μ(I) front creeps
+    // (issue 13 item 1; up to 1.6 cm/s in the thinnest front cells here).
+    let u_last = u[(nt - 1) * nx..]
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(
-        u[(nt - 1) * nx..].iter().all(|&v| v == 0.0),
-        "final state at rest"
+        u_last > 0.0 && u_last.is_finite(),
+        "final max |u| = {u_last}"
     );
 
     // Diagnostics: one row per step plus t = 0; mass conserved (nothing reaches the
@@ -98,13 +104,20 @@ fn collapse_output_honours_the_contract() {
     let ke = read(&f, "diagnostics/kinetic_energy");
     assert_eq!(ke[0], 0.0);
     assert!(ke.iter().cloned().fold(0.0, f64::max) > 0.0);
-    assert_eq!(*ke.last().unwrap(), 0.0);
+    let peak = ke.iter().cloned().fold(0.0, f64::max);
+    assert!(*ke.last().unwrap() <= 1e-6 * peak);
+    assert!(
+        ke[ke.len() - 2] > 1e-6 * peak,
+        "the run ends at the first settled step"
+    );
 
     // Front: every step; starts at the column's edge, ends at the runout.
     assert_eq!(read(&f, "front/t"), td);
     let front = read(&f, "front/x");
     assert_eq!(front[0], x[39], "last cell of the column (x ≤ 0)");
-    assert!((front.last().unwrap() - front[0] - 1.090).abs() < 1e-9);
+    // Runout 1.090 m until the μ(I) friction became backward Euler and the run ends
+    // when settled (issue 13 item 1; tests/scenarios.rs collapse_regression_norms).
+    assert!((front.last().unwrap() - front[0] - 1.105).abs() < 1e-9);
     let csv = std::fs::read_to_string(dir.path().join("collapse_front.csv")).unwrap();
     assert_eq!(csv.lines().count(), n + 1);
 }

@@ -163,6 +163,7 @@ fn product_runs_are_named_and_summarised_in_sweep_order() {
             "initial.erodible_bed",
             "runout",
             "stop_time",
+            "settled_time",
             "h_max_final",
             "t_end",
             "steps",
@@ -176,7 +177,7 @@ fn product_runs_are_named_and_summarised_in_sweep_order() {
     );
     assert!(column(&out.join("summary.csv"), "status")
         .iter()
-        .all(|s| s == "completed" || s == "stopped_at_rest"));
+        .all(|s| s == "completed" || s == "stopped_at_rest" || s == "settled"));
     // The printed table has a line per run and the parameters.
     assert!(stdout.contains("slope_deg  erodible_bed"), "{stdout}");
     assert_eq!(stdout.lines().filter(|l| l.contains("0.0025")).count(), 2);
@@ -406,7 +407,7 @@ fn a_failing_run_is_recorded_and_the_others_go_on() {
     assert!(stderr.contains("1 of 3 runs did not complete"), "{stderr}");
     let status = column(&out.join("summary.csv"), "status");
     assert!(
-        status[0] == "stopped_at_rest" || status[0] == "completed",
+        ["stopped_at_rest", "settled", "completed"].contains(&status[0].as_str()),
         "{status:?}"
     );
     assert!(
@@ -414,7 +415,7 @@ fn a_failing_run_is_recorded_and_the_others_go_on() {
         "{status:?}"
     );
     assert!(
-        status[2] == "stopped_at_rest" || status[2] == "completed",
+        ["stopped_at_rest", "settled", "completed"].contains(&status[2].as_str()),
         "{status:?}"
     );
     let failed = column(&out.join("summary.csv"), "run")[1].clone();

@@ -19,7 +19,7 @@ use super::{Stage, StageError};
 use crate::mesh::Mesh;
 use crate::model::granular::state::LayeredState;
 use crate::physics::rheology::BasalFriction;
-use crate::physics::shallow::{velocity, H_DRY};
+use crate::physics::shallow::H_DRY;
 
 #[derive(Debug)]
 pub struct CoulombFrictionStep<L: BasalFriction> {
@@ -61,8 +61,7 @@ impl<L: BasalFriction> Stage<LayeredState> for CoulombFrictionStep<L> {
                 *q = 0.0;
                 continue;
             }
-            let mu = self.law.mu(velocity(h, *q).abs(), h, g_n * h);
-            *q = coulomb_update(*q, dt * mu * g_n * h);
+            *q = self.law.friction_update(*q, h, dt, g_n);
         }
         state.fill_ghosts(mesh);
         Ok(())

@@ -8,6 +8,8 @@
 //!
 //!   (hu)* = (hu) − Δt (∂_X(h q̄) + 2q̄ ∂_X b)_i   (the discrete operator of step 3),
 //!   σ_i = μ(I) (g_n h_i + 2q̄_i),  I from p_b/ρ = g_n h + 2q̄ (seed 000 eq. 15e),
+//!   (μ(I) at the new speed, backward Euler, for the μ(I) law: issue 13 item 1 and
+//!   [`BasalFriction::nh_friction_update`]; a constant for Coulomb),
 //!   if Δt σ_i < |(hu)*|:  hu ← (hu)* − Δt σ_i sgn((hu)*),  hw ← hw + 2Δt q̄_i,
 //!   otherwise:            hu ← 0,  hw ← 0,
 //!
@@ -18,13 +20,12 @@
 //! weight is the cell's own g_n h_i (`friction.rs`); a negative total pressure (the
 //! grains are lifted) gives no friction.
 
-use super::friction::coulomb_update;
 use super::projection::monolayer::{cell_coefficients, doubled_bed};
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
 use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
 use crate::physics::rheology::BasalFriction;
-use crate::physics::shallow::{velocity, H_DRY};
+use crate::physics::shallow::H_DRY;
 
 /// Step 2: explicit p^n terms and Coulomb friction with the total basal pressure.
 #[derive(Debug)]
@@ -80,9 +81,7 @@ impl<L: BasalFriction> Stage<LayeredState> for NhFrictionStep<L> {
                 continue;
             }
             let p_total = g_n * hi + p_b;
-            let mu = self.law.mu(velocity(hi, hu[i]).abs(), hi, p_total);
-            let sigma = mu * (g_n * hi + p_b).max(0.0);
-            let q_new = coulomb_update(q, dt * sigma);
+            let q_new = self.law.nh_friction_update(q, hu[i], hi, dt, p_total);
             hu[i] = q_new;
             hw_all[i] = if q_new == 0.0 { 0.0 } else { hw };
         }

@@ -120,11 +120,17 @@ pub struct RunSummary {
     pub runout: f64,
     /// First time the mass is at rest, NaN if never.
     pub stop_time: f64,
+    /// Time after which the kinetic energy stays at or below `time.settle_fraction` ×
+    /// its peak (the time of the first step of that final period), NaN if it does not
+    /// end the run there. Unlike `stop_time` it converges under refinement for μ(I),
+    /// whose mass creeps long after it has practically stopped (issue 13 item 1).
+    #[serde(default = "nan")]
+    pub settled_time: f64,
     pub h_max_final: f64,
     pub t_end: f64,
     pub steps: u64,
     pub wall_time_s: f64,
-    /// "completed" | "stopped_at_rest" | "failed: …".
+    /// "completed" | "stopped_at_rest" | "settled" | "failed: …" | … (docs/output-format.md).
     pub status: String,
     /// Models with a water surface (submarine): max over time and wet cells of
     /// |η − η₀| (m), η₀ the initial surface. `None` for the others.
@@ -135,12 +141,17 @@ pub struct RunSummary {
     pub stage_times: Vec<(String, f64)>,
 }
 
+fn nan() -> f64 {
+    f64::NAN
+}
+
 impl RunSummary {
     /// The summary of a run that never got going: `status`, unknown numbers (NaN).
     pub fn not_run(status: String, wall_time_s: f64) -> RunSummary {
         RunSummary {
             runout: f64::NAN,
             stop_time: f64::NAN,
+            settled_time: f64::NAN,
             h_max_final: f64::NAN,
             t_end: f64::NAN,
             steps: 0,

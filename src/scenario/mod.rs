@@ -77,6 +77,12 @@ pub struct TimeSpec {
     pub cfl: f64,
     /// End the run early once the whole mass is at rest.
     pub stop_at_rest: bool,
+    /// Kinetic energy, as a fraction of its peak, below which the mass counts as
+    /// settled (`settled_time`, `stop_when_settled`), in (0, 1).
+    pub settle_fraction: f64,
+    /// End the run (status `settled`) once the kinetic energy is at or below
+    /// `settle_fraction` × its peak.
+    pub stop_when_settled: bool,
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -131,6 +131,8 @@ pub(crate) struct RawTime {
     pub t_end: Option<f64>,
     pub cfl: Option<f64>,
     pub stop_at_rest: Option<bool>,
+    pub settle_fraction: Option<f64>,
+    pub stop_when_settled: Option<bool>,
 }
 
 #[derive(Debug, Default, Deserialize)]

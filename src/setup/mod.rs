@@ -106,6 +106,7 @@ pub fn run_config(scn: &Scenario) -> RunConfig {
         output_every: scn.output.every,
         gauges: scn.output.gauges.clone(),
         gauge_every: scn.output.gauge_every,
+        settle_fraction: scn.time.settle_fraction,
     }
 }
 

@@ -12,7 +12,7 @@
 //! the same numbers as the one written by the sweep itself.
 //!
 //! A run counts as done (and is skipped on a re-run) when its result file says
-//! `completed` or `stopped_at_rest`, its scenario hash matches the scenario the sweep
+//! `completed`, `stopped_at_rest` or `settled`, its scenario hash matches the scenario the sweep
 //! would run now (same base file, `set`, `--set` and axis values), and its HDF5 file
 //! exists with the same status in `/summary`.
 
@@ -60,17 +60,19 @@ impl RunRecord {
             && a.steps == b.steps
             && same(a.runout, b.runout)
             && same(a.stop_time, b.stop_time)
+            && same(a.settled_time, b.settled_time)
             && same(a.h_max_final, b.h_max_final)
             && same(a.t_end, b.t_end)
     }
 }
 
-/// Runs that ended normally (`completed`, `stopped_at_rest`, `outflowed`, `no_mass`) are
-/// successes; anything else (`failed: …`, `interrupted`, `unfinished`) is not.
+/// Runs that ended normally (`completed`, `stopped_at_rest`, `settled`, `outflowed`,
+/// `no_mass`) are successes; anything else (`failed: …`, `interrupted`, `unfinished`) is
+/// not.
 pub fn status_is_ok(status: &str) -> bool {
     matches!(
         status,
-        "completed" | "stopped_at_rest" | "outflowed" | "no_mass"
+        "completed" | "stopped_at_rest" | "settled" | "outflowed" | "no_mass"
     )
 }
 
@@ -167,6 +169,7 @@ mod tests {
                 status: "failed: x, \"y\"".into(),
                 runout: 0.1 + 0.2,
                 stop_time: f64::NAN,
+                settled_time: f64::NAN,
                 h_max_final: 1.0 / 3.0,
                 t_end: 1e300,
                 steps: 12,
@@ -214,5 +217,21 @@ mod tests {
         fs::write(record_path(dir.path(), &r.name), "garbage").unwrap();
         assert!(read(dir.path(), &r.name).is_err());
         assert!(done(dir.path(), &r.name, &r.scenario_hash).is_none());
+    }
+
+    #[test]
+    fn every_normal_end_is_ok() {
+        for status in [
+            "completed",
+            "stopped_at_rest",
+            "settled",
+            "outflowed",
+            "no_mass",
+        ] {
+            assert!(status_is_ok(status), "{status}");
+        }
+        for status in ["interrupted", "unfinished", "failed: x", "pending"] {
+            assert!(!status_is_ok(status), "{status}");
+        }
     }
 }

@@ -58,9 +58,10 @@ pub fn summary_file_name(shard: super::Shard) -> String {
     }
 }
 
-pub const METRICS: [&str; 7] = [
+pub const METRICS: [&str; 8] = [
     "runout",
     "stop_time",
+    "settled_time",
     "h_max_final",
     "t_end",
     "steps",
@@ -95,6 +96,7 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
                     [
                         r.summary.runout,
                         r.summary.stop_time,
+                        r.summary.settled_time,
                         r.summary.h_max_final,
                         r.summary.t_end,
                     ]
@@ -104,7 +106,7 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
                 fields.push(r.summary.steps.to_string());
                 fields.push(format_float(r.summary.wall_time_s));
             }
-            None => fields.extend(std::iter::repeat_n(String::new(), 6)),
+            None => fields.extend(std::iter::repeat_n(String::new(), 7)),
         }
         fields.push(csv_field(row.status()));
         if waves {
@@ -124,6 +126,7 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
         [
             "runout_m",
             "stop_time_s",
+            "settled_s",
             "h_max_final_m",
             "steps",
             "wall_s",
@@ -148,11 +151,12 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
             Some(r) => line.extend([
                 num(r.summary.runout),
                 num(r.summary.stop_time),
+                num(r.summary.settled_time),
                 num(r.summary.h_max_final),
                 r.summary.steps.to_string(),
                 format!("{:.2}", r.summary.wall_time_s),
             ]),
-            None => line.extend(std::iter::repeat_n(String::new(), 5)),
+            None => line.extend(std::iter::repeat_n(String::new(), 6)),
         }
         let status: String = row.status().chars().take(70).collect();
         line.push(status.replace('\n', " "));
@@ -200,6 +204,7 @@ mod tests {
                 status: "stopped_at_rest".into(),
                 runout: 0.832,
                 stop_time: f64::NAN,
+                settled_time: 0.8125,
                 h_max_final: 0.0417,
                 t_end: 1.4258,
                 steps: 125,
@@ -243,13 +248,13 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(
             lines[0],
-            "index,run,domain.slope_deg,runout,stop_time,h_max_final,t_end,steps,wall_time_s,status"
+            "index,run,domain.slope_deg,runout,stop_time,settled_time,h_max_final,t_end,steps,wall_time_s,status"
         );
         assert_eq!(
             lines[1],
-            "0,slope_deg=16,16,0.832,nan,0.0417,1.4258,125,0.019,stopped_at_rest"
+            "0,slope_deg=16,16,0.832,nan,0.8125,0.0417,1.4258,125,0.019,stopped_at_rest"
         );
-        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,missing");
+        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,,missing");
         assert!(
             lines[3].ends_with(",\"failed: a, \"\"b\"\"\""),
             "{}",
@@ -275,7 +280,7 @@ mod tests {
             "{}",
             lines[1]
         );
-        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,missing,");
+        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,,missing,");
     }
 
     #[test]

@@ -102,6 +102,8 @@ impl Case {
                 t_end: self.t_end,
                 cfl: self.cfl,
                 stop_at_rest: self.stop_at_rest,
+                settle_fraction: 1e-6,
+                stop_when_settled: false,
             },
             output: OutputSpec {
                 file: "test.h5".into(),

@@ -65,7 +65,7 @@ use crate::numerics::friction::coulomb_update;
 use crate::numerics::hydrostatic::HydrostaticStep;
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
-use crate::physics::rheology::{inertial_number, MuI};
+use crate::physics::rheology::{backward_euler_discharge, inertial_number, MuI};
 use crate::physics::shallow::{velocity, H_DRY};
 use std::ops::RangeInclusive;
 
@@ -121,6 +121,23 @@ pub fn cell_friction(
     q: f64,
     phi: f64,
 ) -> (f64, f64, f64) {
+    if law.k == 0.0 {
+        // Without dilatancy: the monolayer's backward-Euler μ(I) step (issue 13 item 1,
+        // `MuI::friction_update`), the walls' μ_w h/W a constant added to μ_1 and μ_2,
+        // so that K = 0 stays the Savage–Hutter μ(I) run bit for bit. (K > 0 keeps μ at
+        // the incoming speed; I and μ are returned for the dilatant part only.)
+        let wall = if law.mu_w > 0.0 {
+            law.mu_w * h / law.width
+        } else {
+            0.0
+        };
+        let mu_s = law.mu_1 + wall;
+        let static_impulse = dt * mu_s * g_c * h;
+        let k = inertial_number(law.d, phi, 1.0, h, g_c * h);
+        let (mu_2, c) = (law.mu_2 + wall, dt * g_c);
+        let q = backward_euler_discharge(mu_s, mu_2, law.i0, q, h, static_impulse, c, k);
+        return (q, 0.0, f64::NAN);
+    }
     let speed = velocity(h, q).abs();
     let i = inertial_number(law.d, phi, speed, h, g_c * h);
     let mut mu = law.mu_of_i(i);

@@ -219,6 +219,7 @@ pub(super) fn write_summary(
     let set = |name: &str, value: f64| group.set_attr_numeric(name, &value);
     set("runout", summary.runout)?;
     set("stop_time", summary.stop_time)?;
+    set("settled_time", summary.settled_time)?;
     set("h_max_final", summary.h_max_final)?;
     set("t_end", summary.t_end)?;
     set("wall_time_s", summary.wall_time_s)?;

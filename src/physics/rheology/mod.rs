@@ -9,7 +9,9 @@ mod coulomb;
 mod mu_i;
 
 pub use coulomb::Coulomb;
-pub use mu_i::{inertial_number, local_inertial_number, MuI};
+pub use mu_i::{
+    backward_euler_discharge, backward_euler_speed, inertial_number, local_inertial_number, MuI,
+};
 
 /// Basal friction law (seed 000 eq. 6).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -25,6 +27,34 @@ pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
     /// Friction coefficient for depth-averaged speed |u| (m/s), thickness h (m) and
     /// basal pressure over density p_b/ρ (m²/s², g_n h for a hydrostatic layer).
     fn mu(&self, speed: f64, h: f64, p_over_rho: f64) -> f64;
+
+    /// The discharge after the friction step of a hydrostatic monolayer (seed 000 §3
+    /// step 2, `numerics::friction`) from the discharge `q` the other steps left, for
+    /// thickness `h` > H_DRY, time step `dt` and normal gravity `g_n`: friction stops
+    /// the mass or slows it, never reverses it. By default μ is taken at the speed of
+    /// `q` (exact for a constant μ); a law whose μ grows with the speed overrides this
+    /// with a backward-Euler solve ([`MuI`]).
+    #[inline(always)]
+    fn friction_update(&self, q: f64, h: f64, dt: f64, g_n: f64) -> f64 {
+        let mu = self.mu(crate::physics::shallow::velocity(h, q).abs(), h, g_n * h);
+        crate::numerics::friction::coulomb_update(q, dt * mu * g_n * h)
+    }
+
+    /// The same for the non-hydrostatic monolayer (`numerics::nonhydrostatic`): the
+    /// friction μ · max(p_total, 0) with the total basal pressure over density
+    /// `p_total` = g_n h + p̄ (also the pressure of I), acting on the discharge `q`
+    /// after the explicit pressure terms; `q_old` is the discharge before them, whose
+    /// speed the default (explicit in μ) evaluates μ at.
+    #[inline(always)]
+    fn nh_friction_update(&self, q: f64, q_old: f64, h: f64, dt: f64, p_total: f64) -> f64 {
+        let mu = self.mu(
+            crate::physics::shallow::velocity(h, q_old).abs(),
+            h,
+            p_total,
+        );
+        let sigma = mu * p_total.max(0.0);
+        crate::numerics::friction::coulomb_update(q, dt * sigma)
+    }
 }
 
 /// The friction coefficient of the bulk rheology at a point of the flow, used by the

@@ -369,10 +369,21 @@ fn time(t: RawTime) -> Res<TimeSpec> {
     if cfl > 1.0 {
         return err("time.cfl", format!("must be in (0, 1], got {cfl}"));
     }
+    let settle_fraction = positive("time.settle_fraction", t.settle_fraction.unwrap_or(1e-6))?;
+    if settle_fraction >= 1.0 {
+        return err(
+            "time.settle_fraction",
+            format!(
+                "must be in (0, 1) (a fraction of the peak kinetic energy), got {settle_fraction}"
+            ),
+        );
+    }
     Ok(TimeSpec {
         t_end,
         cfl,
         stop_at_rest: t.stop_at_rest.unwrap_or(false),
+        settle_fraction,
+        stop_when_settled: t.stop_when_settled.unwrap_or(false),
     })
 }
 
@@ -620,7 +631,9 @@ t_end = 2.0
             TimeSpec {
                 t_end: 2.0,
                 cfl: 0.5,
-                stop_at_rest: false
+                stop_at_rest: false,
+                settle_fraction: 1e-6,
+                stop_when_settled: false
             }
         );
         assert_eq!(
@@ -678,6 +691,8 @@ right = "outflow"
 t_end = 1.5
 cfl = 0.45
 stop_at_rest = true
+settle_fraction = 1e-4
+stop_when_settled = true
 
 [output]
 file = "out/run.h5"
@@ -700,6 +715,8 @@ front_threshold = 2e-3
         assert_eq!(s.initial.erodible_bed, 0.01);
         assert_eq!(s.boundary.right, BoundaryKind::Outflow);
         assert!(s.time.stop_at_rest);
+        assert_eq!(s.time.settle_fraction, 1e-4);
+        assert!(s.time.stop_when_settled);
         assert_eq!(s.time.cfl, 0.45);
         assert_eq!(s.output.file, PathBuf::from("out/run.h5"));
         assert_eq!(s.output.every, 0.05);
@@ -968,6 +985,24 @@ front_threshold = 2e-3
                 5,
             ),
             ("t_end = 2.0", "t_end = 2.0\ncfl = 1.5", "time.cfl", 15),
+            (
+                "t_end = 2.0",
+                "t_end = 2.0\nsettle_fraction = 1.0",
+                "time.settle_fraction",
+                15,
+            ),
+            (
+                "t_end = 2.0",
+                "t_end = 2.0\nsettle_fraction = -1e-6",
+                "time.settle_fraction",
+                15,
+            ),
+            (
+                "t_end = 2.0",
+                "t_end = 2.0\nstop_when_settled = 1",
+                "time.stop_when_settled",
+                15,
+            ),
             ("t_end = 2.0", "t_end = 0", "time.t_end", 14),
             (
                 "h = 0.1",
