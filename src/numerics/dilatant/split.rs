@@ -62,7 +62,7 @@ use super::step::DilatantOptions;
 use crate::mesh::Mesh;
 use crate::model::granular::state::LayeredState;
 use crate::numerics::friction::coulomb_update;
-use crate::numerics::hydrostatic::HydrostaticStep;
+use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
 use crate::physics::rheology::{inertial_number, MuI};
@@ -86,6 +86,8 @@ pub struct SplitScheme {
     rate: Vec<f64>,
     /// μ_eff of every wet cell after the friction step (nx + 2), K > 0 only.
     mu: Vec<f64>,
+    /// K > 0: the volume fraction each face's friction threshold sees (nx + 1).
+    phi_face: Vec<f64>,
     scratch: Vec<f64>,
     cons: [Vec<f64>; 3],
 }
@@ -99,6 +101,38 @@ pub fn reconstruction_law(law: &DilatantLaw, phi_ref: f64) -> MuI {
         i0: law.i0,
         d_s: law.d,
         phi: phi_ref,
+    }
+}
+
+/// The dilatant friction coefficient μ_eff = μ(I) + μ_w h/W + tan ψ (seed 002 eq.
+/// 2.13–2.14 and 4.1; tan ψ = K(φ − φ_eq(I)) cut so that μ_eff ≥ 0) of a layer of
+/// depth h > 0, speed |v| and fraction φ under p/ρ = g_c h. At rest (I = 0) it is the
+/// static threshold μ_1 + K(φ − φ_stat) (+ walls) of seed 002 §2.4 (2.16).
+#[inline(always)]
+pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) -> (f64, f64) {
+    let i = inertial_number(law.d, phi, speed, h, p_over_rho);
+    let mut mu = law.mu_of_i(i);
+    if law.mu_w > 0.0 {
+        mu += law.mu_w * h / law.width;
+    }
+    let tan_psi = law.tan_psi(phi, law.phi_eq(i)).max(-mu);
+    (mu + tan_psi, i)
+}
+
+/// The friction threshold of the hyperbolic step's Coulomb-aware reconstruction for
+/// K > 0: μ_eff (2.13–2.14) at the face's Roe speed and mean depth with the
+/// mass-weighted φ of its two cells, so that the reconstruction holds exactly what the
+/// cell friction holds (a mass at rest with a surface slope below μ_1 + K(φ − φ_stat))
+/// and lets through what it does not.
+struct DilatantFaces<'a> {
+    law: &'a DilatantLaw,
+    phi: &'a [f64],
+}
+
+impl FaceFriction for DilatantFaces<'_> {
+    #[inline(always)]
+    fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
+        mu_eff(self.law, speed, h, p_over_rho, self.phi[face]).0
     }
 }
 
@@ -122,22 +156,16 @@ pub fn cell_friction(
     phi: f64,
 ) -> (f64, f64, f64) {
     let speed = velocity(h, q).abs();
+    if law.k != 0.0 {
+        let (mu, i) = mu_eff(law, speed, h, g_c * h, phi);
+        return (coulomb_update(q, dt * mu * g_c * h), i, mu);
+    }
     let i = inertial_number(law.d, phi, speed, h, g_c * h);
     let mut mu = law.mu_of_i(i);
     if law.mu_w > 0.0 {
         mu += law.mu_w * h / law.width;
     }
-    let q = coulomb_update(q, dt * mu * g_c * h);
-    if law.k == 0.0 || q == 0.0 {
-        return (q, i, mu);
-    }
-    let tan_psi = law.tan_psi(phi, law.phi_eq(i)).max(-mu);
-    let q = if tan_psi >= 0.0 {
-        coulomb_update(q, dt * tan_psi * g_c * h)
-    } else {
-        q - dt * tan_psi * g_c * h * q.signum()
-    };
-    (q, i, mu + tan_psi)
+    (coulomb_update(q, dt * mu * g_c * h), i, mu)
 }
 
 impl SplitScheme {
@@ -161,6 +189,7 @@ impl SplitScheme {
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
             mu: vec![0.0; nx + 2],
+            phi_face: vec![0.0; nx + 1],
             rate: vec![0.0; nx + 1],
             scratch: vec![0.0; nx + 1],
             cons: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
@@ -187,7 +216,29 @@ impl SplitScheme {
     }
 
     fn advance(&mut self, mesh: &Mesh, s: &DilatantState, dt: f64) -> Result<(), StageError> {
-        self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
+        if self.law.k == 0.0 {
+            // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step).
+            self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
+        } else {
+            // μ_eff with the mass-weighted φ of each face's two cells at t^n (a dry
+            // side counts with the other's φ; both dry, the face is never asked).
+            let h = &self.shell.h;
+            for (k, out) in self.phi_face.iter_mut().enumerate() {
+                let (hl, hr) = (h[k].max(0.0), h[k + 1].max(0.0));
+                let (pl, pr) = (s.phi[k], s.phi[k + 1]);
+                *out = if hl + hr > 0.0 {
+                    (hl * pl + hr * pr) / (hl + hr)
+                } else {
+                    0.5 * (pl + pr)
+                };
+            }
+            let faces = DilatantFaces {
+                law: &self.law,
+                phi: &self.phi_face,
+            };
+            self.hyperbolic
+                .apply_with_friction(mesh, dt, &mut self.shell, &faces)?;
+        }
         let r = dt / mesh.dx;
         self.phi_new.copy_from_slice(&s.phi);
         // Cells holding mass after the step: every pass below is restricted to them (a
