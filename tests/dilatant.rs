@@ -757,7 +757,8 @@ fn section_4_3_with_the_default_scheme() {
     //   at every snapshot but 0.6 s and 0.9 s (below);
     // The fronts against K = 0 are not asserted: they differ by one or two cells and
     // their order changes with Δx (docs/numerics.md).
-    // - at 0° every run is at rest by 0.48 s (§4.3.1: "simulations stopped at 0.48 s").
+    // - at 0° K = 0 is at rest by 0.48 s (§4.3.1: "simulations stopped at 0.48 s"),
+    //   the dilatant fronts do not move after 0.48 s and those runs stop by 0.6 s.
     for (slope, t_end) in [(0.0, 0.6), (22.0, 1.8)] {
         let mut rows = Vec::new();
         for (label, file, k) in [
@@ -833,13 +834,12 @@ fn section_4_3_with_the_default_scheme() {
         if slope == 0.0 {
             // §4.3.1: "simulations stopped at 0.48 s". K = 0 is at rest by then. The
             // dilatant deposits stop spreading by then (front unchanged from 0.48 s to
-            // 0.6 s) but are not exactly at rest: their cell friction takes I at t^n's
-            // velocity (split.rs), which does not stop creep slower than the Δt-push of
-            // gravity as the post-push I did, and a dilated 1.3 mm front cell (μ_eff
-            // = μ_1 + K(φ − φ_stat) below its surface slope) creeps at ≤ 1 mm/s while it
-            // compacts (docs/numerics.md).
+            // 0.6 s) and are at rest within the run: dense at 0.484 s, loose at 0.452 s
+            // (their cell friction takes μ_eff at t^n, split.rs; with the post-push μ
+            // of the Savage–Hutter step they stopped at 0.39–0.41 s).
             assert!(k0.2 <= 0.48, "K = 0 at rest at {} s", k0.2);
-            for (label, series, _) in &rows[1..] {
+            for (label, series, stop) in &rows[1..] {
+                assert!(*stop <= t_end, "{label} not at rest by {t_end} s");
                 let (a, b) = (at(series, 0.48), at(series, 0.6));
                 assert_eq!(
                     a.1, b.1,

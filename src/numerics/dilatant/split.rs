@@ -15,9 +15,9 @@
 //! 1. **hyperbolic**: the monolayer's [`HydrostaticStep`] (seed 000 §3 step 1: HLL/PVM,
 //!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. For
 //!    K = 0 its ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`). For K > 0 it
-//!    takes the threshold per face ([`HydrostaticStep::apply_with_friction`]):
-//!    μ_eff = μ(I) + μ_w h/W + tan ψ at the face's Roe speed and mean depth, with the
-//!    mass-weighted φ of the two cells at t^n. The reconstruction and the cell friction
+//!    takes the threshold per face ([`HydrostaticStep::apply_with_friction`]): the mean
+//!    of the two cells' μ_eff = μ(I) + μ_w h/W + tan ψ at t^n (the wet cell's beside a
+//!    dry one), the coefficient the cell friction applies. The reconstruction and the cell friction
 //!    below then hold the same masses: a layer at rest stays at rest (to round-off) iff
 //!    its surface slope is below the static threshold μ_1 + K(φ − φ_stat) of (2.16),
 //!    and moves above it (`tests/dilatant.rs`,
@@ -38,8 +38,8 @@
 //!    the monolayer (`friction.rs`: the impulse Δt μ g_c h stops but never reverses)
 //!    ([`cell_friction`]): for K = 0 with μ(I) at the velocity after the hyperbolic
 //!    step, as the Savage–Hutter friction step; for K > 0 with μ_eff = μ(I) + μ_w h/W +
-//!    tan ψ (2.13–2.14, 4.1) at the cell's velocity of t^n (I of 2.10–2.11 with the
-//!    cell's φ). Then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the
+//!    tan ψ (2.13–2.14, 4.1) of the cell's state at t^n (I of 2.10–2.11 with the cell's
+//!    φ; μ_eff at rest for a cell that was dry). Then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the
 //!    state after friction (I of the velocity after friction): φ from (3.17) or (3.18),
 //!    φh and v kept, so h ← φh/φ and hv ← h v. In a steady uniform flow the velocity of
 //!    t^n and the one after friction are the same, so the friction balances gravity at
@@ -98,10 +98,9 @@ pub struct SplitScheme {
     rate: Vec<f64>,
     /// μ_eff of every wet cell after the friction step (nx + 2), K > 0 only.
     mu: Vec<f64>,
-    /// K > 0: the volume fraction each face's friction threshold sees (nx + 1).
-    phi_face: Vec<f64>,
-    /// K > 0: |v| of every cell at t^n (nx + 2), at which the cell friction takes I.
-    speed_old: Vec<f64>,
+    /// K > 0: μ_eff of every cell at t^n (nx + 2; −1 in a dry cell), used by the
+    /// hyperbolic step's faces and by the cell friction.
+    mu_old: Vec<f64>,
     scratch: Vec<f64>,
     cons: [Vec<f64>; 3],
 }
@@ -134,28 +133,35 @@ pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) 
 }
 
 /// The friction threshold of the hyperbolic step's Coulomb-aware reconstruction for
-/// K > 0: μ_eff (2.13–2.14) at the face's Roe speed and mean depth with the
-/// mass-weighted φ of its two cells, so that the reconstruction holds exactly what the
-/// cell friction holds (a mass at rest with a surface slope below μ_1 + K(φ − φ_stat))
-/// and lets through what it does not.
+/// K > 0: the mean of the two cells' μ_eff at t^n (2.13–2.14; the wet cell's where the
+/// other is dry), the coefficient the cell friction applies, so that the reconstruction
+/// holds exactly what the cell friction holds (a mass at rest with a surface slope
+/// below μ_1 + K(φ − φ_stat)) and lets through what it does not.
 struct DilatantFaces<'a> {
-    law: &'a DilatantLaw,
-    phi: &'a [f64],
+    mu_old: &'a [f64],
 }
 
 impl FaceFriction for DilatantFaces<'_> {
     #[inline(always)]
-    fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
-        mu_eff(self.law, speed, h, p_over_rho, self.phi[face]).0
+    fn mu(&self, face: usize, _speed: f64, _h: f64, _p_over_rho: f64) -> f64 {
+        let (l, r) = (self.mu_old[face], self.mu_old[face + 1]);
+        if l < 0.0 {
+            r
+        } else if r < 0.0 {
+            l
+        } else {
+            0.5 * (l + r)
+        }
     }
 }
 
 /// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ: the
 /// monolayer's Coulomb impulse (`friction.rs`). K = 0: with μ(I) + μ_w h/W (4.1) at
 /// the velocity q/h (I of eq. 2.10–2.11 with the cell's φ, the operations of `MuI::mu`
-/// with p/ρ = g_c h). K > 0: with μ_eff (2.13–2.14, [`mu_eff`]) at the speed
-/// `speed_old` of t^n; a mass is stopped when that impulse exceeds its momentum, so a
-/// mass at rest at t^n is held iff its drive is below the static threshold (2.16).
+/// with p/ρ = g_c h). K > 0: with `mu_old`, μ_eff (2.13–2.14, [`mu_eff`]) of the cell
+/// at t^n (negative: the cell was dry, and μ_eff at rest of the present state is
+/// used); a mass is stopped when that impulse exceeds its momentum, so a mass at rest
+/// at t^n is held iff its drive is below the static threshold (2.16).
 ///
 /// Returns the new discharge, the inertial number I at which μ was taken and μ (μ_eff
 /// for K > 0).
@@ -167,10 +173,14 @@ pub fn cell_friction(
     h: f64,
     q: f64,
     phi: f64,
-    speed_old: f64,
+    mu_old: f64,
 ) -> (f64, f64, f64) {
     if law.k != 0.0 {
-        let (mu, i) = mu_eff(law, speed_old, h, g_c * h, phi);
+        let (mu, i) = if mu_old >= 0.0 {
+            (mu_old, f64::NAN)
+        } else {
+            mu_eff(law, 0.0, h, g_c * h, phi)
+        };
         return (coulomb_update(q, dt * mu * g_c * h), i, mu);
     }
     let speed = velocity(h, q).abs();
@@ -203,8 +213,7 @@ impl SplitScheme {
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
             mu: vec![0.0; nx + 2],
-            phi_face: vec![0.0; nx + 1],
-            speed_old: vec![0.0; nx + 2],
+            mu_old: vec![0.0; nx + 2],
             rate: vec![0.0; nx + 1],
             scratch: vec![0.0; nx + 1],
             cons: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
@@ -235,29 +244,19 @@ impl SplitScheme {
             // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step).
             self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
         } else {
-            for ((out, &h), &q) in self
-                .speed_old
-                .iter_mut()
-                .zip(&self.shell.h)
-                .zip(&self.shell.hu)
-            {
-                *out = velocity(h, q).abs();
-            }
-            // μ_eff with the mass-weighted φ of each face's two cells at t^n (a dry
-            // side counts with the other's φ; both dry, the face is never asked).
-            let h = &self.shell.h;
-            for (k, out) in self.phi_face.iter_mut().enumerate() {
-                let (hl, hr) = (h[k].max(0.0), h[k + 1].max(0.0));
-                let (pl, pr) = (s.phi[k], s.phi[k + 1]);
-                *out = if hl + hr > 0.0 {
-                    (hl * pl + hr * pr) / (hl + hr)
+            // μ_eff of every cell at t^n (−1 where dry; a face with both sides dry is
+            // never asked).
+            let (law, g_c) = (&self.law, mesh.g_n);
+            let cells = self.shell.h.iter().zip(&self.shell.hu).zip(&s.phi);
+            for (out, ((&h, &q), &phi)) in self.mu_old.iter_mut().zip(cells) {
+                *out = if h <= H_DRY {
+                    -1.0
                 } else {
-                    0.5 * (pl + pr)
+                    mu_eff(law, (q / h).abs(), h, g_c * h, phi).0
                 };
             }
             let faces = DilatantFaces {
-                law: &self.law,
-                phi: &self.phi_face,
+                mu_old: &self.mu_old,
             };
             self.hyperbolic
                 .apply_with_friction(mesh, dt, &mut self.shell, &faces)?;
@@ -354,7 +353,7 @@ impl SplitScheme {
                 if !wet {
                     q = 0.0;
                 } else {
-                    (q, _, mu) = cell_friction(law, g_c, dt, hi, q, p, self.speed_old[i]);
+                    (q, _, mu) = cell_friction(law, g_c, dt, hi, q, p, self.mu_old[i]);
                 }
             }
             hu[i] = q;
