@@ -13,15 +13,11 @@
 //! dilatant friction μ_eff = μ(I) + tan ψ (2.13–2.14) and the dilatancy source. One step:
 //!
 //! 1. **hyperbolic**: the monolayer's [`HydrostaticStep`] (seed 000 §3 step 1: HLL/PVM,
-//!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. For
-//!    K = 0 its ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`). For K > 0 it
-//!    takes the threshold per face ([`HydrostaticStep::apply_with_friction`]): the mean
-//!    of the two cells' μ_eff = μ(I) + μ_w h/W + tan ψ at t^n (the wet cell's beside a
-//!    dry one), the coefficient the cell friction applies. The reconstruction and the cell friction
-//!    below then hold the same masses: a layer at rest stays at rest (to round-off) iff
-//!    its surface slope is below the static threshold μ_1 + K(φ − φ_stat) of (2.16),
-//!    and moves above it (`tests/dilatant.rs`,
-//!    `split_scheme::static_thresholds_follow_the_dilatant_friction`).
+//!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. Its
+//!    ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`) whatever K: its friction
+//!    law sees (|u|, h, p) only, not φ. The friction step below therefore decides
+//!    stopping with μ(I) too (and with μ_eff where ψ > 0); with μ_eff alone the two
+//!    thresholds differ at rest and a deposit keeps creeping (docs/numerics.md).
 //! 2. **volume fraction** (2.3): φ rides the step's mass fluxes 𝓕 with the upwind
 //!    value, written for φ rather than φh,
 //!
@@ -36,18 +32,10 @@
 //! 3. **cell pass**: the φ-gradient pressure −g_c h²/(2φ) (φ_{i+1} − φ_{i−1})/(2Δx)
 //!    (a neighbour with h ≤ 10⁻¹⁰ m counts with the cell's own φ); the friction step of
 //!    the monolayer (`friction.rs`: the impulse Δt μ g_c h stops but never reverses)
-//!    ([`cell_friction`]): for K = 0 with μ(I) at the velocity after the hyperbolic
-//!    step, as the Savage–Hutter friction step; for K > 0 with μ_eff = μ(I) + μ_w h/W +
-//!    tan ψ (2.13–2.14, 4.1) of the cell's state at t^n (I of 2.10–2.11 with the cell's
-//!    φ; μ_eff at rest for a cell that was dry). Then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the
-//!    state after friction (I of the velocity after friction): φ from (3.17) or (3.18),
-//!    φh and v kept, so h ← φh/φ and hv ← h v. In a steady uniform flow the velocity of
-//!    t^n and the one after friction are the same, so the friction balances gravity at
-//!    μ_eff(I) = tan θ and the dilatancy step holds φ = φ_eq(I): I = I*, φ = φ_eq(I*)
-//!    to round-off (`split_scheme::uniform_flow_on_an_incline_reaches_the_critical_state`).
-//!    With the velocity after the gravity push (the Savage–Hutter step's explicit μ(I))
-//!    the friction is O(Δt g sin θ) too large: at 28°, Δx = 5 mm the flow settled at
-//!    I = 0.0486 (K = 0) and 0.016 (K = 4.09) against I* = 0.0728.
+//!    with μ(I) (I of 2.10–2.11 with the cell's φ, plus μ_w h/W of 4.1), then for a mass
+//!    still moving the dilatant part tan ψ of μ_eff (2.13–2.14) ([`cell_friction`]);
+//!    then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the state after
+//!    friction: φ from (3.17) or (3.18), φh and v kept, so h ← φh/φ and hv ← h v.
 //! 4. **stabilisation** (K > 0 and ξ ≠ 0 only; off in the scenarios, the split scheme
 //!    needs none; seed 002 §3.3 introduces it for its own scheme): (φh, φhv, φ^α h)
 //!    diffuse with ι = max(0, ξ v Δz) (3.20–3.21), Δz = Δb̂ + Δx Proj_μ(X, v/(g_c Δt))
@@ -98,9 +86,8 @@ pub struct SplitScheme {
     rate: Vec<f64>,
     /// μ_eff of every wet cell after the friction step (nx + 2), K > 0 only.
     mu: Vec<f64>,
-    /// K > 0: μ_eff of every cell at t^n (nx + 2; −1 in a dry cell), used by the
-    /// hyperbolic step's faces and by the cell friction.
-    mu_old: Vec<f64>,
+    /// K > 0: the volume fraction each face's friction threshold sees (nx + 1).
+    phi_face: Vec<f64>,
     scratch: Vec<f64>,
     cons: [Vec<f64>; 3],
 }
@@ -133,38 +120,32 @@ pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) 
 }
 
 /// The friction threshold of the hyperbolic step's Coulomb-aware reconstruction for
-/// K > 0: the mean of the two cells' μ_eff at t^n (2.13–2.14; the wet cell's where the
-/// other is dry), the coefficient the cell friction applies, so that the reconstruction
-/// holds exactly what the cell friction holds (a mass at rest with a surface slope
-/// below μ_1 + K(φ − φ_stat)) and lets through what it does not.
+/// K > 0: μ_eff (2.13–2.14) at the face's Roe speed and mean depth with the
+/// mass-weighted φ of its two cells, so that the reconstruction holds exactly what the
+/// cell friction holds (a mass at rest with a surface slope below μ_1 + K(φ − φ_stat))
+/// and lets through what it does not.
 struct DilatantFaces<'a> {
-    mu_old: &'a [f64],
+    law: &'a DilatantLaw,
+    phi: &'a [f64],
 }
 
 impl FaceFriction for DilatantFaces<'_> {
     #[inline(always)]
-    fn mu(&self, face: usize, _speed: f64, _h: f64, _p_over_rho: f64) -> f64 {
-        let (l, r) = (self.mu_old[face], self.mu_old[face + 1]);
-        if l < 0.0 {
-            r
-        } else if r < 0.0 {
-            l
-        } else {
-            0.5 * (l + r)
-        }
+    fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
+        mu_eff(self.law, speed, h, p_over_rho, self.phi[face]).0
     }
 }
 
-/// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ: the
-/// monolayer's Coulomb impulse (`friction.rs`). K = 0: with μ(I) + μ_w h/W (4.1) at
-/// the velocity q/h (I of eq. 2.10–2.11 with the cell's φ, the operations of `MuI::mu`
-/// with p/ρ = g_c h). K > 0: with `mu_old`, μ_eff (2.13–2.14, [`mu_eff`]) of the cell
-/// at t^n (negative: the cell was dry, and μ_eff at rest of the present state is
-/// used); a mass is stopped when that impulse exceeds its momentum, so a mass at rest
-/// at t^n is held iff its drive is below the static threshold (2.16).
+/// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ:
+/// first the monolayer's (`friction.rs`) with μ(I) (I of eq. 2.10–2.11 with the cell's
+/// φ, the operations of `MuI::mu` with p/ρ = g_c h) plus μ_w h/W with walls (4.1); then,
+/// for K > 0 and a mass still moving, the dilatant part tan ψ = K(φ − φ_eq(I)) (2.13–2.14,
+/// cut so that μ_eff ≥ 0): a further Coulomb impulse when ψ > 0, a push along the motion
+/// when ψ < 0. A moving mass thus feels μ_eff g_c h; a mass is stopped when the impulse
+/// of μ(I) (ψ < 0) or of μ_eff (ψ > 0) exceeds its momentum.
 ///
-/// Returns the new discharge, the inertial number I at which μ was taken and μ (μ_eff
-/// for K > 0).
+/// Returns the new discharge, the inertial number I of the incoming discharge and, for
+/// K > 0, μ_eff at that I (μ(I) + walls where the mass stops).
 #[inline(always)]
 pub fn cell_friction(
     law: &DilatantLaw,
@@ -173,17 +154,12 @@ pub fn cell_friction(
     h: f64,
     q: f64,
     phi: f64,
-    mu_old: f64,
 ) -> (f64, f64, f64) {
+    let speed = velocity(h, q).abs();
     if law.k != 0.0 {
-        let (mu, i) = if mu_old >= 0.0 {
-            (mu_old, f64::NAN)
-        } else {
-            mu_eff(law, 0.0, h, g_c * h, phi)
-        };
+        let (mu, i) = mu_eff(law, speed, h, g_c * h, phi);
         return (coulomb_update(q, dt * mu * g_c * h), i, mu);
     }
-    let speed = velocity(h, q).abs();
     let i = inertial_number(law.d, phi, speed, h, g_c * h);
     let mut mu = law.mu_of_i(i);
     if law.mu_w > 0.0 {
@@ -213,7 +189,7 @@ impl SplitScheme {
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
             mu: vec![0.0; nx + 2],
-            mu_old: vec![0.0; nx + 2],
+            phi_face: vec![0.0; nx + 1],
             rate: vec![0.0; nx + 1],
             scratch: vec![0.0; nx + 1],
             cons: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
@@ -244,19 +220,21 @@ impl SplitScheme {
             // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step).
             self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
         } else {
-            // μ_eff of every cell at t^n (−1 where dry; a face with both sides dry is
-            // never asked).
-            let (law, g_c) = (&self.law, mesh.g_n);
-            let cells = self.shell.h.iter().zip(&self.shell.hu).zip(&s.phi);
-            for (out, ((&h, &q), &phi)) in self.mu_old.iter_mut().zip(cells) {
-                *out = if h <= H_DRY {
-                    -1.0
+            // μ_eff with the mass-weighted φ of each face's two cells at t^n (a dry
+            // side counts with the other's φ; both dry, the face is never asked).
+            let h = &self.shell.h;
+            for (k, out) in self.phi_face.iter_mut().enumerate() {
+                let (hl, hr) = (h[k].max(0.0), h[k + 1].max(0.0));
+                let (pl, pr) = (s.phi[k], s.phi[k + 1]);
+                *out = if hl + hr > 0.0 {
+                    (hl * pl + hr * pr) / (hl + hr)
                 } else {
-                    mu_eff(law, (q / h).abs(), h, g_c * h, phi).0
+                    0.5 * (pl + pr)
                 };
             }
             let faces = DilatantFaces {
-                mu_old: &self.mu_old,
+                law: &self.law,
+                phi: &self.phi_face,
             };
             self.hyperbolic
                 .apply_with_friction(mesh, dt, &mut self.shell, &faces)?;
@@ -348,12 +326,13 @@ impl SplitScheme {
             }
             left = (p, wet);
             // The friction step of the monolayer (friction.rs), with μ_eff.
-            let mut mu = f64::NAN;
+            let q_in = q;
+            let (mut i_in, mut mu) = (0.0, f64::NAN);
             if q != 0.0 {
                 if !wet {
                     q = 0.0;
                 } else {
-                    (q, _, mu) = cell_friction(law, g_c, dt, hi, q, p, self.mu_old[i]);
+                    (q, i_in, mu) = cell_friction(law, g_c, dt, hi, q, p);
                 }
             }
             hu[i] = q;
@@ -372,8 +351,8 @@ impl SplitScheme {
                 if q == 0.0 {
                     continue;
                 }
-                // I after the friction (eq. 2.10, 2.15).
-                let i_out = inertial_number(law.d, p, (q / hi).abs(), hi, g_c * hi);
+                // I scales with |v| at fixed h and φ (eq. 2.10, 2.15).
+                let i_out = i_in * (q / q_in).abs();
                 let phi_eq = law.phi_eq(i_out);
                 // (3.15)–(3.19) with γ̇* = (5/2)|v*|/h*, φ_eq* = φ_eq(I*).
                 let inv_h = 1.0 / hi;
