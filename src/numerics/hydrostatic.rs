@@ -107,6 +107,13 @@
 //! Wet/dry fronts: an emerging bed (h_L > 0, h_R dry, h_L + b_L < b_R, and its mirror)
 //! is seen with the wet state's velocities set to zero (seed 003 Remark 2).
 //!
+//! Per-face friction: the threshold μ of ΔC comes from a [`FaceFriction`], by default
+//! the step's own law (which ignores the face, so the default step is unchanged to the
+//! bit). The dilatant model (seed 002) passes μ_eff = μ(I) + tan ψ with the volume
+//! fraction of each face ([`HydrostaticStep::apply_with_friction`]): its static
+//! threshold μ_1 + K(φ − φ_stat) (seed 002 eq. 2.16) depends on φ, which a
+//! `BasalFriction` of (|u|, h, p) cannot see.
+//!
 //! A state at rest has u_α = 0, so ΔG = 0 and 𝓑 = 0: the exchange terms keep granular
 //! masses at rest exactly at rest, like the monolayer.
 

@@ -13,11 +13,15 @@
 //! dilatant friction μ_eff = μ(I) + tan ψ (2.13–2.14) and the dilatancy source. One step:
 //!
 //! 1. **hyperbolic**: the monolayer's [`HydrostaticStep`] (seed 000 §3 step 1: HLL/PVM,
-//!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. Its
-//!    ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`) whatever K: its friction
-//!    law sees (|u|, h, p) only, not φ. The friction step below therefore decides
-//!    stopping with μ(I) too (and with μ_eff where ψ > 0); with μ_eff alone the two
-//!    thresholds differ at rest and a deposit keeps creeping (docs/numerics.md).
+//!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. For
+//!    K = 0 its ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`). For K > 0 it
+//!    takes the threshold per face ([`HydrostaticStep::apply_with_friction`]):
+//!    μ_eff = μ(I) + μ_w h/W + tan ψ at the face's Roe speed and mean depth, with the
+//!    mass-weighted φ of the two cells at t^n. The reconstruction and the cell friction
+//!    below then hold the same masses: a layer at rest stays at rest (to round-off) iff
+//!    its surface slope is below the static threshold μ_1 + K(φ − φ_stat) of (2.16),
+//!    and moves above it (`tests/dilatant.rs`,
+//!    `split_scheme::static_thresholds_follow_the_dilatant_friction`).
 //! 2. **volume fraction** (2.3): φ rides the step's mass fluxes 𝓕 with the upwind
 //!    value, written for φ rather than φh,
 //!
@@ -31,9 +35,12 @@
 //!    hyperbolic step never asks a dry cell for φ).
 //! 3. **cell pass**: the φ-gradient pressure −g_c h²/(2φ) (φ_{i+1} − φ_{i−1})/(2Δx)
 //!    (a neighbour with h ≤ 10⁻¹⁰ m counts with the cell's own φ); the friction step of
-//!    the monolayer (`friction.rs`: the impulse Δt μ g_c h stops but never reverses)
-//!    with μ(I) (I of 2.10–2.11 with the cell's φ, plus μ_w h/W of 4.1), then for a mass
-//!    still moving the dilatant part tan ψ of μ_eff (2.13–2.14) ([`cell_friction`]);
+//!    the monolayer (`friction.rs`: the impulse Δt μ g_c h stops but never reverses) at
+//!    the velocity after step 1 ([`cell_friction`]): μ(I) + μ_w h/W (4.1) for K = 0,
+//!    μ_eff = μ(I) + μ_w h/W + tan ψ (2.13–2.14, cut at 0) for K > 0 (I of 2.10–2.11
+//!    with the cell's φ). Taking μ after the gravity push is the Savage–Hutter step's
+//!    O(Δt) splitting error: a uniform 28° flow (Δx = 5 mm) settles at I = 0.0486
+//!    (K = 0) and 0.016 (K = 4.09, dense) against I* = 0.0728 (docs/numerics.md);
 //!    then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the state after
 //!    friction: φ from (3.17) or (3.18), φh and v kept, so h ← φh/φ and hv ← h v.
 //! 4. **stabilisation** (K > 0 and ξ ≠ 0 only; off in the scenarios, the split scheme
@@ -136,16 +143,15 @@ impl FaceFriction for DilatantFaces<'_> {
     }
 }
 
-/// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ:
-/// first the monolayer's (`friction.rs`) with μ(I) (I of eq. 2.10–2.11 with the cell's
-/// φ, the operations of `MuI::mu` with p/ρ = g_c h) plus μ_w h/W with walls (4.1); then,
-/// for K > 0 and a mass still moving, the dilatant part tan ψ = K(φ − φ_eq(I)) (2.13–2.14,
-/// cut so that μ_eff ≥ 0): a further Coulomb impulse when ψ > 0, a push along the motion
-/// when ψ < 0. A moving mass thus feels μ_eff g_c h; a mass is stopped when the impulse
-/// of μ(I) (ψ < 0) or of μ_eff (ψ > 0) exceeds its momentum.
+/// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ: the
+/// monolayer's Coulomb impulse (`friction.rs`) at the velocity q/h. K = 0: with μ(I) +
+/// μ_w h/W (4.1) (I of eq. 2.10–2.11 with the cell's φ, the operations of `MuI::mu`
+/// with p/ρ = g_c h). K > 0: with μ_eff = μ(I) + μ_w h/W + tan ψ ([`mu_eff`],
+/// 2.13–2.14, cut at 0), one impulse; a mass is stopped when it exceeds its momentum,
+/// so a mass is held iff its drive is below μ_eff (at rest, the static threshold 2.16).
 ///
-/// Returns the new discharge, the inertial number I of the incoming discharge and, for
-/// K > 0, μ_eff at that I (μ(I) + walls where the mass stops).
+/// Returns the new discharge, the inertial number I of the incoming discharge and the
+/// μ applied.
 #[inline(always)]
 pub fn cell_friction(
     law: &DilatantLaw,
