@@ -107,6 +107,13 @@
 //! Wet/dry fronts: an emerging bed (h_L > 0, h_R dry, h_L + b_L < b_R, and its mirror)
 //! is seen with the wet state's velocities set to zero (seed 003 Remark 2).
 //!
+//! Per-face friction: the threshold μ of ΔC comes from a [`FaceFriction`], by default
+//! the step's own law (which ignores the face, so the default step is unchanged to the
+//! bit). The dilatant model (seed 002) passes μ_eff = μ(I) + tan ψ with the volume
+//! fraction of each face ([`HydrostaticStep::apply_with_friction`]): its static
+//! threshold μ_1 + K(φ − φ_stat) (seed 002 eq. 2.16) depends on φ, which a
+//! `BasalFriction` of (|u|, h, p) cannot see.
+//!
 //! A state at rest has u_α = 0, so ΔG = 0 and 𝓑 = 0: the exchange terms keep granular
 //! masses at rest exactly at rest, like the monolayer.
 
@@ -116,6 +123,23 @@ use crate::mesh::Mesh;
 use crate::model::granular::state::LayeredState;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{sheared_celerity, velocity, H_DRY};
+
+/// The friction coefficient that the Coulomb-aware reconstruction (ΔC) uses at a face:
+/// `face` k lies between the ghost-inclusive cells k and k + 1 (k = 0..=nx), `speed` is
+/// the Roe-averaged |ū| there, `h` the mean depth and `p_over_rho` = g_n h. Every basal
+/// friction law is one (it ignores the face); a model whose threshold depends on more
+/// than (|u|, h, p), such as the dilatant μ(I) + tan ψ (seed 002 eq. 2.13–2.14), supplies
+/// its own through [`HydrostaticStep::apply_with_friction`].
+pub trait FaceFriction {
+    fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64;
+}
+
+impl<L: BasalFriction> FaceFriction for L {
+    #[inline(always)]
+    fn mu(&self, _face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
+        BasalFriction::mu(self, speed, h, p_over_rho)
+    }
+}
 
 /// The hydrostatic step for N ≥ 1 layers, generic over the basal friction law (used in ΔC).
 #[derive(Debug)]
@@ -215,8 +239,8 @@ struct Interface {
 /// The interface coefficients, or `None` where nothing crosses (both sides dry, or no
 /// wave). The returned sides carry the velocity the fluxes see.
 #[inline(always)]
-fn interface<L: BasalFriction>(
-    law: &L,
+fn interface<M: Fn(f64, f64) -> f64>(
+    mu_of: M,
     mut l: Side,
     mut r: Side,
     g_n: f64,
@@ -272,7 +296,7 @@ fn interface<L: BasalFriction>(
     let alpha1 = (s_right.abs() - s_left.abs()) / spread;
 
     // Coulomb-aware reconstruction (ΔC): friction up to its threshold acts as bed.
-    let mu = law.mu(u_roe.abs(), h_roe, g_n * h_roe);
+    let mu = mu_of(u_roe.abs(), h_roe);
     let threshold = g_n * mu;
     // The friction acts on the bottom layer (seed 001 eq. 28): its velocity u_1 enters
     // the drive (seed 003 prints ū). Over a bottom layer that the viscous step has
@@ -385,15 +409,15 @@ fn layer_momentum_flux(
 /// (F^h, F^hu, sources of the left and right cells, their gravity parts) of a
 /// monolayer interface; all zero where nothing crosses.
 #[inline(always)]
-fn monolayer_fluxes<L: BasalFriction>(
-    law: &L,
+fn monolayer_fluxes<M: Fn(f64, f64) -> f64>(
+    mu_of: M,
     l: Side,
     r: Side,
     g_n: f64,
     dx: f64,
     dt: f64,
 ) -> (f64, f64, f64, f64, f64, f64) {
-    match interface(law, l, r, g_n, dx, dt) {
+    match interface(mu_of, l, r, g_n, dx, dt) {
         None => (0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
         Some((c, l, r)) => (
             mass_flux(&c, l, r),
@@ -527,7 +551,14 @@ impl<L: BasalFriction> HydrostaticStep<L> {
 
     /// N > 1: mass flux, pressure source, and each layer's momentum flux and exchange
     /// term at every interface k (between cells k and k + 1, ghosts included).
-    fn interfaces(&mut self, mesh: &Mesh, dt: f64, l_frac: &[f64], h: &[f64]) {
+    fn interfaces<F: FaceFriction>(
+        &mut self,
+        mesh: &Mesh,
+        dt: f64,
+        l_frac: &[f64],
+        h: &[f64],
+        faces: &F,
+    ) {
         let (nx, n) = (mesh.nx, self.layers);
         let (g_n, dx) = (mesh.g_n, mesh.dx);
         let side = |j: usize| Side {
@@ -543,7 +574,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         for k in 0..=nx {
             let right = side(k + 1);
             let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
-            let Some((c, l, r)) = interface(&self.law, left, right, g_n, dx, dt) else {
+            let mu_of = |speed: f64, h: f64| faces.mu(k, speed, h, g_n * h);
+            let Some((c, l, r)) = interface(mu_of, left, right, g_n, dx, dt) else {
                 // The cell update reads every interface's fluxes: they must be zero here.
                 self.flux_h[k] = 0.0;
                 self.share_left[k] = 0.0;
@@ -600,13 +632,14 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     /// interface; cell k's h_new follows as soon as interface k is done. Returns the
     /// smallest h_new and its cell, as [`Self::update_mass`] does (same operations, same
     /// order: the results are those of the N-layer path with N = 1).
-    fn monolayer_interfaces(
+    fn monolayer_interfaces<F: FaceFriction>(
         &mut self,
         mesh: &Mesh,
         dt: f64,
         h: &[f64],
         hu: &[f64],
         r: f64,
+        faces: &F,
     ) -> (f64, usize) {
         let nx = mesh.nx;
         let (g_n, dx) = (mesh.g_n, mesh.dx);
@@ -620,18 +653,20 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         let body_left = &mut self.body_left[..nx + 1];
         let body_right = &mut self.body_right[..nx + 1];
         let h_new = &mut self.h_new[..nx + 2];
-        let law = &self.law;
         let side = |j: usize| Side::monolayer(h[j], hu[j], b[j], z[j]);
-        let fluxes = |l: Side, r: Side| monolayer_fluxes(law, l, r, g_n, dx, dt);
+        let fluxes = |k: usize, l: Side, r: Side| {
+            let mu_of = |speed: f64, h: f64| faces.mu(k, speed, h, g_n * h);
+            monolayer_fluxes(mu_of, l, r, g_n, dx, dt)
+        };
         let mut worst = (f64::INFINITY, 1usize);
         let mut left = side(0);
         let mut right = side(1);
-        let (mut f_left, f_hu, s_l, s_r, b_l, b_r) = fluxes(left, right);
+        let (mut f_left, f_hu, s_l, s_r, b_l, b_r) = fluxes(0, left, right);
         (flux_h[0], flux_hu[0], share_left[0], share_right[0]) = (f_left, f_hu, s_l, s_r);
         (body_left[0], body_right[0]) = (b_l, b_r);
         for k in 1..=nx {
             (left, right) = (right, side(k + 1));
-            let (f_right, f_hu, s_l, s_r, b_l, b_r) = fluxes(left, right);
+            let (f_right, f_hu, s_l, s_r, b_l, b_r) = fluxes(k, left, right);
             (flux_h[k], flux_hu[k], share_left[k], share_right[k]) = (f_right, f_hu, s_l, s_r);
             (body_left[k], body_right[k]) = (b_l, b_r);
             let hn = h[k] - r * (f_right - f_left);
@@ -743,6 +778,23 @@ impl<L: BasalFriction> Stage<LayeredState> for HydrostaticStep<L> {
     }
 
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+        let law = self.law;
+        self.apply_with_friction(mesh, dt, state, &law)
+    }
+}
+
+impl<L: BasalFriction> HydrostaticStep<L> {
+    /// The step with the friction threshold of the Coulomb-aware reconstruction (ΔC)
+    /// taken from `faces` at each face instead of from the step's law (module
+    /// documentation, "per-face friction"). [`Stage::apply`] is this call with the law
+    /// itself, which ignores the face: same operations, same results.
+    pub fn apply_with_friction<F: FaceFriction>(
+        &mut self,
+        mesh: &Mesh,
+        dt: f64,
+        state: &mut LayeredState,
+        faces: &F,
+    ) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, self.layers);
         let (nx, n) = (mesh.nx, self.layers);
         if !state.tracers.is_empty() {
@@ -755,10 +807,10 @@ impl<L: BasalFriction> Stage<LayeredState> for HydrostaticStep<L> {
         // (state untouched) if anything is still negative beyond round-off.
         let r = dt / mesh.dx;
         let mut worst = if n == 1 {
-            self.monolayer_interfaces(mesh, dt, &state.h, &state.hu, r)
+            self.monolayer_interfaces(mesh, dt, &state.h, &state.hu, r, faces)
         } else {
             self.velocities(state);
-            self.interfaces(mesh, dt, &state.l, &state.h);
+            self.interfaces(mesh, dt, &state.l, &state.h, faces);
             self.update_mass(&state.h, r)
         };
         if worst.0 < 0.0 {

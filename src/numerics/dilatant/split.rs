@@ -13,11 +13,15 @@
 //! dilatant friction μ_eff = μ(I) + tan ψ (2.13–2.14) and the dilatancy source. One step:
 //!
 //! 1. **hyperbolic**: the monolayer's [`HydrostaticStep`] (seed 000 §3 step 1: HLL/PVM,
-//!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. Its
-//!    ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`) whatever K: its friction
-//!    law sees (|u|, h, p) only, not φ. The friction step below therefore decides
-//!    stopping with μ(I) too (and with μ_eff where ψ > 0); with μ_eff alone the two
-//!    thresholds differ at rest and a deposit keeps creeping (docs/numerics.md).
+//!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. For
+//!    K = 0 its ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`). For K > 0 it
+//!    takes the threshold per face ([`HydrostaticStep::apply_with_friction`]):
+//!    μ_eff = μ(I) + μ_w h/W + tan ψ at the face's Roe speed and mean depth, with the
+//!    mass-weighted φ of the two cells at t^n. The reconstruction and the cell friction
+//!    below then hold the same masses: a layer at rest stays at rest (to round-off) iff
+//!    its surface slope is below the static threshold μ_1 + K(φ − φ_stat) of (2.16),
+//!    and moves above it (`tests/dilatant.rs`,
+//!    `split_scheme::static_thresholds_follow_the_dilatant_friction`).
 //! 2. **volume fraction** (2.3): φ rides the step's mass fluxes 𝓕 with the upwind
 //!    value, written for φ rather than φh,
 //!
@@ -31,9 +35,12 @@
 //!    hyperbolic step never asks a dry cell for φ).
 //! 3. **cell pass**: the φ-gradient pressure −g_c h²/(2φ) (φ_{i+1} − φ_{i−1})/(2Δx)
 //!    (a neighbour with h ≤ 10⁻¹⁰ m counts with the cell's own φ); the friction step of
-//!    the monolayer (`friction.rs`: the impulse Δt μ g_c h stops but never reverses)
-//!    with μ(I) (I of 2.10–2.11 with the cell's φ, plus μ_w h/W of 4.1), then for a mass
-//!    still moving the dilatant part tan ψ of μ_eff (2.13–2.14) ([`cell_friction`]);
+//!    the monolayer (`friction.rs`: the impulse Δt μ g_c h stops but never reverses) at
+//!    the velocity after step 1 ([`cell_friction`]): μ(I) + μ_w h/W (4.1) for K = 0,
+//!    μ_eff = μ(I) + μ_w h/W + tan ψ (2.13–2.14, cut at 0) for K > 0 (I of 2.10–2.11
+//!    with the cell's φ). Taking μ after the gravity push is the Savage–Hutter step's
+//!    O(Δt) splitting error: a uniform 28° flow (Δx = 5 mm) settles at I = 0.0486
+//!    (K = 0) and 0.016 (K = 4.09, dense) against I* = 0.0728 (docs/numerics.md);
 //!    then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the state after
 //!    friction: φ from (3.17) or (3.18), φh and v kept, so h ← φh/φ and hv ← h v.
 //! 4. **stabilisation** (K > 0 and ξ ≠ 0 only; off in the scenarios, the split scheme
@@ -62,7 +69,7 @@ use super::step::DilatantOptions;
 use crate::mesh::Mesh;
 use crate::model::granular::state::LayeredState;
 use crate::numerics::friction::coulomb_update;
-use crate::numerics::hydrostatic::HydrostaticStep;
+use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
 use crate::physics::rheology::{backward_euler_discharge, inertial_number, MuI};
@@ -86,6 +93,8 @@ pub struct SplitScheme {
     rate: Vec<f64>,
     /// μ_eff of every wet cell after the friction step (nx + 2), K > 0 only.
     mu: Vec<f64>,
+    /// K > 0: the volume fraction each face's friction threshold sees (nx + 1).
+    phi_face: Vec<f64>,
     scratch: Vec<f64>,
     cons: [Vec<f64>; 3],
 }
@@ -102,16 +111,47 @@ pub fn reconstruction_law(law: &DilatantLaw, phi_ref: f64) -> MuI {
     }
 }
 
-/// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ:
-/// first the monolayer's (`friction.rs`) with μ(I) (I of eq. 2.10–2.11 with the cell's
-/// φ, the operations of `MuI::mu` with p/ρ = g_c h) plus μ_w h/W with walls (4.1); then,
-/// for K > 0 and a mass still moving, the dilatant part tan ψ = K(φ − φ_eq(I)) (2.13–2.14,
-/// cut so that μ_eff ≥ 0): a further Coulomb impulse when ψ > 0, a push along the motion
-/// when ψ < 0. A moving mass thus feels μ_eff g_c h; a mass is stopped when the impulse
-/// of μ(I) (ψ < 0) or of μ_eff (ψ > 0) exceeds its momentum.
+/// The dilatant friction coefficient μ_eff = μ(I) + μ_w h/W + tan ψ (seed 002 eq.
+/// 2.13–2.14 and 4.1; tan ψ = K(φ − φ_eq(I)) cut so that μ_eff ≥ 0) of a layer of
+/// depth h > 0, speed |v| and fraction φ under p/ρ = g_c h. At rest (I = 0) it is the
+/// static threshold μ_1 + K(φ − φ_stat) (+ walls) of seed 002 §2.4 (2.16).
+#[inline(always)]
+pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) -> (f64, f64) {
+    let i = inertial_number(law.d, phi, speed, h, p_over_rho);
+    let mut mu = law.mu_of_i(i);
+    if law.mu_w > 0.0 {
+        mu += law.mu_w * h / law.width;
+    }
+    let tan_psi = law.tan_psi(phi, law.phi_eq(i)).max(-mu);
+    (mu + tan_psi, i)
+}
+
+/// The friction threshold of the hyperbolic step's Coulomb-aware reconstruction for
+/// K > 0: μ_eff (2.13–2.14) at the face's Roe speed and mean depth with the
+/// mass-weighted φ of its two cells, so that the reconstruction holds exactly what the
+/// cell friction holds (a mass at rest with a surface slope below μ_1 + K(φ − φ_stat))
+/// and lets through what it does not.
+struct DilatantFaces<'a> {
+    law: &'a DilatantLaw,
+    phi: &'a [f64],
+}
+
+impl FaceFriction for DilatantFaces<'_> {
+    #[inline(always)]
+    fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
+        mu_eff(self.law, speed, h, p_over_rho, self.phi[face]).0
+    }
+}
+
+/// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ: the
+/// monolayer's Coulomb impulse (`friction.rs`) at the velocity q/h. K = 0: with μ(I) +
+/// μ_w h/W (4.1) (I of eq. 2.10–2.11 with the cell's φ, the operations of `MuI::mu`
+/// with p/ρ = g_c h). K > 0: with μ_eff = μ(I) + μ_w h/W + tan ψ ([`mu_eff`],
+/// 2.13–2.14, cut at 0), one impulse; a mass is stopped when it exceeds its momentum,
+/// so a mass is held iff its drive is below μ_eff (at rest, the static threshold 2.16).
 ///
-/// Returns the new discharge, the inertial number I of the incoming discharge and, for
-/// K > 0, μ_eff at that I (μ(I) + walls where the mass stops).
+/// Returns the new discharge, the inertial number I of the incoming discharge and the
+/// μ applied.
 #[inline(always)]
 pub fn cell_friction(
     law: &DilatantLaw,
@@ -139,22 +179,16 @@ pub fn cell_friction(
         return (q, 0.0, f64::NAN);
     }
     let speed = velocity(h, q).abs();
+    if law.k != 0.0 {
+        let (mu, i) = mu_eff(law, speed, h, g_c * h, phi);
+        return (coulomb_update(q, dt * mu * g_c * h), i, mu);
+    }
     let i = inertial_number(law.d, phi, speed, h, g_c * h);
     let mut mu = law.mu_of_i(i);
     if law.mu_w > 0.0 {
         mu += law.mu_w * h / law.width;
     }
-    let q = coulomb_update(q, dt * mu * g_c * h);
-    if law.k == 0.0 || q == 0.0 {
-        return (q, i, mu);
-    }
-    let tan_psi = law.tan_psi(phi, law.phi_eq(i)).max(-mu);
-    let q = if tan_psi >= 0.0 {
-        coulomb_update(q, dt * tan_psi * g_c * h)
-    } else {
-        q - dt * tan_psi * g_c * h * q.signum()
-    };
-    (q, i, mu + tan_psi)
+    (coulomb_update(q, dt * mu * g_c * h), i, mu)
 }
 
 impl SplitScheme {
@@ -178,6 +212,7 @@ impl SplitScheme {
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
             mu: vec![0.0; nx + 2],
+            phi_face: vec![0.0; nx + 1],
             rate: vec![0.0; nx + 1],
             scratch: vec![0.0; nx + 1],
             cons: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
@@ -204,7 +239,29 @@ impl SplitScheme {
     }
 
     fn advance(&mut self, mesh: &Mesh, s: &DilatantState, dt: f64) -> Result<(), StageError> {
-        self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
+        if self.law.k == 0.0 {
+            // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step).
+            self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
+        } else {
+            // μ_eff with the mass-weighted φ of each face's two cells at t^n (a dry
+            // side counts with the other's φ; both dry, the face is never asked).
+            let h = &self.shell.h;
+            for (k, out) in self.phi_face.iter_mut().enumerate() {
+                let (hl, hr) = (h[k].max(0.0), h[k + 1].max(0.0));
+                let (pl, pr) = (s.phi[k], s.phi[k + 1]);
+                *out = if hl + hr > 0.0 {
+                    (hl * pl + hr * pr) / (hl + hr)
+                } else {
+                    0.5 * (pl + pr)
+                };
+            }
+            let faces = DilatantFaces {
+                law: &self.law,
+                phi: &self.phi_face,
+            };
+            self.hyperbolic
+                .apply_with_friction(mesh, dt, &mut self.shell, &faces)?;
+        }
         let r = dt / mesh.dx;
         self.phi_new.copy_from_slice(&s.phi);
         // Cells holding mass after the step: every pass below is restricted to them (a
