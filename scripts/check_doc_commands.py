@@ -206,8 +206,10 @@ def classify(cmd):
         return "run", cmd.text
     text = re.sub(r"^cargo run --release -- ", "granflow ", cmd.text)
     # The scratch directory has no Cargo.toml; release reuses CI's release build.
-    text = re.sub(r"^cargo run (?!--release)", f"cargo run --release --manifest-path {ROOT}/Cargo.toml ",
-                  text)
+    if text.startswith("cargo run "):
+        # Any other `cargo run` (an example, say), with or without --release.
+        rest = re.sub(r"^cargo run (--release )?", "", text)
+        text = f"cargo run --release --manifest-path {ROOT}/Cargo.toml {rest}"
     for prefix, why in NOT_RUN.items():
         if text.startswith(prefix) or f" {prefix} " in f" {text} ":
             return "skip", why
