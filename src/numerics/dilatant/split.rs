@@ -72,7 +72,7 @@ use crate::numerics::friction::coulomb_update;
 use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
-use crate::physics::rheology::{backward_euler_discharge, inertial_number, MuI};
+use crate::physics::rheology::{inertial_number, BasalFriction, MuI};
 use crate::physics::shallow::{velocity, H_DRY};
 use std::ops::RangeInclusive;
 
@@ -162,8 +162,8 @@ pub fn cell_friction(
     phi: f64,
 ) -> (f64, f64, f64) {
     if law.k == 0.0 {
-        // Without dilatancy: the monolayer's backward-Euler μ(I) step (issue 13 item 1,
-        // `MuI::friction_update`), the walls' μ_w h/W a constant added to μ_1 and μ_2,
+        // Without dilatancy: the monolayer's own backward-Euler μ(I) step (issue 13 item
+        // 1, `MuI::friction_update`), the walls' μ_w h/W a constant added to μ_1 and μ_2,
         // so that K = 0 stays the Savage–Hutter μ(I) run bit for bit. (K > 0 keeps μ at
         // the incoming speed; I and μ are returned for the dilatant part only.)
         let wall = if law.mu_w > 0.0 {
@@ -171,23 +171,16 @@ pub fn cell_friction(
         } else {
             0.0
         };
-        let mu_s = law.mu_1 + wall;
-        let static_impulse = dt * mu_s * g_c * h;
-        let k = inertial_number(law.d, phi, 1.0, h, g_c * h);
-        let (mu_2, c) = (law.mu_2 + wall, dt * g_c);
-        let q = backward_euler_discharge(mu_s, mu_2, law.i0, q, h, static_impulse, c, k);
-        return (q, 0.0, f64::NAN);
+        let savage_hutter = MuI {
+            mu_s: law.mu_1 + wall,
+            mu_2: law.mu_2 + wall,
+            i0: law.i0,
+            d_s: law.d,
+            phi,
+        };
+        return (savage_hutter.friction_update(q, h, dt, g_c), 0.0, f64::NAN);
     }
-    let speed = velocity(h, q).abs();
-    if law.k != 0.0 {
-        let (mu, i) = mu_eff(law, speed, h, g_c * h, phi);
-        return (coulomb_update(q, dt * mu * g_c * h), i, mu);
-    }
-    let i = inertial_number(law.d, phi, speed, h, g_c * h);
-    let mut mu = law.mu_of_i(i);
-    if law.mu_w > 0.0 {
-        mu += law.mu_w * h / law.width;
-    }
+    let (mu, i) = mu_eff(law, velocity(h, q).abs(), h, g_c * h, phi);
     (coulomb_update(q, dt * mu * g_c * h), i, mu)
 }
 
