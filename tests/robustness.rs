@@ -75,9 +75,15 @@ fn with_h(expr: &str) -> String {
 /// Runs `granflow ARGS…` with stdout a pipe whose reading end is closed at once, as in
 /// `granflow … | true`.
 fn with_closed_stdout(args: &[&str], cwd: &Path) -> (i32, String) {
-    let mut child = std::process::Command::new(bin())
-        .args(args)
-        .current_dir(cwd)
+    let mut cmd = std::process::Command::new(bin());
+    cmd.args(args).current_dir(cwd);
+    spawn_with_closed_stdout(cmd)
+}
+
+/// Spawns `cmd` with stdout a pipe whose reading end is closed at once; returns its exit
+/// code (-1 if a signal ended it) and its stderr.
+fn spawn_with_closed_stdout(mut cmd: std::process::Command) -> (i32, String) {
+    let mut child = cmd
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -114,27 +120,15 @@ fn other_commands_into_a_closed_pipe_do_not_panic() {
         vec!["check", "mine.toml"],
     ] {
         // A shell that waits, so the reader is gone before granflow writes.
-        let mut child = std::process::Command::new("sh")
-            .arg("-c")
+        let mut sh = std::process::Command::new("sh");
+        sh.arg("-c")
             .arg("sleep 0.2; exec \"$0\" \"$@\"")
             .arg(bin())
             .args(&args)
-            .current_dir(dir.path())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        drop(child.stdout.take());
-        let mut stderr = String::new();
-        child
-            .stderr
-            .take()
-            .unwrap()
-            .read_to_string(&mut stderr)
-            .unwrap();
-        let code = child.wait().unwrap().code();
+            .current_dir(dir.path());
+        let (code, stderr) = spawn_with_closed_stdout(sh);
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
-        assert_eq!(code, Some(0), "{args:?}: {stderr}");
+        assert_eq!(code, 0, "{args:?}: {stderr}");
     }
 }
 
