@@ -4,6 +4,8 @@
 //! shapes, bad keys are refused with exit code 2, and a lake at rest reads a constant
 //! surface at every gauge.
 
+mod common;
+
 use std::path::Path;
 
 use assert_cmd::Command;
@@ -224,11 +226,7 @@ fn the_files_hold_the_documented_shapes() {
         .args(["--set", "output.gauge_every=0.1"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let f = rust_hdf5::H5File::open(&h5).unwrap();
     let read = |name: &str| f.dataset(name).unwrap().read_raw::<f64>().unwrap();
     let shape = |name: &str| f.dataset(name).unwrap().shape();
@@ -270,7 +268,7 @@ fn the_files_hold_the_documented_shapes() {
         ])
         .output()
         .unwrap();
-    assert!(out.status.success());
+    common::assert_success(&out);
     assert!(!dir.path().join("plain_gauges.csv").exists());
     let f = rust_hdf5::H5File::open(&plain).unwrap();
     assert!(f.dataset("gauges/t").is_err());

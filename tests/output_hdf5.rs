@@ -597,10 +597,6 @@ assert f["front"].attrs["threshold"] == {THRESHOLD:e}
             .arg(&path)
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        common::assert_success(&out);
     }
 }
