@@ -10,6 +10,15 @@
 //! then steps (CFL + all stages) are timed in bursts that alternate between the two;
 //! the best burst of each is kept (the machine is shared). Second case: the same with
 //! a 1 cm layer everywhere (every cell wet), 640 and 64 000 cells.
+//!
+//! For instruction counts under callgrind (docs/performance.md, "Dilatant model"), a
+//! fixed number of steps of one stepper from t = 0, nothing timed:
+//!
+//!   BENCH_BINARY --profile {sh|split|stab} CELLS LAYER STEPS
+//!
+//! (`sh`: Savage–Hutter μ(I); `split`: the split scheme without viscosity; `stab`: with
+//! ξ = (2, 2, 2)); BENCH_BINARY is the executable `cargo bench --bench dilatant
+//! --no-run` prints.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -82,7 +91,9 @@ impl Split {
     }
 }
 
-fn case(cells: usize, layer: f64, t0: f64) {
+/// The seed 002 §4 collapse on `cells` cells of 5 mm from x = −0.2 m (22°, wall on the
+/// left, outflow on the right): the 14 cm column on x ≤ 0, `layer` m of grains beyond.
+fn collapse(cells: usize, layer: f64) -> (Mesh, Vec<f64>) {
     let spec = MeshSpec {
         x_min: -0.2,
         x_max: -0.2 + cells as f64 * 0.005,
@@ -93,28 +104,47 @@ fn case(cells: usize, layer: f64, t0: f64) {
         right: BoundaryKind::Outflow,
     };
     let mesh = Mesh::new(&spec, vec![0.0; cells]);
-    let h: Vec<f64> = mesh
+    let h = mesh
         .x
         .iter()
         .map(|&x| if x <= 0.0 { 0.14 } else { layer })
         .collect();
+    (mesh, h)
+}
+
+impl SavageHutter {
+    fn new(mesh: &Mesh, h: &[f64]) -> Self {
+        SavageHutter {
+            state: State::from_profiles(mesh, &[1.0], h, &vec![0.0; mesh.nx]),
+            hyperbolic: HydrostaticStep::new(MU_I, mesh.nx),
+            friction: CoulombFrictionStep::new(MU_I),
+        }
+    }
+}
+
+impl Split {
+    /// The dense column (φ0 = 0.62, Table 1) with the viscosity coefficients ξ.
+    fn new(mesh: &Mesh, h: &[f64], xi: f64) -> Self {
+        let nx = mesh.nx;
+        let mut options = DilatantOptions::default();
+        options.viscosity.xi = [xi; 3];
+        Split {
+            state: DilatantState::from_profiles(mesh, 2.0, h, &vec![0.0; nx], &vec![0.62; nx]),
+            scheme: SplitScheme::new(DilatantLaw::table1(), options, nx, 0.62),
+        }
+    }
+}
+
+fn case(cells: usize, layer: f64, t0: f64) {
+    let (mesh, h) = collapse(cells, layer);
     let zero = vec![0.0; cells];
-    let mut sh = SavageHutter {
-        state: State::from_profiles(&mesh, &[1.0], &h, &zero),
-        hyperbolic: HydrostaticStep::new(MU_I, cells),
-        friction: CoulombFrictionStep::new(MU_I),
-    };
+    let mut sh = SavageHutter::new(&mesh, &h);
     let mut dil = Dilatant {
         state: DilatantState::from_profiles(&mesh, 2.0, &h, &zero, &vec![0.62; cells]),
         scheme: DilatantScheme::new(DilatantLaw::table1(), DilatantOptions::default(), cells),
     };
     // The split scheme with the scenarios' default: no stabilisation viscosity.
-    let mut split_options = DilatantOptions::default();
-    split_options.viscosity.xi = [0.0; 3];
-    let mut split = Split {
-        state: DilatantState::from_profiles(&mesh, 2.0, &h, &zero, &vec![0.62; cells]),
-        scheme: SplitScheme::new(DilatantLaw::table1(), split_options, cells, 0.62),
-    };
+    let mut split = Split::new(&mesh, &h, 0.0);
     // Advance both to about t0 (their own Δt), untimed.
     let steps_to_t0 = (t0 / (0.5 * mesh.dx / (9.81f64 * 0.14).sqrt())) as usize;
     for _ in 0..steps_to_t0 {
@@ -167,7 +197,37 @@ fn case(cells: usize, layer: f64, t0: f64) {
     );
 }
 
+/// `--profile WHICH CELLS LAYER STEPS`: `STEPS` steps of one stepper, for callgrind.
+fn profile(args: &[String]) {
+    let usage = "usage: --profile {sh|split|stab} CELLS LAYER STEPS";
+    let [which, cells, layer, steps] = args else {
+        panic!("{usage}");
+    };
+    let cells: usize = cells.parse().expect(usage);
+    let layer: f64 = layer.parse().expect(usage);
+    let steps: usize = steps.parse().expect(usage);
+    let (mesh, h) = collapse(cells, layer);
+    let h_sum = match which.as_str() {
+        "sh" => {
+            let mut sh = SavageHutter::new(&mesh, &h);
+            (0..steps).for_each(|_| sh.step(&mesh));
+            sh.state.h.iter().sum::<f64>()
+        }
+        "split" | "stab" => {
+            let mut split = Split::new(&mesh, &h, if which == "stab" { 2.0 } else { 0.0 });
+            (0..steps).for_each(|_| split.step(&mesh));
+            split.state.h.iter().sum::<f64>()
+        }
+        _ => panic!("{usage}"),
+    };
+    println!("{h_sum}");
+}
+
 fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(k) = args.iter().position(|a| a == "--profile") {
+        return profile(&args[k + 1..]);
+    }
     case(640, 0.0, 0.3);
     case(640, 0.01, 0.3);
     case(64_000, 0.01, 0.0);
