@@ -104,6 +104,39 @@ impl DilatantLaw {
         }
     }
 
+    /// φ_eq(I) (as [`DilatantLaw::phi_eq`]) and its derivative dφ_eq/dI ≤ 0: every
+    /// regularisation is convex and non-increasing in I, which the backward-Euler
+    /// friction of the split scheme relies on (`numerics::dilatant::split`).
+    #[inline(always)]
+    pub fn phi_eq_and_slope(&self, i: f64) -> (f64, f64) {
+        let (ps, kt) = (self.phi_stat, self.k_tilde);
+        match self.phi_eq {
+            PhiEq::Linear => (ps - kt * i, -kt),
+            PhiEq::F0 => {
+                let p = ps - kt * i;
+                if p > 0.0 {
+                    (p, -kt)
+                } else {
+                    (0.0, 0.0)
+                }
+            }
+            PhiEq::F1 => {
+                let p = ps * (-kt * i / ps).exp();
+                (p, -kt * p / ps)
+            }
+            PhiEq::F2 { n } => {
+                // d/dI [φ_stat b^−N] = −K̃ b^−N−1 = −K̃ φ_eq/(φ_stat b), b = 1 + K̃ I/(N φ_stat).
+                let base = 1.0 + kt * i / (n * ps);
+                let p = if n == 1.0 {
+                    ps / base
+                } else {
+                    ps / base.powf(n)
+                };
+                (p, -kt * p / (ps * base))
+            }
+        }
+    }
+
     /// μ(I) of eq. (2.14), as μ_1 + (μ_2 − μ_1)/(1 + I_0/I): I = 0 gives μ_1 and I = ∞
     /// gives μ_2 without 0/0.
     #[inline(always)]
@@ -317,6 +350,29 @@ mod tests {
         }
         .phi_eq(2.0);
         assert_relative_eq!(f1, f2, max_relative = 1e-6);
+    }
+
+    #[test]
+    fn phi_eq_slope_is_the_derivative() {
+        let mut law = DilatantLaw::table1();
+        for reg in [
+            PhiEq::Linear,
+            PhiEq::F0,
+            PhiEq::F1,
+            PhiEq::F2 { n: 1.0 },
+            PhiEq::F2 { n: 3.0 },
+        ] {
+            law.phi_eq = reg;
+            for i in [0.0, 1e-3, 0.07, 0.5, 2.0] {
+                let (p, slope) = law.phi_eq_and_slope(i);
+                assert_eq!(p, law.phi_eq(i), "{reg:?} I={i}");
+                let e = 1e-6;
+                let fd =
+                    (law.phi_eq(i + e) - law.phi_eq((i - e).max(0.0))) / (i + e - (i - e).max(0.0));
+                assert_relative_eq!(slope, fd, max_relative = 1e-6, epsilon = 1e-12);
+                assert!(slope <= 0.0);
+            }
+        }
     }
 
     #[test]
