@@ -101,8 +101,6 @@ pub struct SplitScheme {
     rate: Vec<f64>,
     /// μ_eff of every wet cell after the friction step (nx + 2), K > 0 only.
     mu: Vec<f64>,
-    /// K > 0: the volume fraction each face's friction threshold sees (nx + 1).
-    phi_face: Vec<f64>,
     scratch: Vec<f64>,
     cons: [Vec<f64>; 3],
 }
@@ -136,19 +134,47 @@ pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) 
 
 /// The friction threshold of the hyperbolic step's Coulomb-aware reconstruction for
 /// K > 0: μ_eff (2.13–2.14) at the face's Roe speed and mean depth with the
-/// mass-weighted φ of its two cells, so that the reconstruction holds exactly what the
+/// mass-weighted φ of its two cells at t^n (a dry side counts with the other's φ; both
+/// dry, the face is never asked), so that the reconstruction holds exactly what the
 /// cell friction holds (a mass at rest with a surface slope below μ_1 + K(φ − φ_stat))
-/// and lets through what it does not.
+/// and lets through what it does not. φ of the face is formed where it is asked for
+/// (no pass of its own), and a face at rest (Roe speed 0: I = 0) takes the static
+/// threshold μ_1 + μ_w h/W + K(φ − φ_stat) without I, μ(I) and φ_eq(I): the same
+/// value bit for bit (μ(0) = μ_1 + 0 and φ_eq(0) = φ_stat exactly), fewer operations.
 struct DilatantFaces<'a> {
     law: &'a DilatantLaw,
+    /// h and φ at t^n (nx + 2, ghosts included).
+    h: &'a [f64],
     phi: &'a [f64],
 }
 
 impl FaceFriction for DilatantFaces<'_> {
     #[inline(always)]
     fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
-        mu_eff(self.law, speed, h, p_over_rho, self.phi[face]).0
+        let law = self.law;
+        let (hl, hr) = (self.h[face].max(0.0), self.h[face + 1].max(0.0));
+        let (pl, pr) = (self.phi[face], self.phi[face + 1]);
+        let phi = if hl + hr > 0.0 {
+            (hl * pl + hr * pr) / (hl + hr)
+        } else {
+            0.5 * (pl + pr)
+        };
+        if speed == 0.0 {
+            let mut mu = law.mu_1;
+            if law.mu_w > 0.0 {
+                mu += law.mu_w * h / law.width;
+            }
+            return mu + law.tan_psi(phi, law.phi_stat).max(-mu);
+        }
+        moving_face(law, speed, h, p_over_rho, phi)
     }
+}
+
+/// μ_eff of a moving face, out of line: the face function stays small enough to be
+/// inlined into the hyperbolic step's loop.
+#[inline(never)]
+fn moving_face(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) -> f64 {
+    mu_eff(law, speed, h, p_over_rho, phi).0
 }
 
 /// G(I) = μ(I) + μ_w h/W + K(φ − φ_eq(I)) (seed 002 eq. 2.8, 2.13–2.14, 4.1; `wall`
@@ -254,6 +280,20 @@ pub fn cell_friction(law: &DilatantLaw, g_c: f64, dt: f64, h: f64, q: f64, phi: 
         };
         return (savage_hutter.friction_update(q, h, dt, g_c), 0.0);
     }
+    dilatant_friction(law, g_c, dt, h, q, phi, wall)
+}
+
+/// The K > 0 part of [`cell_friction`] (`wall` = μ_w h/W).
+#[inline(always)]
+fn dilatant_friction(
+    law: &DilatantLaw,
+    g_c: f64,
+    dt: f64,
+    h: f64,
+    q: f64,
+    phi: f64,
+    wall: f64,
+) -> (f64, f64) {
     let weight = g_c * h;
     let at_rest = (law.mu_1 + wall + law.tan_psi(phi, law.phi_stat)).max(0.0);
     if dt * at_rest * weight * (1.0 + STATIC_ROUNDOFF) >= q.abs() {
@@ -296,7 +336,6 @@ impl SplitScheme {
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
             mu: vec![0.0; nx + 2],
-            phi_face: vec![0.0; nx + 1],
             rate: vec![0.0; nx + 1],
             scratch: vec![0.0; nx + 1],
             cons: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
@@ -327,21 +366,12 @@ impl SplitScheme {
             // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step).
             self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
         } else {
-            // μ_eff with the mass-weighted φ of each face's two cells at t^n (a dry
-            // side counts with the other's φ; both dry, the face is never asked).
-            let h = &self.shell.h;
-            for (k, out) in self.phi_face.iter_mut().enumerate() {
-                let (hl, hr) = (h[k].max(0.0), h[k + 1].max(0.0));
-                let (pl, pr) = (s.phi[k], s.phi[k + 1]);
-                *out = if hl + hr > 0.0 {
-                    (hl * pl + hr * pr) / (hl + hr)
-                } else {
-                    0.5 * (pl + pr)
-                };
-            }
+            // μ_eff with the mass-weighted φ of each face's two cells at t^n; backup[0]
+            // holds h at t^n.
             let faces = DilatantFaces {
                 law: &self.law,
-                phi: &self.phi_face,
+                h: &self.backup[0],
+                phi: &s.phi,
             };
             self.hyperbolic
                 .apply_with_friction(mesh, dt, &mut self.shell, &faces)?;
@@ -384,7 +414,8 @@ impl SplitScheme {
         let faces = flux.windows(2).zip(phi.windows(3));
         for (j, ((f, p3), (&hj, next))) in faces.zip(h.iter().zip(out)).enumerate() {
             let p = p3[1];
-            if hj <= 0.0 {
+            if hj <= 0.0 || (f[0] == 0.0 && f[1] == 0.0) {
+                // Dry, or nothing crosses (a mass at rest): φ stays (already copied).
                 continue;
             }
             let up_out = if f[1] > 0.0 { p } else { p3[2] };
@@ -410,15 +441,33 @@ impl SplitScheme {
         dt: f64,
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
+        match (self.law.k != 0.0, !self.opt.viscosity.is_off()) {
+            (false, _) => self.cells_with::<false, false>(mesh, dt, wet),
+            (true, false) => self.cells_with::<true, false>(mesh, dt, wet),
+            (true, true) => self.cells_with::<true, true>(mesh, dt, wet),
+        }
+    }
+
+    /// [`SplitScheme::cells`] for K ≠ 0 (`DILATANT`) and ξ ≠ 0 (`STABILISE`), so that
+    /// the loop carries no test of either.
+    fn cells_with<const DILATANT: bool, const STABILISE: bool>(
+        &mut self,
+        mesh: &Mesh,
+        dt: f64,
+        wet: RangeInclusive<usize>,
+    ) -> Result<(), StageError> {
         let (nx, g_c, dx) = (self.shell.nx, mesh.g_n, mesh.dx);
         let law = &self.law;
-        let dilatant = law.k != 0.0;
-        let stabilise = !self.opt.viscosity.is_off();
         let (h, hu, phi) = (&mut self.shell.h, &mut self.shell.hu, &mut self.phi_new);
+        let mu = &mut self.mu;
+        let (lo, hi_end) = (*wet.start(), *wet.end() + 1);
+        // Every index below is < hi_end + 1 ≤ nx + 2: checked once, not per cell.
+        assert!(lo >= 1 && hi_end < h.len() && h.len() == hu.len() && h.len() == phi.len());
+        assert!(mu.len() == h.len());
         let gradient_factor = 0.5 * g_c * dt / (2.0 * dx);
         // φ and wetness of the left neighbour before its dilatancy step.
-        let mut left = (phi[wet.start() - 1], h[wet.start() - 1] > H_DRY);
-        for i in wet {
+        let mut left = (phi[lo - 1], h[lo - 1] > H_DRY);
+        for i in lo..hi_end {
             let hi = h[i];
             let p = phi[i];
             let wet = hi > H_DRY;
@@ -438,16 +487,24 @@ impl SplitScheme {
             if q != 0.0 {
                 if !wet {
                     q = 0.0;
+                } else if DILATANT {
+                    // μ_w h/W as `cell_friction` forms it (μ_w > 0 only).
+                    let wall = if law.mu_w > 0.0 {
+                        law.mu_w * hi / law.width
+                    } else {
+                        0.0
+                    };
+                    (q, i_out) = dilatant_friction(law, g_c, dt, hi, q, p, wall);
                 } else {
                     (q, i_out) = cell_friction(law, g_c, dt, hi, q, p);
                 }
             }
             hu[i] = q;
-            if dilatant && wet {
-                if stabilise {
+            if DILATANT && wet {
+                if STABILISE {
                     // μ_eff at the state after friction (at rest: μ_1 + K(φ − φ_stat)
                     // plus the walls), for the stabilisation's faces.
-                    self.mu[i] = mu_eff_at(law, hi, p, i_out);
+                    mu[i] = mu_eff_at(law, hi, p, i_out);
                 }
                 if q == 0.0 {
                     continue;
@@ -474,8 +531,8 @@ impl SplitScheme {
             }
         }
         fill_fraction_ghosts(phi);
-        self.mu[0] = self.mu[1];
-        self.mu[nx + 1] = self.mu[nx];
+        mu[0] = mu[1];
+        mu[nx + 1] = mu[nx];
         Ok(())
     }
 
