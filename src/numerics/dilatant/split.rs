@@ -207,9 +207,10 @@ fn friction_and_slope(law: &DilatantLaw, phi: f64, wall: f64, i: f64) -> (f64, f
 /// answer is u*; otherwise the root of g lies where G > 0, so it is the root of the
 /// equation with the cut, and Newton's method from u = 0 climbs to it monotonically
 /// (the tangent of a concave function lies above it: no iterate passes the root).
-/// Stopped after a step ≤ 10⁻⁹ u: quadratic convergence leaves an error of order
-/// (g''/g') · step², far below round-off (checked against bisection to the last bit in
-/// the unit tests). Returns (u, I = k u); a NaN u* gives NaN.
+/// Stopped after a step δ with |g''|max δ² ≤ ε u/4 (the error left is then below
+/// ε u/2: quadratic convergence, g' ≥ 1), or δ ≤ 10⁻⁹ u where no bound on g'' is known
+/// (f0's kink); checked against bisection to round-off in the unit tests. Returns
+/// (u, I = k u); a NaN u* gives NaN.
 #[inline(always)]
 pub fn backward_euler_speed(
     law: &DilatantLaw,
@@ -229,7 +230,13 @@ pub fn backward_euler_speed(
             return (u_star, i);
         }
     }
-    let mut u: f64 = 0.0;
+    // The first Newton step from u = 0 in closed form: G(0) = μ_1 + μ_w h/W + K(φ −
+    // φ_stat), G'(0) = (μ_2 − μ_1)/I_0 − K φ_eq'(0).
+    let (g0, slope0) = friction_and_slope(law, phi, wall, 0.0);
+    let mut u = (u_star - c * g0) / (1.0 + c * k * slope0);
+    // |g''| ≤ c k² |G''|max: after a step δ from the left the error left is at most
+    // 2 |g''| δ² (g' ≥ 1), so |g''| δ² ≤ ε u/4 means the root to round-off.
+    let curvature = c * k * k * law.friction_curvature_bound();
     for _ in 0..MAX_NEWTON {
         let (g, slope) = friction_and_slope(law, phi, wall, k * u);
         let step = (u_star - u - c * g) / (1.0 + c * k * slope);
@@ -238,7 +245,7 @@ pub fn backward_euler_speed(
             break;
         }
         u += step;
-        if step <= NEWTON_TOLERANCE * u {
+        if step <= NEWTON_TOLERANCE * u || curvature * step * step <= 0.25 * f64::EPSILON * u {
             break;
         }
     }
@@ -405,31 +412,31 @@ impl SplitScheme {
         r: f64,
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
-        let (lo, hi) = (*wet.start(), *wet.end());
-        // Faces lo − 1..=hi, cells lo − 1..=hi + 1: equal-length windows, no bounds checks.
-        let flux = &self.hyperbolic.mass_flux()[lo - 1..=hi];
-        let phi = &phi[lo - 1..=hi + 1];
-        let h = &self.shell.h[lo..=hi];
-        let out = &mut self.phi_new[lo..=hi];
-        let faces = flux.windows(2).zip(phi.windows(3));
-        for (j, ((f, p3), (&hj, next))) in faces.zip(h.iter().zip(out)).enumerate() {
-            let p = p3[1];
-            if hj <= 0.0 || (f[0] == 0.0 && f[1] == 0.0) {
+        let (lo, end) = (*wet.start(), *wet.end() + 1);
+        let flux = self.hyperbolic.mass_flux();
+        let (h, out) = (&self.shell.h, &mut self.phi_new);
+        // Faces lo − 1..end, cells lo − 1..=end: checked once, not per cell.
+        assert!(lo >= 1 && end < phi.len() && end <= flux.len());
+        assert!(phi.len() == h.len() && h.len() == out.len());
+        for j in lo..end {
+            let (hj, f_in, f_out) = (h[j], flux[j - 1], flux[j]);
+            if hj <= 0.0 || (f_in == 0.0 && f_out == 0.0) {
                 // Dry, or nothing crosses (a mass at rest): φ stays (already copied).
                 continue;
             }
-            let up_out = if f[1] > 0.0 { p } else { p3[2] };
-            let up_in = if f[0] > 0.0 { p3[0] } else { p };
-            let change = f[1] * (up_out - p) - f[0] * (up_in - p);
+            let p = phi[j];
+            let up_out = if f_out > 0.0 { p } else { phi[j + 1] };
+            let up_in = if f_in > 0.0 { phi[j - 1] } else { p };
+            let change = f_out * (up_out - p) - f_in * (up_in - p);
             let value = p - r * change / hj;
             if !(value > 0.0 && value < 1.0) {
                 return Err(StageError::Inadmissible {
-                    x: mesh.x[lo + j - 1],
+                    x: mesh.x[j - 1],
                     quantity: "volume fraction φ (transport)",
                     value,
                 });
             }
-            *next = value;
+            out[j] = value;
         }
         Ok(())
     }
