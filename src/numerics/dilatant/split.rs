@@ -202,7 +202,7 @@ fn friction_and_slope(law: &DilatantLaw, phi: f64, wall: f64, i: f64) -> (f64, f
 /// are taken at the new speed: taking them at u* (explicit in I) gave a uniform 28°
 /// flow a spurious steady state (module documentation).
 ///
-/// Solution: g(u) = u + c G(k u) − u* is increasing and concave ([`friction_and_slope`])
+/// Solution: g(u) = u + c G(k u) − u* is increasing and concave (`friction_and_slope`)
 /// with g(0) < 0. Where G(k u*) ≤ 0 (a loose mass, μ_eff = 0 on all of [0, u*]) the
 /// answer is u*; otherwise the root of g lies where G > 0, so it is the root of the
 /// equation with the cut, and Newton's method from u = 0 climbs to it monotonically
