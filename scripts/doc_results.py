@@ -78,7 +78,7 @@ CHECKS = {
     "dil_mass": cargo_test("dilatant", "split_scheme::grains_are_conserved_and_fractions_stay_admissible"),
     "dil_collapse": cargo_test("dilatant", "section_4_3_with_the_default_scheme"),
     "dil_threshold": cargo_test("dilatant", "split_scheme::static_thresholds_follow_the_dilatant_friction"),
-    "dil_uniform": cargo_test("dilatant", "split_scheme::uniform_flow_on_an_incline_split_scheme_report"),
+    "dil_uniform": cargo_test("dilatant", "split_scheme::uniform_flow_on_an_incline_reaches_the_critical_state_split_scheme"),
     "collapse_pins": cargo_test("scenarios", "collapse_regression_norms"),
     "frozen_hashes": cargo_test("multilayer", "monolayer_numbers_are_frozen"),
     "film_speed": cargo_test("properties", "thin_cell_next_to_a_bed_step_keeps_a_bounded_speed"),

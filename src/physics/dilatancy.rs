@@ -104,6 +104,55 @@ impl DilatantLaw {
         }
     }
 
+    /// φ_eq(I) (as [`DilatantLaw::phi_eq`]) and its derivative dφ_eq/dI ≤ 0: every
+    /// regularisation is convex and non-increasing in I, which the backward-Euler
+    /// friction of the split scheme relies on (`numerics::dilatant::split`).
+    #[inline(always)]
+    pub fn phi_eq_and_slope(&self, i: f64) -> (f64, f64) {
+        let (ps, kt) = (self.phi_stat, self.k_tilde);
+        match self.phi_eq {
+            PhiEq::Linear => (ps - kt * i, -kt),
+            PhiEq::F0 => {
+                let p = ps - kt * i;
+                if p > 0.0 {
+                    (p, -kt)
+                } else {
+                    (0.0, 0.0)
+                }
+            }
+            PhiEq::F1 => {
+                let p = ps * (-kt * i / ps).exp();
+                (p, -kt * p / ps)
+            }
+            PhiEq::F2 { n } => {
+                // d/dI [φ_stat b^−N] = −K̃ b^−N−1 = −K̃ φ_eq/(φ_stat b), b = 1 + K̃ I/(N φ_stat).
+                let base = 1.0 + kt * i / (n * ps);
+                let p = if n == 1.0 {
+                    ps / base
+                } else {
+                    ps / base.powf(n)
+                };
+                (p, -kt * p / (ps * base))
+            }
+        }
+    }
+
+    /// An upper bound of |G''(I)| over I ≥ 0 for G = μ(I) + K(φ − φ_eq(I)) (the
+    /// dilatant friction before its cut): 2(μ_2 − μ_1)/I_0² + K max|φ_eq''|, with
+    /// max|φ_eq''| = 0 (2.9), K̃²/φ_stat (f1), (N + 1)K̃²/(N φ_stat) (f2); ∞ for f0,
+    /// whose kink has none.
+    pub fn friction_curvature_bound(&self) -> f64 {
+        let (ps, kt) = (self.phi_stat, self.k_tilde);
+        let phi_eq = match self.phi_eq {
+            PhiEq::Linear => 0.0,
+            PhiEq::F0 => f64::INFINITY,
+            PhiEq::F1 => kt * kt / ps,
+            PhiEq::F2 { n } => (n + 1.0) * kt * kt / (n * ps),
+        };
+        let dilatancy = if self.k == 0.0 { 0.0 } else { self.k * phi_eq };
+        2.0 * (self.mu_2 - self.mu_1).abs() / (self.i0 * self.i0) + dilatancy
+    }
+
     /// μ(I) of eq. (2.14), as μ_1 + (μ_2 − μ_1)/(1 + I_0/I): I = 0 gives μ_1 and I = ∞
     /// gives μ_2 without 0/0.
     #[inline(always)]
@@ -317,6 +366,52 @@ mod tests {
         }
         .phi_eq(2.0);
         assert_relative_eq!(f1, f2, max_relative = 1e-6);
+    }
+
+    #[test]
+    fn phi_eq_slope_is_the_derivative() {
+        let mut law = DilatantLaw::table1();
+        for reg in [
+            PhiEq::Linear,
+            PhiEq::F0,
+            PhiEq::F1,
+            PhiEq::F2 { n: 1.0 },
+            PhiEq::F2 { n: 3.0 },
+        ] {
+            law.phi_eq = reg;
+            for i in [0.0, 1e-3, 0.07, 0.5, 2.0] {
+                let (p, slope) = law.phi_eq_and_slope(i);
+                assert_eq!(p, law.phi_eq(i), "{reg:?} I={i}");
+                let e = 1e-6;
+                let fd =
+                    (law.phi_eq(i + e) - law.phi_eq((i - e).max(0.0))) / (i + e - (i - e).max(0.0));
+                assert_relative_eq!(slope, fd, max_relative = 1e-6, epsilon = 1e-12);
+                assert!(slope <= 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn friction_curvature_bound_holds() {
+        let mut law = DilatantLaw::table1();
+        for reg in [
+            PhiEq::Linear,
+            PhiEq::F1,
+            PhiEq::F2 { n: 1.0 },
+            PhiEq::F2 { n: 3.0 },
+        ] {
+            law.phi_eq = reg;
+            let g = |i: f64| law.mu_of_i(i) - law.k * law.phi_eq(i);
+            let bound = law.friction_curvature_bound();
+            for i in [1e-4, 1e-2, 0.1, 1.0] {
+                let e = 0.5 * i;
+                let second = (g(i + e) - 2.0 * g(i) + g(i - e)) / (e * e);
+                assert!(
+                    second <= 0.0 && -second <= bound * (1.0 + 1e-3),
+                    "{reg:?} I={i}: {second} vs {bound}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -34,7 +34,16 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
         match spec.options.scheme {
             SchemeKind::Split => {
                 let scheme = SplitScheme::new(spec.law, spec.options, mesh.nx, scn.material.phi);
-                (Box::new(scheme), 0.0, 0.0)
+                // K = 0: the Savage–Hutter run's exact rest (bit for bit). K > 0: a mass
+                // near its static threshold μ_1 + K(φ − φ_stat) compacts as it creeps and
+                // comes to rest only asymptotically (backward-Euler friction, split.rs),
+                // so rest is as for the Appendix B scheme.
+                let (depth, speed) = if spec.law.k == 0.0 {
+                    (0.0, 0.0)
+                } else {
+                    (spec.law.d, REST_SPEED)
+                };
+                (Box::new(scheme), depth, speed)
             }
             SchemeKind::AppendixB => (
                 Box::new(DilatantScheme::new(spec.law, spec.options, mesh.nx)),

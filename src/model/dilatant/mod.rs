@@ -38,10 +38,12 @@ pub struct Dilatant {
     /// Thickness from which a cell counts for the front (m).
     pub front_threshold: f64,
     /// Thickness (m) below which a cell's speed does not count for the rest test: 0 for
-    /// the split scheme (every cell counts, as in the monolayer), the grain diameter d
-    /// for the Appendix B scheme, whose stabilisation viscosity (seed 002 eq. 3.20)
-    /// spreads films of ~1e-10 m ahead of a deposit that keep a speed of order 0.1 m/s
-    /// (seed 002 §3.3 calls layers thinner than a few grains physically meaningless).
+    /// the split scheme with K = 0 (every cell counts, as in the monolayer), the grain
+    /// diameter d for the Appendix B scheme, whose stabilisation viscosity (seed 002
+    /// eq. 3.20) spreads films of ~1e-10 m ahead of a deposit that keep a speed of
+    /// order 0.1 m/s (seed 002 §3.3 calls layers thinner than a few grains physically
+    /// meaningless), and for the split scheme with K > 0, whose front films (tens of µm,
+    /// φ ≈ 0.5) compact while they creep and slow down only exponentially.
     pub rest_depth: f64,
     /// Largest speed of a mass at rest (m/s).
     pub rest_speed: f64,
@@ -97,9 +99,11 @@ impl Model for Dilatant {
         }
     }
 
-    /// 0 for the split scheme, whose friction step stops a mass exactly (as the
-    /// monolayer's); [`REST_SPEED`] for the Appendix B scheme, whose apparent-topography
-    /// friction (seed 002 eq. 3.10) stops it to round-off.
+    /// 0 for the split scheme with K = 0, whose friction step stops a mass exactly (as
+    /// the monolayer's); [`REST_SPEED`] for the Appendix B scheme, whose
+    /// apparent-topography friction (seed 002 eq. 3.10) stops it to round-off, and for
+    /// the split scheme with K > 0, where a mass that creeps near its static threshold
+    /// compacts and stops only asymptotically (backward-Euler friction, `split.rs`).
     fn rest_speed(&self) -> f64 {
         self.rest_speed
     }

@@ -35,14 +35,23 @@
 //!    hyperbolic step never asks a dry cell for φ).
 //! 3. **cell pass**: the φ-gradient pressure −g_c h²/(2φ) (φ_{i+1} − φ_{i−1})/(2Δx)
 //!    (a neighbour with h ≤ 10⁻¹⁰ m counts with the cell's own φ); the friction step of
-//!    the monolayer (`friction.rs`: the impulse Δt μ g_c h stops but never reverses) at
-//!    the velocity after step 1 ([`cell_friction`]): μ(I) + μ_w h/W (4.1) for K = 0,
-//!    μ_eff = μ(I) + μ_w h/W + tan ψ (2.13–2.14, cut at 0) for K > 0 (I of 2.10–2.11
-//!    with the cell's φ). Taking μ after the gravity push is the Savage–Hutter step's
-//!    O(Δt) splitting error: a uniform 28° flow (Δx = 5 mm) settles at I = 0.0486
-//!    (K = 0) and 0.016 (K = 4.09, dense) against I* = 0.0728 (docs/numerics.md);
+//!    the monolayer (`friction.rs`: friction stops but never reverses) in backward
+//!    Euler in the speed ([`cell_friction`]): μ(I) + μ_w h/W (4.1) for K = 0 (the
+//!    Savage–Hutter `MuI::friction_update`), μ_eff = μ(I) + μ_w h/W + tan ψ (2.13–2.14,
+//!    cut at 0) for K > 0 with μ(I) and φ_eq(I) both at the new speed
+//!    ([`backward_euler_speed`], I of 2.10–2.11 with the cell's φ); the mass stops iff
+//!    its discharge is within the static impulse Δt g_c h (μ_1 + μ_w h/W + K(φ − φ_stat))
+//!    of (2.16). Until issue 11's follow-up μ_eff was taken at the speed after the
+//!    gravity push (explicit in I): a uniform 28° flow then settled at I = 0.0160,
+//!    φ = 0.5789 (dense start) or nearly stopped (loose, I = 2.0e-4) instead of
+//!    I* = 0.0728, φ_eq(I*) = 0.5678, because the dilatancy step below relaxed φ
+//!    towards φ_eq at the slower speed after friction while the friction used the
+//!    faster one, so tan ψ stayed > 0 at the fixed point. Now the fixed point is
+//!    exactly tan ψ = 0, μ(I) = tan θ (`tests/dilatant.rs`,
+//!    `split_scheme::uniform_flow_on_an_incline_reaches_the_critical_state_split_scheme`);
 //!    then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the state after
-//!    friction: φ from (3.17) or (3.18), φh and v kept, so h ← φh/φ and hv ← h v.
+//!    friction (I* = the I at which μ_eff was taken): φ from (3.17) or (3.18), φh and v
+//!    kept, so h ← φh/φ and hv ← h v.
 //! 4. **stabilisation** (K > 0 and ξ ≠ 0 only; off in the scenarios, the split scheme
 //!    needs none; seed 002 §3.3 introduces it for its own scheme): (φh, φhv, φ^α h)
 //!    diffuse with ι = max(0, ξ v Δz) (3.20–3.21), Δz = Δb̂ + Δx Proj_μ(X, v/(g_c Δt))
@@ -68,12 +77,11 @@ use super::state::DilatantState;
 use super::step::DilatantOptions;
 use crate::mesh::Mesh;
 use crate::model::granular::state::LayeredState;
-use crate::numerics::friction::coulomb_update;
 use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
-use crate::physics::rheology::{inertial_number, BasalFriction, MuI};
-use crate::physics::shallow::{velocity, H_DRY};
+use crate::physics::rheology::{inertial_number, BasalFriction, MuI, STATIC_ROUNDOFF};
+use crate::physics::shallow::H_DRY;
 use std::ops::RangeInclusive;
 
 /// The split dilatant stepper with its work arrays (allocated once).
@@ -93,8 +101,6 @@ pub struct SplitScheme {
     rate: Vec<f64>,
     /// μ_eff of every wet cell after the friction step (nx + 2), K > 0 only.
     mu: Vec<f64>,
-    /// K > 0: the volume fraction each face's friction threshold sees (nx + 1).
-    phi_face: Vec<f64>,
     scratch: Vec<f64>,
     cons: [Vec<f64>; 3],
 }
@@ -128,49 +134,150 @@ pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) 
 
 /// The friction threshold of the hyperbolic step's Coulomb-aware reconstruction for
 /// K > 0: μ_eff (2.13–2.14) at the face's Roe speed and mean depth with the
-/// mass-weighted φ of its two cells, so that the reconstruction holds exactly what the
+/// mass-weighted φ of its two cells at t^n (a dry side counts with the other's φ; both
+/// dry, the face is never asked), so that the reconstruction holds exactly what the
 /// cell friction holds (a mass at rest with a surface slope below μ_1 + K(φ − φ_stat))
-/// and lets through what it does not.
+/// and lets through what it does not. φ of the face is formed where it is asked for
+/// (no pass of its own), and a face at rest (Roe speed 0: I = 0) takes the static
+/// threshold μ_1 + μ_w h/W + K(φ − φ_stat) without I, μ(I) and φ_eq(I): the same
+/// value bit for bit (μ(0) = μ_1 + 0 and φ_eq(0) = φ_stat exactly), fewer operations.
 struct DilatantFaces<'a> {
     law: &'a DilatantLaw,
+    /// h and φ at t^n (nx + 2, ghosts included).
+    h: &'a [f64],
     phi: &'a [f64],
 }
 
 impl FaceFriction for DilatantFaces<'_> {
     #[inline(always)]
     fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
-        mu_eff(self.law, speed, h, p_over_rho, self.phi[face]).0
+        let law = self.law;
+        let (hl, hr) = (self.h[face].max(0.0), self.h[face + 1].max(0.0));
+        let (pl, pr) = (self.phi[face], self.phi[face + 1]);
+        let phi = if hl + hr > 0.0 {
+            (hl * pl + hr * pr) / (hl + hr)
+        } else {
+            0.5 * (pl + pr)
+        };
+        if speed == 0.0 {
+            let mut mu = law.mu_1;
+            if law.mu_w > 0.0 {
+                mu += law.mu_w * h / law.width;
+            }
+            return mu + law.tan_psi(phi, law.phi_stat).max(-mu);
+        }
+        moving_face(law, speed, h, p_over_rho, phi)
     }
 }
 
-/// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ: the
-/// monolayer's Coulomb impulse (`friction.rs`) at the velocity q/h. K = 0: with μ(I) +
-/// μ_w h/W (4.1) (I of eq. 2.10–2.11 with the cell's φ, the operations of `MuI::mu`
-/// with p/ρ = g_c h). K > 0: with μ_eff = μ(I) + μ_w h/W + tan ψ ([`mu_eff`],
-/// 2.13–2.14, cut at 0), one impulse; a mass is stopped when it exceeds its momentum,
-/// so a mass is held iff its drive is below μ_eff (at rest, the static threshold 2.16).
-///
-/// Returns the new discharge, the inertial number I of the incoming discharge and the
-/// μ applied.
+/// μ_eff of a moving face, out of line: the face function stays small enough to be
+/// inlined into the hyperbolic step's loop.
+#[inline(never)]
+fn moving_face(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) -> f64 {
+    mu_eff(law, speed, h, p_over_rho, phi).0
+}
+
+/// G(I) = μ(I) + μ_w h/W + K(φ − φ_eq(I)) (seed 002 eq. 2.8, 2.13–2.14, 4.1; `wall`
+/// = μ_w h/W) before the cut at 0, and dG/dI ≥ 0. G is increasing and concave in I:
+/// μ(I) is, and every φ_eq of §2 (2.9, f0–f2) is convex and non-increasing
+/// ([`DilatantLaw::phi_eq_and_slope`]). Needs I_0 > 0 (validated).
 #[inline(always)]
-pub fn cell_friction(
+fn friction_and_slope(law: &DilatantLaw, phi: f64, wall: f64, i: f64) -> (f64, f64) {
+    let dmu = law.mu_2 - law.mu_1;
+    let inv = 1.0 / (i + law.i0);
+    let (phi_eq, phi_eq_slope) = law.phi_eq_and_slope(i);
+    let g = law.mu_1 + dmu * i * inv + wall + law.k * (phi - phi_eq);
+    (g, dmu * law.i0 * inv * inv - law.k * phi_eq_slope)
+}
+
+/// Backward Euler in the speed for the dilatant friction (K > 0): the speed u ≥ 0
+/// after a friction step that solves
+///
+///   u + c μ_eff(k u) = u*,   μ_eff(I) = max(0, G(I)),  G = μ(I) + μ_w h/W + K(φ − φ_eq(I)),
+///
+/// for the speed u* ≥ 0 before it, c = Δt g_c (the impulse per unit μ per unit depth),
+/// k = I/u = 2.5 d/(h √(φ g_c h)) (eq. 2.10–2.11, 2.15) and `wall` = μ_w h/W. The caller
+/// has checked that the mass moves: u* > c μ_eff(0), with μ_eff(0) = max(0, μ_1 +
+/// μ_w h/W + K(φ − φ_stat)) the static threshold of (2.16). Both μ(I) and φ_eq(I), hence tan ψ,
+/// are taken at the new speed: taking them at u* (explicit in I) gave a uniform 28°
+/// flow a spurious steady state (module documentation).
+///
+/// Solution: g(u) = u + c G(k u) − u* is increasing and concave (`friction_and_slope`)
+/// with g(0) < 0. Where G(k u*) ≤ 0 (a loose mass, μ_eff = 0 on all of [0, u*]) the
+/// answer is u*; otherwise the root of g lies where G > 0, so it is the root of the
+/// equation with the cut, and Newton's method from u = 0 climbs to it monotonically
+/// (the tangent of a concave function lies above it: no iterate passes the root).
+/// Stopped after a step δ with |g''|max δ² ≤ ε u/4 (the error left is then below
+/// ε u/2: quadratic convergence, g' ≥ 1), or δ ≤ 10⁻⁹ u where no bound on g'' is known
+/// (f0's kink); checked against bisection to round-off in the unit tests. Returns
+/// (u, I = k u); a NaN u* gives NaN.
+#[inline(always)]
+pub fn backward_euler_speed(
     law: &DilatantLaw,
-    g_c: f64,
-    dt: f64,
-    h: f64,
-    q: f64,
     phi: f64,
-) -> (f64, f64, f64) {
+    wall: f64,
+    u_star: f64,
+    c: f64,
+    k: f64,
+) -> (f64, f64) {
+    if u_star.is_nan() {
+        return (f64::NAN, f64::NAN);
+    }
+    if law.mu_1 + wall + law.tan_psi(phi, law.phi_stat) < 0.0 {
+        // The cut can bind: without friction up to u*?
+        let i = k * u_star;
+        if friction_and_slope(law, phi, wall, i).0 <= 0.0 {
+            return (u_star, i);
+        }
+    }
+    // The first Newton step from u = 0 in closed form: G(0) = μ_1 + μ_w h/W + K(φ −
+    // φ_stat), G'(0) = (μ_2 − μ_1)/I_0 − K φ_eq'(0).
+    let (g0, slope0) = friction_and_slope(law, phi, wall, 0.0);
+    let mut u = (u_star - c * g0) / (1.0 + c * k * slope0);
+    // |g''| ≤ c k² |G''|max: after a step δ from the left the error left is at most
+    // 2 |g''| δ² (g' ≥ 1), so |g''| δ² ≤ ε u/4 means the root to round-off.
+    let curvature = c * k * k * law.friction_curvature_bound();
+    for _ in 0..MAX_NEWTON {
+        let (g, slope) = friction_and_slope(law, phi, wall, k * u);
+        let step = (u_star - u - c * g) / (1.0 + c * k * slope);
+        if step.is_nan() || step <= 0.0 {
+            // At the root to round-off.
+            break;
+        }
+        u += step;
+        if step <= NEWTON_TOLERANCE * u || curvature * step * step <= 0.25 * f64::EPSILON * u {
+            break;
+        }
+    }
+    let u = u.min(u_star);
+    (u, k * u)
+}
+
+/// Relative size of the last Newton step of [`backward_euler_speed`].
+const NEWTON_TOLERANCE: f64 = 1e-9;
+/// A bound the monotone iteration never meets in practice (a guard, not a tolerance).
+const MAX_NEWTON: usize = 100;
+
+/// The friction step of a cell with discharge `q`, thickness h > 0 and fraction φ, the
+/// monolayer's (`friction.rs`: friction stops the mass or slows it, never reverses it)
+/// in backward Euler. K = 0: μ(I) + μ_w h/W (4.1) (I of eq. 2.10–2.11 with the cell's
+/// φ), the monolayer's `MuI::friction_update`. K > 0: μ_eff = μ(I) + μ_w h/W + tan ψ
+/// (2.13–2.14, cut at 0) at the new speed ([`backward_euler_speed`]); the mass is
+/// stopped iff |q| ≤ Δt g_c h μ_eff(0) (up to `STATIC_ROUNDOFF`, as for μ(I)), so a mass
+/// is held iff its drive is below the static threshold μ_1 + K(φ − φ_stat) of (2.16).
+///
+/// Returns the new discharge and its inertial number I (0 for K = 0: not needed).
+#[inline(always)]
+pub fn cell_friction(law: &DilatantLaw, g_c: f64, dt: f64, h: f64, q: f64, phi: f64) -> (f64, f64) {
+    let wall = if law.mu_w > 0.0 {
+        law.mu_w * h / law.width
+    } else {
+        0.0
+    };
     if law.k == 0.0 {
         // Without dilatancy: the monolayer's own backward-Euler μ(I) step (issue 13 item
         // 1, `MuI::friction_update`), the walls' μ_w h/W a constant added to μ_1 and μ_2,
-        // so that K = 0 stays the Savage–Hutter μ(I) run bit for bit. (K > 0 keeps μ at
-        // the incoming speed; I and μ are returned for the dilatant part only.)
-        let wall = if law.mu_w > 0.0 {
-            law.mu_w * h / law.width
-        } else {
-            0.0
-        };
+        // so that K = 0 stays the Savage–Hutter μ(I) run bit for bit.
         let savage_hutter = MuI {
             mu_s: law.mu_1 + wall,
             mu_2: law.mu_2 + wall,
@@ -178,10 +285,41 @@ pub fn cell_friction(
             d_s: law.d,
             phi,
         };
-        return (savage_hutter.friction_update(q, h, dt, g_c), 0.0, f64::NAN);
+        return (savage_hutter.friction_update(q, h, dt, g_c), 0.0);
     }
-    let (mu, i) = mu_eff(law, velocity(h, q).abs(), h, g_c * h, phi);
-    (coulomb_update(q, dt * mu * g_c * h), i, mu)
+    dilatant_friction(law, g_c, dt, h, q, phi, wall)
+}
+
+/// The K > 0 part of [`cell_friction`] (`wall` = μ_w h/W).
+#[inline(always)]
+fn dilatant_friction(
+    law: &DilatantLaw,
+    g_c: f64,
+    dt: f64,
+    h: f64,
+    q: f64,
+    phi: f64,
+    wall: f64,
+) -> (f64, f64) {
+    let weight = g_c * h;
+    let at_rest = (law.mu_1 + wall + law.tan_psi(phi, law.phi_stat)).max(0.0);
+    if dt * at_rest * weight * (1.0 + STATIC_ROUNDOFF) >= q.abs() {
+        return (0.0, 0.0);
+    }
+    let k = inertial_number(law.d, phi, 1.0, h, weight);
+    let (u, i) = backward_euler_speed(law, phi, wall, (q / h).abs(), dt * g_c, k);
+    (u * h * q.signum(), i)
+}
+
+/// μ_eff = max(0, G(I)) of a cell (2.13–2.14, 4.1) at a known inertial number I.
+#[inline(always)]
+fn mu_eff_at(law: &DilatantLaw, h: f64, phi: f64, i: f64) -> f64 {
+    let wall = if law.mu_w > 0.0 {
+        law.mu_w * h / law.width
+    } else {
+        0.0
+    };
+    (law.mu_of_i(i) + wall + law.tan_psi(phi, law.phi_eq(i))).max(0.0)
 }
 
 impl SplitScheme {
@@ -205,7 +343,6 @@ impl SplitScheme {
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
             mu: vec![0.0; nx + 2],
-            phi_face: vec![0.0; nx + 1],
             rate: vec![0.0; nx + 1],
             scratch: vec![0.0; nx + 1],
             cons: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
@@ -236,21 +373,12 @@ impl SplitScheme {
             // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step).
             self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
         } else {
-            // μ_eff with the mass-weighted φ of each face's two cells at t^n (a dry
-            // side counts with the other's φ; both dry, the face is never asked).
-            let h = &self.shell.h;
-            for (k, out) in self.phi_face.iter_mut().enumerate() {
-                let (hl, hr) = (h[k].max(0.0), h[k + 1].max(0.0));
-                let (pl, pr) = (s.phi[k], s.phi[k + 1]);
-                *out = if hl + hr > 0.0 {
-                    (hl * pl + hr * pr) / (hl + hr)
-                } else {
-                    0.5 * (pl + pr)
-                };
-            }
+            // μ_eff with the mass-weighted φ of each face's two cells at t^n; backup[0]
+            // holds h at t^n.
             let faces = DilatantFaces {
                 law: &self.law,
-                phi: &self.phi_face,
+                h: &self.backup[0],
+                phi: &s.phi,
             };
             self.hyperbolic
                 .apply_with_friction(mesh, dt, &mut self.shell, &faces)?;
@@ -284,30 +412,31 @@ impl SplitScheme {
         r: f64,
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
-        let (lo, hi) = (*wet.start(), *wet.end());
-        // Faces lo − 1..=hi, cells lo − 1..=hi + 1: equal-length windows, no bounds checks.
-        let flux = &self.hyperbolic.mass_flux()[lo - 1..=hi];
-        let phi = &phi[lo - 1..=hi + 1];
-        let h = &self.shell.h[lo..=hi];
-        let out = &mut self.phi_new[lo..=hi];
-        let faces = flux.windows(2).zip(phi.windows(3));
-        for (j, ((f, p3), (&hj, next))) in faces.zip(h.iter().zip(out)).enumerate() {
-            let p = p3[1];
-            if hj <= 0.0 {
+        let (lo, end) = (*wet.start(), *wet.end() + 1);
+        let flux = self.hyperbolic.mass_flux();
+        let (h, out) = (&self.shell.h, &mut self.phi_new);
+        // Faces lo − 1..end, cells lo − 1..=end: checked once, not per cell.
+        assert!(lo >= 1 && end < phi.len() && end <= flux.len());
+        assert!(phi.len() == h.len() && h.len() == out.len());
+        for j in lo..end {
+            let (hj, f_in, f_out) = (h[j], flux[j - 1], flux[j]);
+            if hj <= 0.0 || (f_in == 0.0 && f_out == 0.0) {
+                // Dry, or nothing crosses (a mass at rest): φ stays (already copied).
                 continue;
             }
-            let up_out = if f[1] > 0.0 { p } else { p3[2] };
-            let up_in = if f[0] > 0.0 { p3[0] } else { p };
-            let change = f[1] * (up_out - p) - f[0] * (up_in - p);
+            let p = phi[j];
+            let up_out = if f_out > 0.0 { p } else { phi[j + 1] };
+            let up_in = if f_in > 0.0 { phi[j - 1] } else { p };
+            let change = f_out * (up_out - p) - f_in * (up_in - p);
             let value = p - r * change / hj;
             if !(value > 0.0 && value < 1.0) {
                 return Err(StageError::Inadmissible {
-                    x: mesh.x[lo + j - 1],
+                    x: mesh.x[j - 1],
                     quantity: "volume fraction φ (transport)",
                     value,
                 });
             }
-            *next = value;
+            out[j] = value;
         }
         Ok(())
     }
@@ -319,15 +448,33 @@ impl SplitScheme {
         dt: f64,
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
+        match (self.law.k != 0.0, !self.opt.viscosity.is_off()) {
+            (false, _) => self.cells_with::<false, false>(mesh, dt, wet),
+            (true, false) => self.cells_with::<true, false>(mesh, dt, wet),
+            (true, true) => self.cells_with::<true, true>(mesh, dt, wet),
+        }
+    }
+
+    /// [`SplitScheme::cells`] for K ≠ 0 (`DILATANT`) and ξ ≠ 0 (`STABILISE`), so that
+    /// the loop carries no test of either.
+    fn cells_with<const DILATANT: bool, const STABILISE: bool>(
+        &mut self,
+        mesh: &Mesh,
+        dt: f64,
+        wet: RangeInclusive<usize>,
+    ) -> Result<(), StageError> {
         let (nx, g_c, dx) = (self.shell.nx, mesh.g_n, mesh.dx);
         let law = &self.law;
-        let dilatant = law.k != 0.0;
-        let stabilise = !self.opt.viscosity.is_off();
         let (h, hu, phi) = (&mut self.shell.h, &mut self.shell.hu, &mut self.phi_new);
+        let mu = &mut self.mu;
+        let (lo, hi_end) = (*wet.start(), *wet.end() + 1);
+        // Every index below is < hi_end + 1 ≤ nx + 2: checked once, not per cell.
+        assert!(lo >= 1 && hi_end < h.len() && h.len() == hu.len() && h.len() == phi.len());
+        assert!(mu.len() == h.len());
         let gradient_factor = 0.5 * g_c * dt / (2.0 * dx);
         // φ and wetness of the left neighbour before its dilatancy step.
-        let mut left = (phi[wet.start() - 1], h[wet.start() - 1] > H_DRY);
-        for i in wet {
+        let mut left = (phi[lo - 1], h[lo - 1] > H_DRY);
+        for i in lo..hi_end {
             let hi = h[i];
             let p = phi[i];
             let wet = hi > H_DRY;
@@ -341,34 +488,34 @@ impl SplitScheme {
                 }
             }
             left = (p, wet);
-            // The friction step of the monolayer (friction.rs), with μ_eff.
-            let q_in = q;
-            let (mut i_in, mut mu) = (0.0, f64::NAN);
+            // The friction step of the monolayer (friction.rs), with μ_eff, backward
+            // Euler: I_out is the inertial number of the new discharge.
+            let mut i_out = 0.0;
             if q != 0.0 {
                 if !wet {
                     q = 0.0;
+                } else if DILATANT {
+                    // μ_w h/W as `cell_friction` forms it (μ_w > 0 only).
+                    let wall = if law.mu_w > 0.0 {
+                        law.mu_w * hi / law.width
+                    } else {
+                        0.0
+                    };
+                    (q, i_out) = dilatant_friction(law, g_c, dt, hi, q, p, wall);
                 } else {
-                    (q, i_in, mu) = cell_friction(law, g_c, dt, hi, q, p);
+                    (q, i_out) = cell_friction(law, g_c, dt, hi, q, p);
                 }
             }
             hu[i] = q;
-            if dilatant && wet {
-                if stabilise {
-                    if mu.is_nan() {
-                        // At rest: μ_eff = μ_1 + K(φ − φ_stat) (I = 0), plus the walls.
-                        mu = (law.mu_1 + law.tan_psi(p, law.phi_stat)).max(0.0);
-                        if law.mu_w > 0.0 {
-                            mu += law.mu_w * hi / law.width;
-                        }
-                    }
-                    // μ_eff at the incoming state, for the stabilisation's faces.
-                    self.mu[i] = mu;
+            if DILATANT && wet {
+                if STABILISE {
+                    // μ_eff at the state after friction (at rest: μ_1 + K(φ − φ_stat)
+                    // plus the walls), for the stabilisation's faces.
+                    mu[i] = mu_eff_at(law, hi, p, i_out);
                 }
                 if q == 0.0 {
                     continue;
                 }
-                // I scales with |v| at fixed h and φ (eq. 2.10, 2.15).
-                let i_out = i_in * (q / q_in).abs();
                 let phi_eq = law.phi_eq(i_out);
                 // (3.15)–(3.19) with γ̇* = (5/2)|v*|/h*, φ_eq* = φ_eq(I*).
                 let inv_h = 1.0 / hi;
@@ -391,8 +538,8 @@ impl SplitScheme {
             }
         }
         fill_fraction_ghosts(phi);
-        self.mu[0] = self.mu[1];
-        self.mu[nx + 1] = self.mu[nx];
+        mu[0] = mu[1];
+        mu[nx + 1] = mu[nx];
         Ok(())
     }
 
@@ -507,5 +654,76 @@ impl Stage<DilatantState> for SplitScheme {
 
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
         self.step(mesh, state, dt)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::dilatancy::PhiEq;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+
+        /// Newton from u = 0 against bisection: the same root to a few ulps, for every
+        /// regularisation, stiff K, walls and loose states whose μ_eff is cut at 0.
+        #[test]
+        fn backward_euler_speed_is_the_root_to_round_off(
+            reg in 0usize..5,
+            k_dil in prop_oneof![0.0f64..20.0, 0.0f64..1e3],
+            phi in 0.3f64..0.7,
+            wall in prop_oneof![Just(0.0), 0.0f64..0.2],
+            u_star in 1e-6f64..5.0,
+            c in 1e-5f64..0.5,
+            k in 1e-2f64..1e4,
+        ) {
+            let phi_eq = [PhiEq::Linear, PhiEq::F0, PhiEq::F1, PhiEq::F2 { n: 1.0 },
+                PhiEq::F2 { n: 3.0 }][reg];
+            let law = DilatantLaw { k: k_dil, phi_eq, ..DilatantLaw::table1() };
+            let at_rest = (law.mu_1 + wall + law.tan_psi(phi, law.phi_stat)).max(0.0);
+            prop_assume!(u_star > c * at_rest * (1.0 + 1e-9));
+            // Bisection on u + c max(0, G(k u)) − u* to adjacent floats.
+            let reference = {
+                let g = |u: f64| {
+                    let (gv, _) = friction_and_slope(&law, phi, wall, k * u);
+                    u + c * gv.max(0.0) - u_star
+                };
+                let (mut lo, mut hi) = (0.0f64, u_star);
+                while hi - lo > f64::EPSILON * hi {
+                    let mid = 0.5 * (lo + hi);
+                    if g(mid) < 0.0 { lo = mid } else { hi = mid }
+                }
+                0.5 * (lo + hi)
+            };
+            let (u, i) = backward_euler_speed(&law, phi, wall, u_star, c, k);
+            // The residual u + c G − u* carries round-off of order ε u*, so both roots
+            // are determined to ε u*/g'(u) ≤ ε u* (g' ≥ 1), not to ε u.
+            prop_assert!((u - reference).abs() <= 4.0 * f64::EPSILON * u_star,
+                "u {} reference {} (rel. {:e})", u, reference, (u - reference) / reference);
+            prop_assert!(u > 0.0 && u <= u_star);
+            prop_assert_eq!(i, k * u);
+        }
+    }
+
+    #[test]
+    fn backward_euler_speed_limits() {
+        let law = DilatantLaw::table1();
+        assert!(backward_euler_speed(&law, 0.6, 0.0, f64::NAN, 0.01, 1.0)
+            .0
+            .is_nan());
+        // A very loose mass: μ_eff = 0 up to u*, no friction at all.
+        let (u, _) = backward_euler_speed(&law, 0.3, 0.0, 1e-3, 0.01, 1.0);
+        assert_eq!(u, 1e-3);
+        // With K = 0 the dilatant friction is μ(I): the monolayer's closed form.
+        let law0 = DilatantLaw { k: 0.0, ..law };
+        let (u, _) = backward_euler_speed(&law0, 0.6, 0.0, 0.3, 0.05, 2.0);
+        let closed = crate::physics::rheology::backward_euler_speed(
+            law.mu_1, law.mu_2, law.i0, 0.3, 0.05, 2.0,
+        );
+        assert!(
+            (u - closed).abs() <= 4.0 * f64::EPSILON * closed,
+            "{u} {closed}"
+        );
     }
 }

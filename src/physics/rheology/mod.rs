@@ -11,6 +11,7 @@ mod mu_i;
 pub use coulomb::Coulomb;
 pub use mu_i::{
     backward_euler_discharge, backward_euler_speed, inertial_number, local_inertial_number, MuI,
+    STATIC_ROUNDOFF,
 };
 
 /// Basal friction law (seed 000 eq. 6).
