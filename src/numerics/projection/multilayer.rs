@@ -74,7 +74,7 @@ use super::{PressureSolver, ProjectionOperator};
 use crate::mesh::BoundaryKind;
 use crate::mesh::Mesh;
 use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
-use crate::numerics::banded::{BandedCholesky, StencilRow};
+use crate::numerics::banded::{band_index, BandedCholesky, StencilRow};
 use crate::numerics::linalg::PressureRows;
 
 /// Coefficients of one layer of one cell: the impulses of its base (α − 1/2) and top
@@ -392,8 +392,7 @@ impl PressureRows for MultilayerRows<'_> {
         let op = self.op;
         let n = op.layers;
         debug_assert_eq!(p, n + 1);
-        let w = stride;
-        let o = stride - (p + 1); // the band is right-aligned in each row
+        let w = stride; // column c of the band from c·w, the diagonal first
         let active = op.active_unknowns();
         let (s, len) = (active.start, active.len());
         band[..len * w].fill(0.0);
@@ -420,16 +419,17 @@ impl PressureRows for MultilayerRows<'_> {
                     for (si, r) in [r0, r1, r2, r3].into_iter().enumerate() {
                         rhs[r] -= tu[si] * u + tw[si] * v;
                     }
-                    band[r0 * w + o + p] += e(0, 0);
-                    band[r1 * w + o + p - 1] += e(1, 0);
-                    band[r1 * w + o + p] += e(1, 1);
-                    band[r2 * w + o + p - n] += e(2, 0);
-                    band[r2 * w + o + p - n + 1] += e(2, 1);
-                    band[r2 * w + o + p] += e(2, 2);
-                    band[r3 * w + o] += e(3, 0);
-                    band[r3 * w + o + p - n] += e(3, 1);
-                    band[r3 * w + o + p - 1] += e(3, 2);
-                    band[r3 * w + o + p] += e(3, 3);
+                    // Entry (r, c) at c·w + r − c.
+                    band[r0 * w] += e(0, 0);
+                    band[r0 * w + 1] += e(1, 0);
+                    band[r1 * w] += e(1, 1);
+                    band[r0 * w + n] += e(2, 0);
+                    band[r1 * w + n - 1] += e(2, 1);
+                    band[r2 * w] += e(2, 2);
+                    band[r0 * w + p] += e(3, 0);
+                    band[r1 * w + n] += e(3, 1);
+                    band[r2 * w + 1] += e(3, 2);
+                    band[r3 * w] += e(3, 3);
                     continue;
                 }
                 let idx = [
@@ -449,8 +449,8 @@ impl PressureRows for MultilayerRows<'_> {
                         if !valid[s2] || idx[s2] > idx[s1] {
                             continue;
                         }
-                        let q = p - (idx[s1] - idx[s2]);
-                        band[r * w + o + q] += (k.u[s1] * k.u[s2] + k.w[s1] * k.w[s2]) * inv_m;
+                        let e = (k.u[s1] * k.u[s2] + k.w[s1] * k.w[s2]) * inv_m;
+                        band[band_index(r, idx[s2] - s, w)] += e;
                     }
                 }
             }
@@ -458,7 +458,7 @@ impl PressureRows for MultilayerRows<'_> {
         for f in op.span.clone() {
             if !op.wet[f] {
                 for j in 0..n {
-                    band[(f * n + j - s) * w + o + p] = 1.0;
+                    band[(f * n + j - s) * w] = 1.0;
                 }
             }
         }
@@ -569,7 +569,7 @@ mod tests {
     use super::*;
     use crate::mesh::Coordinates;
     use crate::mesh::MeshSpec;
-    use crate::numerics::banded::stencil_residual;
+    use crate::numerics::banded::{assemble_rows, stencil_residual};
     use crate::numerics::projection::monolayer::{constraint_residual, MonolayerOperator};
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
     use crate::numerics::Stage;
@@ -738,25 +738,13 @@ mod tests {
                     let mut op = MultilayerOperator::new(&mesh, &state.l);
                     op.update(&mesh, &state);
                     let rows = op.rows(&state);
-                    let (p, w) = (layers + 1, layers + 2);
+                    let (p, w) = (layers + 1, layers + 4);
                     let active = rows.active();
                     let n = active.len();
                     let (mut band, mut rhs) = (vec![7.0; n * w], vec![7.0; n]);
                     assert!(rows.assemble_band(&mut band, &mut rhs, p, w));
-                    let (mut by_rows, mut rhs_rows) = (vec![0.0; n * w], vec![0.0; n]);
-                    for r in 0..n {
-                        let row = rows.row(active.start + r);
-                        let lr = &mut by_rows[r * w..(r + 1) * w];
-                        lr[..3].copy_from_slice(&row.coef[0]);
-                        lr[p - 1] += row.coef[1][0];
-                        lr[p] += row.coef[1][1];
-                        rhs_rows[r] = row.rhs;
-                        // Columns before the active start are not part of the system.
-                        for q in 0..p.saturating_sub(r) {
-                            lr[q] = 0.0;
-                            band[r * w + q] = 0.0;
-                        }
-                    }
+                    let (mut by_rows, mut rhs_rows) = (vec![7.0; n * w], vec![7.0; n]);
+                    assemble_rows(&rows, &mut by_rows, &mut rhs_rows, p, w);
                     let scale = by_rows.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                     let rscale = rhs_rows.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                     for (a, b) in band.iter().zip(&by_rows) {
