@@ -68,6 +68,7 @@
 //! face's constraint (same for N = 1 with a dry edge, 3 % apart on a wet one).
 
 use std::ops::Range;
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::monolayer::{doubled_bed, face_depth, ConstraintResidual, NH_FILM_FRACTION};
 use super::{PressureSolver, ProjectionOperator};
@@ -110,6 +111,8 @@ pub struct MultilayerOperator {
     /// Faces that may carry an unknown (span of the mass) at the last update.
     span: Range<usize>,
     nx: usize,
+    /// The thickness of the last update (its coefficients depend on nothing else).
+    h_last: Vec<f64>,
 }
 
 impl MultilayerOperator {
@@ -134,6 +137,7 @@ impl MultilayerOperator {
             merged_right: false,
             span: 0..0,
             nx: mesh.nx,
+            h_last: Vec::with_capacity(mesh.nx + 2),
         }
     }
 
@@ -147,11 +151,24 @@ impl MultilayerOperator {
     }
 
     /// Recomputes the wet faces and the coefficients of 𝒯 from the thickness of
-    /// `state` (module documentation).
+    /// `state` (module documentation). Nothing to do when h is bit for bit that of
+    /// the last update (steps 2 and 3 of a time step share an operator,
+    /// [`SharedOperator`], and h does not change in between).
     pub fn update(&mut self, mesh: &Mesh, state: &LayeredState) {
         let (nx, n) = (self.nx, self.layers);
         debug_assert_eq!(state.layers, n);
         let h = &state.h[..];
+        let same = self.h_last.len() == h.len()
+            && self
+                .h_last
+                .iter()
+                .zip(h)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+        if same {
+            return;
+        }
+        self.h_last.clear();
+        self.h_last.extend_from_slice(h);
         let h_min = self.h_min;
         for k in 0..=nx {
             self.wet[k] = h[k] > h_min && h[k + 1] > h_min;
@@ -395,13 +412,27 @@ impl PressureRows for MultilayerRows<'_> {
         let w = stride; // column c of the band from c·w, the diagonal first
         let active = op.active_unknowns();
         let (s, len) = (active.start, active.len());
-        band[..len * w].fill(0.0);
         rhs[..len].fill(0.0);
         if len == 0 {
             return true;
         }
+        // The columns of a face are zeroed just before its first contribution (then
+        // they are in cache when the cells add to them), column by column (short
+        // fills, not one pass over the whole band first).
+        let mut zeroed = op.span.start; // first face not zeroed yet
+        let mut zero_to = |band: &mut [f64], last: usize| {
+            while zeroed <= last.min(op.span.end - 1) {
+                for col in
+                    band[(zeroed * n - s) * w..((zeroed + 1) * n - s) * w].chunks_exact_mut(w)
+                {
+                    col.fill(0.0);
+                }
+                zeroed += 1;
+            }
+        };
         let (c0, c1) = (op.span.start.max(1), op.span.end.min(op.nx));
         for c in c0..=c1 {
+            zero_to(band, c);
             let inv_h = 1.0 / self.h[c];
             let (wl, wr) = (op.wet[c - 1], op.wet[c]);
             for a in 0..n {
@@ -455,6 +486,7 @@ impl PressureRows for MultilayerRows<'_> {
                 }
             }
         }
+        zero_to(band, op.span.end - 1);
         for f in op.span.clone() {
             if !op.wet[f] {
                 for j in 0..n {
@@ -551,6 +583,44 @@ impl ProjectionOperator for MultilayerOperator {
         }
         fill_tracer_ghosts(state.hw_mut(), nx, n);
         state.fill_ghosts(mesh);
+    }
+}
+
+/// One [`MultilayerOperator`] used by the explicit pressure terms of step 2
+/// (`nh_multilayer.rs`) and by the projection of step 3: h does not change between
+/// them, so its coefficients are computed once per time step.
+#[derive(Debug, Clone)]
+pub struct SharedOperator(pub Arc<Mutex<MultilayerOperator>>);
+
+impl SharedOperator {
+    pub fn new(mesh: &Mesh, l: &[f64]) -> Self {
+        SharedOperator(Arc::new(Mutex::new(MultilayerOperator::new(mesh, l))))
+    }
+
+    pub fn lock(&self) -> MutexGuard<'_, MultilayerOperator> {
+        self.0.lock().expect("operator lock")
+    }
+}
+
+impl ProjectionOperator for SharedOperator {
+    type Row = StencilRow;
+
+    fn block(&self) -> usize {
+        self.lock().layers
+    }
+
+    fn solve<S: PressureSolver<Row = StencilRow>>(
+        &mut self,
+        mesh: &Mesh,
+        state: &LayeredState,
+        solver: &mut S,
+        pi: &mut [f64],
+    ) {
+        self.lock().solve(mesh, state, solver, pi);
+    }
+
+    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64) {
+        self.lock().correct(mesh, state, pi, dt);
     }
 }
 
