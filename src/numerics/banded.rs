@@ -210,8 +210,8 @@ const PANEL: usize = 4;
 /// receive the panel's rank-4 update in one pass each (each chunk loaded and stored
 /// once, losing the four products in pivot order). Every entry of L undergoes the
 /// operations of the one-pivot-at-a-time right-looking algorithm in the same order,
-/// so the blocking does not change the factor. The backward substitution is by
-/// columns (dot products, in 4 partial sums).
+/// so the blocking does not change the factor, and the substitutions keep their
+/// order too: the results are those of the unblocked version, bit for bit.
 #[inline(always)]
 fn factor_solve(
     band: &mut [f64],
@@ -265,30 +265,17 @@ fn factor_solve(
         }
         k += PANEL;
     }
-    // Back substitution with Lᵀ by columns: x_c = (y_c − Σ_{d ≥ 1} L[c+d][c] x_{c+d})
-    // / L[c][c], the sum in 4 partial sums over d ≥ 2, the x_{c+1} term last (the
-    // only one that waits for the previous unknown).
-    for c in (0..n).rev() {
-        let col = &band[c * w..c * w + w];
-        let len = p.min(n - 1 - c);
-        let mut s = y[c];
-        if len >= 1 {
-            let (l, x) = (&col[2..=len], &xs[c + 2..=c + len]);
-            let (l4, lr) = l.as_chunks::<4>();
-            let (x4, xr) = x.as_chunks::<4>();
-            let mut acc = [0.0; 4];
-            for (a, b) in l4.iter().zip(x4) {
-                for e in 0..4 {
-                    acc[e] += a[e] * b[e];
-                }
-            }
-            for (a, b) in lr.iter().zip(xr) {
-                acc[0] += a * b;
-            }
-            s -= (acc[0] + acc[1]) + (acc[2] + acc[3]);
-            s -= col[1] * xs[c + 1];
+    // Back substitution with Lᵀ, by rows of L (the order of the row-major version,
+    // so the same bits): x_r = y_r / L[r][r], then y_c −= L[r][c] x_r for the
+    // columns c of row r, whose entries are w − 1 apart in the column layout.
+    for r in (0..n).rev() {
+        let xr = y[r] / band[r * w];
+        xs[r] = xr;
+        let c0 = r.saturating_sub(p);
+        let row = band[c0 * w + (r - c0)..].iter().step_by(w - 1);
+        for (yc, &l) in y[c0..r].iter_mut().zip(row) {
+            *yc -= l * xr;
         }
-        xs[c] = s / col[0];
     }
 }
 
