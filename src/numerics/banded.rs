@@ -265,17 +265,19 @@ fn factor_solve(
         }
         k += PANEL;
     }
-    // Back substitution with Lᵀ, by rows of L (the order of the row-major version,
-    // so the same bits): x_r = y_r / L[r][r], then y_c −= L[r][c] x_r for the
-    // columns c of row r, whose entries are w − 1 apart in the column layout.
-    for r in (0..n).rev() {
-        let xr = y[r] / band[r * w];
-        xs[r] = xr;
-        let c0 = r.saturating_sub(p);
-        let row = band[c0 * w + (r - c0)..].iter().step_by(w - 1);
-        for (yc, &l) in y[c0..r].iter_mut().zip(row) {
-            *yc -= l * xr;
+    // Back substitution with Lᵀ by columns: x_c = (y_c − L[c+p][c] x_{c+p} − … −
+    // L[c+1][c] x_{c+1}) / L[c][c], subtracted in that order (r descending: the
+    // order in which the row-oriented version, y_c −= L[r][c] x_r for r = n − 1 …
+    // 0, reaches y_c, so the same bits). A column is contiguous, and only its last
+    // term waits for the previous unknown.
+    for c in (0..n).rev() {
+        let len = p.min(n - 1 - c);
+        let col = &band[c * w + 1..c * w + 1 + len];
+        let mut s = y[c];
+        for (&l, &x) in col.iter().zip(&xs[c + 1..c + 1 + len]).rev() {
+            s -= l * x;
         }
+        xs[c] = s / band[c * w];
     }
 }
 
