@@ -150,7 +150,7 @@ impl BandedCholesky {
             unsafe { factor_solve_avx2(band, y, xs, p) };
             return;
         }
-        factor_solve(band, y, xs, p, rank4_plain);
+        factor_solve::<false>(band, y, xs, p);
     }
 }
 
@@ -213,13 +213,7 @@ const PANEL: usize = 4;
 /// so the blocking does not change the factor, and the substitutions keep their
 /// order too: the results are those of the unblocked version, bit for bit.
 #[inline(always)]
-fn factor_solve(
-    band: &mut [f64],
-    y: &mut [f64],
-    xs: &mut [f64],
-    p: usize,
-    rank4: unsafe fn(*mut f64, usize, usize, usize),
-) {
+fn factor_solve<const AVX: bool>(band: &mut [f64], y: &mut [f64], xs: &mut [f64], p: usize) {
     let n = y.len();
     let w = p + 1 + PADR;
     let full = (p + 1 + 3) & !3; // d = 0..=p in whole chunks
@@ -238,7 +232,7 @@ fn factor_solve(
                 // Updates of the panel's earlier columns: L[k+t+d][k+s] L[k+t][k+s].
                 for s in 0..t {
                     let src = bp.add((k + s) * w + (t - s));
-                    axpy_chunks(c, src, *src, full / 4);
+                    axpy_chunks::<AVX>(c, src, *src, full / 4);
                 }
                 let d = (*c).sqrt();
                 *c = d;
@@ -261,7 +255,7 @@ fn factor_solve(
             // system): rows j ..= k + 3 + p lose Σ_t L[i][k+t] L[j][k+t], the run
             // rounded up to whole chunks (rows past k + 3 + p read the PADR zeros).
             let cols = (k + PANEL + p).min(n) - (k + PANEL);
-            rank4(bp.add(k * w), w, p, cols);
+            rank4_update::<AVX>(bp.add(k * w), w, p, cols);
         }
         k += PANEL;
     }
@@ -284,13 +278,12 @@ fn factor_solve(
 /// The rank-4 update of a panel (columns 0..4 from `panel`, stride `w`) applied to
 /// the `cols` columns after it: column 4 + m, rows 4 + m ..= 3 + p, loses Σ_t
 /// L[i][t] L[4+m][t], its run rounded up to whole chunks (rows past 3 + p read the
-/// PADR zeros of the panel's columns). A function of its own (not inlined), so that
-/// its loop gets the registers.
+/// PADR zeros of the panel's columns).
 ///
 /// # Safety
 /// `panel` valid for (4 + cols) w values, w ≥ p + 8.
 #[inline(always)]
-unsafe fn rank4_update(panel: *mut f64, w: usize, p: usize, cols: usize) {
+unsafe fn rank4_update<const AVX: bool>(panel: *mut f64, w: usize, p: usize, cols: usize) {
     let src = [
         panel.add(4) as *const f64,
         panel.add(w + 3) as *const f64,
@@ -300,37 +293,32 @@ unsafe fn rank4_update(panel: *mut f64, w: usize, p: usize, cols: usize) {
     for m in 0..cols {
         let target = panel.add((PANEL + m) * w);
         let c = [src[0].add(m), src[1].add(m), src[2].add(m), src[3].add(m)];
-        axpy4_chunks(target, c, [*c[0], *c[1], *c[2], *c[3]], (p - m).div_ceil(4));
+        axpy4_chunks::<AVX>(target, c, [*c[0], *c[1], *c[2], *c[3]], (p - m).div_ceil(4));
     }
 }
 
-/// [`rank4_update`], portable build.
-///
-/// # Safety
-/// As [`rank4_update`].
-#[inline(never)]
-unsafe fn rank4_plain(panel: *mut f64, w: usize, p: usize, cols: usize) {
-    rank4_update(panel, w, p, cols)
-}
-
-/// [`rank4_update`], AVX2 build (same operations, same bits).
-///
-/// # Safety
-/// As [`rank4_update`]; the CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline(never)]
-unsafe fn rank4_avx2(panel: *mut f64, w: usize, p: usize, cols: usize) {
-    rank4_update(panel, w, p, cols)
-}
-
-/// a −= f · c over `chunks` 4-wide chunks.
+/// a −= f · c over `chunks` 4-wide chunks. With `AVX` the chunks are AVX vectors
+/// (written with intrinsics, so the compiler adds no runtime alias checks or
+/// unrolling around these short loops); the same operations, so the same bits.
 ///
 /// # Safety
 /// `a` and `c` valid for 4 `chunks` values; a chunk of `a` may overlap only the
-/// same chunk of `c`'s run if at all (each is loaded before it is stored).
+/// same chunk of `c`'s run if at all (each is loaded before it is stored). With
+/// `AVX`, the CPU must support AVX (only called from [`factor_solve_avx2`]).
 #[inline(always)]
-unsafe fn axpy_chunks(a: *mut f64, c: *const f64, f: f64, chunks: usize) {
+unsafe fn axpy_chunks<const AVX: bool>(a: *mut f64, c: *const f64, f: f64, chunks: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        use std::arch::x86_64::{_mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd};
+        use std::arch::x86_64::{_mm256_storeu_pd, _mm256_sub_pd};
+        let fv = _mm256_set1_pd(f);
+        for m in 0..chunks {
+            let (pa, pc) = (a.add(4 * m), c.add(4 * m));
+            let x = _mm256_loadu_pd(pa);
+            _mm256_storeu_pd(pa, _mm256_sub_pd(x, _mm256_mul_pd(fv, _mm256_loadu_pd(pc))));
+        }
+        return;
+    }
     for m in 0..chunks {
         let (pa, pc) = (
             a.add(4 * m) as *mut [f64; 4],
@@ -347,12 +335,37 @@ unsafe fn axpy_chunks(a: *mut f64, c: *const f64, f: f64, chunks: usize) {
 }
 
 /// a −= b[0] c[0]; −= b[1] c[1]; … (in that order, element by element) over
-/// `chunks` 4-wide chunks.
+/// `chunks` 4-wide chunks (AVX vectors with `AVX`, as [`axpy_chunks`]).
 ///
 /// # Safety
 /// As [`axpy_chunks`], for each of the four sources.
 #[inline(always)]
-unsafe fn axpy4_chunks(a: *mut f64, c: [*const f64; 4], b: [f64; 4], chunks: usize) {
+unsafe fn axpy4_chunks<const AVX: bool>(
+    a: *mut f64,
+    c: [*const f64; 4],
+    b: [f64; 4],
+    chunks: usize,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        use std::arch::x86_64::{_mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd};
+        use std::arch::x86_64::{_mm256_storeu_pd, _mm256_sub_pd};
+        let bv = [
+            _mm256_set1_pd(b[0]),
+            _mm256_set1_pd(b[1]),
+            _mm256_set1_pd(b[2]),
+            _mm256_set1_pd(b[3]),
+        ];
+        for m in 0..chunks {
+            let pa = a.add(4 * m);
+            let mut x = _mm256_loadu_pd(pa);
+            for t in 0..4 {
+                x = _mm256_sub_pd(x, _mm256_mul_pd(bv[t], _mm256_loadu_pd(c[t].add(4 * m))));
+            }
+            _mm256_storeu_pd(pa, x);
+        }
+        return;
+    }
     for m in 0..chunks {
         let pa = a.add(4 * m) as *mut [f64; 4];
         let x = *pa;
@@ -374,7 +387,7 @@ unsafe fn axpy4_chunks(a: *mut f64, c: [*const f64; 4], b: [f64; 4], chunks: usi
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn factor_solve_avx2(band: &mut [f64], y: &mut [f64], xs: &mut [f64], p: usize) {
-    factor_solve(band, y, xs, p, rank4_avx2)
+    factor_solve::<true>(band, y, xs, p)
 }
 
 /// Whether the AVX2 kernel can run here.
