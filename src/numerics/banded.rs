@@ -237,15 +237,15 @@ fn factor_solve<const AVX: bool>(band: &mut [f64], y: &mut [f64], xs: &mut [f64]
                 let d = (*c).sqrt();
                 *c = d;
                 let inv = 1.0 / d;
-                for q in 1..p + 1 {
-                    *c.add(q) *= inv;
-                }
+                // Rows 1 ..= p, in whole chunks (past p: PADR zeros, 0·inv = 0).
+                scale_chunks::<AVX>(c.add(1), inv, p.div_ceil(4));
                 let yk = y[k + t] * inv;
                 y[k + t] = yk;
                 let len = p.min(n - 1 - (k + t));
-                let col = std::slice::from_raw_parts(c.add(1), len);
-                for (yv, &l) in y[k + t + 1..k + t + 1 + len].iter_mut().zip(col) {
-                    *yv -= l * yk;
+                let yp = y.as_mut_ptr().add(k + t + 1);
+                axpy_chunks::<AVX>(yp, c.add(1), yk, len / 4);
+                for q in len / 4 * 4..len {
+                    *yp.add(q) -= *c.add(1 + q) * yk;
                 }
             }
             if b < PANEL {
@@ -331,6 +331,30 @@ unsafe fn axpy_chunks<const AVX: bool>(a: *mut f64, c: *const f64, f: f64, chunk
             x[2] - f * y[2],
             x[3] - f * y[3],
         ];
+    }
+}
+
+/// a *= f over `chunks` 4-wide chunks (AVX vectors with `AVX`).
+///
+/// # Safety
+/// `a` valid for 4 `chunks` values; with `AVX`, the CPU must support AVX.
+#[inline(always)]
+unsafe fn scale_chunks<const AVX: bool>(a: *mut f64, f: f64, chunks: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        use std::arch::x86_64::_mm256_storeu_pd;
+        use std::arch::x86_64::{_mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd};
+        let fv = _mm256_set1_pd(f);
+        for m in 0..chunks {
+            let pa = a.add(4 * m);
+            _mm256_storeu_pd(pa, _mm256_mul_pd(_mm256_loadu_pd(pa), fv));
+        }
+        return;
+    }
+    for m in 0..chunks {
+        let pa = a.add(4 * m) as *mut [f64; 4];
+        let x = *pa;
+        *pa = [x[0] * f, x[1] * f, x[2] * f, x[3] * f];
     }
 }
 
