@@ -446,21 +446,29 @@ impl PressureRows for MultilayerRows<'_> {
                     let (tu, tw) = (&k.u, &k.w);
                     let e = |s1: usize, s2: usize| (tu[s1] * tu[s2] + tw[s1] * tw[s2]) * inv_m;
                     let r0 = (c - 1) * n + a - s;
+                    // The four unknowns are active (both faces wet, a + 1 < n), so
+                    // r0 + n + 1 < len, and every offset below is ≤ p < w: one
+                    // check here instead of one per entry.
+                    assert!((r0 + n + 2) * w <= band.len() && r0 + n + 1 < rhs.len());
                     let (r1, r2, r3) = (r0 + 1, r0 + n, r0 + n + 1);
-                    for (si, r) in [r0, r1, r2, r3].into_iter().enumerate() {
-                        rhs[r] -= tu[si] * u + tw[si] * v;
+                    // SAFETY: indices bounded as asserted above.
+                    unsafe {
+                        for (si, r) in [r0, r1, r2, r3].into_iter().enumerate() {
+                            *rhs.get_unchecked_mut(r) -= tu[si] * u + tw[si] * v;
+                        }
+                        let mut add = |i: usize, v: f64| *band.get_unchecked_mut(i) += v;
+                        // Entry (r, c) at c·w + r − c.
+                        add(r0 * w, e(0, 0));
+                        add(r0 * w + 1, e(1, 0));
+                        add(r1 * w, e(1, 1));
+                        add(r0 * w + n, e(2, 0));
+                        add(r1 * w + n - 1, e(2, 1));
+                        add(r2 * w, e(2, 2));
+                        add(r0 * w + p, e(3, 0));
+                        add(r1 * w + n, e(3, 1));
+                        add(r2 * w + 1, e(3, 2));
+                        add(r3 * w, e(3, 3));
                     }
-                    // Entry (r, c) at c·w + r − c.
-                    band[r0 * w] += e(0, 0);
-                    band[r0 * w + 1] += e(1, 0);
-                    band[r1 * w] += e(1, 1);
-                    band[r0 * w + n] += e(2, 0);
-                    band[r1 * w + n - 1] += e(2, 1);
-                    band[r2 * w] += e(2, 2);
-                    band[r0 * w + p] += e(3, 0);
-                    band[r1 * w + n] += e(3, 1);
-                    band[r2 * w + 1] += e(3, 2);
-                    band[r3 * w] += e(3, 3);
                     continue;
                 }
                 let idx = [
