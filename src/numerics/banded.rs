@@ -11,15 +11,20 @@
 //! n = (nx + 1) N unknowns: O(nx N³) with no iteration, against seed 003's block
 //! Gauss–Seidel with a tolerance.
 //!
-//! [`BandedCholesky`] assembles the lower band (the operator writes it cell by cell,
-//! [`PressureRows::assemble_band`]; other row sources row by row) and factorises it in
-//! place right-looking: each pivot scales its column and subtracts the rank-one update
-//! from the p rows below it, each a contiguous run of the row (an axpy: no reductions,
-//! so the work pipelines; padded to whole 4-wide chunks and compiled for AVX2 when the
-//! CPU has it, with the same operations in the same order, hence the same bits). The
-//! forward substitution rides the factorisation sweep and the backward one is row
-//! axpys. Storage is the band of L (n (p + 4) values), allocated once for the largest
-//! system; a step allocates nothing.
+//! [`BandedCholesky`] assembles the lower band by columns (the operator writes it cell
+//! by cell, [`PressureRows::assemble_band`]; other row sources row by row) and
+//! factorises it in place, right-looking by panels of 4 columns (`factor_solve`):
+//! each column of a panel takes its earlier columns' updates and is scaled, then
+//! each of the next p columns takes the panel's rank-4 update in one pass. Every
+//! update is an axpy on a contiguous run of a column (no reductions, so the work
+//! pipelines), padded to whole 4-wide chunks, written with AVX intrinsics in the
+//! AVX2 build (chosen at run time) and as scalar lanes in the portable one; every
+//! entry sees the operations of the one-pivot-at-a-time algorithm in the same
+//! order, so both builds, and the unblocked algorithm, give the same bits. The
+//! forward substitution rides the factorisation sweep; the backward one goes by
+//! columns in the order of the row-oriented version. Storage is the band of L
+//! (n (p + 8) values), allocated once for the largest system; a step allocates
+//! nothing.
 //!
 //! Measured alternatives (benches/nh_multilayer_solver.rs, numbers in
 //! docs/performance.md): a block-Thomas (block Cholesky) elimination with dense N×N
@@ -83,7 +88,7 @@ pub fn stencil_residual<R: PressureRows<Row = StencilRow>>(
     }
 }
 
-/// Up-looking banded Cholesky factorisation and solve of an SPD stencil system (module
+/// Banded Cholesky factorisation and solve of an SPD stencil system (module
 /// documentation).
 #[derive(Debug, Clone, Default)]
 pub struct BandedCholesky {
@@ -120,7 +125,7 @@ impl BandedCholesky {
     ///
     /// The lower band is assembled by columns first (by [`PressureRows::assemble_band`]
     /// when the rows offer it, else row by row with [`assemble_rows`]), then
-    /// factorised in place by panels of [`PANEL`] columns ([`factor_solve`]).
+    /// factorised in place by panels of 4 columns (`factor_solve`).
     pub fn solve_rows<R: PressureRows<Row = StencilRow>>(&mut self, rows: &R, x: &mut [f64]) {
         let m = self.block;
         assert!(m >= 1, "block size");
