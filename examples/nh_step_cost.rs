@@ -32,8 +32,17 @@ fn main() {
         let dt = sim.step(f64::INFINITY).expect("step");
         sim.t += dt;
     }
+    // Faces whose two cells are thicker than the projection's wet threshold
+    // (NH_FILM_FRACTION Δx): the ones that carry pressure unknowns.
+    let h_min = granflow::numerics::projection::monolayer::NH_FILM_FRACTION * sim.mesh.dx;
+    let h = &sim.state.h;
+    let nx = sim.mesh.nx;
+    let wet = (0..=nx)
+        .filter(|&f| h[f] > h_min && h[f + 1] > h_min)
+        .count();
     println!(
-        "{pressure}: {warm} warm-up steps, then {steps} (t = {:.4})",
-        sim.t
+        "{pressure}: {warm} warm-up steps, then {steps} (t = {:.4}); wet faces {wet} of {}",
+        sim.t,
+        nx + 1
     );
 }

@@ -11,15 +11,20 @@
 //! n = (nx + 1) N unknowns: O(nx N³) with no iteration, against seed 003's block
 //! Gauss–Seidel with a tolerance.
 //!
-//! [`BandedCholesky`] assembles the lower band (the operator writes it cell by cell,
-//! [`PressureRows::assemble_band`]; other row sources row by row) and factorises it in
-//! place right-looking: each pivot scales its column and subtracts the rank-one update
-//! from the p rows below it, each a contiguous run of the row (an axpy: no reductions,
-//! so the work pipelines; padded to whole 4-wide chunks and compiled for AVX2 when the
-//! CPU has it, with the same operations in the same order, hence the same bits). The
-//! forward substitution rides the factorisation sweep and the backward one is row
-//! axpys. Storage is the band of L (n (p + 4) values), allocated once for the largest
-//! system; a step allocates nothing.
+//! [`BandedCholesky`] assembles the lower band by columns (the operator writes it cell
+//! by cell, [`PressureRows::assemble_band`]; other row sources row by row) and
+//! factorises it in place, right-looking by panels of 4 columns (`factor_solve`):
+//! each column of a panel takes its earlier columns' updates and is scaled, then
+//! each of the next p columns takes the panel's rank-4 update in one pass. Every
+//! update is an axpy on a contiguous run of a column (no reductions, so the work
+//! pipelines), padded to whole 4-wide chunks, written with AVX intrinsics in the
+//! AVX2 build (chosen at run time) and as scalar lanes in the portable one; every
+//! entry sees the operations of the one-pivot-at-a-time algorithm in the same
+//! order, so both builds, and the unblocked algorithm, give the same bits. The
+//! forward substitution rides the factorisation sweep; the backward one goes by
+//! columns in the order of the row-oriented version. Storage is the band of L
+//! (n (p + 8) values), allocated once for the largest system; a step allocates
+//! nothing.
 //!
 //! Measured alternatives (benches/nh_multilayer_solver.rs, numbers in
 //! docs/performance.md): a block-Thomas (block Cholesky) elimination with dense N×N
@@ -83,18 +88,17 @@ pub fn stencil_residual<R: PressureRows<Row = StencilRow>>(
     }
 }
 
-/// Up-looking banded Cholesky factorisation and solve of an SPD stencil system (module
+/// Banded Cholesky factorisation and solve of an SPD stencil system (module
 /// documentation).
 #[derive(Debug, Clone, Default)]
 pub struct BandedCholesky {
     block: usize,
-    /// Band of L: row r (relative to the active start) holds L[r][r − p ..= r] at
-    /// `band[r (p + 1) ..]`, the diagonal last.
+    /// Band of L by columns: column c (relative to the active start) holds
+    /// L[c ..= c + p][c] at `band[c w ..]`, the diagonal first, then PADR zeros
+    /// (w = p + 1 + PADR, [`band_index`]).
     band: Vec<f64>,
     /// Forward-substituted right-hand side.
     y: Vec<f64>,
-    /// Column of the current pivot (p + 1 values).
-    column: Vec<f64>,
     /// The CPU has AVX2 (x86-64): the factorisation uses the AVX2 build of the kernel.
     avx2: bool,
 }
@@ -105,9 +109,8 @@ impl BandedCholesky {
         let p = block + 1;
         BandedCholesky {
             block,
-            band: vec![0.0; faces * block * (PAD + p + 1)],
+            band: vec![0.0; faces * block * (p + 1 + PADR)],
             y: vec![0.0; faces * block],
-            column: vec![0.0; PAD + block + 2],
             avx2: avx2(),
         }
     }
@@ -120,21 +123,18 @@ impl BandedCholesky {
     /// symmetric positive definite; only its lower triangle is read. A non-positive
     /// pivot (not SPD) leaves NaN in `x`, which the run loop reports.
     ///
-    /// The lower band is assembled first (by [`PressureRows::assemble_band`] when the
-    /// rows offer it, else row by row), then factorised in place right-looking: pivot
-    /// k scales its column and subtracts its rank-one update from the p rows below,
-    /// each a contiguous run of that row (an axpy, no reductions, so it pipelines and
-    /// vectorises); the forward substitution rides the same sweep, and the backward
-    /// one is row-oriented axpys too.
+    /// The lower band is assembled by columns first (by [`PressureRows::assemble_band`]
+    /// when the rows offer it, else row by row with [`assemble_rows`]), then
+    /// factorised in place by panels of 4 columns (`factor_solve`).
     pub fn solve_rows<R: PressureRows<Row = StencilRow>>(&mut self, rows: &R, x: &mut [f64]) {
         let m = self.block;
         assert!(m >= 1, "block size");
         let p = m + 1;
-        let w = PAD + p + 1;
+        let w = p + 1 + PADR;
         let active = rows.active();
         x[..active.start].fill(0.0);
         x[active.end..].fill(0.0);
-        let (s, n) = (active.start, active.len());
+        let n = active.len();
         if n == 0 {
             return;
         }
@@ -144,113 +144,266 @@ impl BandedCholesky {
         if self.y.len() < n {
             self.y.resize(n, 0.0);
         }
-        self.column.resize(PAD + p + 1, 0.0);
         let (band, y) = (&mut self.band[..n * w], &mut self.y[..n]);
         if !rows.assemble_band(band, y, p, w) {
-            for r in 0..n {
-                let row = rows.row(s + r);
-                let lr = &mut band[r * w..(r + 1) * w];
-                lr.fill(0.0);
-                let lr = &mut lr[PAD..];
-                // (df = −1, dj) → column r − m + dj − 1 → q = dj; (0, −1) → q = p − 1.
-                lr[..3].copy_from_slice(&row.coef[0]);
-                // (For N ≤ 2 two stencil entries share a column, of which one is 0.)
-                lr[p - 1] += row.coef[1][0];
-                lr[p] += row.coef[1][1];
-                y[r] = row.rhs;
-            }
+            assemble_rows(rows, band, y, p, w);
         }
-        // Columns before the active start (rows r < p) are 0.
-        for r in 0..p.min(n) {
-            band[r * w..r * w + PAD + (p - r)].fill(0.0);
-        }
-        let col = &mut self.column[..PAD + p + 1];
-        col.fill(0.0);
         let xs = &mut x[active.clone()];
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: the CPU supports AVX2 (checked in `new`).
-            unsafe { factor_solve_avx2(band, y, col, xs, p) };
+            unsafe { factor_solve_avx2(band, y, xs, p) };
             return;
         }
-        factor_solve(band, y, col, xs, p);
+        factor_solve::<false>(band, y, xs, p);
     }
 }
 
-/// Zeros stored before each row's band (and before the pivot column), so that every
-/// update is a whole number of 4-wide chunks: a chunk reaching left of the band
-/// multiplies a zero of the column (a − c·0 = a).
-const PAD: usize = 3;
-
-/// In-place Cholesky factorisation of the lower band `band` (n rows of PAD + p + 1:
-/// PAD zeros, then the band, the diagonal last), forward substitution of `y` in the
-/// same sweep, and backward substitution into `xs` ([`BandedCholesky::solve_rows`]).
-/// `col` (PAD + p + 1 values, the first PAD zero) holds the pivot's column.
+/// Where entry (r, c) of the lower band (0 ≤ r − c ≤ p) is stored: column c from
+/// `c · stride`, the diagonal first ([`PressureRows::assemble_band`]).
 #[inline(always)]
-fn factor_solve(band: &mut [f64], y: &mut [f64], col: &mut [f64], xs: &mut [f64], p: usize) {
+pub fn band_index(r: usize, c: usize, stride: usize) -> usize {
+    c * stride + (r - c)
+}
+
+/// The lower band of the active rows of `rows`, formed row by row (the layout of
+/// [`PressureRows::assemble_band`]; entries of rows past the end are 0).
+pub fn assemble_rows<R: PressureRows<Row = StencilRow>>(
+    rows: &R,
+    band: &mut [f64],
+    rhs: &mut [f64],
+    p: usize,
+    stride: usize,
+) {
+    let active = rows.active();
+    let (s, n) = (active.start, active.len());
+    band[..n * stride].fill(0.0);
+    for r in 0..n {
+        let row = rows.row(s + r);
+        // (df = −1, dj) → column r − p + dj; (0, −1) → column r − 1; (0, 0) → r.
+        // (For N ≤ 2 two stencil entries share a column, of which one is 0.) Columns
+        // before the active start are not part of the system.
+        for (dj, &v) in row.coef[0].iter().enumerate() {
+            if r + dj >= p {
+                band[band_index(r, r + dj - p, stride)] += v;
+            }
+        }
+        if r >= 1 {
+            band[band_index(r, r - 1, stride)] += row.coef[1][0];
+        }
+        band[band_index(r, r, stride)] += row.coef[1][1];
+        rhs[r] = row.rhs;
+    }
+}
+
+/// Zeros stored after each column's band, so that every update is a whole number of
+/// 4-wide chunks: a chunk reaching past the band multiplies zeros of the source
+/// column (a − b·0 = a) and writes the target's zeros back.
+const PADR: usize = 7;
+
+/// Columns per panel of the blocked factorisation ([`factor_solve`]).
+const PANEL: usize = 4;
+
+/// In-place Cholesky factorisation of the lower band `band` (n columns of p + 1 +
+/// PADR: the band, the diagonal first, then zeros), forward substitution of `y` in
+/// the same sweep, and backward substitution into `xs` ([`BandedCholesky::solve_rows`]).
+///
+/// Blocked right-looking by panels of [`PANEL`] columns, each step an axpy on a
+/// contiguous run of a column (no reductions, so the work pipelines and vectorises;
+/// the runs are padded to whole 4-wide chunks): each column of the panel receives
+/// the updates of the panel's earlier columns and is scaled; the next p columns then
+/// receive the panel's rank-4 update in one pass each (each chunk loaded and stored
+/// once, losing the four products in pivot order). Every entry of L undergoes the
+/// operations of the one-pivot-at-a-time right-looking algorithm in the same order,
+/// so the blocking does not change the factor, and the substitutions keep their
+/// order too: the results are those of the unblocked version, bit for bit.
+#[inline(always)]
+fn factor_solve<const AVX: bool>(band: &mut [f64], y: &mut [f64], xs: &mut [f64], p: usize) {
     let n = y.len();
-    let w = PAD + p + 1;
-    let d0 = PAD + p; // offset of the diagonal in a row
-    assert!(band.len() >= n * w && col.len() > PAD + p);
-    let (bp, cp) = (band.as_mut_ptr(), col.as_mut_ptr());
-    for k in 0..n {
-        let below = p.min(n - 1 - k);
-        // SAFETY: every index below is < n·w in `band` (rows k..=k + below < n, offsets
-        // < w) and < PAD + p + 1 in `col` (checked above); `band` and `col` are distinct
-        // slices. The loops are the same as with indexing, without the bounds checks
-        // that kept them from pipelining.
+    let w = p + 1 + PADR;
+    let full = (p + 1 + 3) & !3; // d = 0..=p in whole chunks
+    assert!(band.len() >= n * w && xs.len() == n && full + 3 <= w);
+    let bp = band.as_mut_ptr();
+    let mut k = 0;
+    while k < n {
+        let b = PANEL.min(n - k);
+        // SAFETY (this block): columns k .. k + b < n, each read and written at
+        // offsets < w (`full` + 3 ≤ w, asserted), so every access is < n·w ≤
+        // band.len(); within a column update the source column differs from the
+        // target, and every chunk is loaded before it is stored.
         unsafe {
-            let diag = bp.add(k * w + d0);
-            let d = (*diag).sqrt();
-            *diag = d;
-            let inv = 1.0 / d;
-            let yk = y[k] * inv;
-            y[k] = yk;
-            // Column k of L: L[k + i][k] sits in row k + i at offset d0 − i; col[PAD + i].
-            for i in 1..=below {
-                let e = bp.add((k + i) * w + d0 - i);
-                let v = *e * inv;
-                *e = v;
-                *cp.add(PAD + i) = v;
-                *y.get_unchecked_mut(k + i) -= v * yk;
+            for t in 0..b {
+                let c = bp.add((k + t) * w);
+                // Updates of the panel's earlier columns: L[k+t+d][k+s] L[k+t][k+s].
+                for s in 0..t {
+                    let src = bp.add((k + s) * w + (t - s));
+                    axpy_chunks::<AVX>(c, src, *src, full / 4);
+                }
+                let d = (*c).sqrt();
+                *c = d;
+                let inv = 1.0 / d;
+                // Rows 1 ..= p, in whole chunks (past p: PADR zeros, 0·inv = 0).
+                scale_chunks::<AVX>(c.add(1), inv, p.div_ceil(4));
+                let yk = y[k + t] * inv;
+                y[k + t] = yk;
+                let len = p.min(n - 1 - (k + t));
+                let yp = y.as_mut_ptr().add(k + t + 1);
+                axpy_chunks::<AVX>(yp, c.add(1), yk, len / 4);
+                for q in len / 4 * 4..len {
+                    *yp.add(q) -= *c.add(1 + q) * yk;
+                }
             }
-            // Row k + i loses col_i col_j for the columns k + j, j = 1..=i (offsets
-            // d0 − i + 1 ..= d0), extended to the left to a multiple of 4 entries (the
-            // column's zeros before j = 1 make the extension a no-op).
-            for i in 1..=below {
-                let ci = *cp.add(PAD + i);
-                let len = (i + 3) & !3;
-                let row = std::slice::from_raw_parts_mut(bp.add((k + i) * w + d0 + 1 - len), len);
-                let c = std::slice::from_raw_parts(cp.add(PAD + i + 1 - len), len);
-                axpy_chunks(row, c, ci);
+            if b < PANEL {
+                break;
             }
+            // Rank-4 update of the columns j = k + 4 + m (m = 0..p, within the
+            // system): rows j ..= k + 3 + p lose Σ_t L[i][k+t] L[j][k+t], the run
+            // rounded up to whole chunks (rows past k + 3 + p read the PADR zeros).
+            let cols = (k + PANEL + p).min(n) - (k + PANEL);
+            rank4_update::<AVX>(bp.add(k * w), w, p, cols);
         }
+        k += PANEL;
     }
-    // Back substitution with Lᵀ, by rows of L: x_r = y_r / L[r][r], then y_c −=
-    // L[r][c] x_r for the columns c of row r.
-    for r in (0..n).rev() {
-        let xr = y[r] / band[r * w + d0];
-        xs[r] = xr;
-        let q0 = p.saturating_sub(r);
-        let lr = &band[r * w + PAD + q0..r * w + d0];
-        let yc = &mut y[r + q0 - p..r];
-        for (yc, &l) in yc.iter_mut().zip(lr) {
-            *yc -= l * xr;
+    // Back substitution with Lᵀ by columns: x_c = (y_c − L[c+p][c] x_{c+p} − … −
+    // L[c+1][c] x_{c+1}) / L[c][c], subtracted in that order (r descending: the
+    // order in which the row-oriented version, y_c −= L[r][c] x_r for r = n − 1 …
+    // 0, reaches y_c, so the same bits). A column is contiguous, and only its last
+    // term waits for the previous unknown.
+    for c in (0..n).rev() {
+        let len = p.min(n - 1 - c);
+        let col = &band[c * w + 1..c * w + 1 + len];
+        let mut s = y[c];
+        for (&l, &x) in col.iter().zip(&xs[c + 1..c + 1 + len]).rev() {
+            s -= l * x;
         }
+        xs[c] = s / band[c * w];
     }
 }
 
-/// row −= ci · c, both of a length that is a multiple of 4, as 4-wide chunks (two
-/// slices, so the compiler knows they do not overlap).
+/// The rank-4 update of a panel (columns 0..4 from `panel`, stride `w`) applied to
+/// the `cols` columns after it: column 4 + m, rows 4 + m ..= 3 + p, loses Σ_t
+/// L[i][t] L[4+m][t], its run rounded up to whole chunks (rows past 3 + p read the
+/// PADR zeros of the panel's columns).
+///
+/// # Safety
+/// `panel` valid for (4 + cols) w values, w ≥ p + 8.
 #[inline(always)]
-fn axpy_chunks(row: &mut [f64], c: &[f64], ci: f64) {
-    let (r4, _) = row.as_chunks_mut::<4>();
-    let (c4, _) = c.as_chunks::<4>();
-    for (a, b) in r4.iter_mut().zip(c4) {
-        a[0] -= ci * b[0];
-        a[1] -= ci * b[1];
-        a[2] -= ci * b[2];
-        a[3] -= ci * b[3];
+unsafe fn rank4_update<const AVX: bool>(panel: *mut f64, w: usize, p: usize, cols: usize) {
+    let src = [
+        panel.add(4) as *const f64,
+        panel.add(w + 3) as *const f64,
+        panel.add(2 * w + 2) as *const f64,
+        panel.add(3 * w + 1) as *const f64,
+    ];
+    for m in 0..cols {
+        let target = panel.add((PANEL + m) * w);
+        let c = [src[0].add(m), src[1].add(m), src[2].add(m), src[3].add(m)];
+        axpy4_chunks::<AVX>(target, c, [*c[0], *c[1], *c[2], *c[3]], (p - m).div_ceil(4));
+    }
+}
+
+/// a −= f · c over `chunks` 4-wide chunks. With `AVX` the chunks are AVX vectors
+/// (written with intrinsics, so the compiler adds no runtime alias checks or
+/// unrolling around these short loops); the same operations, so the same bits.
+///
+/// # Safety
+/// `a` and `c` valid for 4 `chunks` values; a chunk of `a` may overlap only the
+/// same chunk of `c`'s run if at all (each is loaded before it is stored). With
+/// `AVX`, the CPU must support AVX (only called from [`factor_solve_avx2`]).
+#[inline(always)]
+unsafe fn axpy_chunks<const AVX: bool>(a: *mut f64, c: *const f64, f: f64, chunks: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        use std::arch::x86_64::{_mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd};
+        use std::arch::x86_64::{_mm256_storeu_pd, _mm256_sub_pd};
+        let fv = _mm256_set1_pd(f);
+        for m in 0..chunks {
+            let (pa, pc) = (a.add(4 * m), c.add(4 * m));
+            let x = _mm256_loadu_pd(pa);
+            _mm256_storeu_pd(pa, _mm256_sub_pd(x, _mm256_mul_pd(fv, _mm256_loadu_pd(pc))));
+        }
+        return;
+    }
+    for m in 0..chunks {
+        let (pa, pc) = (
+            a.add(4 * m) as *mut [f64; 4],
+            c.add(4 * m) as *const [f64; 4],
+        );
+        let (x, y) = (*pa, *pc);
+        *pa = [
+            x[0] - f * y[0],
+            x[1] - f * y[1],
+            x[2] - f * y[2],
+            x[3] - f * y[3],
+        ];
+    }
+}
+
+/// a *= f over `chunks` 4-wide chunks (AVX vectors with `AVX`).
+///
+/// # Safety
+/// `a` valid for 4 `chunks` values; with `AVX`, the CPU must support AVX.
+#[inline(always)]
+unsafe fn scale_chunks<const AVX: bool>(a: *mut f64, f: f64, chunks: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        use std::arch::x86_64::_mm256_storeu_pd;
+        use std::arch::x86_64::{_mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd};
+        let fv = _mm256_set1_pd(f);
+        for m in 0..chunks {
+            let pa = a.add(4 * m);
+            _mm256_storeu_pd(pa, _mm256_mul_pd(_mm256_loadu_pd(pa), fv));
+        }
+        return;
+    }
+    for m in 0..chunks {
+        let pa = a.add(4 * m) as *mut [f64; 4];
+        let x = *pa;
+        *pa = [x[0] * f, x[1] * f, x[2] * f, x[3] * f];
+    }
+}
+
+/// a −= b[0] c[0]; −= b[1] c[1]; … (in that order, element by element) over
+/// `chunks` 4-wide chunks (AVX vectors with `AVX`, as [`axpy_chunks`]).
+///
+/// # Safety
+/// As [`axpy_chunks`], for each of the four sources.
+#[inline(always)]
+unsafe fn axpy4_chunks<const AVX: bool>(
+    a: *mut f64,
+    c: [*const f64; 4],
+    b: [f64; 4],
+    chunks: usize,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        use std::arch::x86_64::{_mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd};
+        use std::arch::x86_64::{_mm256_storeu_pd, _mm256_sub_pd};
+        let bv = [
+            _mm256_set1_pd(b[0]),
+            _mm256_set1_pd(b[1]),
+            _mm256_set1_pd(b[2]),
+            _mm256_set1_pd(b[3]),
+        ];
+        for m in 0..chunks {
+            let pa = a.add(4 * m);
+            let mut x = _mm256_loadu_pd(pa);
+            for t in 0..4 {
+                x = _mm256_sub_pd(x, _mm256_mul_pd(bv[t], _mm256_loadu_pd(c[t].add(4 * m))));
+            }
+            _mm256_storeu_pd(pa, x);
+        }
+        return;
+    }
+    for m in 0..chunks {
+        let pa = a.add(4 * m) as *mut [f64; 4];
+        let x = *pa;
+        let y0 = *(c[0].add(4 * m) as *const [f64; 4]);
+        let y1 = *(c[1].add(4 * m) as *const [f64; 4]);
+        let y2 = *(c[2].add(4 * m) as *const [f64; 4]);
+        let y3 = *(c[3].add(4 * m) as *const [f64; 4]);
+        let lane = |e: usize| x[e] - b[0] * y0[e] - b[1] * y1[e] - b[2] * y2[e] - b[3] * y3[e];
+        *pa = [lane(0), lane(1), lane(2), lane(3)];
     }
 }
 
@@ -262,14 +415,8 @@ fn axpy_chunks(row: &mut [f64], c: &[f64], ci: f64) {
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn factor_solve_avx2(
-    band: &mut [f64],
-    y: &mut [f64],
-    col: &mut [f64],
-    xs: &mut [f64],
-    p: usize,
-) {
-    factor_solve(band, y, col, xs, p)
+unsafe fn factor_solve_avx2(band: &mut [f64], y: &mut [f64], xs: &mut [f64], p: usize) {
+    factor_solve::<true>(band, y, xs, p)
 }
 
 /// Whether the AVX2 kernel can run here.

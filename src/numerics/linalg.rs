@@ -23,11 +23,11 @@ pub trait PressureRows {
     /// to k − 1 and of the last to k + 1 are ignored (those unknowns are 0).
     fn row(&self, k: usize) -> Self::Row;
     /// For banded solvers (`banded.rs`): writes the lower band of the active rows and
-    /// their right-hand sides into `rhs`, and returns true. Row r takes `stride` ≥ p + 1
-    /// values from `band[r·stride]`, its band right-aligned: entry q (column r − p + q,
-    /// the diagonal at q = p) at `r·stride + stride − p − 1 + q`, zeros before. The
-    /// default returns false and the solver forms the rows one by one with
-    /// [`row`](Self::row).
+    /// their right-hand sides into `rhs`, and returns true. The band is stored by
+    /// columns: column c takes `stride` ≥ p + 1 values from `band[c·stride]`, entry
+    /// (r, c) for c ≤ r ≤ c + p at `c·stride + r − c` (the diagonal first), zeros
+    /// after it and for rows past the last. The default returns false and the solver
+    /// forms the rows one by one with [`row`](Self::row).
     fn assemble_band(
         &self,
         _band: &mut [f64],

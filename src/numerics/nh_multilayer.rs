@@ -16,7 +16,7 @@
 //! are the correction operator of step 3 applied to pⁿ. Normal discharges of dry cells
 //! are set to 0.
 
-use super::projection::multilayer::MultilayerOperator;
+use super::projection::multilayer::SharedOperator;
 use super::viscous::MultilayerViscousStep;
 use super::{Stage, StageError};
 use crate::mesh::Mesh;
@@ -27,7 +27,7 @@ use crate::physics::shallow::H_DRY;
 /// Step 2 of the N-layer non-hydrostatic model (module documentation).
 #[derive(Debug)]
 pub struct NhViscousStep<L: BasalFriction + LocalFriction> {
-    operator: MultilayerOperator,
+    operator: SharedOperator,
     viscous: MultilayerViscousStep<L>,
     /// Δt pⁿ, face-major.
     impulse: Vec<f64>,
@@ -35,10 +35,21 @@ pub struct NhViscousStep<L: BasalFriction + LocalFriction> {
 
 impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
     pub fn new(mesh: &Mesh, l: &[f64], viscous: MultilayerViscousStep<L>) -> Self {
+        Self::with_operator(mesh, SharedOperator::new(mesh, l), viscous)
+    }
+
+    /// With the operator that the projection of step 3 uses too (its coefficients
+    /// are then computed once per step).
+    pub fn with_operator(
+        mesh: &Mesh,
+        operator: SharedOperator,
+        viscous: MultilayerViscousStep<L>,
+    ) -> Self {
+        let layers = operator.lock().layers();
         NhViscousStep {
-            operator: MultilayerOperator::new(mesh, l),
+            operator,
             viscous,
-            impulse: vec![0.0; (mesh.nx + 1) * l.len()],
+            impulse: vec![0.0; (mesh.nx + 1) * layers],
         }
     }
 
@@ -51,8 +62,10 @@ impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
         for (pi, &p) in self.impulse.iter_mut().zip(&nh.p) {
             *pi = dt * p;
         }
-        self.operator.update(mesh, state);
-        self.operator.apply_impulses(state, &self.impulse);
+        let mut op = self.operator.lock();
+        op.update(mesh, state);
+        op.apply_impulses(state, &self.impulse);
+        drop(op);
         state.fill_ghosts(mesh);
     }
 }
@@ -91,6 +104,7 @@ mod tests {
     use super::*;
     use crate::mesh::MeshSpec;
     use crate::mesh::{BoundaryKind, Coordinates};
+    use crate::numerics::projection::multilayer::MultilayerOperator;
     use crate::numerics::viscous::ViscousOptions;
     use crate::numerics::viscous::{BasalCondition, Regularization};
     use crate::physics::rheology::MuI;

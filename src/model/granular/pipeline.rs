@@ -14,7 +14,7 @@ use crate::numerics::hydrostatic::HydrostaticStep;
 use crate::numerics::nh_multilayer::NhViscousStep;
 use crate::numerics::nonhydrostatic::NhFrictionStep;
 use crate::numerics::projection::monolayer::MonolayerOperator;
-use crate::numerics::projection::multilayer::MultilayerOperator;
+use crate::numerics::projection::multilayer::SharedOperator;
 use crate::numerics::projection::{ProjectionStage, ThomasSolver};
 use crate::numerics::viscous::{MultilayerViscousStep, ViscousOptions};
 use crate::numerics::Stage;
@@ -87,9 +87,15 @@ impl WithLaw for Stages<'_> {
                     c_msm: spec.c_msm,
                 };
                 let viscous = MultilayerViscousStep::new(law, nx, l, opts);
-                stages.push(Box::new(NhViscousStep::new(mesh, l, viscous)));
+                // One operator for the explicit pⁿ terms and the projection.
+                let operator = SharedOperator::new(mesh, l);
+                stages.push(Box::new(NhViscousStep::with_operator(
+                    mesh,
+                    operator.clone(),
+                    viscous,
+                )));
                 stages.push(Box::new(ProjectionStage::new(
-                    MultilayerOperator::new(mesh, l),
+                    operator,
                     BandedCholesky::new(n, nx + 1),
                     nx,
                 )));

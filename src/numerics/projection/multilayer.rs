@@ -68,13 +68,14 @@
 //! face's constraint (same for N = 1 with a dry edge, 3 % apart on a wet one).
 
 use std::ops::Range;
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::monolayer::{doubled_bed, face_depth, ConstraintResidual, NH_FILM_FRACTION};
 use super::{PressureSolver, ProjectionOperator};
 use crate::mesh::BoundaryKind;
 use crate::mesh::Mesh;
 use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
-use crate::numerics::banded::{BandedCholesky, StencilRow};
+use crate::numerics::banded::{band_index, BandedCholesky, StencilRow};
 use crate::numerics::linalg::PressureRows;
 
 /// Coefficients of one layer of one cell: the impulses of its base (α − 1/2) and top
@@ -110,6 +111,8 @@ pub struct MultilayerOperator {
     /// Faces that may carry an unknown (span of the mass) at the last update.
     span: Range<usize>,
     nx: usize,
+    /// The thickness of the last update (its coefficients depend on nothing else).
+    h_last: Vec<f64>,
 }
 
 impl MultilayerOperator {
@@ -134,6 +137,7 @@ impl MultilayerOperator {
             merged_right: false,
             span: 0..0,
             nx: mesh.nx,
+            h_last: Vec::with_capacity(mesh.nx + 2),
         }
     }
 
@@ -147,11 +151,24 @@ impl MultilayerOperator {
     }
 
     /// Recomputes the wet faces and the coefficients of 𝒯 from the thickness of
-    /// `state` (module documentation).
+    /// `state` (module documentation). Nothing to do when h is bit for bit that of
+    /// the last update (steps 2 and 3 of a time step share an operator,
+    /// [`SharedOperator`], and h does not change in between).
     pub fn update(&mut self, mesh: &Mesh, state: &LayeredState) {
         let (nx, n) = (self.nx, self.layers);
         debug_assert_eq!(state.layers, n);
         let h = &state.h[..];
+        let same = self.h_last.len() == h.len()
+            && self
+                .h_last
+                .iter()
+                .zip(h)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+        if same {
+            return;
+        }
+        self.h_last.clear();
+        self.h_last.extend_from_slice(h);
         let h_min = self.h_min;
         for k in 0..=nx {
             self.wet[k] = h[k] > h_min && h[k + 1] > h_min;
@@ -392,17 +409,30 @@ impl PressureRows for MultilayerRows<'_> {
         let op = self.op;
         let n = op.layers;
         debug_assert_eq!(p, n + 1);
-        let w = stride;
-        let o = stride - (p + 1); // the band is right-aligned in each row
+        let w = stride; // column c of the band from c·w, the diagonal first
         let active = op.active_unknowns();
         let (s, len) = (active.start, active.len());
-        band[..len * w].fill(0.0);
         rhs[..len].fill(0.0);
         if len == 0 {
             return true;
         }
+        // The columns of a face are zeroed just before its first contribution (then
+        // they are in cache when the cells add to them), column by column (short
+        // fills, not one pass over the whole band first).
+        let mut zeroed = op.span.start; // first face not zeroed yet
+        let mut zero_to = |band: &mut [f64], last: usize| {
+            while zeroed <= last.min(op.span.end - 1) {
+                for col in
+                    band[(zeroed * n - s) * w..((zeroed + 1) * n - s) * w].chunks_exact_mut(w)
+                {
+                    col.fill(0.0);
+                }
+                zeroed += 1;
+            }
+        };
         let (c0, c1) = (op.span.start.max(1), op.span.end.min(op.nx));
         for c in c0..=c1 {
+            zero_to(band, c);
             let inv_h = 1.0 / self.h[c];
             let (wl, wr) = (op.wet[c - 1], op.wet[c]);
             for a in 0..n {
@@ -416,20 +446,29 @@ impl PressureRows for MultilayerRows<'_> {
                     let (tu, tw) = (&k.u, &k.w);
                     let e = |s1: usize, s2: usize| (tu[s1] * tu[s2] + tw[s1] * tw[s2]) * inv_m;
                     let r0 = (c - 1) * n + a - s;
+                    // The four unknowns are active (both faces wet, a + 1 < n), so
+                    // r0 + n + 1 < len, and every offset below is ≤ p < w: one
+                    // check here instead of one per entry.
+                    assert!((r0 + n + 2) * w <= band.len() && r0 + n + 1 < rhs.len());
                     let (r1, r2, r3) = (r0 + 1, r0 + n, r0 + n + 1);
-                    for (si, r) in [r0, r1, r2, r3].into_iter().enumerate() {
-                        rhs[r] -= tu[si] * u + tw[si] * v;
+                    // SAFETY: indices bounded as asserted above.
+                    unsafe {
+                        for (si, r) in [r0, r1, r2, r3].into_iter().enumerate() {
+                            *rhs.get_unchecked_mut(r) -= tu[si] * u + tw[si] * v;
+                        }
+                        let mut add = |i: usize, v: f64| *band.get_unchecked_mut(i) += v;
+                        // Entry (r, c) at c·w + r − c.
+                        add(r0 * w, e(0, 0));
+                        add(r0 * w + 1, e(1, 0));
+                        add(r1 * w, e(1, 1));
+                        add(r0 * w + n, e(2, 0));
+                        add(r1 * w + n - 1, e(2, 1));
+                        add(r2 * w, e(2, 2));
+                        add(r0 * w + p, e(3, 0));
+                        add(r1 * w + n, e(3, 1));
+                        add(r2 * w + 1, e(3, 2));
+                        add(r3 * w, e(3, 3));
                     }
-                    band[r0 * w + o + p] += e(0, 0);
-                    band[r1 * w + o + p - 1] += e(1, 0);
-                    band[r1 * w + o + p] += e(1, 1);
-                    band[r2 * w + o + p - n] += e(2, 0);
-                    band[r2 * w + o + p - n + 1] += e(2, 1);
-                    band[r2 * w + o + p] += e(2, 2);
-                    band[r3 * w + o] += e(3, 0);
-                    band[r3 * w + o + p - n] += e(3, 1);
-                    band[r3 * w + o + p - 1] += e(3, 2);
-                    band[r3 * w + o + p] += e(3, 3);
                     continue;
                 }
                 let idx = [
@@ -449,16 +488,17 @@ impl PressureRows for MultilayerRows<'_> {
                         if !valid[s2] || idx[s2] > idx[s1] {
                             continue;
                         }
-                        let q = p - (idx[s1] - idx[s2]);
-                        band[r * w + o + q] += (k.u[s1] * k.u[s2] + k.w[s1] * k.w[s2]) * inv_m;
+                        let e = (k.u[s1] * k.u[s2] + k.w[s1] * k.w[s2]) * inv_m;
+                        band[band_index(r, idx[s2] - s, w)] += e;
                     }
                 }
             }
         }
+        zero_to(band, op.span.end - 1);
         for f in op.span.clone() {
             if !op.wet[f] {
                 for j in 0..n {
-                    band[(f * n + j - s) * w + o + p] = 1.0;
+                    band[(f * n + j - s) * w] = 1.0;
                 }
             }
         }
@@ -554,6 +594,44 @@ impl ProjectionOperator for MultilayerOperator {
     }
 }
 
+/// One [`MultilayerOperator`] used by the explicit pressure terms of step 2
+/// (`nh_multilayer.rs`) and by the projection of step 3: h does not change between
+/// them, so its coefficients are computed once per time step.
+#[derive(Debug, Clone)]
+pub struct SharedOperator(pub Arc<Mutex<MultilayerOperator>>);
+
+impl SharedOperator {
+    pub fn new(mesh: &Mesh, l: &[f64]) -> Self {
+        SharedOperator(Arc::new(Mutex::new(MultilayerOperator::new(mesh, l))))
+    }
+
+    pub fn lock(&self) -> MutexGuard<'_, MultilayerOperator> {
+        self.0.lock().expect("operator lock")
+    }
+}
+
+impl ProjectionOperator for SharedOperator {
+    type Row = StencilRow;
+
+    fn block(&self) -> usize {
+        self.lock().layers
+    }
+
+    fn solve<S: PressureSolver<Row = StencilRow>>(
+        &mut self,
+        mesh: &Mesh,
+        state: &LayeredState,
+        solver: &mut S,
+        pi: &mut [f64],
+    ) {
+        self.lock().solve(mesh, state, solver, pi);
+    }
+
+    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64) {
+        self.lock().correct(mesh, state, pi, dt);
+    }
+}
+
 /// [`BandedCholesky`] as the projection's pressure solver.
 impl PressureSolver for BandedCholesky {
     type Row = StencilRow;
@@ -569,7 +647,7 @@ mod tests {
     use super::*;
     use crate::mesh::Coordinates;
     use crate::mesh::MeshSpec;
-    use crate::numerics::banded::stencil_residual;
+    use crate::numerics::banded::{assemble_rows, stencil_residual};
     use crate::numerics::projection::monolayer::{constraint_residual, MonolayerOperator};
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
     use crate::numerics::Stage;
@@ -738,25 +816,13 @@ mod tests {
                     let mut op = MultilayerOperator::new(&mesh, &state.l);
                     op.update(&mesh, &state);
                     let rows = op.rows(&state);
-                    let (p, w) = (layers + 1, layers + 2);
+                    let (p, w) = (layers + 1, layers + 4);
                     let active = rows.active();
                     let n = active.len();
                     let (mut band, mut rhs) = (vec![7.0; n * w], vec![7.0; n]);
                     assert!(rows.assemble_band(&mut band, &mut rhs, p, w));
-                    let (mut by_rows, mut rhs_rows) = (vec![0.0; n * w], vec![0.0; n]);
-                    for r in 0..n {
-                        let row = rows.row(active.start + r);
-                        let lr = &mut by_rows[r * w..(r + 1) * w];
-                        lr[..3].copy_from_slice(&row.coef[0]);
-                        lr[p - 1] += row.coef[1][0];
-                        lr[p] += row.coef[1][1];
-                        rhs_rows[r] = row.rhs;
-                        // Columns before the active start are not part of the system.
-                        for q in 0..p.saturating_sub(r) {
-                            lr[q] = 0.0;
-                            band[r * w + q] = 0.0;
-                        }
-                    }
+                    let (mut by_rows, mut rhs_rows) = (vec![7.0; n * w], vec![7.0; n]);
+                    assemble_rows(&rows, &mut by_rows, &mut rhs_rows, p, w);
                     let scale = by_rows.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                     let rscale = rhs_rows.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                     for (a, b) in band.iter().zip(&by_rows) {
