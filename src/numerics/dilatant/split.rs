@@ -481,16 +481,12 @@ impl SplitScheme {
             left = (p, wet);
             // The friction step of the monolayer (friction.rs), with μ_eff, backward
             // Euler: I_out is the inertial number of the new discharge.
-            let (mut i_out, mut wall) = (0.0, 0.0);
+            let mut i_out = 0.0;
             if q != 0.0 {
                 if !wet {
                     q = 0.0;
                 } else if DILATANT {
-                    // μ_w h/W as `cell_friction` forms it (μ_w > 0 only).
-                    if law.mu_w > 0.0 {
-                        wall = law.mu_w * hi / law.width;
-                    }
-                    (q, i_out) = dilatant_friction(law, g_c, dt, hi, q, p, wall);
+                    (q, i_out) = dilatant_friction(law, g_c, dt, hi, q, p, wall(law, hi));
                 } else {
                     (q, i_out) = cell_friction(law, g_c, dt, hi, q, p);
                 }
@@ -510,6 +506,7 @@ impl SplitScheme {
                 if STABILISE {
                     // μ_eff at the state after friction (2.13–2.14, 4.1), for the
                     // stabilisation's faces.
+                    let wall = wall(law, hi);
                     mu[i] = (law.mu_of_i(i_out) + wall + law.tan_psi(p, phi_eq)).max(0.0);
                 }
                 // (3.15)–(3.19) with γ̇* = (5/2)|v*|/h*, φ_eq* = φ_eq(I*).
@@ -653,17 +650,22 @@ impl SplitScheme {
     }
 }
 
+/// μ_w h/W of eq. (4.1) as `cell_friction` forms it (0 without walls).
+#[inline(always)]
+fn wall(law: &DilatantLaw, h: f64) -> f64 {
+    if law.mu_w > 0.0 {
+        law.mu_w * h / law.width
+    } else {
+        0.0
+    }
+}
+
 /// The static threshold μ_eff(0) = max(0, μ_1 + μ_w h/W + K(φ − φ_stat)) of a cell
 /// (2.16): max(0, μ(I) + μ_w h/W + K(φ − φ_eq(I))) at I = 0 bit for bit (μ(0) = μ_1 + 0
 /// and φ_eq(0) = φ_stat exactly for every regularisation), without μ(I) and φ_eq(I).
 #[inline(always)]
 fn static_mu(law: &DilatantLaw, h: f64, phi: f64) -> f64 {
-    let wall = if law.mu_w > 0.0 {
-        law.mu_w * h / law.width
-    } else {
-        0.0
-    };
-    (law.mu_1 + wall + law.tan_psi(phi, law.phi_stat)).max(0.0)
+    (law.mu_1 + wall(law, h) + law.tan_psi(phi, law.phi_stat)).max(0.0)
 }
 
 /// Ghost fractions copy the edge cells (walls and outflow alike).

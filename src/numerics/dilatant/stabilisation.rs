@@ -127,7 +127,9 @@ mod tests {
         // Faces 1..=3 and 6 active (drive > 0), the others without drive: diffusing
         // each run of active faces over its cells gives the whole row's sub-step bit
         // for bit, and the cells next to no active face are not touched.
-        let u0: Vec<f64> = (0..10).map(|i| 0.1 + (i as f64 * 0.37).sin().abs()).collect();
+        let u0: Vec<f64> = (0..10)
+            .map(|i| 0.1 + (i as f64 * 0.37).sin().abs())
+            .collect();
         let drive = [0.0, 0.3, 0.05, 0.7, 0.0, 0.0, 0.2, 0.0, 0.0];
         let rate = 0.4;
         let mut whole = u0.clone();
