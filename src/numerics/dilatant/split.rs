@@ -57,7 +57,8 @@
 //!    diffuse with ι = max(0, ξ v Δz) (3.20–3.21), Δz = Δb̂ + Δx Proj_μ(X, v/(g_c Δt))
 //!    (3.6–3.12), μ the mean of the two cells' μ_eff, on faces whose two cells are wet
 //!    (h > 10⁻¹⁰ m): the viscosity never wets a dry cell, so it cannot spread films
-//!    ahead of a deposit. Sub-cycled to meet (3.22).
+//!    ahead of a deposit. Sub-cycled to meet (3.22). Only the runs of faces with a
+//!    drive and their cells are visited; the other cells keep their state.
 //!
 //! Steps 2–4 run over the cells that hold mass after step 1 only.
 //!
@@ -72,7 +73,7 @@
 
 use super::flux::proj_friction;
 use super::source::relax_towards;
-use super::stabilisation::diffuse;
+use super::stabilisation::diffuse_run;
 use super::state::DilatantState;
 use super::step::DilatantOptions;
 use crate::mesh::Mesh;
@@ -96,12 +97,14 @@ pub struct SplitScheme {
     phi_new: Vec<f64>,
     /// (h, hv) at t^n, restored when a later sub-step fails.
     backup: [Vec<f64>; 2],
-    /// Stabilisation: per face drive max(0, vΔz) and rate; (φh, φhv, φ^α h).
+    /// Stabilisation (K > 0, ξ ≠ 0): per face drive max(0, vΔz), set on the active
+    /// faces only (nx + 1); the runs of consecutive active faces (first, last) in
+    /// increasing order; (φh, φhv, φ^α h) (nx + 2).
     drive: Vec<f64>,
-    rate: Vec<f64>,
-    /// μ_eff of every wet cell after the friction step (nx + 2), K > 0 only.
+    active: Vec<(usize, usize)>,
+    /// μ_eff after the friction step (nx + 2) of the cells that moved through it; −1
+    /// marks a cell the friction held (its μ_eff is the static threshold at its h, φ).
     mu: Vec<f64>,
-    scratch: Vec<f64>,
     cons: [Vec<f64>; 3],
 }
 
@@ -311,17 +314,6 @@ fn dilatant_friction(
     (u * h * q.signum(), i)
 }
 
-/// μ_eff = max(0, G(I)) of a cell (2.13–2.14, 4.1) at a known inertial number I.
-#[inline(always)]
-fn mu_eff_at(law: &DilatantLaw, h: f64, phi: f64, i: f64) -> f64 {
-    let wall = if law.mu_w > 0.0 {
-        law.mu_w * h / law.width
-    } else {
-        0.0
-    };
-    (law.mu_of_i(i) + wall + law.tan_psi(phi, law.phi_eq(i))).max(0.0)
-}
-
 impl SplitScheme {
     /// `phi_ref`: the material's φ (the Savage–Hutter law's).
     pub fn new(law: DilatantLaw, opt: DilatantOptions, nx: usize, phi_ref: f64) -> Self {
@@ -342,9 +334,8 @@ impl SplitScheme {
             phi_new: vec![0.0; nx + 2],
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
+            active: Vec::with_capacity(nx + 1),
             mu: vec![0.0; nx + 2],
-            rate: vec![0.0; nx + 1],
-            scratch: vec![0.0; nx + 1],
             cons: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
         }
     }
@@ -495,28 +486,29 @@ impl SplitScheme {
                 if !wet {
                     q = 0.0;
                 } else if DILATANT {
-                    // μ_w h/W as `cell_friction` forms it (μ_w > 0 only).
-                    let wall = if law.mu_w > 0.0 {
-                        law.mu_w * hi / law.width
-                    } else {
-                        0.0
-                    };
-                    (q, i_out) = dilatant_friction(law, g_c, dt, hi, q, p, wall);
+                    (q, i_out) = dilatant_friction(law, g_c, dt, hi, q, p, wall(law, hi));
                 } else {
                     (q, i_out) = cell_friction(law, g_c, dt, hi, q, p);
                 }
             }
             hu[i] = q;
             if DILATANT && wet {
-                if STABILISE {
-                    // μ_eff at the state after friction (at rest: μ_1 + K(φ − φ_stat)
-                    // plus the walls), for the stabilisation's faces.
-                    mu[i] = mu_eff_at(law, hi, p, i_out);
-                }
                 if q == 0.0 {
+                    if STABILISE {
+                        // Held by the friction: μ_eff is the static threshold at (h, φ),
+                        // which the dilatancy step below leaves; formed only if a
+                        // stabilisation face asks (`static_mu`).
+                        mu[i] = -1.0;
+                    }
                     continue;
                 }
                 let phi_eq = law.phi_eq(i_out);
+                if STABILISE {
+                    // μ_eff at the state after friction (2.13–2.14, 4.1), for the
+                    // stabilisation's faces.
+                    let wall = wall(law, hi);
+                    mu[i] = (law.mu_of_i(i_out) + wall + law.tan_psi(p, phi_eq)).max(0.0);
+                }
                 // (3.15)–(3.19) with γ̇* = (5/2)|v*|/h*, φ_eq* = φ_eq(I*).
                 let inv_h = 1.0 / hi;
                 let v = q * inv_h;
@@ -544,52 +536,77 @@ impl SplitScheme {
     }
 
     /// Step 4: the viscosity (3.20)–(3.22) on wet–wet faces.
+    ///
+    /// A face has a drive only if one of its cells moves (v_interf = 0 otherwise), and
+    /// the diffusion runs over each run of consecutive active faces (a face with no
+    /// drive carries no flux): its cost follows the moving cells, not the extent of
+    /// the deposit (a collapse keeps a few cells moving at both ends of a long deposit
+    /// at rest). Cells next to no active face are left as they are (until issue 11's
+    /// follow-up they went through (φh, φ^α h) → φ, h, a change at round-off).
+    #[inline(never)]
     fn stabilise(
         &mut self,
         mesh: &Mesh,
         dt: f64,
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
-        let (nx, g_c, dx) = (self.shell.nx, mesh.g_n, mesh.dx);
+        let (g_c, dx) = (mesh.g_n, mesh.dx);
         let alpha = self.opt.flux.alpha;
+        let law = &self.law;
         let (h, hu, phi) = (&self.shell.h, &self.shell.hu, &self.phi_new);
+        let (mu, z) = (&self.mu, &mesh.z);
+        let (drive, active) = (&mut self.drive, &mut self.active);
+        active.clear();
+        // Faces start..end (between two cells of the wet range); cells start..=end.
+        let (start, end) = (*wet.start(), *wet.end());
+        assert!(start >= 1 && end < h.len() && end < drive.len());
+        assert!(h.len() == hu.len() && h.len() == phi.len() && h.len() == mu.len());
+        assert!(z.len() > end);
+        // μ_eff of cell j after the friction step.
+        let cell_mu = |j: usize| {
+            if mu[j] < 0.0 {
+                static_mu(law, h[j], phi[j])
+            } else {
+                mu[j]
+            }
+        };
         let mut largest: f64 = 0.0;
-        let (mut first, mut last) = (usize::MAX, 0);
         let alpha_term = 0.5 / (alpha - 1.0);
-        // Faces next to the wet range have no drive; those inside may.
-        self.drive[wet.start() - 1] = 0.0;
-        self.drive[*wet.end()] = 0.0;
-        for k in *wet.start()..*wet.end() {
-            self.drive[k] = 0.0;
+        for k in start..end {
             let (hl, hr) = (h[k], h[k + 1]);
             if hl <= H_DRY || hr <= H_DRY || (hu[k] == 0.0 && hu[k + 1] == 0.0) {
                 continue;
             }
-            // v_interf (3.8), X_interf Δx (3.12), μ_eff^interf as the mean of the cells'.
+            // v_interf (3.8), X_interf Δx (3.12), μ_eff^interf as the mean of the
+            // cells'.
             let (ml, mr) = (phi[k] * hl, phi[k + 1] * hr);
             let v = (phi[k] * hu[k] + phi[k + 1] * hu[k + 1]) / (ml + mr);
-            let db_hat = mesh.z[k + 1] - mesh.z[k];
+            let db_hat = z[k + 1] - z[k];
             let (al, ar) = (phi_power(phi[k], alpha), phi_power(phi[k + 1], alpha));
             let x = (hl - hr - db_hat + alpha_term * (hl + hr) * (al - ar) / (al + ar)) / dx;
-            let mu = 0.5 * (self.mu[k] + self.mu[k + 1]);
+            let mu = 0.5 * (cell_mu(k) + cell_mu(k + 1));
             let dz = db_hat + dx * proj_friction(mu, x, v / (g_c * dt));
             let d = (v * dz).max(0.0);
             if d > 0.0 {
-                self.drive[k] = d;
+                drive[k] = d;
                 largest = largest.max(d);
-                first = first.min(k);
-                last = k;
+                // Capacity nx + 1, one push per face at most: no allocation.
+                match active.last_mut() {
+                    Some((_, last)) if *last + 1 == k => *last = k,
+                    _ => active.push((k, k)),
+                }
             }
         }
         if largest == 0.0 {
             return Ok(());
         }
-        // Faces s0..=e0 − 2 (zero drive outside first..=last) and cells s0..e0: every
-        // cell next to an active face is interior to that range.
-        let (s0, e0) = (first.saturating_sub(1), (last + 3).min(nx + 2));
-        {
-            let [m, q, w] = &mut self.cons;
-            for j in s0..e0 {
+        // Runs of consecutive active faces a..=b and their cells a..=b + 1 (wet, inside
+        // the wet range); two runs share no cell.
+        let (active, drive): (&[(usize, usize)], &[f64]) = (active, drive);
+        let [m, q, w] = &mut self.cons;
+        assert!(m.len() == h.len() && q.len() == h.len() && w.len() == h.len());
+        for &(a, b) in active {
+            for j in a..=b + 1 {
                 let mj = phi[j] * h[j];
                 m[j] = mj;
                 q[j] = phi[j] * hu[j];
@@ -600,44 +617,55 @@ impl SplitScheme {
         let n = visc.substeps(largest, dt, dx);
         let r = dt / n as f64 / (dx * dx);
         for _ in 0..n {
-            for (c, u) in self.cons.iter_mut().enumerate() {
+            for (c, u) in [&mut *m, &mut *q, &mut *w].into_iter().enumerate() {
                 let xi = visc.xi[c];
                 if xi == 0.0 {
                     continue;
                 }
-                for k in s0..e0 - 1 {
-                    self.rate[k] = r * xi * self.drive[k];
+                let rate = r * xi;
+                for &(a, b) in active {
+                    diffuse_run(&mut u[a..=b + 1], &drive[a..=b], rate);
                 }
-                let faces = s0..e0 - 1;
-                diffuse(
-                    &mut u[s0..e0],
-                    &self.rate[faces.clone()],
-                    &mut self.scratch[faces],
-                );
             }
         }
-        let [m, q, w] = &self.cons;
-        for j in (s0 + 1).max(1)..=(e0 - 2).min(nx) {
-            if self.shell.h[j] <= H_DRY {
-                // Not next to an active face (those join two wet cells): unchanged.
-                continue;
+        let (h, hu, phi) = (&mut self.shell.h, &mut self.shell.hu, &mut self.phi_new);
+        for &(a, b) in active {
+            for j in a..=b + 1 {
+                let p = phi_from_ratio(w[j] / m[j], alpha);
+                if !(p > 0.0 && p < 1.0) {
+                    return Err(StageError::Inadmissible {
+                        x: mesh.x[j - 1],
+                        quantity: "volume fraction φ (stabilisation step)",
+                        value: p,
+                    });
+                }
+                phi[j] = p;
+                h[j] = m[j] / p;
+                hu[j] = q[j] / p;
             }
-            let p = phi_from_ratio(w[j] / m[j], alpha);
-            if !(p > 0.0 && p < 1.0) {
-                return Err(StageError::Inadmissible {
-                    x: mesh.x[j - 1],
-                    quantity: "volume fraction φ (stabilisation step)",
-                    value: p,
-                });
-            }
-            self.phi_new[j] = p;
-            self.shell.h[j] = m[j] / p;
-            self.shell.hu[j] = q[j] / p;
         }
         fill_fraction_ghosts(&mut self.phi_new);
         self.shell.fill_ghosts(mesh);
         Ok(())
     }
+}
+
+/// μ_w h/W of eq. (4.1) as `cell_friction` forms it (0 without walls).
+#[inline(always)]
+fn wall(law: &DilatantLaw, h: f64) -> f64 {
+    if law.mu_w > 0.0 {
+        law.mu_w * h / law.width
+    } else {
+        0.0
+    }
+}
+
+/// The static threshold μ_eff(0) = max(0, μ_1 + μ_w h/W + K(φ − φ_stat)) of a cell
+/// (2.16): max(0, μ(I) + μ_w h/W + K(φ − φ_eq(I))) at I = 0 bit for bit (μ(0) = μ_1 + 0
+/// and φ_eq(0) = φ_stat exactly for every regularisation), without μ(I) and φ_eq(I).
+#[inline(always)]
+fn static_mu(law: &DilatantLaw, h: f64, phi: f64) -> f64 {
+    (law.mu_1 + wall(law, h) + law.tan_psi(phi, law.phi_stat)).max(0.0)
 }
 
 /// Ghost fractions copy the edge cells (walls and outflow alike).
