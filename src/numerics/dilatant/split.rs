@@ -692,7 +692,8 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(4000))]
+        // About 11 % of draws are at rest (prop_assume); allow for that in long runs.
+        #![proptest_config(ProptestConfig { max_global_rejects: 1 << 20, ..ProptestConfig::with_cases(4000) })]
 
         /// Newton from u = 0 against bisection: the same root to a few ulps, for every
         /// regularisation, stiff K, walls and loose states whose μ_eff is cut at 0.
@@ -725,9 +726,15 @@ mod tests {
                 0.5 * (lo + hi)
             };
             let (u, i) = backward_euler_speed(&law, phi, wall, u_star, c, k);
-            // The residual u + c G − u* carries round-off of order ε u*, so both roots
-            // are determined to ε u*/g'(u) ≤ ε u* (g' ≥ 1), not to ε u.
-            prop_assert!((u - reference).abs() <= 4.0 * f64::EPSILON * u_star,
+            // The residual u + c G − u* is evaluated with a round-off of order ε times
+            // the sum of its terms' magnitudes: u*, and c times μ(I) ≤ μ_2, the wall
+            // term and the two halves of K(φ − φ_eq(I)) at the root, which cancel
+            // when φ is near φ_eq. Both roots are determined to that over g'(u) ≥ 1,
+            // not to ε u. (Bound ε u* alone failed on K 5.93, φ 0.456, c 0.4356,
+            // u* 0.061: Newton 13 ulps and bisection 22 ulps from a 60-digit root.)
+            let phi_eq_root = law.phi_eq_and_slope(k * reference).0.abs();
+            let scale = u_star + c * (law.mu_2 + wall + k_dil * (phi + phi_eq_root));
+            prop_assert!((u - reference).abs() <= 4.0 * f64::EPSILON * scale,
                 "u {} reference {} (rel. {:e})", u, reference, (u - reference) / reference);
             prop_assert!(u > 0.0 && u <= u_star);
             prop_assert_eq!(i, k * u);
