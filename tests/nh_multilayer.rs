@@ -330,8 +330,10 @@ fn project(v: &[f64], nx_f: usize, n_f: usize, nx: usize, n: usize) -> Vec<f64> 
 /// Seed 003 §5.2, Table 5: L1 errors (eq. 35) of h, u(z), w(z) at t = 0.15 s refining
 /// (Nx, N) together, against (1600, 32) (the paper's reference is (6400, 128)). Paper:
 /// errors of h 1.59e-2, 1.22e-2, 6.40e-3 on (100, 2), (200, 4), (400, 8), orders 0.39,
-/// 0.93 (then 1.06, 1.18). Measured: h 2.23e-3, 1.26e-3, 7.18e-4; u 7.42e-3, 5.74e-3,
-/// 4.18e-3; w 3.79e-3, 2.73e-3, 1.87e-3 (orders h 0.82/0.81, u 0.37/0.46, w 0.47/0.54).
+/// 0.93 (then 1.06, 1.18). Measured: h 2.245e-3, 1.269e-3, 7.201e-4; u 7.372e-3,
+/// 5.725e-3, 4.177e-3; w 3.712e-3, 2.709e-3, 1.862e-3 (orders h 0.82/0.82, u 0.36/0.45,
+/// w 0.45/0.54). The whole family up to (1600, 32) against (6400, 128) is
+/// scripts/table5_convergence.py (docs/validation.md).
 /// Why u and w converge slowly: see [`vertical_refinement_converges_when_the_basal_friction_does_not_depend_on_n`]
 /// and docs/validation.md.
 #[test]
@@ -369,8 +371,8 @@ fn convergence_at_first_order_table_5() {
             .collect();
         println!("  orders {:.2} {:.2} {:.2}", order[0], order[1], order[2]);
     }
-    // h converges at first order (measured 0.82, 0.81; paper 0.39, 0.93). u(z) and
-    // w(z) converge more slowly here (measured 0.37/0.46 and 0.47/0.54 against the
+    // h converges at first order (measured 0.82, 0.82; paper 0.39, 0.93). u(z) and
+    // w(z) converge more slowly here (measured 0.36/0.45 and 0.45/0.54 against the
     // paper's 0.66/1.18 and 0.68/1.29), so only their decrease is asserted. The
     // reference is only 4 times finer than the finest run, which biases the last orders
     // upwards, not downwards. The errors are in the moving core (not at the outflows
