@@ -121,6 +121,20 @@ def errors(run, ref):
     return e_h, layered(u, u_r), layered(w, w_r)
 
 
+def orders_along(seq, errs):
+    """Observed orders between consecutive entries of seq: log(e_prev/e)/log(Nx/Nx_prev)."""
+    out, prev = {}, None
+    for p in seq:
+        e = errs[p]
+        if prev is None:
+            out[p] = [None] * 3
+        else:
+            ratio = math.log(p[0] / prev[0])
+            out[p] = [math.log(a / b) / ratio if a > 0 and b > 0 else math.nan for a, b in zip(errs[prev], e)]
+        prev = p
+    return out
+
+
 def fmt_err(v, p):
     ours = f"{v:.3e}" if np.isfinite(v) else "   -     "
     return f"{ours} [{p:.2e}]" if p is not None else f"{ours} [   -    ]"
@@ -204,34 +218,52 @@ def main():
           f"(paper's values in brackets, its reference (6400, 128))")
     print(f"{'(Nx, N)':>11}  {'error h':>20} {'order h':>12}  {'error u(z)':>20} {'order u':>12}  "
           f"{'error w(z)':>20} {'order w':>12}  {'wall s':>8} {'steps':>6}")
-    rows, prev = [], None
+    runs_ok = {p: Run(out / f"{summary[p]['run']}.h5") for p in runs if p not in failed}
+    errs = {p: errors(runs_ok[p], ref) if p in runs_ok else (math.nan,) * 3 for p in family}
+    orders = orders_along(family, errs)
+    rows = []
     for p in family:
-        r = summary.get(p)
-        ok = p not in failed
-        e = errors(Run(out / f"{r['run']}.h5"), ref) if ok else (math.nan,) * 3
-        if prev is not None and ok and prev[1] is not None:
-            ratio = math.log(p[0] / prev[0][0])
-            orders = [math.log(a / b) / ratio if a > 0 and b > 0 else math.nan for a, b in zip(prev[1], e)]
-        else:
-            orders = [None] * 3
-        prev = (p, e if ok else None)
+        r, e, o = summary.get(p), errs[p], orders[p]
+        ok = p in runs_ok
         paper = PAPER.get(p, (None,) * 6)
-        wall = float(r["wall_time_s"]) if r and ok else math.nan
-        steps = r["steps"] if r and ok else "-"
-        print(f"{str(p):>11}  " + "  ".join(f"{fmt_err(e[v], paper[2 * v]):>20} {fmt_order(orders[v], paper[2 * v + 1]):>12}"
+        wall = float(r["wall_time_s"]) if ok else math.nan
+        steps = r["steps"] if ok else "-"
+        print(f"{str(p):>11}  " + "  ".join(f"{fmt_err(e[v], paper[2 * v]):>20} {fmt_order(o[v], paper[2 * v + 1]):>12}"
                                             for v in range(3))
               + f"  {wall:8.2f} {steps:>6}" + ("" if ok else f"  {r['status'] if r else 'no result'}"))
         rows.append({
             "cells": p[0], "layers": p[1], "ref_cells": nx_f, "ref_layers": n_f,
-            "err_h": e[0], "order_h": orders[0], "err_u": e[1], "order_u": orders[1],
-            "err_w": e[2], "order_w": orders[2],
+            "err_h": e[0], "order_h": o[0], "err_u": e[1], "order_u": o[1],
+            "err_w": e[2], "order_w": o[2],
             "paper_err_h": paper[0], "paper_order_h": paper[1], "paper_err_u": paper[2],
             "paper_order_u": paper[3], "paper_err_w": paper[4], "paper_order_w": paper[5],
             "wall_time_s": wall, "steps": steps, "status": r["status"] if r else "no result",
         })
+
     r = summary[reference]
     print(f"{'reference':>11}  {str(reference):>20} {'':>12}  {'':>20} {'':>12}  {'':>20} {'':>12}  "
           f"{float(r['wall_time_s']):8.2f} {r['steps']:>6}")
+
+    # Reference-free: each run against the next finer run of the list (the last against
+    # the reference). If e_k ~ C dx^p, these differences fall at the same order p.
+    chain = family + [reference]
+    diffs = {}
+    for a, b in zip(chain, chain[1:]):
+        refines = b[0] % a[0] == 0 and b[1] % a[1] == 0
+        diffs[a] = (errors(runs_ok[a], final_state(runs_ok[b]))
+                    if refines and a in runs_ok and b in runs_ok else (math.nan,) * 3)
+    d_orders = orders_along(family, diffs)
+    for a, b, prev in zip(chain[1:], chain[2:], chain):
+        if b[0] * prev[0] != a[0] * a[0]:  # orders only between equal refinement ratios
+            d_orders[a] = [None] * 3
+    print("\ndifferences between consecutive runs (no reference; same norms):")
+    print(f"{'(Nx, N)':>11} {'against':>11}  {'h':>9} {'order':>5}  {'u(z)':>9} {'order':>5}  {'w(z)':>9} {'order':>5}")
+    for (a, b), row in zip(zip(chain, chain[1:]), rows):
+        d, o = diffs[a], d_orders[a]
+        print(f"{str(a):>11} {str(b):>11}  " + "  ".join(
+            f"{d[v]:9.3e} {o[v]:5.2f}" if o[v] is not None else f"{d[v]:9.3e} {'-':>5}" for v in range(3)))
+        row.update({"next_cells": b[0], "next_layers": b[1], "diff_h": d[0], "diff_order_h": d_orders[a][0],
+                    "diff_u": d[1], "diff_order_u": d_orders[a][1], "diff_w": d[2], "diff_order_w": d_orders[a][2]})
     load1 = os.getloadavg()
     print(f"sweep wall time {elapsed:.1f} s (runs already done are reused); load average "
           f"{load0[0]:.2f} at the start, {load1[0]:.2f} at the end")
