@@ -10,16 +10,18 @@ Runs, through one `granflow sweep` (scenarios/nh_multilayer_convergence.toml: a
 smooth mass on a 20° plane, [-0.5, 1.5] m, free outflow, CFL 0.7, Table 1 material,
 t = 0.15 s), the family (Nx, N) = (100, 2), (200, 4), (400, 8), (800, 16), (1600, 32)
 (cells and layers refined together) and a reference, by default the paper's
-(6400, 128) (about an hour here; --reference 3200 64 takes a few minutes). It reads
-the snapshot at t = 0.15 s of every run, averages the reference onto each run's cells
-and layers (the projection of seed 003 eq. 35, as `project` in tests/nh_multilayer.rs),
-and prints the L1 errors of eq. (35),
+(6400, 128) (3614 s and 1 GiB here, on a shared 2-vCPU machine; --reference 3200 64:
+2 min). It reads the snapshot at t = 0.15 s of every run, averages the reference onto
+each run's cells and layers (the projection of seed 003 eq. 35, as `project` in
+tests/nh_multilayer.rs), and prints the L1 errors of eq. (35),
 
     ||h - h_ref||_1 = dx sum_i |h_i - h_ref_i|,
     ||v - v_ref||_1 = dx sum_i h_i/N sum_a |v_a,i - v_ref_a,i|,   v = u(z), w(z),
 
 and the observed orders log(e_prev/e)/log(Nx/Nx_prev), beside the paper's Table 5
-values in brackets, with each run's wall time and steps. It writes DIR/table5.csv.
+values in brackets, with each run's wall time and steps, then the differences between
+consecutive runs (each against the next finer one of the list, the last against the
+reference), which need no reference. It writes DIR/table5.csv.
 
 --quick is the cheap check run in CI: reference (800, 16), family (100, 2), (200, 4).
 --min-order-h / --min-order-v: exit 1 if the last order of h (resp. of u(z) and w(z))
