@@ -485,8 +485,8 @@ fn vertical_refinement_converges_when_the_basal_friction_does_not_depend_on_n() 
 /// CFL from the scenario's 0.7 down to 0.7/64, the u(z) differences (eq. 35 norm)
 /// between consecutive CFLs are 1.144e-3, 9.983e-4, 8.753e-4, 6.226e-4, 3.880e-4,
 /// 2.163e-4: orders 0.20, 0.19, 0.49, 0.68, 0.84. It is the bottom layer (u_1 in the
-/// cell right of x = 0.5 m: 0.419, 0.407, 0.395, 0.383, 0.371, 0.363, 0.358 m/s); the same
-/// differences appear at 800 cells one CFL halving later, i.e. at the same time step:
+/// cell at x = 0.5 m: 0.419, 0.407, 0.395, 0.383, 0.371, 0.363, 0.358 m/s); the same
+/// differences appear at 800 cells one CFL halving earlier, i.e. at the same time step:
 /// first order in time only for dt below about 5e-5 s, so refining x at CFL 0.7 is
 /// pre-asymptotic for the profile up to about 10^4 cells. The hydrostatic multilayer
 /// model shows it too (docs/validation.md), so it is the viscous/friction step.
