@@ -319,6 +319,20 @@ fn convergence_run_with(
     (h, u, w, sim.mesh.dx)
 }
 
+/// The layered L1 norm of seed 003 eq. (35): Δx Σ_i (h_i/N) Σ_α |v_{α,i} − r_{α,i}|,
+/// for fields stored layer-major (`v[α·nx + i]`).
+fn layered_l1(h: &[f64], v: &[f64], r: &[f64], nx: usize, n: usize, dx: f64) -> f64 {
+    (0..nx)
+        .map(|i| {
+            h[i] / n as f64
+                * (0..n)
+                    .map(|a| (v[a * nx + i] - r[a * nx + i]).abs())
+                    .sum::<f64>()
+        })
+        .sum::<f64>()
+        * dx
+}
+
 /// The reference averaged onto the coarse cells and layers ("projections of the
 /// reference solutions onto the spaces of the local solutions", seed 003 eq. 35).
 fn project(v: &[f64], nx_f: usize, n_f: usize, nx: usize, n: usize) -> Vec<f64> {
@@ -363,17 +377,7 @@ fn convergence_at_first_order_table_5() {
             project(&w_r, nx_f, n_f, nx, n),
         );
         let eh: f64 = h.iter().zip(&hr).map(|(a, b)| (a - b).abs()).sum::<f64>() * dx;
-        let layered = |v: &[f64], r: &[f64]| -> f64 {
-            (0..nx)
-                .map(|i| {
-                    h[i] / n as f64
-                        * (0..n)
-                            .map(|a| (v[a * nx + i] - r[a * nx + i]).abs())
-                            .sum::<f64>()
-                })
-                .sum::<f64>()
-                * dx
-        };
+        let layered = |v: &[f64], r: &[f64]| layered_l1(&h, v, r, nx, n, dx);
         let e = [eh, layered(&u, &ur), layered(&w, &wr)];
         println!("  ({nx}, {n}): {:.3e} {:.3e} {:.3e}", e[0], e[1], e[2]);
         errors.push(e);
@@ -453,15 +457,7 @@ fn vertical_refinement_converges_when_the_basal_friction_does_not_depend_on_n() 
             .map(|&n| {
                 let (h, u) = run(text, n);
                 let ur = project(&u_ref, 400, 32, 400, n);
-                (0..400)
-                    .map(|i| {
-                        h[i] / n as f64
-                            * (0..n)
-                                .map(|a| (u[a * 400 + i] - ur[a * 400 + i]).abs())
-                                .sum::<f64>()
-                    })
-                    .sum::<f64>()
-                    * dx
+                layered_l1(&h, &u, &ur, 400, n, dx)
             })
             .collect()
     };
@@ -503,15 +499,7 @@ fn in_depth_profile_is_first_order_in_time_only_below_the_scenario_cfl() {
         .windows(2)
         .map(|p| {
             let ((h, u, _, dx), (_, u_f, _, _)) = (&p[0], &p[1]);
-            (0..nx)
-                .map(|i| {
-                    h[i] / n as f64
-                        * (0..n)
-                            .map(|a| (u[a * nx + i] - u_f[a * nx + i]).abs())
-                            .sum::<f64>()
-                })
-                .sum::<f64>()
-                * dx
+            layered_l1(h, u, u_f, nx, n, *dx)
         })
         .collect();
     let orders: Vec<f64> = diffs.windows(2).map(|d| (d[0] / d[1]).log2()).collect();
