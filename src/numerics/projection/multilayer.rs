@@ -296,17 +296,21 @@ impl MultilayerOperator {
             .expect("a non-hydrostatic state carries hw")
             .q;
         let (c0, c1) = (self.span.start.max(1), self.span.end.min(nx));
+        let l = &self.l[..n];
         for c in c0..=c1 {
             let (left, right) = (&pi[(c - 1) * n..c * n], &pi[c * n..(c + 1) * n]);
+            // The cell's slices, all of length n: no bounds check per layer.
+            let coef = &self.coef[c * n..(c + 1) * n];
+            let (hu, hw) = (&mut hu[c * n..(c + 1) * n], &mut hw[c * n..(c + 1) * n]);
             for a in 0..n {
-                let k = &self.coef[c * n + a];
+                let k = &coef[a];
                 let top = |side: &[f64]| if a + 1 < n { side[a + 1] } else { 0.0 };
                 let p = [left[a], top(left), right[a], top(right)];
                 let du: f64 = k.u.iter().zip(&p).map(|(c, p)| c * p).sum();
                 let dw: f64 = k.w.iter().zip(&p).map(|(c, p)| c * p).sum();
-                let inv_l = 1.0 / self.l[a];
-                hu[c * n + a] += du * inv_l;
-                hw[c * n + a] += dw * inv_l;
+                let inv_l = 1.0 / l[a];
+                hu[a] += du * inv_l;
+                hw[a] += dw * inv_l;
             }
         }
     }
