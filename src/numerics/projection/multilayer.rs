@@ -185,16 +185,19 @@ impl MultilayerOperator {
         let inv_dx = 1.0 / self.dx;
         // Cells touching a face of the span.
         let (c0, c1) = (self.span.start.max(1), self.span.end.min(nx));
+        // Slices of known length: no bounds check per layer.
+        let (level, l) = (&self.level[..=n], &self.l[..n]);
         for c in c0..=c1 {
             let (wl, wr) = (self.wet[c - 1], self.wet[c]);
+            let coef = &mut self.coef[c * n..(c + 1) * n];
             let hc = h[c];
             let (hl, hr) = (face_depth(h[c - 1], hc), face_depth(hc, h[c + 1]));
             let db = 0.25 * (self.two_b[c + 1] - self.two_b[c - 1]) * inv_dx;
             let (dhl, dhr) = ((hc - hl) * inv_dx, (hr - hc) * inv_dx);
             for a in 0..n {
                 let top = a + 1 < n;
-                let (lb, lt) = (self.level[a], self.level[a + 1]);
-                let la = self.l[a];
+                let (lb, lt) = (level[a], level[a + 1]);
+                let la = l[a];
                 let mut k = LayerCoefficients::default();
                 if wl {
                     let cons = 0.5 * la * hl * inv_dx;
@@ -214,7 +217,7 @@ impl MultilayerOperator {
                         k.w[RIGHT + 1] = -0.5;
                     }
                 }
-                self.coef[c * n + a] = k;
+                coef[a] = k;
             }
         }
         // Outflow: the edge face's pressure is its inner neighbour's (seed 003 eq. 37):
