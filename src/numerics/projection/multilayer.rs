@@ -834,6 +834,45 @@ mod tests {
     /// The band assembled cell by cell (what the solver uses) is the band of the rows
     /// formed one by one, to round-off, with dry faces inside the span (identity
     /// rows), films and merged outflow faces.
+    /// The columns the assembly reports as final through `ready` (the solver
+    /// factorises them at once) are bit for bit those of the finished band, and the
+    /// reports end with every column.
+    #[test]
+    fn columns_reported_ready_are_final() {
+        for layers in [1, 3, 20] {
+            for (left, right) in BOUNDARIES {
+                let (mesh, mut state) = moving_state(60, layers, left, right, true);
+                state.h[40] = 1e-9; // a dry cell: its two faces carry no unknown
+                state.fill_ghosts(&mesh);
+                let mut op = MultilayerOperator::new(&mesh, &state.l);
+                op.update(&mesh, &state);
+                let rows = op.rows(&state);
+                let (p, w) = (layers + 1, layers + 4);
+                let n = rows.active().len();
+                let (mut band, mut rhs) = (vec![7.0; n * w], vec![7.0; n]);
+                let mut seen: Vec<(usize, Vec<f64>, Vec<f64>)> = Vec::new();
+                let mut ready = |band: &mut [f64], rhs: &mut [f64], c: usize| {
+                    seen.push((c, band[..c * w].to_vec(), rhs[..c].to_vec()));
+                };
+                assert!(rows.assemble_band(&mut band, &mut rhs, p, w, &mut ready));
+                assert!(seen.len() > 2, "N = {layers}: reported along the way");
+                assert_eq!(seen.last().unwrap().0, n);
+                let mut last = 0;
+                for (c, b, r) in &seen {
+                    assert!(*c >= last);
+                    last = *c;
+                    let same = |x: &[f64], y: &[f64]| {
+                        x.iter().zip(y).all(|(a, b)| a.to_bits() == b.to_bits())
+                    };
+                    assert!(
+                        same(b, &band[..c * w]) && same(r, &rhs[..*c]),
+                        "N = {layers}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn assembled_band_is_the_band_of_the_rows() {
         for layers in [1, 2, 5, 20] {
