@@ -40,8 +40,25 @@ fn main() {
     let wet = (0..=nx)
         .filter(|&f| h[f] > h_min && h[f + 1] > h_min)
         .count();
+    // FNV-1a of the state (t, h, h u_α, tracers, pressure), to check that a change
+    // keeps the results bit for bit.
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    let s = &sim.state;
+    let nh = s.nh.as_ref().map(|nh| nh.p.as_slice()).unwrap_or(&[]);
+    let tracers = s.tracers.iter().flat_map(|t| t.q.iter());
+    for v in std::iter::once(&sim.t)
+        .chain(h)
+        .chain(&s.hu)
+        .chain(tracers)
+        .chain(nh)
+    {
+        for b in v.to_bits().to_le_bytes() {
+            hash = (hash ^ b as u64).wrapping_mul(0x100_0000_01b3);
+        }
+    }
     println!(
-        "{pressure}: {warm} warm-up steps, then {steps} (t = {:.4}); wet faces {wet} of {}",
+        "{pressure}: {warm} warm-up steps, then {steps} (t = {:.4}); wet faces {wet} of {}; \
+         state hash {hash:#018x}",
         sim.t,
         nx + 1
     );

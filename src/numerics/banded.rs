@@ -13,7 +13,9 @@
 //!
 //! [`BandedCholesky`] assembles the lower band by columns (the operator writes it cell
 //! by cell, [`PressureRows::assemble_band`]; other row sources row by row) and
-//! factorises it in place, right-looking by panels of 4 columns (`factor_solve`):
+//! factorises it in place, right-looking by panels of 4 columns (`factor_to`), a
+//! panel as soon as the assembly has finished the columns it touches (so the band is
+//! factorised while it is in cache, not in a second pass through it):
 //! each column of a panel takes its earlier columns' updates and is scaled, then
 //! each of the next p columns takes the panel's rank-4 update in one pass. Every
 //! update is an axpy on a contiguous run of a column (no reductions, so the work
@@ -125,7 +127,8 @@ impl BandedCholesky {
     ///
     /// The lower band is assembled by columns first (by [`PressureRows::assemble_band`]
     /// when the rows offer it, else row by row with [`assemble_rows`]), then
-    /// factorised in place by panels of 4 columns (`factor_solve`).
+    /// factorised in place by panels of 4 columns (`factor_to`) as the columns become
+    /// final, then back-substituted.
     pub fn solve_rows<R: PressureRows<Row = StencilRow>>(&mut self, rows: &R, x: &mut [f64]) {
         let m = self.block;
         assert!(m >= 1, "block size");
@@ -145,17 +148,25 @@ impl BandedCholesky {
             self.y.resize(n, 0.0);
         }
         let (band, y) = (&mut self.band[..n * w], &mut self.y[..n]);
-        if !rows.assemble_band(band, y, p, w) {
+        let avx2 = self.avx2;
+        // Panels are factorised as soon as the columns they touch are final (the
+        // assembly reports them), while those columns are still in cache.
+        let mut k = 0; // first column not factorised yet
+        let mut ready = |band: &mut [f64], y: &mut [f64], c: usize| {
+            #[cfg(target_arch = "x86_64")]
+            if avx2 {
+                // SAFETY: the CPU supports AVX2 (checked in `new`).
+                unsafe { factor_to_avx2(band, y, p, &mut k, c) };
+                return;
+            }
+            factor_to::<false>(band, y, p, &mut k, c);
+        };
+        if !rows.assemble_band(band, y, p, w, &mut ready) {
             assemble_rows(rows, band, y, p, w);
+            ready(band, y, n);
         }
-        let xs = &mut x[active.clone()];
-        #[cfg(target_arch = "x86_64")]
-        if self.avx2 {
-            // SAFETY: the CPU supports AVX2 (checked in `new`).
-            unsafe { factor_solve_avx2(band, y, xs, p) };
-            return;
-        }
-        factor_solve::<false>(band, y, xs, p);
+        debug_assert_eq!(k, n, "the assembly reported every column");
+        back_substitute(band, y, &mut x[active.clone()], p);
     }
 }
 
@@ -201,12 +212,14 @@ pub fn assemble_rows<R: PressureRows<Row = StencilRow>>(
 /// column (a − b·0 = a) and writes the target's zeros back.
 const PADR: usize = 7;
 
-/// Columns per panel of the blocked factorisation ([`factor_solve`]).
+/// Columns per panel of the blocked factorisation ([`factor_to`]).
 const PANEL: usize = 4;
 
 /// In-place Cholesky factorisation of the lower band `band` (n columns of p + 1 +
-/// PADR: the band, the diagonal first, then zeros), forward substitution of `y` in
-/// the same sweep, and backward substitution into `xs` ([`BandedCholesky::solve_rows`]).
+/// PADR: the band, the diagonal first, then zeros) and forward substitution of `y`
+/// in the same sweep, from column `*k` on, as far as the columns 0 .. `ready` allow
+/// (a panel and its rank-4 update touch columns up to k + 3 + p); `*k` becomes the
+/// first column not factorised ([`BandedCholesky::solve_rows`]).
 ///
 /// Blocked right-looking by panels of [`PANEL`] columns, each step an axpy on a
 /// contiguous run of a column (no reductions, so the work pipelines and vectorises;
@@ -216,27 +229,35 @@ const PANEL: usize = 4;
 /// once, losing the four products in pivot order). Every entry of L undergoes the
 /// operations of the one-pivot-at-a-time right-looking algorithm in the same order,
 /// so the blocking does not change the factor, and the substitutions keep their
-/// order too: the results are those of the unblocked version, bit for bit.
+/// order too: the results are those of the unblocked version, bit for bit. (Each
+/// entry is final before its first update, so when the factorisation runs does not
+/// change it either.)
 #[inline(always)]
-fn factor_solve<const AVX: bool>(band: &mut [f64], y: &mut [f64], xs: &mut [f64], p: usize) {
+fn factor_to<const AVX: bool>(
+    band: &mut [f64],
+    y: &mut [f64],
+    p: usize,
+    k: &mut usize,
+    ready: usize,
+) {
     let n = y.len();
     let w = p + 1 + PADR;
     let full = (p + 1 + 3) & !3; // d = 0..=p in whole chunks
-    assert!(band.len() >= n * w && xs.len() == n && full + 3 <= w);
+    assert!(band.len() >= n * w && full + 3 <= w && ready <= n);
     let bp = band.as_mut_ptr();
-    let mut k = 0;
-    while k < n {
-        let b = PANEL.min(n - k);
-        // SAFETY (this block): columns k .. k + b < n, each read and written at
+    let mut k0 = *k;
+    while k0 < n && (k0 + PANEL + p).min(n) <= ready {
+        let b = PANEL.min(n - k0);
+        // SAFETY (this block): columns k0 .. k0 + b < n, each read and written at
         // offsets < w (`full` + 3 ≤ w, asserted), so every access is < n·w ≤
         // band.len(); within a column update the source column differs from the
         // target, and every chunk is loaded before it is stored.
         unsafe {
             for t in 0..b {
-                let c = bp.add((k + t) * w);
+                let c = bp.add((k0 + t) * w);
                 // Updates of the panel's earlier columns: L[k+t+d][k+s] L[k+t][k+s].
                 for s in 0..t {
-                    let src = bp.add((k + s) * w + (t - s));
+                    let src = bp.add((k0 + s) * w + (t - s));
                     axpy_chunks::<AVX>(c, src, *src, full / 4);
                 }
                 let d = (*c).sqrt();
@@ -244,31 +265,39 @@ fn factor_solve<const AVX: bool>(band: &mut [f64], y: &mut [f64], xs: &mut [f64]
                 let inv = 1.0 / d;
                 // Rows 1 ..= p, in whole chunks (past p: PADR zeros, 0·inv = 0).
                 scale_chunks::<AVX>(c.add(1), inv, p.div_ceil(4));
-                let yk = y[k + t] * inv;
-                y[k + t] = yk;
-                let len = p.min(n - 1 - (k + t));
-                let yp = y.as_mut_ptr().add(k + t + 1);
+                let yk = y[k0 + t] * inv;
+                y[k0 + t] = yk;
+                let len = p.min(n - 1 - (k0 + t));
+                let yp = y.as_mut_ptr().add(k0 + t + 1);
                 axpy_chunks::<AVX>(yp, c.add(1), yk, len / 4);
                 for q in len / 4 * 4..len {
                     *yp.add(q) -= *c.add(1 + q) * yk;
                 }
             }
             if b < PANEL {
+                k0 = n;
                 break;
             }
             // Rank-4 update of the columns j = k + 4 + m (m = 0..p, within the
             // system): rows j ..= k + 3 + p lose Σ_t L[i][k+t] L[j][k+t], the run
             // rounded up to whole chunks (rows past k + 3 + p read the PADR zeros).
-            let cols = (k + PANEL + p).min(n) - (k + PANEL);
-            rank4_update::<AVX>(bp.add(k * w), w, p, cols);
+            let cols = (k0 + PANEL + p).min(n) - (k0 + PANEL);
+            rank4_update::<AVX>(bp.add(k0 * w), w, p, cols);
         }
-        k += PANEL;
+        k0 += PANEL;
     }
-    // Back substitution with Lᵀ by columns: x_c = (y_c − L[c+p][c] x_{c+p} − … −
-    // L[c+1][c] x_{c+1}) / L[c][c], subtracted in that order (r descending: the
-    // order in which the row-oriented version, y_c −= L[r][c] x_r for r = n − 1 …
-    // 0, reaches y_c, so the same bits). A column is contiguous, and only its last
-    // term waits for the previous unknown.
+    *k = k0;
+}
+
+/// Back substitution with Lᵀ by columns: x_c = (y_c − L[c+p][c] x_{c+p} − … −
+/// L[c+1][c] x_{c+1}) / L[c][c], subtracted in that order (r descending: the order
+/// in which the row-oriented version, y_c −= L[r][c] x_r for r = n − 1 … 0, reaches
+/// y_c, so the same bits). A column is contiguous, and only its last term waits for
+/// the previous unknown.
+fn back_substitute(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) {
+    let n = y.len();
+    let w = p + 1 + PADR;
+    assert!(band.len() >= n * w && xs.len() == n);
     for c in (0..n).rev() {
         let len = p.min(n - 1 - c);
         let col = &band[c * w + 1..c * w + 1 + len];
@@ -309,7 +338,7 @@ unsafe fn rank4_update<const AVX: bool>(panel: *mut f64, w: usize, p: usize, col
 /// # Safety
 /// `a` and `c` valid for 4 `chunks` values; a chunk of `a` may overlap only the
 /// same chunk of `c`'s run if at all (each is loaded before it is stored). With
-/// `AVX`, the CPU must support AVX (only called from [`factor_solve_avx2`]).
+/// `AVX`, the CPU must support AVX (only called from [`factor_to_avx2`]).
 #[inline(always)]
 unsafe fn axpy_chunks<const AVX: bool>(a: *mut f64, c: *const f64, f: f64, chunks: usize) {
     #[cfg(target_arch = "x86_64")]
@@ -407,7 +436,7 @@ unsafe fn axpy4_chunks<const AVX: bool>(
     }
 }
 
-/// [`factor_solve`] compiled for AVX2 (4 doubles per vector instead of SSE2's 2). The
+/// [`factor_to`] compiled for AVX2 (4 doubles per vector instead of SSE2's 2). The
 /// same operations in the same order (no fused multiply-add: Rust does not contract
 /// a·b + c), so the results are bit-for-bit those of the portable version.
 ///
@@ -415,8 +444,8 @@ unsafe fn axpy4_chunks<const AVX: bool>(
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn factor_solve_avx2(band: &mut [f64], y: &mut [f64], xs: &mut [f64], p: usize) {
-    factor_solve::<true>(band, y, xs, p)
+unsafe fn factor_to_avx2(band: &mut [f64], y: &mut [f64], p: usize, k: &mut usize, ready: usize) {
+    factor_to::<true>(band, y, p, k, ready)
 }
 
 /// Whether the AVX2 kernel can run here.

@@ -12,6 +12,10 @@
 
 use std::ops::Range;
 
+/// Called by [`PressureRows::assemble_band`] as `ready(band, rhs, c)` when the
+/// columns 0 .. c of the band are final.
+pub type BandReady<'a> = dyn FnMut(&mut [f64], &mut [f64], usize) + 'a;
+
 /// A (block-)tridiagonal system, one row at a time.
 pub trait PressureRows {
     /// One row: its couplings to the unknowns k − 1, k, k + 1 and its right-hand side.
@@ -26,14 +30,19 @@ pub trait PressureRows {
     /// their right-hand sides into `rhs`, and returns true. The band is stored by
     /// columns: column c takes `stride` ≥ p + 1 values from `band[c·stride]`, entry
     /// (r, c) for c ≤ r ≤ c + p at `c·stride + r − c` (the diagonal first), zeros
-    /// after it and for rows past the last. The default returns false and the solver
-    /// forms the rows one by one with [`row`](Self::row).
+    /// after it and for rows past the last. Whenever the columns and right-hand sides
+    /// 0 .. c are final (nothing more will be added to them), it may call
+    /// `ready(band, rhs, c)`, with c not decreasing and the last call with c = the
+    /// number of active rows, so that a solver can factorise those columns while the
+    /// band is in cache; `ready` changes only columns < c and rhs[..c]. The default
+    /// returns false and the solver forms the rows one by one with [`row`](Self::row).
     fn assemble_band(
         &self,
         _band: &mut [f64],
         _rhs: &mut [f64],
         _p: usize,
         _stride: usize,
+        _ready: &mut BandReady,
     ) -> bool {
         false
     }

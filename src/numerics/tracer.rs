@@ -111,13 +111,16 @@ impl TracerTransport {
                         &departure[i * n..(i + 1) * n],
                         &departure[(i - 1) * n..i * n],
                     );
+                    let exchange = &mut self.exchange[..=n];
                     let mut g = 0.0;
-                    self.exchange[0] = 0.0;
-                    for a in 0..n - 1 {
-                        g += r * l[a] * (right[a] - left[a]);
-                        self.exchange[a + 1] = g;
+                    exchange[0] = 0.0;
+                    for (((e, &la), &dr), &dl) in
+                        exchange[1..n].iter_mut().zip(l).zip(right).zip(left)
+                    {
+                        g += r * la * (dr - dl);
+                        *e = g;
                     }
-                    self.exchange[n] = 0.0;
+                    exchange[n] = 0.0;
                     let conc = &c[i * n..(i + 1) * n];
                     // Upwind concentration at the interface above layer a (a + 1/2).
                     let at = |a: usize, g: f64| -> f64 {
@@ -129,11 +132,17 @@ impl TracerTransport {
                             conc[a - 1]
                         }
                     };
-                    for (a, la) in l.iter().enumerate() {
-                        let (below, above) = (self.exchange[a], self.exchange[a + 1]);
-                        let vertical = (at(a + 1, above) * above - at(a, below) * below) / la;
-                        let q = &mut tracer.q[i * n + a];
-                        *q += vertical - r * (self.flux[i * n + a] - self.flux[(i - 1) * n + a]);
+                    // Slices of equal length: one bounds check each, not one per layer.
+                    let (fr, fl) = (
+                        &self.flux[i * n..(i + 1) * n],
+                        &self.flux[(i - 1) * n..i * n],
+                    );
+                    let qs = &mut tracer.q[i * n..(i + 1) * n];
+                    let l = &l[..n];
+                    for a in 0..n {
+                        let (below, above) = (exchange[a], exchange[a + 1]);
+                        let vertical = (at(a + 1, above) * above - at(a, below) * below) / l[a];
+                        qs[a] += vertical - r * (fr[a] - fl[a]);
                     }
                     continue;
                 }
