@@ -15,7 +15,10 @@ fn fnv(h: &mut u64, v: f64) {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let cap: f64 = args[0].parse().unwrap();
+    let Some(cap) = args.first().and_then(|a| a.parse::<f64>().ok()) else {
+        eprintln!("usage: fingerprints T_END_CAP SCENARIO.toml ... (e.g. 0.3 scenarios/*.toml)");
+        std::process::exit(2);
+    };
     let variants: &[&[&str]] = &[
         &[],
         &["rheology.law=\"coulomb\""],
