@@ -20,7 +20,7 @@ use crate::model::Model;
 use crate::output::{GaugeRecord, OutputError, OutputSink};
 
 /// Left cell and weight of the linear interpolation at `xg` between the cell centres
-/// `x` (uniform spacing `dx`): v(xg) = (1 − w) v[i] + w v[i + 1] (v[i] alone when
+/// `x` (uniform spacing `dx`): v(xg) = (1 − w) v\[i\] + w v\[i + 1\] (v\[i\] alone when
 /// w = 0, which is also the answer outside the centres).
 pub fn interpolation(x: &[f64], dx: f64, xg: f64) -> (usize, f64) {
     let n = x.len();

@@ -45,7 +45,7 @@
 //!
 //! symmetric positive definite, with the 3×3 stencil (faces f ± 1, interfaces α ± 1)
 //! of [`crate::numerics::banded`]: ordered face by face it is banded with half-bandwidth
-//! N + 1 and is solved exactly by [`BandedCholesky`](crate::numerics::banded::BandedCholesky).
+//! N + 1 and is solved exactly by [`BandedCholesky`].
 //! After the correction the discrete constraint holds to round-off, and the
 //! projection removes exactly the kinetic energy of its correction (KE⁺ + KE(δ) = KE⁻).
 //!

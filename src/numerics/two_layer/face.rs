@@ -9,8 +9,8 @@
 //! By the discrete product rule (eq. 89) its "static" part (everything but the
 //! velocities) is identically
 //!
-//!   [R₁]₂ˢ = g cos θ̄ H̄₁ Δη,
-//!   [R₁]₄ˢ = g cos θ̄ H̄₂ (A₂ Δ(H₂cos²θ) + r A₁ Δ(H₁cos²θ) + Δb + (1 − A₂)/4 H̄₂ Δcos²θ),
+//!   \[R₁\]₂ˢ = g cos θ̄ H̄₁ Δη,
+//!   \[R₁\]₄ˢ = g cos θ̄ H̄₂ (A₂ Δ(H₂cos²θ) + r A₁ Δ(H₁cos²θ) + Δb + (1 − A₂)/4 H̄₂ Δcos²θ),
 //!
 //! which is how it is evaluated (one subtraction Δη: a lake at rest gives exactly 0).
 //! The paper's eq. (80) prints the last term as "H̄₂ cos²θ_{i+1} − cos²θ_i"; the
@@ -20,12 +20,12 @@
 //!
 //! Coulomb term of the face (eq. 79): if |Q̄₂| > Δt σ_c/cos θ̄ the face carries the
 //! friction source −N tan δ₀ sgn(Q̄₂) ([`coulomb_normal_stress`], i.e. T₁/cos θ + T₂);
-//! otherwise τ_crit, which is exactly [R₁]₄ˢ, so that R₂ has no grain-momentum
+//! otherwise τ_crit, which is exactly \[R₁\]₄ˢ, so that R₂ has no grain-momentum
 //! component at a grain layer at rest whatever its slope.
 //!
 //! Own-depth split: the static parts of the momentum rows are shared by the two cells
-//! in proportion to their own thicknesses, θ_L [R₁]ˢ and θ_R [R₁]ˢ (θ_L = H_L/(H_L + H_R)),
-//! with the upwinded part bounded by the thinner side (m α₁ [R₁]ˢ, m = min θ), instead of
+//! in proportion to their own thicknesses, θ_L \[R₁\]ˢ and θ_R \[R₁\]ˢ (θ_L = H_L/(H_L + H_R)),
+//! with the upwinded part bounded by the thinner side (m α₁ \[R₁\]ˢ, m = min θ), instead of
 //! ½ each as in eq. (73): the sum over the face is unchanged (R₁), equal thicknesses give
 //! eq. (73) exactly, and a film beside a thick cell is no longer pushed by half the
 //! thick cell's pressure (acceleration ∝ H_thick/H_film: the Δt collapse of the
