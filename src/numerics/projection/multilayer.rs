@@ -681,6 +681,22 @@ mod tests {
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
     use crate::numerics::Stage;
 
+    /// [`moving_state`] on 60 cells with cell 40 dry (its two faces carry no unknown),
+    /// and the operator updated to it.
+    fn operator_with_a_dry_cell(
+        layers: usize,
+        left: BoundaryKind,
+        right: BoundaryKind,
+        film: bool,
+    ) -> (LayeredState, MultilayerOperator) {
+        let (mesh, mut state) = moving_state(60, layers, left, right, film);
+        state.h[40] = 1e-9;
+        state.fill_ghosts(&mesh);
+        let mut op = MultilayerOperator::new(&mesh, &state.l);
+        op.update(&mesh, &state);
+        (state, op)
+    }
+
     /// A wet state on a curved bed with a sheared, layer-dependent velocity field that
     /// violates the constraints; `film` puts a film just thicker than the wet threshold
     /// 0.05 Δx next to thick cells, as at a front.
@@ -841,11 +857,7 @@ mod tests {
     fn columns_reported_ready_are_final() {
         for layers in [1, 3, 20] {
             for (left, right) in BOUNDARIES {
-                let (mesh, mut state) = moving_state(60, layers, left, right, true);
-                state.h[40] = 1e-9; // a dry cell: its two faces carry no unknown
-                state.fill_ghosts(&mesh);
-                let mut op = MultilayerOperator::new(&mesh, &state.l);
-                op.update(&mesh, &state);
+                let (state, op) = operator_with_a_dry_cell(layers, left, right, true);
                 let rows = op.rows(&state);
                 let (p, w) = (layers + 1, layers + 4);
                 let n = rows.active().len();
@@ -878,11 +890,7 @@ mod tests {
         for layers in [1, 2, 5, 20] {
             for (left, right) in BOUNDARIES {
                 for film in [false, true] {
-                    let (mesh, mut state) = moving_state(60, layers, left, right, film);
-                    state.h[40] = 1e-9; // a dry cell: its two faces carry no unknown
-                    state.fill_ghosts(&mesh);
-                    let mut op = MultilayerOperator::new(&mesh, &state.l);
-                    op.update(&mesh, &state);
+                    let (state, op) = operator_with_a_dry_cell(layers, left, right, film);
                     let rows = op.rows(&state);
                     let (p, w) = (layers + 1, layers + 4);
                     let active = rows.active();
