@@ -88,23 +88,11 @@ impl DilatantLaw {
     /// Critical-state volume fraction φ_eq(I) (eq. 2.9 and f0–f2).
     #[inline(always)]
     pub fn phi_eq(&self, i: f64) -> f64 {
-        let (ps, kt) = (self.phi_stat, self.k_tilde);
-        match self.phi_eq {
-            PhiEq::Linear => ps - kt * i,
-            PhiEq::F0 => (ps - kt * i).max(0.0),
-            PhiEq::F1 => ps * (-kt * i / ps).exp(),
-            PhiEq::F2 { n } => {
-                let base = 1.0 + kt * i / (n * ps);
-                if n == 1.0 {
-                    ps / base
-                } else {
-                    ps / base.powf(n)
-                }
-            }
-        }
+        // The slope is dead code here once inlined.
+        self.phi_eq_and_slope(i).0
     }
 
-    /// φ_eq(I) (as [`DilatantLaw::phi_eq`]) and its derivative dφ_eq/dI ≤ 0: every
+    /// φ_eq(I) (the regularisations' one definition) and its derivative dφ_eq/dI ≤ 0: every
     /// regularisation is convex and non-increasing in I, which the backward-Euler
     /// friction of the split scheme relies on (`numerics::dilatant::split`).
     #[inline(always)]
