@@ -221,6 +221,20 @@ fn scheme_cfl(mesh: &Mesh, s: &DilatantState) -> f64 {
     scheme.max_dt(mesh, s)
 }
 
+/// The critical state of a uniform layer on a plane of slope θ: tan ψ = 0 and μ(I*) =
+/// tan θ (eq. 2.13–2.14), so I* = I_0 (tan θ − μ_1)/(μ_2 − tan θ); returns (I*, φ_eq(I*)).
+fn critical_state(law: &DilatantLaw, theta_deg: f64) -> (f64, f64) {
+    let tan = theta_deg.to_radians().tan();
+    let i_star = law.i0 * (tan - law.mu_1) / (law.mu_2 - tan);
+    (i_star, law.phi_eq(i_star))
+}
+
+/// The speed v of a layer of depth h and fraction φ at inertial number I:
+/// I = (5/2) v d/(h √(φ g_c h)) (eq. 2.10, 2.11, 2.15) solved for v.
+fn speed_at_inertial_number(law: &DilatantLaw, i: f64, h: f64, phi: f64, g_c: f64) -> f64 {
+    i * h * (phi * g_c * h).sqrt() / (2.5 * law.d)
+}
+
 #[test]
 fn uniform_flow_on_an_incline_reaches_the_critical_state() {
     // A uniform layer on a 28° plane: the steady state has tan ψ = 0, i.e.
@@ -228,16 +242,14 @@ fn uniform_flow_on_an_incline_reaches_the_critical_state() {
     // φ* = φ_eq(I*) (f2, N = 1); v follows from I* = (5/2) v d/(h √(φ* g_c h)).
     let law = DilatantLaw::table1();
     let theta: f64 = 28.0;
-    let tan = theta.to_radians().tan();
-    let i_star = law.i0 * (tan - law.mu_1) / (law.mu_2 - tan);
-    let phi_star = law.phi_eq(i_star);
+    let (i_star, phi_star) = critical_state(&law, theta);
     for phi0 in [0.62, 0.55] {
         let mesh = mesh(0.0, 0.2, 4, theta, (false, false));
         // Start at the steady speed of the critical state (a dense layer started at rest
         // on 28° is held by its dilatant friction μ_1 + K(φ0 − φ_stat) = 0.635 > tan θ).
         let (g_c, m) = (mesh.g_n, phi0 * 0.01);
         let h_star = m / phi_star;
-        let v_star = i_star * h_star * (phi_star * g_c * h_star).sqrt() / (2.5 * law.d);
+        let v_star = speed_at_inertial_number(&law, i_star, h_star, phi_star, g_c);
         let mut s = state(&mesh, |_| 0.01, |_| v_star, |_| phi0);
         let mut scheme = DilatantScheme::new(law, DilatantOptions::default(), mesh.nx);
         let steps = run(&mut scheme, &mesh, &mut s, 40.0, |_, _, _| {}).unwrap();
@@ -993,9 +1005,7 @@ mod split_scheme {
         // φ = 0.5789 and the loose one nearly stopped (I = 2.0e-4, φ = 0.5813).
         let law = DilatantLaw::table1();
         let theta: f64 = 28.0;
-        let tan = theta.to_radians().tan();
-        let i_star = law.i0 * (tan - law.mu_1) / (law.mu_2 - tan);
-        let phi_star = law.phi_eq(i_star);
+        let (i_star, phi_star) = critical_state(&law, theta);
         for (k, phi0) in [(0.0, 0.62), (4.09, 0.62), (4.09, 0.55)] {
             let law = DilatantLaw { k, ..law };
             let mesh = mesh(0.0, 0.02, 4, theta, (false, false));
@@ -1003,7 +1013,7 @@ mod split_scheme {
             // K = 0 keeps φ0 (no dilatancy): its steady state has φ = φ0.
             let phi_end = if k == 0.0 { phi0 } else { phi_star };
             let h_end = m / phi_end;
-            let v_end = i_star * h_end * (phi_end * g_c * h_end).sqrt() / (2.5 * law.d);
+            let v_end = speed_at_inertial_number(&law, i_star, h_end, phi_end, g_c);
             let mut s = state(&mesh, |_| 0.01, |_| v_end, |_| phi0);
             let mut scheme = SplitScheme::new(law, DilatantOptions::default(), mesh.nx, 0.62);
             let steps = run_split(&mut scheme, &mesh, &mut s, 40.0, |_| {});
