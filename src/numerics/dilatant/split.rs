@@ -127,10 +127,7 @@ pub fn reconstruction_law(law: &DilatantLaw, phi_ref: f64) -> MuI {
 #[inline(always)]
 pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) -> (f64, f64) {
     let i = inertial_number(law.d, phi, speed, h, p_over_rho);
-    let mut mu = law.mu_of_i(i);
-    if law.mu_w > 0.0 {
-        mu += law.mu_w * h / law.width;
-    }
+    let mu = law.mu_of_i(i) + wall(law, h);
     let tan_psi = law.tan_psi(phi, law.phi_eq(i)).max(-mu);
     (mu + tan_psi, i)
 }
@@ -163,10 +160,7 @@ impl FaceFriction for DilatantFaces<'_> {
             0.5 * (pl + pr)
         };
         if speed == 0.0 {
-            let mut mu = law.mu_1;
-            if law.mu_w > 0.0 {
-                mu += law.mu_w * h / law.width;
-            }
+            let mu = law.mu_1 + wall(law, h);
             return mu + law.tan_psi(phi, law.phi_stat).max(-mu);
         }
         moving_face(law, speed, h, p_over_rho, phi)
@@ -272,11 +266,7 @@ const MAX_NEWTON: usize = 100;
 /// Returns the new discharge and its inertial number I (0 for K = 0: not needed).
 #[inline(always)]
 pub fn cell_friction(law: &DilatantLaw, g_c: f64, dt: f64, h: f64, q: f64, phi: f64) -> (f64, f64) {
-    let wall = if law.mu_w > 0.0 {
-        law.mu_w * h / law.width
-    } else {
-        0.0
-    };
+    let wall = wall(law, h);
     if law.k == 0.0 {
         // Without dilatancy: the monolayer's own backward-Euler μ(I) step (issue 13 item
         // 1, `MuI::friction_update`), the walls' μ_w h/W a constant added to μ_1 and μ_2,
@@ -305,7 +295,7 @@ fn dilatant_friction(
     wall: f64,
 ) -> (f64, f64) {
     let weight = g_c * h;
-    let at_rest = (law.mu_1 + wall + law.tan_psi(phi, law.phi_stat)).max(0.0);
+    let at_rest = static_mu(law, h, phi);
     if dt * at_rest * weight * (1.0 + STATIC_ROUNDOFF) >= q.abs() {
         return (0.0, 0.0);
     }
@@ -650,7 +640,7 @@ impl SplitScheme {
     }
 }
 
-/// μ_w h/W of eq. (4.1) as `cell_friction` forms it (0 without walls).
+/// μ_w h/W of eq. (4.1) (0 without walls), the one place it is formed.
 #[inline(always)]
 fn wall(law: &DilatantLaw, h: f64) -> f64 {
     if law.mu_w > 0.0 {
