@@ -173,7 +173,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
 /// Seed 003 §5.3, Table 6 (a): errors proportional to δ (paper: h 5.34e-5, 5.34e-10,
 /// 2.99e-16; u 5.38e-5, 5.39e-10, 5.39e-15; w 4.21e-5, 4.21e-10, 4.21e-15). Measured:
 /// h 6.16e-4, 7.79e-9, 7.07e-14; u 1.56e-3, 2.20e-8, 2.02e-13; w 9.44e-4, 1.52e-8,
-/// 1.39e-13 (62–78 δ for h, 156–220 δ for u; hydrostatic multilayer: h 63–70 δ, u
+/// 1.39e-13 (62–78 δ for h, 156–220 δ for u; hydrostatic multilayer: h 54–70 δ, u
 /// 148–179 δ). Why tens of δ rather than the paper's 5 δ (docs/numerics.md, "Creep at
 /// the repose slope"): at exactly the repose slope the drive equals the strength μ_s p
 /// of every interface, and with the viscosities frozen at t^n the interface shear
@@ -182,8 +182,9 @@ fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
 /// proportional to δ√n, not to δ (halving the CFL number multiplies them by √2).
 /// The paper does not print how its scheme avoids that; taking its eq. (25) literally
 /// (ĥ = h_i + ½(h_{i−1} + h_{i+1}) ≈ 2h as the column weight in step 2) gives h 4.4 δ,
-/// u 4.1 δ and h 0.26 δ at δ = 1e-15 (paper 5.3 δ, 5.4 δ, 0.30 δ), but then a surface
-/// at 20.01° stays at rest too, which the paper's last paragraph of §5.3 rules out.
+/// u 4.1 δ and h 0.26 δ at δ = 1e-15 (paper 5.3 δ, 5.4 δ, 0.30 δ), and at 20.01° an h
+/// change of 1.3e-5 with velocities still of 4 δ (paper: h "of order 1e-5"), but it
+/// doubles the friction of every column below the repose slope; not adopted.
 #[test]
 fn mass_at_repose_stays_at_rest_to_order_delta() {
     println!(
