@@ -151,7 +151,8 @@ fn departures_inside(sink: &MemorySink, dx: f64, layers: usize, cut: usize) -> [
 /// outflow boundary (measured h: 4.70e-4, 1.90e-9, 1.15e-14; u: 1.55e-3, 2.16e-8,
 /// 1.98e-13; w: 9.00e-4, 1.17e-8, 1.06e-13 for δ = 1e-5, 1e-10, 1e-15). The edge cells
 /// feel half the surface slope (the outflow ghost copies the edge column) and creep at
-/// 2δ/√3 while their neighbours creep at 2δ√n (see the next test): at δ = 1e-10,
+/// 2δ/√3 while their neighbours creep at 2δ√n (`creep_at_rest_follows_the_frozen_viscosity_recursion`
+/// in tests/multilayer.rs): at δ = 1e-10,
 /// 5.9e-9 of the 7.8e-9 of h are in these 6 cells.
 #[test]
 fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
