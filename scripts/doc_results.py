@@ -57,6 +57,7 @@ CHECKS = {
     "bagnold": cargo_test("multilayer", "bagnold_profile_converges_at_second_order_in_the_layers"),
     "sidewall": cargo_test("multilayer", "sidewall_profiles_match_jop_solution"),
     "ml_rest": cargo_test("multilayer", "multilayer_mass_at_repose_stays_at_rest_to_order_delta"),
+    "ml_creep": cargo_test("multilayer", "creep_at_rest_follows_the_frozen_viscosity_recursion"),
     "erodible": cargo_test(
         "multilayer", "erodible_bed_lengthens_runout_with_mu_i_but_not_with_constant_friction"),
     "erodible_cmsm": cargo_test("multilayer", "erodible_bed_lengthens_runout_with_c_msm"),

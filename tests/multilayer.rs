@@ -436,6 +436,8 @@ fn at_rest_run(delta: f64, surface_deg: f64) -> (f64, f64) {
 /// up to the creep the δ regularisation allows (errors proportional to δ); a surface
 /// 0.01° steeper moves. (Seed 003 needs its ĥ of eq. 25 for this; with the own-depth
 /// split of the pressure source in step 1 the weight h_i suffices, docs/numerics.md.)
+/// Measured h 6.30e-4, 7.03e-9, 5.42e-14 and u 1.48e-3, 1.78e-8, 1.79e-13: tens of δ,
+/// the frozen-viscosity creep 2δ√n of the next test (paper about 5 δ).
 #[test]
 fn multilayer_mass_at_repose_stays_at_rest_to_order_delta() {
     println!(
@@ -445,7 +447,7 @@ fn multilayer_mass_at_repose_stays_at_rest_to_order_delta() {
         let (eh, eu) = at_rest_run(delta, 20.0);
         println!("  δ = {delta:.0e}: {eh:.3e} {eu:.3e}");
         assert!(
-            eh <= 100.0 * delta + 1e-12 && eu <= 300.0 * delta + 1e-12,
+            eh <= 100.0 * delta && eu <= 250.0 * delta,
             "δ = {delta}: {eh:e}, {eu:e}"
         );
     }
@@ -454,6 +456,102 @@ fn multilayer_mass_at_repose_stays_at_rest_to_order_delta() {
     assert!(
         eh > 1e-5 && eu > 1e-5,
         "a surface beyond the repose slope moves: {eh:e}, {eu:e}"
+    );
+}
+
+/// Interface strain rates |u_{α+1} − u_α| / h_{α+1/2} in units of δ over the physical
+/// cells `cells` (0-based) and every interface: (mean, min, max); and the largest
+/// bottom-layer speed there.
+fn interface_shear(sim: &Sim, delta: f64, cells: std::ops::Range<usize>) -> ([f64; 3], f64) {
+    let n = sim.state.layers;
+    let count = (cells.len() * (n - 1)) as f64;
+    let (mut sum, mut lo, mut hi, mut bottom) = (0.0, f64::INFINITY, 0.0f64, 0.0f64);
+    for i in cells {
+        let u = layer_velocities(sim, i);
+        let gap = sim.state.h[i + 1] / n as f64;
+        for a in 1..n {
+            let s = (u[a] - u[a - 1]).abs() / gap / delta;
+            sum += s;
+            lo = lo.min(s);
+            hi = hi.max(s);
+        }
+        bottom = bottom.max(u[0].abs());
+    }
+    ([sum / count, lo, hi], bottom)
+}
+
+/// Why the errors of Table 6 are tens of δ (docs/numerics.md, "Creep at rest"). With
+/// the viscosities frozen at t^n, the implicit step makes the stress ν^n s^{n+1} carry
+/// the drive. At exactly the repose slope the drive is the strength μ_s p of every
+/// interface (the pressure source of step 1 and the weight of step 2 are both the
+/// column's own depth), so ν^n s^{n+1} = μ_s p with ν^n = μ_s p / √((s^n)² + 4δ²):
+/// (s^{n+1})² = (s^n)² + 4δ², s = 2δ√n after n steps whatever their length — the creep
+/// grows with the number of steps, not with time (halving the CFL number multiplies
+/// it by √2). Where the drive is a fraction r < 1 of the strength the same recursion
+/// converges to s = 2δ r/√(1 − r²), with the bottom layer held exactly by its Coulomb
+/// friction: below the repose slope (r = tan θ_surface/μ_s), and in the two edge cells,
+/// whose outflow ghost (a copy of the edge column) makes the surface flat across the
+/// boundary face, so that they feel half the surface slope (r = ½ at the repose slope,
+/// s = 2δ/√3). The mismatch between the edge cells and their creeping neighbours is
+/// the outflow part of Table 6's h error. Measured on the random bed of §5.3 with
+/// δ = 1e-10 (μ(I) − μ_s is then negligible): inside, s/δ = 41.95 after 440 steps
+/// (2√440 = 41.95) and 59.33 after 880 (CFL 0.35); 5.84 at 19° (2r/√(1 − r²) = 5.84);
+/// in the edge cells 1.1547 (2/√3) and 1.0738 at 19°; uniform to 0.3 % inside (μ(I) − μ_s
+/// slows the fastest interfaces), to 1e-4 in the edge cells.
+#[test]
+fn creep_at_rest_follows_the_frozen_viscosity_recursion() {
+    let delta = 1e-10;
+    let build = |surface_deg: f64, cfl: f64| {
+        let (_, mut sim) = scenario(
+            "at_rest_random_bed_multilayer.toml",
+            &sets(&[
+                &format!("rheology.delta={delta:e}"),
+                &format!("initial.h=\"0.8 - tan({surface_deg}*deg)*(x-2) - b\""),
+                &format!("time.cfl={cfl}"),
+            ]),
+        );
+        run(&mut sim);
+        sim
+    };
+    let fixed_point = |r: f64| 2.0 * r / (1.0 - r * r).sqrt();
+    let check = |sim: &Sim, inside: f64, edge: f64, label: &str| {
+        let nx = sim.mesh.nx;
+        let (shear, bottom) = interface_shear(sim, delta, 1..nx - 1);
+        println!(
+            "  {label}: {} steps, inside s/δ mean {:.3} (min {:.3}, max {:.3}), expected {inside:.3}; bottom layer ≤ {bottom:.2e} m/s",
+            sim.steps, shear[0], shear[1], shear[2]
+        );
+        assert!(
+            shear.iter().all(|s| (s / inside - 1.0).abs() < 5e-3),
+            "{label}: {shear:?} vs {inside}"
+        );
+        for cells in [0..1, nx - 1..nx] {
+            let ([_, lo, hi], edge_bottom) = interface_shear(sim, delta, cells.clone());
+            println!("    edge cell {cells:?}: s/δ {lo:.4}..{hi:.4}, expected {edge:.4}");
+            assert!(
+                (lo / edge - 1.0).abs() < 1e-3 && (hi / edge - 1.0).abs() < 1e-3,
+                "{label}, edge {cells:?}: {lo} {hi} vs {edge}"
+            );
+            assert_eq!(edge_bottom, 0.0, "{label}: edge cells are held at the bed");
+        }
+        bottom
+    };
+    for cfl in [0.7, 0.35] {
+        let sim = build(20.0, cfl);
+        let inside = 2.0 * (sim.steps as f64).sqrt();
+        check(
+            &sim,
+            inside,
+            fixed_point(0.5),
+            &format!("repose slope, CFL {cfl}"),
+        );
+    }
+    let r = tan_deg(19.0) / tan_deg(20.0);
+    let sim = build(19.0, 0.7);
+    let bottom = check(&sim, fixed_point(r), fixed_point(0.5 * r), "19°");
+    assert_eq!(
+        bottom, 0.0,
+        "below the repose slope the bottom layer is held"
     );
 }
 

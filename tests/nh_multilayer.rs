@@ -148,10 +148,12 @@ fn departures_inside(sink: &MemorySink, dx: f64, layers: usize, cut: usize) -> [
 }
 
 /// Seed 003 §5.3, Table 6 away from the outflows: without the 3 cells next to each
-/// outflow boundary the departures from rest of the NH multilayer model are those of
-/// the hydrostatic one and proportional to δ (measured h: 4.8e-4, 3.7e-9, 2.6e-14 for
-/// δ = 1e-5, 1e-10, 1e-15), within the bound the hydrostatic multilayer test uses
-/// (100 δ for h, 300 δ for u and w).
+/// outflow boundary (measured h: 4.70e-4, 1.90e-9, 1.15e-14; u: 1.55e-3, 2.16e-8,
+/// 1.98e-13; w: 9.00e-4, 1.17e-8, 1.06e-13 for δ = 1e-5, 1e-10, 1e-15). The edge cells
+/// feel half the surface slope (the outflow ghost copies the edge column) and creep at
+/// 2δ/√3 while their neighbours creep at 2δ√n (`creep_at_rest_follows_the_frozen_viscosity_recursion`
+/// in tests/multilayer.rs): at δ = 1e-10,
+/// 5.9e-9 of the 7.8e-9 of h are in these 6 cells.
 #[test]
 fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
     for delta in [1e-5, 1e-10, 1e-15] {
@@ -163,30 +165,27 @@ fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
         let [eh, eu, ew] = departures_inside(&sink, sim.mesh.dx, sim.state.layers, 3);
         println!("  δ = {delta:.0e}, inside: {eh:.3e} {eu:.3e} {ew:.3e}");
         assert!(
-            eh <= 100.0 * delta && eu <= 300.0 * delta && ew <= 300.0 * delta,
+            eh <= 60.0 * delta && eu <= 250.0 * delta && ew <= 150.0 * delta,
             "δ = {delta}: {eh:e} {eu:e} {ew:e}"
         );
     }
 }
 
-/// Seed 003 §5.3, Table 6 (a): errors of the order of δ (paper: h 5.34e-5, 5.34e-10,
-/// 2.99e-16; u 5.38e-5, 5.39e-10, 5.39e-15; w 4.21e-5, 4.21e-10, 4.21e-15).
-///
-/// KNOWN FAILURE (issue 10, open): measured h, u, w errors 6.3e-4, 1.6e-3, 1.1e-3
-/// (δ = 1e-5), 1.3e-8, 3.0e-8, 2.9e-8 (δ = 1e-10) and 1.2e-13 for h (δ = 1e-15):
-/// proportional to δ, but 130 δ for h at δ = 1e-10 against the 100 δ bound (the
-/// hydrostatic model: 70 δ; the paper: 5.3 δ). At t = 1 s, 9.3e-9 of the 1.3e-8 are in
-/// the 3 cells next to each outflow (hydrostatic: 3.4e-9 of 7.0e-9), growing linearly
-/// in time, and the NH bed pressure there is 10× its value inside (2.7e-7 and 5.7e-7
-/// against ~3e-8). Cause found: the outflow treatment of the projection. Seed 003
-/// eq. (37) drops the constraint at the two outermost faces and copies p̃ from the
-/// third (a non-symmetric system); ours merges the edge face into its neighbour and
-/// imposes the sum of their constraints (symmetric), in which the edge cell has no
-/// horizontal mass flux through the boundary face (the ghost column is not part of
-/// 𝒯), so the creep leaving the domain reads as a divergence that the projection
-/// answers with pressure. p̃ = 0 at the outflow faces instead (Dirichlet) is far worse
-/// (1.8e-5 for h). The fix is eq. (37) itself, which needs a non-symmetric banded
-/// solve (LU) at the two ends; not done (docs/validation.md).
+/// Seed 003 §5.3, Table 6 (a): errors proportional to δ (paper: h 5.34e-5, 5.34e-10,
+/// 2.99e-16; u 5.38e-5, 5.39e-10, 5.39e-15; w 4.21e-5, 4.21e-10, 4.21e-15). Measured:
+/// h 6.16e-4, 7.79e-9, 7.07e-14; u 1.56e-3, 2.20e-8, 2.02e-13; w 9.44e-4, 1.52e-8,
+/// 1.39e-13 (62–78 δ for h, 156–220 δ for u; hydrostatic multilayer: h 54–70 δ, u
+/// 148–179 δ). Why tens of δ rather than the paper's 5 δ (docs/numerics.md, "Creep at
+/// the repose slope"): at exactly the repose slope the drive equals the strength μ_s p
+/// of every interface, and with the viscosities frozen at t^n the interface shear
+/// grows as s = 2δ√n over n steps (`creep_at_rest_follows_the_frozen_viscosity_recursion`
+/// in tests/multilayer.rs: 41.95 δ after the 440 steps of this run), so the errors are
+/// proportional to δ√n, not to δ (halving the CFL number multiplies them by √2).
+/// The paper does not print how its scheme avoids that; taking its eq. (25) literally
+/// (ĥ = h_i + ½(h_{i−1} + h_{i+1}) ≈ 2h as the column weight in step 2) gives h 4.4 δ,
+/// u 4.1 δ and h 0.26 δ at δ = 1e-15 (paper 5.3 δ, 5.4 δ, 0.30 δ), and at 20.01° an h
+/// change of 1.3e-5 with velocities still of 4 δ (paper: h "of order 1e-5"), but it
+/// doubles the friction of every column below the repose slope; not adopted.
 #[test]
 fn mass_at_repose_stays_at_rest_to_order_delta() {
     println!(
@@ -202,9 +201,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta() {
         let [eh, eu, ew] = departures_from_rest(&sink, sim.mesh.dx, sim.state.layers);
         println!("  δ = {delta:.0e}: {eh:.3e} {eu:.3e} {ew:.3e}");
         assert!(
-            eh <= 100.0 * delta + 1e-12
-                && eu <= 300.0 * delta + 1e-12
-                && ew <= 300.0 * delta + 1e-12,
+            eh <= 100.0 * delta && eu <= 250.0 * delta && ew <= 200.0 * delta,
             "δ = {delta}: {eh:e} {eu:e} {ew:e}"
         );
     }
