@@ -43,6 +43,17 @@
 //! cell; a negative total pressure (grains lifted) gives no stress. Hydrostatic states
 //! take the code path above unchanged.
 //!
+//! With `rheology.viscosity = "implicit"` ([`ViscosityTime::Implicit`]) every coefficient
+//! above — ν_{α+1/2}, the inertial numbers, the basal μ_b and the layer sidewall term —
+//! is taken at the new velocities instead of t^n: per column, R(u) = 0 with
+//! R_α = l_α h u_α − l_α q*_α + Δt(σ_{α−1/2} − σ_{α+1/2}) [+ Δt μ_b p_b sgn(u_1)],
+//! σ = ν(s) ∂_z u, the gradient of a convex column energy. It is solved from the frozen
+//! solution by damped Newton (tangent couplings Δt σ'/h_{α+1/2}, the Coulomb bed
+//! linearised inside the exact set-valued bottom solve, a line search on the energy,
+//! Picard steps after a cut Newton step) until every |R_α|/(l_α h) is within the
+//! tolerance (m/s, plus round-off) or a full Newton correction is; a column that does
+//! not get there within the iteration limit fails the step (docs/numerics.md).
+//!
 //! Cells thinner than [`THIN_LAYER`] are treated as one layer with Coulomb friction
 //! (seed 003 Remark 2): the depth-averaged discharge gets the monolayer friction update
 //! and every layer moves with it. A cell dry at t^n and wetted by step 1 freezes its
