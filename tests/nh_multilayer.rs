@@ -595,3 +595,33 @@ fn default_viscosity_is_the_frozen_step_bit_for_bit() {
     assert_eq!(hash(&["rheology.viscosity=frozen"]), default);
     assert_ne!(hash(&["rheology.viscosity=implicit"]), default);
 }
+
+/// `rheology.viscosity = "implicit"` converges (within its default tolerance and
+/// iteration limit, else the run fails with a solver error) on every bundled
+/// multilayer scenario: δ and bound regularisations, Coulomb beds that stop, thin
+/// 20-layer columns (§5.1), sidewalls, hydrostatic and non-hydrostatic.
+#[test]
+fn implicit_viscosity_converges_on_every_bundled_multilayer_scenario() {
+    for file in [
+        "at_rest_random_bed_multilayer.toml",
+        "bagnold.toml",
+        "erodible_bed.toml",
+        "nh_multilayer_at_rest.toml",
+        "nh_multilayer_collapse.toml",
+        "nh_multilayer_convergence.toml",
+        "sidewall_channel.toml",
+        "transient_channel.toml",
+    ] {
+        let mut sim = build(file, &["rheology.viscosity=implicit", "time.t_end=0.05"]);
+        assert!(sim.state.layers > 1, "{file}");
+        run(&mut sim);
+        assert!(
+            sim.state
+                .h
+                .iter()
+                .chain(&sim.state.hu)
+                .all(|v| v.is_finite()),
+            "{file}"
+        );
+    }
+}
