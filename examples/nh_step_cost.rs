@@ -4,6 +4,9 @@
 //!
 //!   valgrind --tool=callgrind target/release/examples/nh_step_cost nonhydrostatic 60
 //!
+//! Optional arguments: the layers (default 20) and `rheology.viscosity` ("frozen", the
+//! default, or "implicit"), e.g. `nh_step_cost hydrostatic 60 20 implicit`.
+//!
 //! Run it twice with different `steps` and difference the totals, or read the stages'
 //! inclusive counts (`callgrind_annotate --inclusive=yes`) divided by their calls.
 use granflow::scenario::load_file;
@@ -15,11 +18,13 @@ fn main() {
     let pressure = args.get(1).map(String::as_str).unwrap_or("nonhydrostatic");
     let steps: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(40);
     let layers = args.get(3).map(String::as_str).unwrap_or("20");
+    let viscosity = args.get(4).map(String::as_str).unwrap_or("frozen");
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/nh_multilayer_collapse.toml");
     let sets = vec![
         format!("model.pressure={pressure}"),
         format!("model.layers={layers}"),
         "time.stop_at_rest=false".to_string(),
+        format!("rheology.viscosity={viscosity}"),
     ];
     let scn = load_file(&path, &sets).expect("scenario");
     let mut sim = build_granular(&scn);

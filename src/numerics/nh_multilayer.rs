@@ -126,6 +126,7 @@ mod tests {
             regularization: Regularization::Delta { delta: 1e-5 },
             sidewall: None,
             c_msm: false,
+            viscosity: crate::numerics::viscous::ViscosityTime::Frozen,
         }
     }
 

@@ -43,6 +43,17 @@
 //! cell; a negative total pressure (grains lifted) gives no stress. Hydrostatic states
 //! take the code path above unchanged.
 //!
+//! With `rheology.viscosity = "implicit"` ([`ViscosityTime::Implicit`]) every coefficient
+//! above — ν_{α+1/2}, the inertial numbers, the basal μ_b and the layer sidewall term —
+//! is taken at the new velocities instead of t^n: per column, R(u) = 0 with
+//! R_α = l_α h u_α − l_α q*_α + Δt(σ_{α−1/2} − σ_{α+1/2}) [+ Δt μ_b p_b sgn(u_1)],
+//! σ = ν(s) ∂_z u, the gradient of a convex column energy. It is solved from the frozen
+//! solution by damped Newton (tangent couplings Δt σ'/h_{α+1/2}, the Coulomb bed
+//! linearised inside the exact set-valued bottom solve, a line search on the energy,
+//! Picard steps after a cut Newton step) until every |R_α|/(l_α h) is within the
+//! tolerance (m/s, plus round-off) or a full Newton correction is; a column that does
+//! not get there within the iteration limit fails the step (docs/numerics.md).
+//!
 //! Cells thinner than [`THIN_LAYER`] are treated as one layer with Coulomb friction
 //! (seed 003 Remark 2): the depth-averaged discharge gets the monolayer friction update
 //! and every layer moves with it. A cell dry at t^n and wetted by step 1 freezes its
@@ -110,6 +121,24 @@ pub struct ViscousOptions {
     pub sidewall: Option<Sidewall>,
     /// Second-order strain rate of seed 001 eq. (32).
     pub c_msm: bool,
+    /// Where the viscosities are taken: at t^n (the paper's scheme) or at the new speed.
+    pub viscosity: ViscosityTime,
+}
+
+/// Where the viscous step takes its viscosities, inertial numbers and basal friction
+/// (`rheology.viscosity`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ViscosityTime {
+    /// Frozen at t^n: one linear solve per column (seed 003 §4 "Step 2").
+    Frozen,
+    /// At the new speed u^{n+1}: the column equations are solved by Picard iteration
+    /// (re-freezing at the last iterate) until the residual of every layer's equation,
+    /// in m/s, is at most `tolerance` (plus the round-off of its evaluation); a column
+    /// still above it after `max_iterations` solves fails the step.
+    Implicit {
+        tolerance: f64,
+        max_iterations: usize,
+    },
 }
 
 /// The implicit viscous step, generic over the rheology (a constant μ or μ(I)).
@@ -138,6 +167,43 @@ pub struct MultilayerViscousStep<L: BasalFriction + LocalFriction> {
     coupling: Vec<[f64; LANES]>,
     diag: Vec<[f64; LANES]>,
     rhs: Vec<[f64; LANES]>,
+    /// The discharges entering the step (`ViscosityTime::Implicit` only, else empty).
+    saved: Vec<f64>,
+    /// Implicit step only (else empty), per column (N): tangents dσ/dγ at the slots of
+    /// `frozen`, the last accepted iterate, the solution of the linear solve, and the
+    /// couplings, diagonal and right-hand side of that solve.
+    tangent: Vec<f64>,
+    current: Vec<f64>,
+    trial: Vec<f64>,
+    col_c: Vec<f64>,
+    col_d: Vec<f64>,
+    col_r: Vec<f64>,
+    /// The residuals R_α of the last `evaluate` without the basal friction, and its
+    /// basal friction impulse (the line search's directional derivatives).
+    resid: Vec<f64>,
+    bed_impulse: f64,
+    /// The Newton direction (trial − current).
+    direction: Vec<f64>,
+    stats: ImplicitStats,
+}
+
+/// Iteration counts of the implicit viscous step since construction
+/// ([`MultilayerViscousStep::stats`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ImplicitStats {
+    /// Columns solved (h ≥ [`THIN_LAYER`]), summed over the steps.
+    pub columns: u64,
+    /// Linear column solves, the first (frozen) one included.
+    pub solves: u64,
+    /// Most solves of one column in one step.
+    pub max_solves: usize,
+    /// Extra residual evaluations of the line search (beyond one per Newton step).
+    pub line_search: u64,
+    /// Picard steps taken where the line search failed.
+    pub picard_steps: u64,
+    /// Columns stopped by a Newton correction within the tolerance (the others by
+    /// their residual).
+    pub newton_stops: u64,
 }
 
 impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
@@ -153,6 +219,10 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         for a in 1..n {
             inv_gap[a] = 2.0 / (l[a - 1] + l[a]);
         }
+        let implicit = |v: Vec<f64>| match opts.viscosity {
+            ViscosityTime::Frozen => Vec::new(),
+            ViscosityTime::Implicit { .. } => v,
+        };
         let layer_sidewall = matches!(
             opts.sidewall,
             Some(Sidewall {
@@ -178,7 +248,23 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             coupling: vec![[0.0; LANES]; n],
             diag: vec![[0.0; LANES]; n],
             rhs: vec![[0.0; LANES]; n],
+            saved: implicit(vec![0.0; (nx + 2) * n]),
+            tangent: implicit(vec![0.0; n]),
+            current: implicit(vec![0.0; n]),
+            trial: implicit(vec![0.0; n]),
+            col_c: implicit(vec![0.0; n]),
+            col_d: implicit(vec![0.0; n]),
+            col_r: implicit(vec![0.0; n]),
+            resid: implicit(vec![0.0; n]),
+            bed_impulse: 0.0,
+            direction: implicit(vec![0.0; n]),
+            stats: ImplicitStats::default(),
         }
+    }
+
+    /// Iteration counts of the implicit step so far (zero when frozen).
+    pub fn stats(&self) -> ImplicitStats {
+        self.stats
     }
 
     /// Jop's sidewall friction μ_w (H − z)/W at depth `depth` below the surface.
@@ -210,15 +296,60 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         }
     }
 
+    /// The tangent dσ/dγ of the interface stress σ = ν(s) γ (over density) with respect
+    /// to the shear γ = ∂_z u, for the viscosity `nu` = μ p / R(s) at the strain rate
+    /// s = |γ| (or the C-MSM norm, s ≥ |γ|), `mu` = μ(I(s)) and `dmu_ds` = dμ/ds:
+    /// ν + (γ²/s) dν/ds, with dν/ds = (p/R)(dμ/ds − μ s/R²) for the δ regularisation
+    /// and (p/s)(dμ/ds − μ/s) or 0 (on the bound ν = ν_M) for the bound.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn tangent_of(
+        &self,
+        nu: f64,
+        mu: f64,
+        dmu_ds: f64,
+        p: f64,
+        s: f64,
+        shear: f64,
+        nu_max: f64,
+    ) -> f64 {
+        if s <= 0.0 || nu == 0.0 {
+            return nu;
+        }
+        let dnu = match self.opts.regularization {
+            Regularization::Delta { delta } => {
+                let r2 = s * s + 4.0 * delta * delta;
+                p * (dmu_ds - mu * s / r2) / r2.sqrt()
+            }
+            Regularization::Bound => {
+                if s >= mu * p / nu_max {
+                    p * (dmu_ds - mu / s) / s
+                } else {
+                    0.0
+                }
+            }
+        };
+        (nu + shear * shear / s * dnu).max(0.0)
+    }
+
     /// Freezes the coefficients of one wet cell `i` at the state t^n.
     fn freeze_cell(&mut self, mesh: &Mesh, state: &LayeredState, i: usize) {
         let n = self.layers;
-        let (g_n, l) = (mesh.g_n, &state.l);
-        let h = state.h[i];
-        let inv_h = 1.0 / h;
+        let inv_h = 1.0 / state.h[i];
         for (u, q) in self.velocity.iter_mut().zip(&state.hu[i * n..(i + 1) * n]) {
             *u = q * inv_h;
         }
+        self.freeze_loaded(mesh, &state.h, &state.l, &state.hu, i);
+    }
+
+    /// Computes the coefficients of cell `i` (thicknesses `hs`, layer fractions `l`)
+    /// for the velocities in `self.velocity`; the C-MSM x-derivative takes the
+    /// neighbours' discharges from `around`.
+    fn freeze_loaded(&mut self, mesh: &Mesh, hs: &[f64], l: &[f64], around: &[f64], i: usize) {
+        let n = self.layers;
+        let g_n = mesh.g_n;
+        let h = hs[i];
+        let inv_h = 1.0 / h;
         let base = i * n;
         // Pressures are those of the column's own depth, as the pressure force of step 1.
         let p_b = g_n * h;
@@ -228,7 +359,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             Regularization::Delta { .. } => f64::INFINITY,
         };
         if !self.p_nh.is_empty() {
-            self.freeze_cell_nonhydrostatic(mesh, state, i, nu_max);
+            self.freeze_cell_nonhydrostatic(mesh, hs, l, around, i, nu_max);
             return;
         }
         let u = &self.velocity;
@@ -238,12 +369,21 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         self.frozen[base] = match self.opts.basal {
             BasalCondition::Coulomb => {
                 let shear = (u[0] * inv_h1).abs();
+                if !self.tangent.is_empty() {
+                    // dμ_b/d|u_1|.
+                    self.tangent[0] = self.law.mu_slope_at(shear * scale) * scale * inv_h1;
+                }
                 self.law.mu_at(shear * scale) + self.jop(h)
             }
             BasalCondition::NoSlip => {
                 let shear = (2.0 * u[0] * inv_h1).abs();
                 let mu = self.law.mu_at(shear * scale) + self.jop(h);
-                self.viscosity(mu, p_b, shear, nu_max)
+                let nu = self.viscosity(mu, p_b, shear, nu_max);
+                if !self.tangent.is_empty() {
+                    let slope = self.law.mu_slope_at(shear * scale) * scale;
+                    self.tangent[0] = self.tangent_of(nu, mu, slope, p_b, shear, shear, nu_max);
+                }
+                nu
             }
         };
 
@@ -253,8 +393,8 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             let shear = (u[a] - u[a - 1]) * inv_h * self.inv_gap[a];
             let s = if self.opts.c_msm {
                 let pair = |j: usize| {
-                    let hj = state.h[j];
-                    velocity(hj, state.hu[j * n + a - 1]) + velocity(hj, state.hu[j * n + a])
+                    let hj = hs[j];
+                    velocity(hj, around[j * n + a - 1]) + velocity(hj, around[j * n + a])
                 };
                 let dx_sum = (pair(i + 1) - pair(i - 1)) * inv_2dx;
                 (shear * shear + dx_sum * dx_sum).sqrt()
@@ -264,7 +404,13 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             let p = p_b * self.above[a];
             let mu =
                 self.law.mu_at(s * scale * self.inv_sqrt_above[a]) + self.jop(h * self.above[a]);
-            self.frozen[base + a] = self.viscosity(mu, p, s, nu_max);
+            let nu = self.viscosity(mu, p, s, nu_max);
+            self.frozen[base + a] = nu;
+            if !self.tangent.is_empty() {
+                let ds = scale * self.inv_sqrt_above[a];
+                let slope = self.law.mu_slope_at(s * scale * self.inv_sqrt_above[a]) * ds;
+                self.tangent[a] = self.tangent_of(nu, mu, slope, p, s, shear, nu_max);
+            }
         }
 
         if let Some(Sidewall {
@@ -291,13 +437,15 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     fn freeze_cell_nonhydrostatic(
         &mut self,
         mesh: &Mesh,
-        state: &LayeredState,
+        hs: &[f64],
+        l: &[f64],
+        around: &[f64],
         i: usize,
         nu_max: f64,
     ) {
         let n = self.layers;
-        let (g_n, l) = (mesh.g_n, &state.l);
-        let h = state.h[i];
+        let g_n = mesh.g_n;
+        let h = hs[i];
         let inv_h = 1.0 / h;
         let base = i * n;
         let p_hydro = g_n * h;
@@ -308,12 +456,22 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         self.frozen[base] = match self.opts.basal {
             BasalCondition::Coulomb => {
                 let shear = (u[0] * inv_h1).abs();
+                if !self.tangent.is_empty() {
+                    let ds = self.law.inertial_scale(p_b);
+                    self.tangent[0] = self.law.mu_slope_at(shear * ds) * ds * inv_h1;
+                }
                 self.law.mu_at(shear * self.law.inertial_scale(p_b)) + self.jop(h)
             }
             BasalCondition::NoSlip => {
                 let shear = (2.0 * u[0] * inv_h1).abs();
                 let mu = self.law.mu_at(shear * self.law.inertial_scale(p_b)) + self.jop(h);
-                self.viscosity(mu, p_b, shear, nu_max)
+                let nu = self.viscosity(mu, p_b, shear, nu_max);
+                if !self.tangent.is_empty() {
+                    let ds = self.law.inertial_scale(p_b);
+                    let slope = self.law.mu_slope_at(shear * ds) * ds;
+                    self.tangent[0] = self.tangent_of(nu, mu, slope, p_b, shear, shear, nu_max);
+                }
+                nu
             }
         };
         let inv_2dx = 0.5 / mesh.dx;
@@ -321,8 +479,8 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             let shear = (u[a] - u[a - 1]) * inv_h * self.inv_gap[a];
             let s = if self.opts.c_msm {
                 let pair = |j: usize| {
-                    let hj = state.h[j];
-                    velocity(hj, state.hu[j * n + a - 1]) + velocity(hj, state.hu[j * n + a])
+                    let hj = hs[j];
+                    velocity(hj, around[j * n + a - 1]) + velocity(hj, around[j * n + a])
                 };
                 let dx_sum = (pair(i + 1) - pair(i - 1)) * inv_2dx;
                 (shear * shear + dx_sum * dx_sum).sqrt()
@@ -331,7 +489,13 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             };
             let p = pressure(a, &self.p_nh);
             let mu = self.law.mu_at(s * self.law.inertial_scale(p)) + self.jop(h * self.above[a]);
-            self.frozen[base + a] = self.viscosity(mu, p, s, nu_max);
+            let nu = self.viscosity(mu, p, s, nu_max);
+            self.frozen[base + a] = nu;
+            if !self.tangent.is_empty() {
+                let ds = self.law.inertial_scale(p);
+                let slope = self.law.mu_slope_at(s * ds) * ds;
+                self.tangent[a] = self.tangent_of(nu, mu, slope, p, s, shear, nu_max);
+            }
         }
         if let Some(Sidewall {
             mu_w,
@@ -472,6 +636,16 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         let n = self.layers;
         let g_n = mesh.g_n;
+        let implicit = match self.opts.viscosity {
+            ViscosityTime::Frozen => None,
+            ViscosityTime::Implicit {
+                tolerance,
+                max_iterations,
+            } => Some((tolerance, max_iterations)),
+        };
+        if implicit.is_some() {
+            self.saved.copy_from_slice(&state.hu);
+        }
         // Columns waiting to be solved together.
         let (mut cells, mut impulses, mut count) = ([0usize; LANES], [0.0; LANES], 0);
         for i in 1..=mesh.nx {
@@ -483,8 +657,14 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
             if h < THIN_LAYER {
                 let q = &mut state.hu[i * n..(i + 1) * n];
                 let q_mean: f64 = q.iter().zip(&state.l).map(|(q, l)| q * l).sum();
-                let mu = self.law.mu(velocity(h, q_mean).abs(), h, g_n * h);
-                q.fill(coulomb_update(q_mean, dt * mu * g_n * h));
+                let q_new = if implicit.is_some() {
+                    // μ at the new speed: the monolayer's implicit friction update.
+                    self.law.friction_update(q_mean, h, dt, g_n)
+                } else {
+                    let mu = self.law.mu(velocity(h, q_mean).abs(), h, g_n * h);
+                    coulomb_update(q_mean, dt * mu * g_n * h)
+                };
+                q.fill(q_new);
                 continue;
             }
             if self.frozen[i * n].is_nan() {
@@ -492,11 +672,7 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
                 self.freeze_cell(mesh, state, i);
             }
             cells[count] = i;
-            impulses[count] = if self.p_nh.is_empty() {
-                dt * self.frozen[i * n] * g_n * h
-            } else {
-                dt * self.frozen[i * n] * (g_n * h + self.p_nh[i * n]).max(0.0)
-            };
+            impulses[count] = self.impulse(i, h, g_n, dt);
             count += 1;
             if count == LANES {
                 self.solve_columns(state, cells, impulses, count, dt);
@@ -509,7 +685,374 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
             }
             self.solve_columns(state, cells, impulses, count, dt);
         }
+        if let Some((tolerance, max_iterations)) = implicit {
+            // Iterate every column to the equations with the coefficients at u^{n+1}.
+            let saved = std::mem::take(&mut self.saved);
+            let result = self.iterate(mesh, dt, state, &saved, tolerance, max_iterations);
+            if result.is_err() {
+                // A failed step leaves the state as it found it.
+                state.hu.copy_from_slice(&saved);
+            }
+            self.saved = saved;
+            result?;
+        }
         state.fill_ghosts(mesh);
+        Ok(())
+    }
+}
+
+impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
+    /// The basal friction impulse Δt μ_b p_b of cell `i` (Coulomb bed) for the
+    /// coefficients in `frozen`.
+    #[inline(always)]
+    fn impulse(&self, i: usize, h: f64, g_n: f64, dt: f64) -> f64 {
+        let n = self.layers;
+        if self.p_nh.is_empty() {
+            dt * self.frozen[i * n] * g_n * h
+        } else {
+            dt * self.frozen[i * n] * (g_n * h + self.p_nh[i * n]).max(0.0)
+        }
+    }
+
+    /// Computes the coefficients of cell `i` at the velocities in `velocity` and the
+    /// residual of its column equations with them. Returns the largest over the layers
+    /// of |R_α| / (l_α h) (m/s), whether every |R_α| ≤ `tolerance` l_α h + 8ε Σ|terms
+    /// of R_α| (the tolerance plus the round-off of evaluating R_α), and
+    /// Σ_α l_α (R_α / (l_α h))² for the line search. `q_star` holds the discharges
+    /// entering the step.
+    ///
+    ///   R_α = d_α u_α + c_α (u_α − u_{α−1}) + c_{α+1} (u_α − u_{α+1}) − l_α q*_α
+    ///         [+ Δt μ_b p_b sgn(u_1) for α = 1 with a Coulomb bed],
+    ///
+    /// with d_α = l_α h (1 + Δt s_α) (+ 2Δt ν_{1/2}/(l_1 h) for no slip),
+    /// c_α = Δt ν_{α−1/2}/h_{α−1/2}, c_1 = c_{N+1} = 0. A Coulomb bed at rest (u_1 = 0)
+    /// is in equilibrium when the rest of R_1 is within the friction impulse.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate(
+        &mut self,
+        mesh: &Mesh,
+        dt: f64,
+        hs: &[f64],
+        l: &[f64],
+        q_star: &[f64],
+        i: usize,
+        tolerance: f64,
+    ) -> (f64, bool, f64) {
+        if self.opts.basal == BasalCondition::Coulomb && self.velocity[0].abs() <= tolerance {
+            // A bottom layer slower than the tolerance is at rest (the line search
+            // approaches a stop λ by λ, never reaching u_1 = 0 exactly).
+            self.velocity[0] = 0.0;
+        }
+        self.freeze_loaded(mesh, hs, l, q_star, i);
+        let n = self.layers;
+        let h = hs[i];
+        let base = i * n;
+        let u = &self.velocity;
+        let dt_over_h = dt / h;
+        self.bed_impulse = 0.0;
+        let coupling = |a: usize| {
+            if a == 0 || a == n {
+                0.0
+            } else {
+                dt_over_h * self.frozen[base + a] * self.inv_gap[a]
+            }
+        };
+        let (mut worst, mut ok, mut norm) = (0.0f64, true, 0.0);
+        for a in 0..n {
+            let mut d = l[a] * h;
+            if !self.side.is_empty() {
+                d += dt * l[a] * h * self.side[base + a];
+            }
+            if a == 0 && self.opts.basal == BasalCondition::NoSlip {
+                d += dt_over_h * self.frozen[base] * 2.0 / l[0];
+            }
+            let below = if a > 0 { u[a] - u[a - 1] } else { 0.0 };
+            let above = if a + 1 < n { u[a] - u[a + 1] } else { 0.0 };
+            let terms = [
+                d * u[a],
+                coupling(a) * below,
+                coupling(a + 1) * above,
+                -l[a] * q_star[base + a],
+            ];
+            let mut r: f64 = terms.iter().sum();
+            let mut size: f64 = terms.iter().map(|t| t.abs()).sum();
+            if !self.resid.is_empty() {
+                self.resid[a] = r;
+            }
+            if a == 0 && self.opts.basal == BasalCondition::Coulomb {
+                let impulse = self.impulse(i, h, mesh.g_n, dt);
+                self.bed_impulse = impulse;
+                size += impulse;
+                r = if u[0] != 0.0 {
+                    r + impulse * u[0].signum()
+                } else {
+                    r.signum() * (r.abs() - impulse).max(0.0)
+                };
+            }
+            let scale = l[a] * h;
+            worst = worst.max(r.abs() / scale);
+            norm += l[a] * (r / scale) * (r / scale);
+            ok &= r.abs() <= tolerance * scale + 8.0 * f64::EPSILON * size;
+        }
+        (worst, ok, norm)
+    }
+
+    /// φ'(λ) = R·Δ at the last `evaluate`, with the basal friction's one-sided
+    /// derivative where the bottom layer is at rest.
+    fn slope(&self) -> f64 {
+        let mut g: f64 = self
+            .resid
+            .iter()
+            .zip(&self.direction)
+            .map(|(r, d)| r * d)
+            .sum();
+        let (u0, d0) = (self.velocity[0], self.direction[0]);
+        let s = if u0 != 0.0 {
+            u0.signum()
+        } else if d0 != 0.0 {
+            d0.signum()
+        } else {
+            0.0
+        };
+        g += self.bed_impulse * s * d0;
+        g
+    }
+
+    /// `velocity` = current + λ direction.
+    fn set_along(&mut self, lambda: f64) {
+        for ((u, c), d) in self
+            .velocity
+            .iter_mut()
+            .zip(&self.current)
+            .zip(&self.direction)
+        {
+            *u = c + lambda * d;
+        }
+    }
+
+    /// One linear solve of column `i` for the coefficients at the velocities in
+    /// `velocity`, into `trial`: a Newton step (`newton`: the couplings are the
+    /// tangents dσ/dγ and the linearisation σ(γ) ≈ σ(γᵏ) + σ'(γᵏ)(γ − γᵏ) leaves the
+    /// explicit forces Δt (ν − σ') γᵏ), or a Picard step (the secant viscosities ν).
+    /// The basal friction coefficient and the sidewall coefficients are those of the
+    /// last iterate in both. The elimination is that of `solve_columns`.
+    #[allow(clippy::too_many_arguments)]
+    fn solve_single(
+        &mut self,
+        i: usize,
+        h: f64,
+        l: &[f64],
+        q_star: &[f64],
+        dt: f64,
+        g_n: f64,
+        newton: bool,
+    ) {
+        let n = self.layers;
+        let base = i * n;
+        let mut impulse = self.impulse(i, h, g_n, dt);
+        // Newton on the Coulomb bed too: Δt p_b μ_b(|u_1|) ≈ impulse + k_b (|u_1| − |u_1ᵏ|),
+        // k_b = Δt p_b dμ_b/d|u_1|, i.e. k_b on the diagonal and a lower threshold.
+        let mut bed_stiffness = 0.0;
+        if newton && self.opts.basal == BasalCondition::Coulomb {
+            let p_b = if self.p_nh.is_empty() {
+                g_n * h
+            } else {
+                (g_n * h + self.p_nh[base]).max(0.0)
+            };
+            bed_stiffness = dt * p_b * self.tangent[0];
+            impulse = (impulse - bed_stiffness * self.velocity[0].abs()).max(0.0);
+        }
+        let inv_h = 1.0 / h;
+        let dt_over_h = dt * inv_h;
+        let Self {
+            col_c: c,
+            col_d: d,
+            col_r: r,
+            velocity: u,
+            trial,
+            tangent,
+            frozen,
+            side,
+            inv_gap,
+            opts,
+            ..
+        } = self;
+        let coef = |a: usize| {
+            if newton {
+                tangent[a]
+            } else {
+                frozen[base + a]
+            }
+        };
+        c[0] = 0.0;
+        for a in 1..n {
+            c[a] = dt_over_h * coef(a) * inv_gap[a];
+        }
+        for a in 0..n {
+            d[a] = l[a] * h;
+            if !side.is_empty() {
+                d[a] += dt * l[a] * h * side[base + a];
+            }
+            r[a] = l[a] * q_star[base + a];
+        }
+        if newton {
+            for a in 1..n {
+                let shear = (u[a] - u[a - 1]) * inv_h * inv_gap[a];
+                let force = dt * (frozen[base + a] - tangent[a]) * shear;
+                r[a] -= force;
+                r[a - 1] += force;
+            }
+        }
+        d[0] += bed_stiffness;
+        if opts.basal == BasalCondition::NoSlip {
+            d[0] += dt_over_h * coef(0) * 2.0 / l[0];
+            if newton {
+                let shear = 2.0 * u[0] * inv_h / l[0];
+                r[0] -= dt * (frozen[base] - tangent[0]) * shear;
+            }
+        }
+        for a in (1..n).rev() {
+            let inv = 1.0 / (d[a] + c[a]);
+            let m = c[a] * inv;
+            d[a - 1] += m * d[a];
+            r[a - 1] += m * r[a];
+            d[a] = inv;
+        }
+        let mut below = match opts.basal {
+            BasalCondition::Coulomb => coulomb_update(r[0], impulse) / d[0],
+            BasalCondition::NoSlip => r[0] / d[0],
+        };
+        trial[0] = below;
+        for a in 1..n {
+            below = (r[a] + c[a] * below) * d[a];
+            trial[a] = below;
+        }
+    }
+
+    /// The iterations of the implicit step on every column (h ≥ [`THIN_LAYER`]), from
+    /// the first (frozen) solve that `apply` left in `state`: damped Newton on the
+    /// column equations (module documentation), a Picard step when the line search
+    /// fails, until [`evaluate`](Self::evaluate) accepts the iterate.
+    fn iterate(
+        &mut self,
+        mesh: &Mesh,
+        dt: f64,
+        state: &mut LayeredState,
+        q_star: &[f64],
+        tolerance: f64,
+        max_iterations: usize,
+    ) -> Result<(), StageError> {
+        const LINE_SEARCH: usize = 12;
+        let n = self.layers;
+        let g_n = mesh.g_n;
+        for i in 1..=mesh.nx {
+            let h = state.h[i];
+            if h < THIN_LAYER {
+                continue;
+            }
+            let base = i * n;
+            let inv_h = 1.0 / h;
+            for (u, q) in self.velocity.iter_mut().zip(&state.hu[base..base + n]) {
+                *u = q * inv_h;
+            }
+            let (hs, l) = (&state.h, &state.l);
+            let (mut worst, mut ok, mut norm) =
+                self.evaluate(mesh, dt, hs, l, q_star, i, tolerance);
+            let mut solves = 1;
+            let mut newton = true;
+            while !ok {
+                if solves >= max_iterations {
+                    return Err(StageError::Inadmissible {
+                        x: mesh.x[i - 1],
+                        quantity: "residual (m/s) of the implicit viscous step after \
+                                   rheology.viscosity_iterations solves (rheology.viscosity = \"implicit\")",
+                        value: worst,
+                    });
+                }
+                self.current.copy_from_slice(&self.velocity);
+                self.solve_single(i, h, l, q_star, dt, g_n, newton);
+                // Line search on the column's energy E (convex, ∇E = R): along the
+                // Newton direction Δ, E(u + λΔ) is convex in λ with derivative
+                // φ'(λ) = R(u + λΔ)·Δ, negative at 0 for a descent direction. The full
+                // step is taken when φ'(1) ≤ 0; else φ' is bracketed (regula falsi)
+                // until |φ'(λ)| ≤ |φ'(0)|/2.
+                let mut step = 0.0f64;
+                for ((d, t), c) in self
+                    .direction
+                    .iter_mut()
+                    .zip(&self.trial)
+                    .zip(&self.current)
+                {
+                    *d = t - c;
+                    step = step.max(d.abs());
+                }
+                if newton && step <= tolerance {
+                    // The full Newton correction is within the tolerance: take it and
+                    // stop (where the shear is within δ of 0, the residual in m/s is
+                    // that of a velocity difference amplified by Δt ν/(h_{α+1/2} l_α h),
+                    // which for thin columns can exceed 10⁷).
+                    self.velocity.copy_from_slice(&self.trial);
+                    solves += 1;
+                    self.stats.newton_stops += 1;
+                    break;
+                }
+                let g0 = self.slope();
+                let mut accepted = false;
+                if g0 < 0.0 {
+                    let (mut lo, mut g_lo, mut hi, mut g_hi) = (0.0, g0, 1.0, f64::NAN);
+                    let mut lambda: f64 = 1.0;
+                    for step in 0..=LINE_SEARCH {
+                        self.set_along(lambda);
+                        let (w, o, m) = self.evaluate(mesh, dt, hs, l, q_star, i, tolerance);
+                        let g = self.slope();
+                        if o || (step == 0 && g <= 0.0) || g.abs() <= 0.5 * g0.abs() {
+                            (worst, ok, norm, accepted) = (w, o, m, true);
+                            // A Newton step cut below 1/2 is followed by a Picard one.
+                            newton = !newton || lambda >= 0.5;
+                            break;
+                        }
+                        self.stats.line_search += 1;
+                        if g < 0.0 {
+                            (lo, g_lo) = (lambda, g);
+                        } else {
+                            (hi, g_hi) = (lambda, g);
+                        }
+                        let width = hi - lo;
+                        lambda = if g_hi.is_nan() {
+                            hi
+                        } else {
+                            (lo + width * g_lo / (g_lo - g_hi))
+                                .clamp(lo + 0.05 * width, hi - 0.05 * width)
+                        };
+                    }
+                    if !accepted && lo > 0.0 {
+                        // E decreased up to λ = lo (φ' < 0 on [0, lo]).
+                        self.set_along(lo);
+                        (worst, ok, norm) = self.evaluate(mesh, dt, hs, l, q_star, i, tolerance);
+                        accepted = true;
+                        newton = !newton;
+                    }
+                }
+                let _ = norm;
+                if !accepted {
+                    // Picard from the last iterate: re-freeze there, solve with ν.
+                    self.velocity.copy_from_slice(&self.current);
+                    self.evaluate(mesh, dt, hs, l, q_star, i, tolerance);
+                    self.solve_single(i, h, l, q_star, dt, g_n, false);
+                    self.velocity.copy_from_slice(&self.trial);
+                    (worst, ok, norm) = self.evaluate(mesh, dt, hs, l, q_star, i, tolerance);
+                    self.stats.picard_steps += 1;
+                    newton = true;
+                }
+                solves += 1;
+            }
+            for (q, u) in state.hu[base..base + n].iter_mut().zip(&self.velocity) {
+                *q = h * u;
+            }
+            self.stats.columns += 1;
+            self.stats.solves += solves as u64;
+            self.stats.max_solves = self.stats.max_solves.max(solves);
+        }
         Ok(())
     }
 }
@@ -541,6 +1084,7 @@ mod tests {
             regularization: Regularization::Delta { delta: 1e-5 },
             sidewall: None,
             c_msm: false,
+            viscosity: ViscosityTime::Frozen,
         }
     }
 
@@ -655,6 +1199,180 @@ mod tests {
                     "{lost} vs {impulse}"
                 );
                 assert!(state.hu[2 * 4] > 0.0, "friction never reverses the flow");
+            }
+        }
+    }
+
+    /// The column residual (m/s per layer, |R_α| / (l_α h)) of the step's equations
+    /// (module documentation) with every coefficient — the interface viscosities, the
+    /// inertial numbers and the basal friction — at the velocities `u`, written out
+    /// from the equations independently of the step's code, with the round-off bound
+    /// 16ε Σ|terms| / (l_α h) of each.
+    #[allow(clippy::too_many_arguments)]
+    fn residual_at_new_speed(
+        law: &MuI,
+        l: &[f64],
+        h: f64,
+        g_n: f64,
+        dt: f64,
+        regularization: Regularization,
+        basal: BasalCondition,
+        q_star: &[f64],
+        u: &[f64],
+    ) -> Vec<(f64, f64)> {
+        let n = l.len();
+        // μ p / R(s): seed 003 eq. 10 or the bound of seed 001 eq. 6.
+        let nu = |mu: f64, p: f64, s: f64| match regularization {
+            Regularization::Delta { delta } => mu * p / (s * s + 4.0 * delta * delta).sqrt(),
+            Regularization::Bound => {
+                let nu_max = 250.0 * (GRAVITY * h * h * h).sqrt();
+                mu * p / s.max(mu * p / nu_max)
+            }
+        };
+        // σ_a: stress over density on the interface below layer a (a ≥ 1).
+        let sigma = |a: usize| -> f64 {
+            let gap = 0.5 * (l[a - 1] + l[a]) * h;
+            let gamma = (u[a] - u[a - 1]) / gap;
+            let p = g_n * h * l[a..].iter().sum::<f64>();
+            let mu = law.mu_local(gamma.abs(), p);
+            nu(mu, p, gamma.abs()) * gamma
+        };
+        (0..n)
+            .map(|a| {
+                let mut terms = vec![l[a] * h * u[a], -l[a] * q_star[a]];
+                if a > 0 {
+                    terms.push(dt * sigma(a));
+                }
+                if a + 1 < n {
+                    terms.push(-dt * sigma(a + 1));
+                }
+                let mut r: f64 = terms.iter().sum();
+                let mut size: f64 = terms.iter().map(|t| t.abs()).sum();
+                if a == 0 {
+                    let h1 = l[0] * h;
+                    match basal {
+                        BasalCondition::Coulomb => {
+                            let impulse = dt * law.mu_local(u[0].abs() / h1, g_n * h) * g_n * h;
+                            size += impulse;
+                            r = if u[0] != 0.0 {
+                                r + impulse * u[0].signum()
+                            } else {
+                                (r.abs() - impulse).max(0.0)
+                            };
+                        }
+                        BasalCondition::NoSlip => {
+                            let gamma = 2.0 * u[0] / h1;
+                            let p = g_n * h;
+                            let mu = law.mu_local(gamma.abs(), p);
+                            let t = dt * nu(mu, p, gamma.abs()) * gamma;
+                            r += t;
+                            size += t.abs();
+                        }
+                    }
+                }
+                let scale = l[a] * h;
+                (r.abs() / scale, 16.0 * f64::EPSILON * size / scale)
+            })
+            .collect()
+    }
+
+    /// `rheology.viscosity = "implicit"`: the new velocities satisfy the column
+    /// equations with the viscosities, inertial numbers and basal friction at the new
+    /// speed to the tolerance (plus round-off), for a Coulomb and a no-slip bed, a
+    /// sliding and a stopping bottom layer; the frozen step (coefficients at t^n)
+    /// misses them by far on the same columns.
+    #[test]
+    fn implicit_step_satisfies_the_column_equations_at_the_new_speed() {
+        let law = MuI {
+            mu_s: 0.38,
+            mu_2: 0.62,
+            i0: 0.279,
+            d_s: 0.7e-3,
+            phi: 0.62,
+        };
+        let l = [0.1, 0.2, 0.3, 0.25, 0.15];
+        let n = l.len();
+        let m = mesh(3, 20.0);
+        let (h0, dt, tolerance) = (0.1, 5e-3, 1e-12);
+        type Profile = fn(usize) -> f64;
+        let profiles: [(&str, Profile); 2] = [
+            ("sheared, sliding", |a| 0.3 + 0.2 * (a * a) as f64),
+            ("slow, stopping", |a| 1e-3 * (1.0 + a as f64)),
+        ];
+        let cases = [
+            (
+                BasalCondition::Coulomb,
+                Regularization::Delta { delta: 1e-5 },
+            ),
+            (
+                BasalCondition::NoSlip,
+                Regularization::Delta { delta: 1e-5 },
+            ),
+            (BasalCondition::Coulomb, Regularization::Bound),
+        ];
+        for (basal, regularization) in cases {
+            for (name, profile) in profiles {
+                let mut worst = [0.0f64; 2];
+                for (k, viscosity) in [
+                    ViscosityTime::Implicit {
+                        tolerance,
+                        max_iterations: 50,
+                    },
+                    ViscosityTime::Frozen,
+                ]
+                .into_iter()
+                .enumerate()
+                {
+                    let mut state = LayeredState::from_profiles(&m, &l, &[h0; 3], &[0.0; 3]);
+                    for j in 0..5 {
+                        for a in 0..n {
+                            state.hu[j * n + a] = h0 * profile(a);
+                        }
+                    }
+                    let opts = ViscousOptions {
+                        viscosity,
+                        regularization,
+                        ..options(basal)
+                    };
+                    let mut step = MultilayerViscousStep::new(law, 3, &l, opts);
+                    step.prepare(&m, &state);
+                    let q0 = state.hu[2 * n..3 * n].to_vec();
+                    step.apply(&m, dt, &mut state).unwrap();
+                    let u: Vec<f64> = state.hu[2 * n..3 * n].iter().map(|q| q / h0).collect();
+                    let res = residual_at_new_speed(
+                        &law,
+                        &l,
+                        h0,
+                        m.g_n,
+                        dt,
+                        regularization,
+                        basal,
+                        &q0,
+                        &u,
+                    );
+                    for (a, &(r, round_off)) in res.iter().enumerate() {
+                        if k == 0 {
+                            assert!(
+                                r <= tolerance + round_off,
+                                "{basal:?}, {regularization:?}, {name}, layer {a}: residual {r:e} (round-off {round_off:e})"
+                            );
+                        }
+                        worst[k] = worst[k].max(r);
+                    }
+                    if k == 0 {
+                        let stats = step.stats();
+                        assert!(stats.solves > stats.columns, "{stats:?}: iterated");
+                        println!("{basal:?}, {regularization:?}, {name}: {stats:?}, u = {u:.6?}");
+                    }
+                }
+                println!(
+                    "{basal:?}, {name}: residuals implicit {:e}, frozen {:e}",
+                    worst[0], worst[1]
+                );
+                assert!(
+                    worst[1] > 1e-6,
+                    "{basal:?}, {name}: the frozen step differs ({worst:?})"
+                );
             }
         }
     }

@@ -27,7 +27,9 @@ pub use crate::model::dilatant::DilatantSpec;
 pub use crate::model::granular::config::{MultilayerSpec, Pressure};
 pub use crate::model::submarine::SubmarineSpec;
 pub use crate::model::ModelKind;
-pub use crate::numerics::viscous::{BasalCondition, Regularization, Sidewall, SidewallForm};
+pub use crate::numerics::viscous::{
+    BasalCondition, Regularization, Sidewall, SidewallForm, ViscosityTime,
+};
 pub use crate::physics::rheology::FrictionLaw;
 pub use crate::physics::Material;
 

@@ -96,6 +96,9 @@ pub(crate) struct RawRheology {
     pub channel_width: Option<f64>,
     pub sidewall: Option<String>,
     pub c_msm: Option<bool>,
+    pub viscosity: Option<String>,
+    pub viscosity_tolerance: Option<f64>,
+    pub viscosity_iterations: Option<i64>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -8,7 +8,7 @@ use granflow::output::RunSummary;
 use granflow::scenario::{
     BasalCondition, Boundaries, BoundaryKind, Coordinates, Domain, FrictionLaw, Initial, Material,
     ModelKind, ModelSpec, MultilayerSpec, OutputSpec, Pressure, Profile, Regularization, Scenario,
-    TimeSpec,
+    TimeSpec, ViscosityTime,
 };
 use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
@@ -83,6 +83,7 @@ impl Case {
                 regularization: Regularization::Delta { delta: 1e-5 },
                 sidewall: None,
                 c_msm: false,
+                viscosity: ViscosityTime::Frozen,
                 static_threshold: 1e-3,
             },
             dilatancy: None,

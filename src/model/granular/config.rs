@@ -1,7 +1,7 @@
 //! The granular model's own options, as validated from the scenario (`scenario/`
 //! fills them; the model never reads the TOML).
 
-use crate::numerics::viscous::{BasalCondition, Regularization, Sidewall};
+use crate::numerics::viscous::{BasalCondition, Regularization, Sidewall, ViscosityTime};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pressure {
@@ -20,6 +20,8 @@ pub struct MultilayerSpec {
     pub sidewall: Option<Sidewall>,
     /// Second-order strain-rate correction of seed 001 eq. (32) ("C-MSM").
     pub c_msm: bool,
+    /// Viscosities of the viscous step at t^n or at the new speed (`rheology.viscosity`).
+    pub viscosity: ViscosityTime,
     /// Speed (m/s) above which a layer flows, for `/snapshots/static_interface`.
     pub static_threshold: f64,
 }

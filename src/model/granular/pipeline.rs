@@ -66,6 +66,7 @@ impl WithLaw for Stages<'_> {
                     regularization: spec.regularization,
                     sidewall: spec.sidewall,
                     c_msm: spec.c_msm,
+                    viscosity: spec.viscosity,
                 };
                 stages.push(Box::new(MultilayerViscousStep::new(law, nx, l, opts)));
             }
@@ -85,6 +86,7 @@ impl WithLaw for Stages<'_> {
                     regularization: spec.regularization,
                     sidewall: spec.sidewall,
                     c_msm: spec.c_msm,
+                    viscosity: spec.viscosity,
                 };
                 let viscous = MultilayerViscousStep::new(law, nx, l, opts);
                 // One operator for the explicit pⁿ terms and the projection.

@@ -24,4 +24,9 @@ impl LocalFriction for Coulomb {
     fn mu_at(&self, _inertial_number: f64) -> f64 {
         self.mu
     }
+
+    #[inline(always)]
+    fn mu_slope_at(&self, _inertial_number: f64) -> f64 {
+        0.0
+    }
 }

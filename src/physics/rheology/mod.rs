@@ -70,6 +70,10 @@ pub trait LocalFriction: Copy + Send + Sync + std::fmt::Debug {
     /// μ at the inertial number I.
     fn mu_at(&self, inertial_number: f64) -> f64;
 
+    /// dμ/dI at the inertial number I ≥ 0 (the Newton iteration of the implicit
+    /// viscous step, `rheology.viscosity = "implicit"`).
+    fn mu_slope_at(&self, inertial_number: f64) -> f64;
+
     /// μ for a shear rate |∂_z u| (1/s) under the pressure over density p/ρ (m²/s²).
     #[inline(always)]
     fn mu_local(&self, shear_rate: f64, p_over_rho: f64) -> f64 {

@@ -171,6 +171,13 @@ impl LocalFriction for MuI {
     fn mu_at(&self, inertial_number: f64) -> f64 {
         self.mu_of_i(inertial_number)
     }
+
+    /// (μ_2 − μ_s) I_0 / (I_0 + I)².
+    #[inline(always)]
+    fn mu_slope_at(&self, inertial_number: f64) -> f64 {
+        let d = self.i0 + inertial_number;
+        (self.mu_2 - self.mu_s) * self.i0 / (d * d)
+    }
 }
 
 #[cfg(test)]

@@ -62,6 +62,9 @@ pub(super) fn dilatancy(
         || r.delta.is_some()
         || r.c_msm.is_some()
         || r.sidewall.is_some()
+        || r.viscosity.is_some()
+        || r.viscosity_tolerance.is_some()
+        || r.viscosity_iterations.is_some()
     {
         let key = [
             ("rheology.basal", r.basal.is_some()),
@@ -69,6 +72,15 @@ pub(super) fn dilatancy(
             ("rheology.delta", r.delta.is_some()),
             ("rheology.c_msm", r.c_msm.is_some()),
             ("rheology.sidewall", r.sidewall.is_some()),
+            ("rheology.viscosity", r.viscosity.is_some()),
+            (
+                "rheology.viscosity_tolerance",
+                r.viscosity_tolerance.is_some(),
+            ),
+            (
+                "rheology.viscosity_iterations",
+                r.viscosity_iterations.is_some(),
+            ),
         ]
         .iter()
         .find(|(_, given)| *given)

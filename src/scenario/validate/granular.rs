@@ -7,7 +7,7 @@ use super::super::error::ScenarioError;
 use super::super::raw::{RawModel, RawRheology};
 use super::super::{
     BasalCondition, FrictionLaw, ModelKind, ModelSpec, MultilayerSpec, Pressure, Regularization,
-    Sidewall, SidewallForm,
+    Sidewall, SidewallForm, ViscosityTime,
 };
 use super::check::*;
 use super::MAX_LAYERS;
@@ -169,6 +169,9 @@ pub(super) struct ViscousKeys {
     pub(super) channel_width: Option<f64>,
     sidewall: Option<String>,
     c_msm: Option<bool>,
+    viscosity: Option<String>,
+    viscosity_tolerance: Option<f64>,
+    viscosity_iterations: Option<i64>,
 }
 
 impl ViscousKeys {
@@ -182,12 +185,21 @@ impl ViscousKeys {
             channel_width: r.channel_width,
             sidewall: r.sidewall.clone(),
             c_msm: r.c_msm,
+            viscosity: r.viscosity.clone(),
+            viscosity_tolerance: r.viscosity_tolerance,
+            viscosity_iterations: r.viscosity_iterations,
         }
     }
 }
 
 /// Default regularisation parameter δ (1/s) of seed 003 §5.
 pub(crate) const DEFAULT_DELTA: f64 = 1e-5;
+
+/// Default residual tolerance (m/s) of `rheology.viscosity = "implicit"`.
+pub(crate) const DEFAULT_VISCOSITY_TOLERANCE: f64 = 1e-10;
+
+/// Default most column solves per step of `rheology.viscosity = "implicit"`.
+pub(crate) const DEFAULT_VISCOSITY_ITERATIONS: i64 = 1000;
 
 pub(super) fn multilayer(
     v: ViscousKeys,
@@ -278,12 +290,59 @@ pub(super) fn multilayer(
         }
     };
     let static_threshold = positive("output.static_threshold", static_threshold.unwrap_or(1e-3))?;
+    #[derive(Clone, Copy, PartialEq)]
+    enum Visc {
+        Frozen,
+        Implicit,
+    }
+    let visc = choice(
+        "rheology.viscosity",
+        v.viscosity.as_deref(),
+        Visc::Frozen,
+        &[("frozen", Visc::Frozen), ("implicit", Visc::Implicit)],
+    )?;
+    let viscosity = match visc {
+        Visc::Frozen => {
+            for (key, given) in [
+                (
+                    "rheology.viscosity_tolerance",
+                    v.viscosity_tolerance.is_some(),
+                ),
+                (
+                    "rheology.viscosity_iterations",
+                    v.viscosity_iterations.is_some(),
+                ),
+            ] {
+                if given {
+                    return err(
+                        key,
+                        "only used by viscosity = \"implicit\" (rheology.viscosity is \"frozen\"); remove it",
+                    );
+                }
+            }
+            ViscosityTime::Frozen
+        }
+        Visc::Implicit => ViscosityTime::Implicit {
+            tolerance: positive(
+                "rheology.viscosity_tolerance",
+                v.viscosity_tolerance.unwrap_or(DEFAULT_VISCOSITY_TOLERANCE),
+            )?,
+            max_iterations: int_in(
+                "rheology.viscosity_iterations",
+                v.viscosity_iterations
+                    .unwrap_or(DEFAULT_VISCOSITY_ITERATIONS),
+                1,
+                100_000,
+            )?,
+        },
+    };
     Ok(MultilayerSpec {
         layer_fractions,
         basal,
         regularization,
         sidewall,
         c_msm: v.c_msm.unwrap_or(false),
+        viscosity,
         static_threshold,
     })
 }

@@ -525,6 +525,7 @@ mod tests {
     use super::*;
     use crate::scenario::{
         BasalCondition, FrictionLaw, ModelKind, ModelSpec, Regularization, SidewallForm,
+        ViscosityTime,
     };
     use std::fs;
 
@@ -1186,7 +1187,33 @@ front_threshold = 2e-3
         );
         assert_eq!(s.multilayer.sidewall, None);
         assert!(!s.multilayer.c_msm);
+        assert_eq!(s.multilayer.viscosity, ViscosityTime::Frozen);
         assert_eq!(s.multilayer.static_threshold, 1e-3);
+        let s = load_set(MINIMAL, &["model.layers=4", "rheology.viscosity=implicit"]).unwrap();
+        assert_eq!(
+            s.multilayer.viscosity,
+            ViscosityTime::Implicit {
+                tolerance: 1e-10,
+                max_iterations: 1000
+            }
+        );
+        let s = load_set(
+            MINIMAL,
+            &[
+                "model.layers=4",
+                "rheology.viscosity=implicit",
+                "rheology.viscosity_tolerance=1e-8",
+                "rheology.viscosity_iterations=30",
+            ],
+        )
+        .unwrap();
+        assert_eq!(
+            s.multilayer.viscosity,
+            ViscosityTime::Implicit {
+                tolerance: 1e-8,
+                max_iterations: 30
+            }
+        );
         assert_eq!(load(MINIMAL).unwrap().multilayer.layer_fractions, vec![1.0]);
 
         let bad = [
@@ -1224,6 +1251,39 @@ front_threshold = 2e-3
                 &["model.layers=2", "rheology.delta=0"],
                 "rheology.delta",
                 "greater than 0",
+            ),
+            (
+                &["model.layers=2", "rheology.viscosity=explicit"],
+                "rheology.viscosity",
+                "unknown value \"explicit\" (expected \"frozen\" or \"implicit\")",
+            ),
+            (
+                &["model.layers=2", "rheology.viscosity_tolerance=1e-8"],
+                "rheology.viscosity_tolerance",
+                "only used by viscosity = \"implicit\"",
+            ),
+            (
+                &["model.layers=2", "rheology.viscosity_iterations=10"],
+                "rheology.viscosity_iterations",
+                "only used by viscosity = \"implicit\"",
+            ),
+            (
+                &[
+                    "model.layers=2",
+                    "rheology.viscosity=implicit",
+                    "rheology.viscosity_tolerance=0",
+                ],
+                "rheology.viscosity_tolerance",
+                "greater than 0",
+            ),
+            (
+                &[
+                    "model.layers=2",
+                    "rheology.viscosity=implicit",
+                    "rheology.viscosity_iterations=0",
+                ],
+                "rheology.viscosity_iterations",
+                "at least 1",
             ),
             (
                 &["model.layers=2", "rheology.mu_w=0.2"],
