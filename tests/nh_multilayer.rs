@@ -148,11 +148,12 @@ fn departures_inside(sink: &MemorySink, dx: f64, layers: usize, cut: usize) -> [
 }
 
 /// Seed 003 §5.3, Table 6 away from the outflows: without the 3 cells next to each
-/// outflow boundary (measured h: 4.70e-4, 1.90e-9, 1.15e-14; u: 1.55e-3, 2.16e-8,
-/// 1.98e-13; w: 9.00e-4, 1.17e-8, 1.06e-13 for δ = 1e-5, 1e-10, 1e-15). The edge cells
+/// outflow boundary (measured with the default "lagged" viscosities h: 5.15e-4,
+/// 4.01e-9, 1.84e-14; u: 1.49e-3, 1.84e-8, 1.70e-13; w: 8.88e-4, 9.67e-9, 8.47e-14 for
+/// δ = 1e-5, 1e-10, 1e-15; "frozen": h 4.70e-4, 1.90e-9, 1.15e-14). The edge cells
 /// feel half the surface slope (the outflow ghost copies the edge column) and creep at
 /// 2δ/√3 while their neighbours creep at 2δ√n (`creep_at_rest_follows_the_frozen_viscosity_recursion`
-/// in tests/multilayer.rs): at δ = 1e-10,
+/// in tests/multilayer.rs): at δ = 1e-10 ("frozen"),
 /// 5.9e-9 of the 7.8e-9 of h are in these 6 cells.
 #[test]
 fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
@@ -172,10 +173,11 @@ fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
 }
 
 /// Seed 003 §5.3, Table 6 (a): errors proportional to δ (paper: h 5.34e-5, 5.34e-10,
-/// 2.99e-16; u 5.38e-5, 5.39e-10, 5.39e-15; w 4.21e-5, 4.21e-10, 4.21e-15). Measured:
-/// h 6.16e-4, 7.79e-9, 7.07e-14; u 1.56e-3, 2.20e-8, 2.02e-13; w 9.44e-4, 1.52e-8,
-/// 1.39e-13 (62–78 δ for h, 156–220 δ for u; hydrostatic multilayer: h 54–70 δ, u
-/// 148–179 δ). Why tens of δ rather than the paper's 5 δ (docs/numerics.md, "Creep at
+/// 2.99e-16; u 5.38e-5, 5.39e-10, 5.39e-15; w 4.21e-5, 4.21e-10, 4.21e-15). Measured
+/// with the default "lagged" viscosities: h 6.21e-4, 7.38e-9, 5.19e-14; u 1.49e-3,
+/// 1.86e-8, 1.71e-13; w 9.11e-4, 1.13e-8, 1.01e-13 (52–74 δ for h, 149–186 δ for u;
+/// "frozen": h 6.16e-4, 7.79e-9, 7.07e-14, u 1.56e-3, 2.20e-8, 2.02e-13; hydrostatic
+/// multilayer: h 54–70 δ, u 148–179 δ). Why tens of δ rather than the paper's 5 δ (docs/numerics.md, "Creep at
 /// the repose slope"): at exactly the repose slope the drive equals the strength μ_s p
 /// of every interface, and with the viscosities frozen at t^n the interface shear
 /// grows as s = 2δ√n over n steps (`creep_at_rest_follows_the_frozen_viscosity_recursion`
