@@ -31,6 +31,13 @@ pub struct NhViscousStep<L: BasalFriction + LocalFriction> {
     viscous: MultilayerViscousStep<L>,
     /// Δt pⁿ, face-major.
     impulse: Vec<f64>,
+    /// Freeze the viscosities from the velocities of the previous viscous step (before
+    /// its projection) instead of those at tⁿ (after it); N > 1 only.
+    lagged: bool,
+    /// h u_α after the last viscous solve (ghosts included); empty before the first.
+    viscous_hu: Vec<f64>,
+    /// The state at tⁿ with `viscous_hu` for h u_α: what `lagged` freezes from.
+    lagged_state: Option<LayeredState>,
 }
 
 impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
@@ -50,7 +57,18 @@ impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
             operator,
             viscous,
             impulse: vec![0.0; (mesh.nx + 1) * layers],
+            lagged: false,
+            viscous_hu: Vec::new(),
+            lagged_state: None,
         }
+    }
+
+    /// With `lagged`, the viscosities of step 2 are frozen from the velocities after
+    /// the previous viscous solve rather than after the previous projection (module
+    /// documentation). No effect for N = 1.
+    pub fn lagged(mut self, lagged: bool) -> Self {
+        self.lagged = lagged && self.operator.lock().layers() > 1;
+        self
     }
 
     /// Adds the explicit terms Δt 𝒯 pⁿ to hu and hw (the first half of the step).
@@ -76,12 +94,29 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for NhViscousStep<L> 
     }
 
     fn prepare(&mut self, mesh: &Mesh, state: &LayeredState) {
-        self.viscous.prepare(mesh, state);
+        if !self.lagged || self.viscous_hu.len() != state.hu.len() {
+            // The paper's freezing at tⁿ, and the first step of a lagged run.
+            self.viscous.prepare(mesh, state);
+            return;
+        }
+        // tⁿ with the discharges of the last viscous solve: h is that of tⁿ (the
+        // projection moves no mass) and so is pⁿ (the total pressures of eq. 10).
+        let lagged = self.lagged_state.get_or_insert_with(|| state.clone());
+        lagged.h.copy_from_slice(&state.h);
+        lagged.hu.copy_from_slice(&self.viscous_hu);
+        if let (Some(to), Some(from)) = (&mut lagged.nh, &state.nh) {
+            to.p.copy_from_slice(&from.p);
+        }
+        self.viscous.prepare(mesh, lagged);
     }
 
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         self.apply_explicit_pressure(mesh, dt, state);
         self.viscous.apply(mesh, dt, state)?;
+        if self.lagged {
+            self.viscous_hu.clear();
+            self.viscous_hu.extend_from_slice(&state.hu);
+        }
         let (nx, n) = (mesh.nx, state.layers);
         let LayeredState { h, tracers, .. } = state;
         let hw = &mut tracers

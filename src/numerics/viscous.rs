@@ -131,6 +131,11 @@ pub struct ViscousOptions {
 pub enum ViscosityTime {
     /// Frozen at t^n: one linear solve per column (seed 003 §4 "Step 2").
     Frozen,
+    /// As `Frozen`, but with the non-hydrostatic pressure the velocities they are
+    /// frozen from are those of the previous viscous solve, before its projection
+    /// ([`crate::numerics::nh_multilayer`]). The same as `Frozen` without a
+    /// projection (hydrostatic runs) and for N = 1; the default.
+    Lagged,
     /// At the new speed u^{n+1}: the column equations are solved by Picard iteration
     /// (re-freezing at the last iterate) until the residual of every layer's equation,
     /// in m/s, is at most `tolerance` (plus the round-off of its evaluation); a column
@@ -220,7 +225,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             inv_gap[a] = 2.0 / (l[a - 1] + l[a]);
         }
         let implicit = |v: Vec<f64>| match opts.viscosity {
-            ViscosityTime::Frozen => Vec::new(),
+            ViscosityTime::Frozen | ViscosityTime::Lagged => Vec::new(),
             ViscosityTime::Implicit { .. } => v,
         };
         let layer_sidewall = matches!(
@@ -637,7 +642,7 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
         let n = self.layers;
         let g_n = mesh.g_n;
         let implicit = match self.opts.viscosity {
-            ViscosityTime::Frozen => None,
+            ViscosityTime::Frozen | ViscosityTime::Lagged => None,
             ViscosityTime::Implicit {
                 tolerance,
                 max_iterations,

@@ -16,7 +16,7 @@ use crate::numerics::nonhydrostatic::NhFrictionStep;
 use crate::numerics::projection::monolayer::MonolayerOperator;
 use crate::numerics::projection::multilayer::SharedOperator;
 use crate::numerics::projection::{ProjectionStage, ThomasSolver};
-use crate::numerics::viscous::{MultilayerViscousStep, ViscousOptions};
+use crate::numerics::viscous::{MultilayerViscousStep, ViscosityTime, ViscousOptions};
 use crate::numerics::Stage;
 use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, MuI};
 use crate::physics::Material;
@@ -91,11 +91,10 @@ impl WithLaw for Stages<'_> {
                 let viscous = MultilayerViscousStep::new(law, nx, l, opts);
                 // One operator for the explicit pⁿ terms and the projection.
                 let operator = SharedOperator::new(mesh, l);
-                stages.push(Box::new(NhViscousStep::with_operator(
-                    mesh,
-                    operator.clone(),
-                    viscous,
-                )));
+                let lagged = spec.viscosity == ViscosityTime::Lagged;
+                stages.push(Box::new(
+                    NhViscousStep::with_operator(mesh, operator.clone(), viscous).lagged(lagged),
+                ));
                 stages.push(Box::new(ProjectionStage::new(
                     operator,
                     BandedCholesky::new(n, nx + 1),

@@ -293,16 +293,21 @@ pub(super) fn multilayer(
     #[derive(Clone, Copy, PartialEq)]
     enum Visc {
         Frozen,
+        Lagged,
         Implicit,
     }
     let visc = choice(
         "rheology.viscosity",
         v.viscosity.as_deref(),
-        Visc::Frozen,
-        &[("frozen", Visc::Frozen), ("implicit", Visc::Implicit)],
+        Visc::Lagged,
+        &[
+            ("lagged", Visc::Lagged),
+            ("frozen", Visc::Frozen),
+            ("implicit", Visc::Implicit),
+        ],
     )?;
     let viscosity = match visc {
-        Visc::Frozen => {
+        Visc::Frozen | Visc::Lagged => {
             for (key, given) in [
                 (
                     "rheology.viscosity_tolerance",
@@ -314,13 +319,14 @@ pub(super) fn multilayer(
                 ),
             ] {
                 if given {
-                    return err(
-                        key,
-                        "only used by viscosity = \"implicit\" (rheology.viscosity is \"frozen\"); remove it",
-                    );
+                    return err(key, "only used by viscosity = \"implicit\"; remove it");
                 }
             }
-            ViscosityTime::Frozen
+            if visc == Visc::Frozen {
+                ViscosityTime::Frozen
+            } else {
+                ViscosityTime::Lagged
+            }
         }
         Visc::Implicit => ViscosityTime::Implicit {
             tolerance: positive(

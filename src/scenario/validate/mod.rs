@@ -1187,8 +1187,10 @@ front_threshold = 2e-3
         );
         assert_eq!(s.multilayer.sidewall, None);
         assert!(!s.multilayer.c_msm);
-        assert_eq!(s.multilayer.viscosity, ViscosityTime::Frozen);
+        assert_eq!(s.multilayer.viscosity, ViscosityTime::Lagged);
         assert_eq!(s.multilayer.static_threshold, 1e-3);
+        let s = load_set(MINIMAL, &["model.layers=4", "rheology.viscosity=frozen"]).unwrap();
+        assert_eq!(s.multilayer.viscosity, ViscosityTime::Frozen);
         let s = load_set(MINIMAL, &["model.layers=4", "rheology.viscosity=implicit"]).unwrap();
         assert_eq!(
             s.multilayer.viscosity,
@@ -1255,7 +1257,7 @@ front_threshold = 2e-3
             (
                 &["model.layers=2", "rheology.viscosity=explicit"],
                 "rheology.viscosity",
-                "unknown value \"explicit\" (expected \"frozen\" or \"implicit\")",
+                "unknown value \"explicit\" (expected \"lagged\" or \"frozen\" or \"implicit\")",
             ),
             (
                 &["model.layers=2", "rheology.viscosity_tolerance=1e-8"],
