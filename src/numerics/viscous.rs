@@ -136,10 +136,11 @@ pub enum ViscosityTime {
     /// ([`crate::numerics::nh_multilayer`]). The same as `Frozen` without a
     /// projection (hydrostatic runs) and for N = 1; the default.
     Lagged,
-    /// At the new speed u^{n+1}: the column equations are solved by Picard iteration
-    /// (re-freezing at the last iterate) until the residual of every layer's equation,
-    /// in m/s, is at most `tolerance` (plus the round-off of its evaluation); a column
-    /// still above it after `max_iterations` solves fails the step.
+    /// At the new speed u^{n+1}: the column equations are solved by damped Newton
+    /// (module documentation) until the residual of every layer's equation, in m/s,
+    /// is at most `tolerance` (plus the round-off of its evaluation) or a full Newton
+    /// correction is; a column still above it after `max_iterations` solves fails the
+    /// step.
     Implicit {
         tolerance: f64,
         max_iterations: usize,
