@@ -24,6 +24,12 @@ fn build(file: &str, sets: &[&str]) -> Sim {
     build_granular(&scn)
 }
 
+/// Fingerprint of the state's h, h u_α and h w_α.
+fn state_fingerprint(sim: &Sim) -> u64 {
+    let s = &sim.state;
+    fingerprint(s.h.iter().chain(&s.hu).chain(s.hw()))
+}
+
 fn run(sim: &mut Sim) -> MemorySink {
     let mut sink = MemorySink::default();
     sim.run(&mut sink, &mut |_| {}).expect("run succeeds");
@@ -120,31 +126,42 @@ fn departures_from_rest(sink: &MemorySink, dx: f64, layers: usize) -> [f64; 3] {
 
 /// [`departures_from_rest`] over the cells `cut..nx − cut`.
 fn departures_inside(sink: &MemorySink, dx: f64, layers: usize, cut: usize) -> [f64; 3] {
+    departures_per_snapshot(sink, dx, layers, cut)
+        .into_iter()
+        .fold([0.0f64; 3], |worst, e| {
+            [worst[0].max(e[0]), worst[1].max(e[1]), worst[2].max(e[2])]
+        })
+}
+
+/// The L1 departures of h, u, w from the initial state at each snapshot, over the
+/// cells `cut..nx − cut`.
+fn departures_per_snapshot(sink: &MemorySink, dx: f64, layers: usize, cut: usize) -> Vec<[f64; 3]> {
     let h0 = &sink.snapshots[0].h;
     let nx = h0.len();
     let cells = cut..nx - cut;
-    let mut worst = [0.0f64; 3];
-    for snap in &sink.snapshots {
-        let eh: f64 = cells
-            .clone()
-            .map(|i| (snap.h[i] - h0[i]).abs())
-            .sum::<f64>()
-            * dx;
-        let layer_sum = |v: &[f64]| -> f64 {
-            cells
+    sink.snapshots
+        .iter()
+        .map(|snap| {
+            let eh: f64 = cells
                 .clone()
-                .map(|i| {
-                    snap.h[i] / layers as f64
-                        * (0..layers).map(|a| v[a * nx + i].abs()).sum::<f64>()
-                })
+                .map(|i| (snap.h[i] - h0[i]).abs())
                 .sum::<f64>()
-                * dx
-        };
-        let eu = layer_sum(&snap.u);
-        let ew = layer_sum(snap.w.as_ref().expect("w"));
-        worst = [worst[0].max(eh), worst[1].max(eu), worst[2].max(ew)];
-    }
-    worst
+                * dx;
+            let layer_sum = |v: &[f64]| -> f64 {
+                cells
+                    .clone()
+                    .map(|i| {
+                        snap.h[i] / layers as f64
+                            * (0..layers).map(|a| v[a * nx + i].abs()).sum::<f64>()
+                    })
+                    .sum::<f64>()
+                    * dx
+            };
+            let eu = layer_sum(&snap.u);
+            let ew = layer_sum(snap.w.as_ref().expect("w"));
+            [eh, eu, ew]
+        })
+        .collect()
 }
 
 /// Seed 003 §5.3, Table 6 away from the outflows: without the 3 cells next to each
@@ -268,13 +285,7 @@ fn results_do_not_depend_on_the_thread_count() {
             pool.install(|| {
                 let mut sim = build("nh_multilayer_collapse.toml", &sets);
                 run(&mut sim);
-                fingerprint(
-                    sim.state
-                        .h
-                        .iter()
-                        .chain(&sim.state.hu)
-                        .chain(sim.state.hw()),
-                )
+                state_fingerprint(&sim)
             })
         })
         .collect();
@@ -477,23 +488,21 @@ fn vertical_refinement_converges_when_the_basal_friction_does_not_depend_on_n() 
     assert!(order(&m, 1) < 0.8 && order(&m, 2) < 0.8, "{m:?}");
 }
 
-/// Why u(z) and w(z) converge slowly in x along Table 5 (docs/validation.md): at a fixed
-/// grid (400 cells, N = 8) the time step alone moves the in-depth profile. Halving the
-/// CFL from the scenario's 0.7 down to 0.7/64, the u(z) differences (eq. 35 norm)
-/// between consecutive CFLs are 1.144e-3, 9.983e-4, 8.753e-4, 6.226e-4, 3.880e-4,
-/// 2.163e-4: orders 0.20, 0.19, 0.49, 0.68, 0.84. It is the bottom layer (u_1 in the
-/// cell at x = 0.5 m: 0.419, 0.407, 0.395, 0.383, 0.371, 0.363, 0.358 m/s); the same
-/// differences appear at 800 cells one CFL halving earlier, i.e. at the same time step:
-/// first order in time only for dt below about 5e-5 s, so refining x at CFL 0.7 is
-/// pre-asymptotic for the profile up to about 10^4 cells. The hydrostatic multilayer
-/// model shows it too (docs/validation.md), so it is the viscous/friction step.
-#[test]
-fn in_depth_profile_is_first_order_in_time_only_below_the_scenario_cfl() {
-    let (nx, n) = (400, 8);
-    let runs: Vec<_> = (0..7)
+/// The §5.2 run at (nx, n) with the CFL number 0.7/2^k, k = 0 … halvings, and
+/// `extra` settings: the u(z) differences between consecutive runs (eq. 35 norm),
+/// their orders, and the bottom-layer speed at x = 0.5 m of each run.
+fn cfl_halvings(
+    nx: usize,
+    n: usize,
+    halvings: u32,
+    extra: &[&str],
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let runs: Vec<_> = (0..=halvings)
         .map(|k| {
             let cfl = format!("time.cfl={}", 0.7 / f64::from(1 << k));
-            convergence_run_with(nx, n, &[&cfl])
+            let mut sets = vec![cfl.as_str()];
+            sets.extend_from_slice(extra);
+            convergence_run_with(nx, n, &sets)
         })
         .collect();
     let diffs: Vec<f64> = runs
@@ -506,15 +515,28 @@ fn in_depth_profile_is_first_order_in_time_only_below_the_scenario_cfl() {
     let orders: Vec<f64> = diffs.windows(2).map(|d| (d[0] / d[1]).log2()).collect();
     let i05 = ((0.5 + 0.5) / runs[0].3) as usize;
     let u1: Vec<f64> = runs.iter().map(|r| r.1[i05]).collect();
+    let diffs_text: Vec<String> = diffs.iter().map(|d| format!("{d:.3e}")).collect();
     println!(
-        "u(z) differences between CFL 0.7/2^k and 0.7/2^(k+1), 400 cells, N = 8: {}",
-        diffs
-            .iter()
-            .map(|d| format!("{d:.3e}"))
-            .collect::<Vec<_>>()
-            .join(", ")
+        "{extra:?}: u(z) differences between CFL 0.7/2^k and 0.7/2^(k+1), {nx} cells, \
+         N = {n}: {}\n  orders {orders:.2?}; bottom-layer u at x = 0.5 m: {u1:.4?}",
+        diffs_text.join(", ")
     );
-    println!("orders {orders:.2?}; bottom-layer u at x = 0.5 m: {u1:.3?}");
+    (diffs, orders, u1)
+}
+
+/// Why u(z) and w(z) converge slowly in x along Table 5 (docs/validation.md): at a fixed
+/// grid (400 cells, N = 8) the time step alone moves the in-depth profile. Halving the
+/// CFL from the scenario's 0.7 down to 0.7/64, the u(z) differences (eq. 35 norm)
+/// between consecutive CFLs are 1.144e-3, 9.983e-4, 8.753e-4, 6.226e-4, 3.880e-4,
+/// 2.163e-4: orders 0.20, 0.19, 0.49, 0.68, 0.84. It is the bottom layer (u_1 in the
+/// cell at x = 0.5 m: 0.419, 0.407, 0.395, 0.383, 0.371, 0.363, 0.358 m/s); the same
+/// differences appear at 800 cells one CFL halving earlier, i.e. at the same time step:
+/// first order in time only for dt below about 5e-5 s, so refining x at CFL 0.7 is
+/// pre-asymptotic for the profile up to about 10^4 cells. The hydrostatic multilayer
+/// model shows it too (docs/validation.md), so it is the viscous/friction step.
+#[test]
+fn in_depth_profile_is_first_order_in_time_only_below_the_scenario_cfl() {
+    let (_, orders, u1) = cfl_halvings(400, 8, 6, &[]);
     // Pre-asymptotic at the scenario's CFL (measured 0.20, 0.19), first order once the
     // step is small enough (measured 0.84 at the last halving).
     assert!(orders[0] < 0.4 && orders[1] < 0.4, "{orders:?}");
@@ -530,32 +552,7 @@ fn in_depth_profile_is_first_order_in_time_only_below_the_scenario_cfl() {
 /// CFL 0.7 on: the frozen viscosities at t^n were the pre-asymptotic part.
 #[test]
 fn implicit_viscosity_makes_the_in_depth_profile_first_order_in_time_at_the_scenario_cfl() {
-    let (nx, n) = (400, 8);
-    let runs: Vec<_> = (0..5)
-        .map(|k| {
-            let cfl = format!("time.cfl={}", 0.7 / f64::from(1 << k));
-            convergence_run_with(nx, n, &[&cfl, "rheology.viscosity=implicit"])
-        })
-        .collect();
-    let diffs: Vec<f64> = runs
-        .windows(2)
-        .map(|p| {
-            let ((h, u, _, dx), (_, u_f, _, _)) = (&p[0], &p[1]);
-            layered_l1(h, u, u_f, nx, n, *dx)
-        })
-        .collect();
-    let orders: Vec<f64> = diffs.windows(2).map(|d| (d[0] / d[1]).log2()).collect();
-    let i05 = ((0.5 + 0.5) / runs[0].3) as usize;
-    let u1: Vec<f64> = runs.iter().map(|r| r.1[i05]).collect();
-    println!(
-        "implicit: u(z) differences between CFL 0.7/2^k and 0.7/2^(k+1), 400 cells, N = 8: {}",
-        diffs
-            .iter()
-            .map(|d| format!("{d:.3e}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
-    println!("orders {orders:.2?}; bottom-layer u at x = 0.5 m: {u1:.4?}");
+    let (diffs, orders, u1) = cfl_halvings(400, 8, 4, &["rheology.viscosity=implicit"]);
     // Frozen at CFL 0.7 (the test above): difference 1.144e-3, orders 0.20, 0.19,
     // bottom u 0.419 m/s against 0.358 at CFL 0.7/64. Implicit (measured): 1.958e-4,
     // 1.036e-4, 6.109e-5, 3.749e-5, orders 0.92, 0.76, 0.70, bottom u 0.3548 ... 0.3536.
@@ -583,13 +580,7 @@ fn frozen_viscosity_is_the_paper_step_bit_for_bit() {
         sets.extend_from_slice(extra);
         let mut sim = build("nh_multilayer_convergence.toml", &sets);
         run(&mut sim);
-        fingerprint(
-            sim.state
-                .h
-                .iter()
-                .chain(&sim.state.hu)
-                .chain(sim.state.hw()),
-        )
+        state_fingerprint(&sim)
     };
     let frozen = hash(&[]);
     println!("convergence fingerprint {frozen:#x}");
@@ -639,48 +630,9 @@ fn implicit_viscosity_converges_on_every_bundled_multilayer_scenario() {
 /// after the viscous step) meets the stiff δ-regularised plug at the rear of the mass.
 #[test]
 fn implicit_viscosity_makes_the_hydrostatic_multilayer_profile_first_order_in_time() {
-    let (nx, n) = (400, 8);
-    let runs: Vec<_> = (0..5)
-        .map(|k| {
-            let cfl = format!("time.cfl={}", 0.7 / f64::from(1 << k));
-            convergence_run_with(
-                nx,
-                n,
-                &[
-                    &cfl,
-                    "rheology.viscosity=implicit",
-                    "model.pressure=hydrostatic",
-                ],
-            )
-        })
-        .collect();
-    let diffs: Vec<f64> = runs
-        .windows(2)
-        .map(|p| {
-            let ((h, u, _, dx), (_, u_f, _, _)) = (&p[0], &p[1]);
-            layered_l1(h, u, u_f, nx, n, *dx)
-        })
-        .collect();
-    let orders: Vec<f64> = diffs.windows(2).map(|d| (d[0] / d[1]).log2()).collect();
-    println!("hydrostatic, implicit: differences {diffs:?}, orders {orders:.2?}");
+    let implicit = ["rheology.viscosity=implicit", "model.pressure=hydrostatic"];
+    let (_, orders, _) = cfl_halvings(400, 8, 4, &implicit);
     assert!(orders.iter().all(|o| (0.9..=1.1).contains(o)), "{orders:?}");
-}
-
-/// Largest L1 departure of u from rest (eq. 35) at each snapshot of a run.
-fn u_departures(sink: &MemorySink, dx: f64, layers: usize) -> Vec<f64> {
-    sink.snapshots
-        .iter()
-        .map(|snap| {
-            let nx = snap.h.len();
-            (0..nx)
-                .map(|i| {
-                    snap.h[i] / layers as f64
-                        * (0..layers).map(|a| snap.u[a * nx + i].abs()).sum::<f64>()
-                })
-                .sum::<f64>()
-                * dx
-        })
-        .collect()
 }
 
 /// A mass whose surface lies 1° below the repose slope (§5.3 bed, 10 layers, δ =
@@ -702,7 +654,10 @@ fn mass_below_the_repose_slope_stays_at_rest() {
             ],
         );
         let sink = run(&mut sim);
-        u_departures(&sink, sim.mesh.dx, sim.state.layers)
+        departures_per_snapshot(&sink, sim.mesh.dx, sim.state.layers, 0)
+            .iter()
+            .map(|e| e[1])
+            .collect::<Vec<f64>>()
     };
     let lagged = creep("rheology.viscosity=lagged");
     let frozen = creep("rheology.viscosity=frozen");
