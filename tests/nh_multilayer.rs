@@ -371,7 +371,8 @@ fn project(v: &[f64], nx_f: usize, n_f: usize, nx: usize, n: usize) -> Vec<f64> 
 /// 5.725e-3, 4.177e-3; w 3.712e-3, 2.709e-3, 1.862e-3 (orders h 0.82/0.82, u 0.36/0.45,
 /// w 0.45/0.54). The whole family up to (1600, 32) against (6400, 128) is
 /// scripts/table5_convergence.py (docs/validation.md): last orders h 1.15, u 0.79,
-/// w 0.80 (paper 1.18, 1.07, 1.18); the differences between consecutive runs fall at
+/// w 0.80 (paper 1.18, 1.07, 1.18; 1.03, 0.94, 0.94 with `rheology.viscosity =
+/// "implicit"`); the differences between consecutive runs fall at
 /// order >= 1 only from (3200, 64) to (6400, 128), too costly for a test.
 /// Why u and w converge slowly: see [`vertical_refinement_converges_when_the_basal_friction_does_not_depend_on_n`]
 /// and docs/validation.md.
