@@ -4,8 +4,10 @@
 //!
 //!   valgrind --tool=callgrind target/release/examples/nh_step_cost nonhydrostatic 60
 //!
-//! Optional arguments: the layers (default 20) and `rheology.viscosity` ("frozen", the
-//! default, or "implicit"), e.g. `nh_step_cost hydrostatic 60 20 implicit`.
+//! Optional arguments: the layers (default 20) and `rheology.viscosity` ("frozen", this
+//! driver's default so that its counts compare with the earlier ones, "lagged", the
+//! scenarios' default, the same step plus one copy of h u_α, or "implicit"), e.g.
+//! `nh_step_cost hydrostatic 60 20 implicit`.
 //!
 //! Run it twice with different `steps` and difference the totals, or read the stages'
 //! inclusive counts (`callgrind_annotate --inclusive=yes`) divided by their calls.
