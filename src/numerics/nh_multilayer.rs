@@ -15,6 +15,18 @@
 //! the explicit terms use the thickness after step 1 (h^{n+1/3} = h^{n+1}), so that they
 //! are the correction operator of step 3 applied to pⁿ. Normal discharges of dry cells
 //! are set to 0.
+//!
+//! **Which velocities the viscosities are frozen from** (`rheology.viscosity`). Seed
+//! 003 takes U^n, the state after the previous projection (`"frozen"`). The projection
+//! and the pⁿ terms move the layers of a column independently (the mass matrix M =
+//! diag(l_α h) of eq. 31 knows nothing of the viscous coupling), so they shear a column
+//! that the viscous step holds below its threshold; ν = μ p/√(s² + 4δ²) frozen from that
+//! shear is softer, the next step lets the column shear more, and the creep of a mass
+//! below the repose slope grows without bound (docs/numerics.md, "Below the repose
+//! slope"). With `"lagged"` (the default) ν is frozen from h u_α after the previous
+//! viscous solve, before its projection, with h and pⁿ of t^n (the projection moves no
+//! mass): the fixed point of the held column is then that of the hydrostatic model. For
+//! N = 1 (no interface viscosity) the two are the same and `lagged` is off.
 
 use super::projection::multilayer::SharedOperator;
 use super::viscous::MultilayerViscousStep;
