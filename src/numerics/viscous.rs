@@ -50,7 +50,9 @@
 //! σ = ν(s) ∂_z u, the gradient of a convex column energy. It is solved from the frozen
 //! solution by damped Newton (tangent couplings Δt σ'/h_{α+1/2}, the Coulomb bed
 //! linearised inside the exact set-valued bottom solve, a line search on the energy,
-//! Picard steps after a cut Newton step) until every |R_α|/(l_α h) is within the
+//! Picard steps after a cut Newton step; with the δ form, a primal–dual tangent that
+//! linearises R(s) σ̂ = μ p γ in a stress variable σ̂ carried along the iterations)
+//! until every |R_α|/(l_α h) is within the
 //! tolerance (m/s, plus round-off) or a full Newton correction is; a column that does
 //! not get there within the iteration limit fails the step (docs/numerics.md).
 //!
@@ -190,6 +192,14 @@ pub struct MultilayerViscousStep<L: BasalFriction + LocalFriction> {
     bed_impulse: f64,
     /// The Newton direction (trial − current).
     direction: Vec<f64>,
+    /// Implicit step only (else empty), per interface of the column: the stress
+    /// variable σ̂ (over density), and at the last linearisation the shear γᵏ, the
+    /// stress σ(γᵏ), the coupling coefficient used and the bound μ p.
+    dual: Vec<f64>,
+    dual_shear: Vec<f64>,
+    dual_stress: Vec<f64>,
+    dual_coef: Vec<f64>,
+    dual_cap: Vec<f64>,
     stats: ImplicitStats,
 }
 
@@ -264,6 +274,11 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             resid: implicit(vec![0.0; n]),
             bed_impulse: 0.0,
             direction: implicit(vec![0.0; n]),
+            dual: implicit(vec![0.0; n]),
+            dual_shear: implicit(vec![0.0; n]),
+            dual_stress: implicit(vec![0.0; n]),
+            dual_coef: implicit(vec![0.0; n]),
+            dual_cap: implicit(vec![0.0; n]),
             stats: ImplicitStats::default(),
         }
     }
@@ -824,6 +839,19 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         g
     }
 
+    /// The stress variable σ̂ after a step to `velocity` from the linearisation of
+    /// the last `solve_single`: σ̂ = σ(γᵏ) + t (γ − γᵏ) (t the coupling coefficient
+    /// of that solve: the tangent for Newton, ν for Picard), within ±μ p.
+    fn update_dual(&mut self, h: f64) {
+        let n = self.layers;
+        let inv_h = 1.0 / h;
+        for a in 1..n {
+            let shear = (self.velocity[a] - self.velocity[a - 1]) * inv_h * self.inv_gap[a];
+            let s = self.dual_stress[a] + self.dual_coef[a] * (shear - self.dual_shear[a]);
+            self.dual[a] = s.clamp(-self.dual_cap[a], self.dual_cap[a]);
+        }
+    }
+
     /// `velocity` = current + λ direction.
     fn set_along(&mut self, lambda: f64) {
         for ((u, c), d) in self
@@ -878,11 +906,40 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             trial,
             tangent,
             frozen,
+            dual,
+            dual_shear,
+            dual_stress,
+            dual_coef,
+            dual_cap,
             side,
             inv_gap,
             opts,
             ..
         } = self;
+        let delta = match opts.regularization {
+            Regularization::Delta { delta } if !opts.c_msm => Some(delta),
+            _ => None,
+        };
+        for a in 1..n {
+            let shear = (u[a] - u[a - 1]) * inv_h * inv_gap[a];
+            let nu = frozen[base + a];
+            let mut t = if newton { tangent[a] } else { nu };
+            let stress = nu * shear;
+            let mut cap = f64::INFINITY;
+            if let Some(delta) = delta {
+                let r2 = shear * shear + 4.0 * delta * delta;
+                cap = nu * r2.sqrt();
+                if newton {
+                    // Primal-dual tangent: −γ σ(γ)/R² of dσ/dγ with σ̂ for σ(γ).
+                    t = (t + shear * (stress - dual[a]) / r2).max(0.0);
+                    tangent[a] = t;
+                }
+            }
+            dual_shear[a] = shear;
+            dual_stress[a] = stress;
+            dual_coef[a] = t;
+            dual_cap[a] = cap;
+        }
         let coef = |a: usize| {
             if newton {
                 tangent[a]
@@ -964,6 +1021,13 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             let (hs, l) = (&state.h, &state.l);
             let (mut worst, mut ok, mut norm) =
                 self.evaluate(mesh, dt, hs, l, q_star, i, tolerance);
+            if !ok {
+                // The stress variable starts at σ(γ) of the first iterate.
+                for a in 1..n {
+                    let shear = (self.velocity[a] - self.velocity[a - 1]) * inv_h * self.inv_gap[a];
+                    self.dual[a] = self.frozen[base + a] * shear;
+                }
+            }
             let mut solves = 1;
             let mut newton = true;
             while !ok {
@@ -1040,6 +1104,9 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
                     }
                 }
                 let _ = norm;
+                if accepted {
+                    self.update_dual(h);
+                }
                 if !accepted {
                     // Picard from the last iterate: re-freeze there, solve with ν.
                     self.velocity.copy_from_slice(&self.current);
@@ -1049,6 +1116,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
                     (worst, ok, norm) = self.evaluate(mesh, dt, hs, l, q_star, i, tolerance);
                     self.stats.picard_steps += 1;
                     newton = true;
+                    self.update_dual(h);
                 }
                 solves += 1;
             }
