@@ -48,8 +48,6 @@ pub struct NhViscousStep<L: BasalFriction + LocalFriction> {
     lagged: bool,
     /// h u_α after the last viscous solve (ghosts included); empty before the first.
     viscous_hu: Vec<f64>,
-    /// The state at tⁿ with `viscous_hu` for h u_α: what `lagged` freezes from.
-    lagged_state: Option<LayeredState>,
 }
 
 impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
@@ -71,7 +69,6 @@ impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
             impulse: vec![0.0; (mesh.nx + 1) * layers],
             lagged: false,
             viscous_hu: Vec::new(),
-            lagged_state: None,
         }
     }
 
@@ -113,13 +110,8 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for NhViscousStep<L> 
         }
         // tⁿ with the discharges of the last viscous solve: h is that of tⁿ (the
         // projection moves no mass) and so is pⁿ (the total pressures of eq. 10).
-        let lagged = self.lagged_state.get_or_insert_with(|| state.clone());
-        lagged.h.copy_from_slice(&state.h);
-        lagged.hu.copy_from_slice(&self.viscous_hu);
-        if let (Some(to), Some(from)) = (&mut lagged.nh, &state.nh) {
-            to.p.copy_from_slice(&from.p);
-        }
-        self.viscous.prepare(mesh, lagged);
+        self.viscous
+            .prepare_with_discharges(mesh, state, &self.viscous_hu);
     }
 
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {

@@ -353,14 +353,42 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         (nu + shear * shear / s * dnu).max(0.0)
     }
 
-    /// Freezes the coefficients of one wet cell `i` at the state t^n.
-    fn freeze_cell(&mut self, mesh: &Mesh, state: &LayeredState, i: usize) {
+    /// Freezes the coefficients of one wet cell `i` at the state t^n, with the layer
+    /// discharges `hu` (those of `state`, or of the last viscous solve for the
+    /// non-hydrostatic model's lagged freezing).
+    fn freeze_cell(&mut self, mesh: &Mesh, state: &LayeredState, hu: &[f64], i: usize) {
         let n = self.layers;
         let inv_h = 1.0 / state.h[i];
-        for (u, q) in self.velocity.iter_mut().zip(&state.hu[i * n..(i + 1) * n]) {
+        for (u, q) in self.velocity.iter_mut().zip(&hu[i * n..(i + 1) * n]) {
             *u = q * inv_h;
         }
-        self.freeze_loaded(mesh, &state.h, &state.l, &state.hu, i);
+        self.freeze_loaded(mesh, &state.h, &state.l, hu, i);
+    }
+
+    /// [`Stage::prepare`] with the discharges `hu` in place of `state.hu` (h, the layer
+    /// fractions and p^nh are those of `state`): the lagged freezing of
+    /// [`crate::numerics::nh_multilayer::NhViscousStep`].
+    pub fn prepare_with_discharges(&mut self, mesh: &Mesh, state: &LayeredState, hu: &[f64]) {
+        debug_assert_eq!(state.layers, self.layers);
+        debug_assert_eq!(hu.len(), state.hu.len());
+        let n = self.layers;
+        if let Some(nh) = &state.nh {
+            // p^nh at t^n at the cell centres: the mean of the two faces.
+            self.p_nh.resize((mesh.nx + 2) * n, 0.0);
+            for i in 1..=mesh.nx {
+                for a in 0..n {
+                    self.p_nh[i * n + a] = 0.5 * (nh.p[(i - 1) * n + a] + nh.p[i * n + a]);
+                }
+            }
+        }
+        for i in 1..=mesh.nx {
+            if state.h[i] > H_DRY {
+                self.freeze_cell(mesh, state, hu, i);
+            } else {
+                // Dry at t^n: frozen when step 1 has wetted it (see `apply`).
+                self.frozen[i * n] = f64::NAN;
+            }
+        }
     }
 
     /// Computes the coefficients of cell `i` (thicknesses `hs`, layer fractions `l`)
@@ -633,25 +661,7 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
     }
 
     fn prepare(&mut self, mesh: &Mesh, state: &LayeredState) {
-        debug_assert_eq!(state.layers, self.layers);
-        let n = self.layers;
-        if let Some(nh) = &state.nh {
-            // p^nh at t^n at the cell centres: the mean of the two faces.
-            self.p_nh.resize((mesh.nx + 2) * n, 0.0);
-            for i in 1..=mesh.nx {
-                for a in 0..n {
-                    self.p_nh[i * n + a] = 0.5 * (nh.p[(i - 1) * n + a] + nh.p[i * n + a]);
-                }
-            }
-        }
-        for i in 1..=mesh.nx {
-            if state.h[i] > H_DRY {
-                self.freeze_cell(mesh, state, i);
-            } else {
-                // Dry at t^n: frozen when step 1 has wetted it (see `apply`).
-                self.frozen[i * n] = f64::NAN;
-            }
-        }
+        self.prepare_with_discharges(mesh, state, &state.hu);
     }
 
     fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
@@ -690,7 +700,7 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscous
             }
             if self.frozen[i * n].is_nan() {
                 // Dry at t^n, wetted by step 1: its coefficients come from this state.
-                self.freeze_cell(mesh, state, i);
+                self.freeze_cell(mesh, state, &state.hu, i);
             }
             cells[count] = i;
             impulses[count] = self.impulse(i, h, g_n, dt);
