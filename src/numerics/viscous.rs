@@ -619,39 +619,59 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             }
         }
 
-        // Eliminate from the top down, to one equation for the bottom layer. The
-        // reduced diagonal of layer a is e_a + c_a, with e_{a−1} = d_{a−1} + c_a e_a/(e_a + c_a):
-        // written so, no coupling is subtracted from another, and a rigid column
-        // (couplings ≫ l_a h, e.g. δ → 0 at rest) keeps its mass e ≈ Σ l h to round-off.
-        // d[a] then holds 1/(e_a + c_a) for the back-substitution.
-        for a in (1..n).rev() {
-            let (lower, upper) = d.split_at_mut(a);
-            let (r_lower, r_upper) = r.split_at_mut(a);
-            let (d_a, d_below) = (&mut upper[0], &mut lower[a - 1]);
-            let (r_a, r_below) = (&r_upper[0], &mut r_lower[a - 1]);
-            for k in 0..LANES {
-                let inv = 1.0 / (d_a[k] + c[a][k]);
-                let m = c[a][k] * inv;
-                d_below[k] += m * d_a[k];
-                r_below[k] += m * r_a[k];
-                d_a[k] = inv;
-            }
-        }
-        let mut u_below: [f64; LANES] = std::array::from_fn(|k| match self.opts.basal {
-            BasalCondition::Coulomb => coulomb_update(r[0][k], impulses[k]) / d[0][k],
-            BasalCondition::NoSlip => r[0][k] / d[0][k],
-        });
-        for k in 0..count {
-            state.hu[base[k]] = h[k] * u_below[k];
-        }
-        for a in 1..n {
-            for k in 0..LANES {
-                u_below[k] = (r[a][k] + c[a][k] * u_below[k]) * d[a][k];
-            }
+        let hu = &mut state.hu;
+        eliminate_column(c, d, r, self.opts.basal, impulses, |a, u| {
             for k in 0..count {
-                state.hu[base[k] + a] = h[k] * u_below[k];
+                hu[base[k] + a] = h[k] * u[k];
             }
+        });
+    }
+}
+
+/// Solves K column systems at once (lanes): couplings `c` (c[0] unused), diagonals `d`
+/// without the couplings and right-hand sides `r`, per layer, with the bed condition
+/// (`impulses`: the Coulomb threshold Δt σ of each column); `put(a, u)` receives the
+/// new velocities of layer a, bottom first. `d` and `r` are overwritten.
+///
+/// Eliminates from the top down, to one equation for the bottom layer. The reduced
+/// diagonal of layer a is e_a + c_a, with e_{a−1} = d_{a−1} + c_a e_a/(e_a + c_a):
+/// written so, no coupling is subtracted from another, and a rigid column (couplings
+/// ≫ l_a h, e.g. δ → 0 at rest) keeps its mass e ≈ Σ l h to round-off. d[a] then holds
+/// 1/(e_a + c_a) for the back-substitution. The bottom equation d u_1 = r − Δt σ s,
+/// s ∈ Sgn(u_1), is solved exactly ([`coulomb_update`]).
+#[inline(always)]
+fn eliminate_column<const K: usize>(
+    c: &[[f64; K]],
+    d: &mut [[f64; K]],
+    r: &mut [[f64; K]],
+    basal: BasalCondition,
+    impulses: [f64; K],
+    mut put: impl FnMut(usize, [f64; K]),
+) {
+    let n = d.len();
+    for a in (1..n).rev() {
+        let (lower, upper) = d.split_at_mut(a);
+        let (r_lower, r_upper) = r.split_at_mut(a);
+        let (d_a, d_below) = (&mut upper[0], &mut lower[a - 1]);
+        let (r_a, r_below) = (&r_upper[0], &mut r_lower[a - 1]);
+        for k in 0..K {
+            let inv = 1.0 / (d_a[k] + c[a][k]);
+            let m = c[a][k] * inv;
+            d_below[k] += m * d_a[k];
+            r_below[k] += m * r_a[k];
+            d_a[k] = inv;
         }
+    }
+    let mut u_below: [f64; K] = std::array::from_fn(|k| match basal {
+        BasalCondition::Coulomb => coulomb_update(r[0][k], impulses[k]) / d[0][k],
+        BasalCondition::NoSlip => r[0][k] / d[0][k],
+    });
+    put(0, u_below);
+    for a in 1..n {
+        for k in 0..K {
+            u_below[k] = (r[a][k] + c[a][k] * u_below[k]) * d[a][k];
+        }
+        put(a, u_below);
     }
 }
 
@@ -984,22 +1004,14 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
                 r[0] -= dt * (frozen[base] - tangent[0]) * shear;
             }
         }
-        for a in (1..n).rev() {
-            let inv = 1.0 / (d[a] + c[a]);
-            let m = c[a] * inv;
-            d[a - 1] += m * d[a];
-            r[a - 1] += m * r[a];
-            d[a] = inv;
-        }
-        let mut below = match opts.basal {
-            BasalCondition::Coulomb => coulomb_update(r[0], impulse) / d[0],
-            BasalCondition::NoSlip => r[0] / d[0],
-        };
-        trial[0] = below;
-        for a in 1..n {
-            below = (r[a] + c[a] * below) * d[a];
-            trial[a] = below;
-        }
+        eliminate_column(
+            c.as_chunks::<1>().0,
+            d.as_chunks_mut::<1>().0,
+            r.as_chunks_mut::<1>().0,
+            opts.basal,
+            [impulse],
+            |a, u| trial[a] = u[0],
+        );
     }
 
     /// The iterations of the implicit step on every column (h ≥ [`THIN_LAYER`]), from
