@@ -166,7 +166,14 @@ impl BandedCholesky {
             ready(band, y, n);
         }
         debug_assert_eq!(k, n, "the assembly reported every column");
-        back_substitute(band, y, &mut x[active.clone()], p);
+        let xs = &mut x[active.clone()];
+        #[cfg(target_arch = "x86_64")]
+        if avx2 {
+            // SAFETY: the CPU supports AVX2 (checked in `new`).
+            unsafe { back_substitute_avx2(band, y, xs, p) };
+            return;
+        }
+        back_substitute::<[f64; 4]>(band, y, xs, p);
     }
 }
 
@@ -250,6 +257,11 @@ trait Lanes: Copy {
     /// # Safety
     /// See [`Lanes::load`].
     unsafe fn with_first(self, x: f64) -> Self;
+    /// The four lanes.
+    ///
+    /// # Safety
+    /// See [`Lanes::load`].
+    unsafe fn to_array(self) -> [f64; 4];
 }
 
 impl Lanes for [f64; 4] {
@@ -291,6 +303,10 @@ impl Lanes for [f64; 4] {
     unsafe fn with_first(self, x: f64) -> Self {
         [x, self[1], self[2], self[3]]
     }
+    #[inline(always)]
+    unsafe fn to_array(self) -> [f64; 4] {
+        self
+    }
 }
 
 /// An AVX vector of 4 f64 (the kernels written with intrinsics, so that the compiler
@@ -330,6 +346,10 @@ impl Lanes for Avx {
     unsafe fn with_first(self, x: f64) -> Self {
         use std::arch::x86_64::{_mm256_blend_pd, _mm256_set1_pd};
         Avx(_mm256_blend_pd::<1>(self.0, _mm256_set1_pd(x)))
+    }
+    #[inline(always)]
+    unsafe fn to_array(self) -> [f64; 4] {
+        std::mem::transmute::<std::arch::x86_64::__m256d, [f64; 4]>(self.0)
     }
 }
 
@@ -517,12 +537,17 @@ unsafe fn factor_to_avx2(band: &mut [f64], y: &mut [f64], p: usize, k: &mut usiz
 /// L[c+1][c] x_{c+1}) / L[c][c], subtracted in that order (r descending: the order
 /// in which the row-oriented version, y_c −= L[r][c] x_r for r = n − 1 … 0, reaches
 /// y_c, so the same bits). A column is contiguous, and only its last term waits for
-/// the previous unknown.
-fn back_substitute(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) {
+/// the previous unknown. With p ≥ 4, the columns with all p terms take the products
+/// of rows c + 5 … c + 4⌊p/4⌋ four at a time (one vector product, the four lanes then
+/// subtracted one by one, highest row first), and the last four terms from x_{c+1}
+/// … x_{c+4} kept in registers (just computed: a vector load of them would wait for
+/// their stores).
+#[inline(always)]
+fn back_substitute<V: Lanes>(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) {
     let n = y.len();
     let w = p + 1 + PADR;
     assert!(band.len() >= n * w && xs.len() == n);
-    for c in (0..n).rev() {
+    let scalar = |xs: &mut [f64], c: usize| {
         let len = p.min(n - 1 - c);
         let col = &band[c * w + 1..c * w + 1 + len];
         let mut s = y[c];
@@ -530,7 +555,92 @@ fn back_substitute(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) {
             s -= l * x;
         }
         xs[c] = s / band[c * w];
+    };
+    if p < 4 || n <= p + 4 {
+        for c in (0..n).rev() {
+            scalar(xs, c);
+        }
+        return;
     }
+    // The last p columns (fewer than p terms), then x_{n−1−p} … x_0 with p terms.
+    for c in (n - p..n).rev() {
+        scalar(xs, c);
+    }
+    // SAFETY: columns < n − p from offset 0 to p, x_{c} … x_{c+p} with c + p < n,
+    // y_c: within the band, xs and y (asserted above).
+    unsafe {
+        macro_rules! chunks {
+            ($($f:literal)*) => {
+                match p / 4 {
+                    $($f => back_columns::<V, $f>(band.as_ptr(), y.as_ptr(), xs.as_mut_ptr(), w, p, n),)*
+                    _ => back_columns::<V, 0>(band.as_ptr(), y.as_ptr(), xs.as_mut_ptr(), w, p, n),
+                }
+            };
+        }
+        chunks!(1 2 3 4 5 6 7 8 9 10 11 12);
+    }
+}
+
+/// The columns c = n − 1 − p … 0 of [`back_substitute`] (all p terms), with `F` = p/4
+/// chunks (0: any p ≥ 4, read at run time).
+///
+/// # Safety
+/// As [`back_substitute`]: n > p + 4, p ≥ 4, x_{n−p} … x_{n−1} computed.
+#[inline(always)]
+unsafe fn back_columns<V: Lanes, const F: usize>(
+    bp: *const f64,
+    yp: *const f64,
+    xp: *mut f64,
+    w: usize,
+    p: usize,
+    n: usize,
+) {
+    let chunks = if F == 0 { p / 4 } else { F };
+    let c = n - 1 - p;
+    let (mut x1, mut x2, mut x3, mut x4) = (
+        *xp.add(c + 1),
+        *xp.add(c + 2),
+        *xp.add(c + 3),
+        *xp.add(c + 4),
+    );
+    let mut col = bp.add(c * w);
+    let mut xc = xp.add(c);
+    let mut yc = yp.add(c);
+    for _ in 0..n - p {
+        let mut s = *yc;
+        for q in (4 * chunks + 1..=p).rev() {
+            s -= *col.add(q) * *xc.add(q);
+        }
+        for m in (1..chunks).rev() {
+            let v = V::load(col.add(4 * m + 1)).mul(V::load(xc.add(4 * m + 1)));
+            let v = v.to_array();
+            s -= v[3];
+            s -= v[2];
+            s -= v[1];
+            s -= v[0];
+        }
+        s -= *col.add(4) * x4;
+        s -= *col.add(3) * x3;
+        s -= *col.add(2) * x2;
+        s -= *col.add(1) * x1;
+        let x = s / *col;
+        *xc = x;
+        (x4, x3, x2, x1) = (x3, x2, x1, x);
+        col = col.wrapping_sub(w);
+        xc = xc.wrapping_sub(1);
+        yc = yc.wrapping_sub(1);
+    }
+}
+
+/// [`back_substitute`] with AVX vectors (the products are the same IEEE operations,
+/// so the same bits).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn back_substitute_avx2(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) {
+    back_substitute::<Avx>(band, y, xs, p)
 }
 
 /// Whether the AVX2 kernel can run here.
