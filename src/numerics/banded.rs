@@ -774,19 +774,161 @@ mod tests {
         assert_eq!(a, b);
     }
 
-    /// The AVX2 build of the kernel gives the bits of the portable one.
+    /// `spd_system` with the faces `dry` made identity rows (x = 0 there, no coupling
+    /// to them), as the projection writes dry faces.
+    fn with_dry(sys: &mut StoredStencil, dense: &mut [Vec<f64>], m: usize, dry: &[usize]) {
+        let n = dense.len();
+        for &f in dry {
+            for k in f * m..(f + 1) * m {
+                for i in 0..n {
+                    dense[k][i] = 0.0;
+                    dense[i][k] = 0.0;
+                }
+                dense[k][k] = 1.0;
+                sys.rows[k] = StencilRow::IDENTITY;
+            }
+        }
+        // Rows next to a dry face lose their couplings to it.
+        for k in 0..n {
+            let (f, j) = ((k / m) as isize, (k % m) as isize);
+            for df in -1..=1isize {
+                for dj in -1..=1isize {
+                    let (g, i) = (f + df, j + dj);
+                    if g >= 0 && (g as usize) < n / m && i >= 0 && (i as usize) < m {
+                        let col = g as usize * m + i as usize;
+                        sys.rows[k].coef[(df + 1) as usize][(dj + 1) as usize] = dense[k][col];
+                    }
+                }
+            }
+        }
+    }
+
+    /// The textbook algorithm on the dense matrix, one pivot at a time (right-looking:
+    /// each entry loses L[i][k] L[j][k] for k increasing, over the band only), the
+    /// forward substitution by columns and the backward one by rows, r descending.
+    fn textbook_solve(dense: &[Vec<f64>], rhs: &[f64], p: usize) -> Vec<f64> {
+        let n = dense.len();
+        let mut a = dense.to_vec();
+        let mut y = rhs.to_vec();
+        for k in 0..n {
+            let last = (k + p).min(n - 1);
+            let d = a[k][k].sqrt();
+            let inv = 1.0 / d;
+            a[k][k] = d;
+            for i in k + 1..=last {
+                a[i][k] *= inv;
+            }
+            y[k] *= inv;
+            for i in k + 1..=last {
+                y[i] -= a[i][k] * y[k];
+            }
+            for j in k + 1..=last {
+                for i in j..=last {
+                    a[i][j] -= a[i][k] * a[j][k];
+                }
+            }
+        }
+        let mut x = vec![0.0; n];
+        for c in (0..n).rev() {
+            let mut s = y[c];
+            for r in (c + 1..=(c + p).min(n - 1)).rev() {
+                s -= a[r][c] * x[r];
+            }
+            x[c] = s / a[c][c];
+        }
+        x
+    }
+
+    /// Rows that hand the band to the solver in pieces (`ready` every `every`
+    /// columns), as the projection's assembly does.
+    struct Pieces<'a>(&'a StoredStencil, usize);
+
+    impl PressureRows for Pieces<'_> {
+        type Row = StencilRow;
+        fn active(&self) -> Range<usize> {
+            self.0.active()
+        }
+        fn row(&self, k: usize) -> StencilRow {
+            self.0.row(k)
+        }
+        fn assemble_band(
+            &self,
+            band: &mut [f64],
+            rhs: &mut [f64],
+            p: usize,
+            stride: usize,
+            ready: &mut crate::numerics::linalg::BandReady,
+        ) -> bool {
+            assemble_rows(self.0, band, rhs, p, stride);
+            let n = self.0.active().len();
+            let mut c = 0;
+            while c < n {
+                c = (c + self.1).min(n);
+                ready(band, rhs, c);
+            }
+            true
+        }
+    }
+
+    /// The AVX2 build of the kernel gives the bits of the portable one, and both the
+    /// bits of the textbook algorithm (so of the earlier kernels), whether the band
+    /// is handed over at once or in pieces, with and without dry faces, for block
+    /// sizes on either side of the chunk boundaries and past the register kernel
+    /// (N = 48: the column in memory).
     #[test]
     fn avx2_kernel_gives_the_same_bits() {
-        let (sys, _) = spd_system(30, 20, 11);
-        let n = 600;
-        let mut plain = BandedCholesky::new(20, 30);
-        plain.avx2 = false;
-        let mut fast = BandedCholesky::new(20, 30);
-        let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
-        plain.solve_rows(&sys, &mut a);
-        fast.solve_rows(&sys, &mut b);
-        println!("AVX2 available: {}", fast.avx2);
-        assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+        for (m, faces) in [
+            (1, 40),
+            (2, 30),
+            (3, 30),
+            (4, 20),
+            (5, 20),
+            (7, 16),
+            (8, 16),
+            (20, 30),
+            (23, 10),
+            (33, 10),
+            (48, 8),
+        ] {
+            for dry in [&[][..], &[0, 3, 4, faces - 1][..]] {
+                let (mut sys, mut dense) = spd_system(faces, m, 11 + m as u64);
+                with_dry(&mut sys, &mut dense, m, dry);
+                let n = faces * m;
+                let rhs: Vec<f64> = sys.rows.iter().map(|r| r.rhs).collect();
+                let reference = textbook_solve(&dense, &rhs, m + 1);
+                for every in [n, 7, 1] {
+                    let mut plain = BandedCholesky::new(m, faces);
+                    plain.avx2 = false;
+                    let mut fast = BandedCholesky::new(m, faces);
+                    let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+                    plain.solve_rows(&Pieces(&sys, every), &mut a);
+                    fast.solve_rows(&Pieces(&sys, every), &mut b);
+                    let same = |u: &[f64]| {
+                        u.iter()
+                            .zip(&reference)
+                            .all(|(x, y)| x.to_bits() == y.to_bits())
+                    };
+                    assert!(
+                        same(&a),
+                        "portable, N = {m}, dry {dry:?}, pieces of {every}"
+                    );
+                    assert!(
+                        same(&b),
+                        "AVX2 {}, N = {m}, dry {dry:?}, pieces of {every}",
+                        fast.avx2
+                    );
+                    assert!(a.iter().all(|v| v.is_finite()));
+                }
+                // The whole band at once (`assemble_rows`).
+                let mut x = vec![0.0; n];
+                BandedCholesky::new(m, faces).solve_rows(&sys, &mut x);
+                assert!(x
+                    .iter()
+                    .zip(&reference)
+                    .all(|(x, y)| x.to_bits() == y.to_bits()));
+            }
+        }
+        println!("AVX2 available: {}", avx2());
     }
 
     #[test]
