@@ -96,8 +96,8 @@ pub fn stencil_residual<R: PressureRows<Row = StencilRow>>(
 pub struct BandedCholesky {
     block: usize,
     /// Band of L by columns: column c (relative to the active start) holds
-    /// L[c ..= c + p][c] at `band[c w ..]`, the diagonal first, then PADR zeros
-    /// (w = p + 1 + PADR, [`band_index`]).
+    /// L[c ..= c + p][c] at `band[c w ..]`, the diagonal first, then zeros
+    /// (w = stride(p), [`band_index`]).
     band: Vec<f64>,
     /// Forward-substituted right-hand side.
     y: Vec<f64>,
@@ -111,7 +111,7 @@ impl BandedCholesky {
         let p = block + 1;
         BandedCholesky {
             block,
-            band: vec![0.0; faces * block * (p + 1 + PADR)],
+            band: vec![0.0; faces * block * stride(p)],
             y: vec![0.0; faces * block],
             avx2: avx2(),
         }
@@ -133,7 +133,7 @@ impl BandedCholesky {
         let m = self.block;
         assert!(m >= 1, "block size");
         let p = m + 1;
-        let w = p + 1 + PADR;
+        let w = stride(p);
         let active = rows.active();
         x[..active.start].fill(0.0);
         x[active.end..].fill(0.0);
@@ -214,11 +214,16 @@ pub fn assemble_rows<R: PressureRows<Row = StencilRow>>(
     }
 }
 
-/// Zeros stored after each column's band (w = p + 1 + PADR): a column is updated and
-/// stored in whole 4-wide chunks, rows 0 ..= p + 3 of it at most, and a source run
-/// read in whole chunks reaches row p + 3 of its column at most, so 3 suffice. The
-/// zeros read as sources only subtract exact zeros ([`factor_to`]).
-const PADR: usize = 3;
+/// Values stored per column of the band for half-bandwidth p: the p + 1 entries, the
+/// diagonal first, then zeros, w = 4 CH + 3 for CH = ⌊(p + 4)/4⌋ chunks (p + 4 ≤ w
+/// ≤ p + 7). A column is updated and stored in whole 4-wide chunks, rows 0 ..= p + 3
+/// of it at most, and a source run read in whole chunks reaches row p + 3 of its
+/// column at most; the zeros read as sources only subtract exact zeros
+/// ([`factor_to`]). Fixing w by CH (not p) makes every offset of the register kernels
+/// a constant ([`column_in_registers`]).
+fn stride(p: usize) -> usize {
+    4 * ((p + 4) / 4) + 3
+}
 
 /// Largest number of 4-wide chunks per column (p + 1 ≤ 4 · MAXCH: N ≤ 47) for which
 /// a column is kept in registers ([`column_in_registers`]); wider bands take the
@@ -353,8 +358,8 @@ impl Lanes for Avx {
     }
 }
 
-/// In-place Cholesky factorisation of the lower band `band` (n columns of w = p + 1 +
-/// PADR: the band, the diagonal first, then zeros) and forward substitution of `y`,
+/// In-place Cholesky factorisation of the lower band `band` (n columns of w = [`stride`]
+/// (p): the band, the diagonal first, then zeros) and forward substitution of `y`,
 /// left-looking column by column, from column `*k` up to the final columns 0 ..
 /// `ready`; `*k` becomes `ready` ([`BandedCholesky::solve_rows`]).
 ///
@@ -378,7 +383,7 @@ impl Lanes for Avx {
 #[inline(always)]
 fn factor_to<V: Lanes>(band: &mut [f64], y: &mut [f64], p: usize, k: &mut usize, ready: usize) {
     let n = y.len();
-    let w = p + 1 + PADR;
+    let w = stride(p);
     assert!(band.len() >= n * w && ready <= n && *k <= ready);
     let bp = band.as_mut_ptr();
     let yp = y.as_mut_ptr();
@@ -439,7 +444,7 @@ unsafe fn apply<V: Lanes, const G: usize>(
 /// the scaling ([`factor_to`]).
 ///
 /// # Safety
-/// As [`factor_to`]: columns j − p ..= j valid, w = p + 1 + PADR, j ≥ p.
+/// As [`factor_to`]: columns j − p ..= j valid, w = stride(p), j ≥ p.
 #[inline(always)]
 unsafe fn column_in_registers<V: Lanes, const CH: usize>(
     bp: *mut f64,
@@ -449,7 +454,8 @@ unsafe fn column_in_registers<V: Lanes, const CH: usize>(
     j: usize,
 ) {
     let col = bp.add(j * w);
-    let step = w - 1; // from L[j][k] to L[j][k + 1]
+    debug_assert_eq!(w, 4 * CH + 3);
+    let step = 4 * CH + 2; // from L[j][k] to L[j][k + 1]: w − 1, a constant
     let mut acc = [V::splat(0.0); MAXCH];
     for m in 0..CH {
         acc[m] = V::load(col.add(4 * m));
@@ -494,7 +500,7 @@ unsafe fn column_in_registers<V: Lanes, const CH: usize>(
 /// operations in the same order).
 ///
 /// # Safety
-/// As [`factor_to`]: columns j − min(p, j) ..= j valid, w = p + 1 + PADR.
+/// As [`factor_to`]: columns j − min(p, j) ..= j valid, w = stride(p).
 #[inline(always)]
 unsafe fn column_in_memory<V: Lanes>(bp: *mut f64, yp: *mut f64, w: usize, p: usize, j: usize) {
     let col = bp.add(j * w);
@@ -545,7 +551,7 @@ unsafe fn factor_to_avx2(band: &mut [f64], y: &mut [f64], p: usize, k: &mut usiz
 #[inline(always)]
 fn back_substitute<V: Lanes>(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) {
     let n = y.len();
-    let w = p + 1 + PADR;
+    let w = stride(p);
     assert!(band.len() >= n * w && xs.len() == n);
     let scalar = |xs: &mut [f64], c: usize| {
         let len = p.min(n - 1 - c);
@@ -596,6 +602,8 @@ unsafe fn back_columns<V: Lanes, const F: usize>(
     n: usize,
 ) {
     let chunks = if F == 0 { p / 4 } else { F };
+    // w = 4 (p/4) + 7 ([`stride`]), a constant for F > 0.
+    let w = if F == 0 { w } else { 4 * F + 7 };
     let c = n - 1 - p;
     let (mut x1, mut x2, mut x3, mut x4) = (
         *xp.add(c + 1),
