@@ -13,20 +13,25 @@
 //!
 //! [`BandedCholesky`] assembles the lower band by columns (the operator writes it cell
 //! by cell, [`PressureRows::assemble_band`]; other row sources row by row) and
-//! factorises it in place, right-looking by panels of 4 columns (`factor_to`), a
-//! panel as soon as the assembly has finished the columns it touches (so the band is
-//! factorised while it is in cache, not in a second pass through it):
-//! each column of a panel takes its earlier columns' updates and is scaled, then
-//! each of the next p columns takes the panel's rank-4 update in one pass. Every
-//! update is an axpy on a contiguous run of a column (no reductions, so the work
-//! pipelines), padded to whole 4-wide chunks, written with AVX intrinsics in the
-//! AVX2 build (chosen at run time) and as scalar lanes in the portable one; every
-//! entry sees the operations of the one-pivot-at-a-time algorithm in the same
-//! order, so both builds, and the unblocked algorithm, give the same bits. The
-//! forward substitution rides the factorisation sweep; the backward one goes by
-//! columns in the order of the row-oriented version. Storage is the band of L
-//! (n (p + 8) values), allocated once for the largest system; a step allocates
-//! nothing.
+//! factorises it in place, left-looking column by column (`factor_to`), each column
+//! as soon as the assembly has finished it (so the band is factorised while it is in
+//! cache, not in a second pass through it). Column j is loaded into ⌈(p + 1)/4⌉ AVX
+//! registers, takes the updates of its p pivots k = j − p … j − 1 in that order (a
+//! broadcast of L[j][k] times a run of column k, on the chunks that column reaches),
+//! then the square root, 1/d and the scaling, and is stored once: about 2 vector
+//! instructions per 4 multiply-adds, every address a constant offset (the column
+//! stride depends only on the chunk count). The forward substitution rides the same
+//! pivots (y_j −= L[j][k] y_k). Every entry of L and y gets the real products of the
+//! one-pivot-at-a-time algorithm in the same order, plus some exact zeros that cannot
+//! change a value (no entry is ever −0; `factor_to` gives the argument), so the
+//! factor is bit for bit that of the textbook algorithm (and of the earlier
+//! right-looking panel kernel); the tests compare the bits at N = 1 … 48 with dry
+//! faces. The backward substitution goes by columns in the order of the
+//! row-oriented version, the products four at a time. The kernels are written once
+//! over 4-lane vectors, as AVX intrinsics in the AVX2 build (chosen at run time)
+//! and as plain arrays in the portable one: the same IEEE operations (no fused
+//! multiply-add), so the same bits. Storage is the band of L (n (p + 4 … p + 7)
+//! values), allocated once for the largest system; a step allocates nothing.
 //!
 //! Measured alternatives (benches/nh_multilayer_solver.rs, numbers in
 //! docs/performance.md): a block-Thomas (block Cholesky) elimination with dense N×N
@@ -422,6 +427,7 @@ fn factor_to<V: Lanes>(band: &mut [f64], y: &mut [f64], p: usize, k: &mut usize,
 ///
 /// # Safety
 /// The rows read lie in the band, `yk` in y ([`factor_to`]).
+#[allow(clippy::needless_range_loop)] // chunk m at offset 4m, in registers
 #[inline(always)]
 unsafe fn apply<V: Lanes, const G: usize>(
     acc: &mut [V; MAXCH],
@@ -445,6 +451,7 @@ unsafe fn apply<V: Lanes, const G: usize>(
 ///
 /// # Safety
 /// As [`factor_to`]: columns j − p ..= j valid, w = stride(p), j ≥ p.
+#[allow(clippy::needless_range_loop)] // chunk m at offset 4m, in registers
 #[inline(always)]
 unsafe fn column_in_registers<V: Lanes, const CH: usize>(
     bp: *mut f64,
