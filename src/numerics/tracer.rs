@@ -44,8 +44,6 @@ pub struct TracerTransport {
     /// c = q/h per tracer, cell and layer (with ghosts), before the step.
     concentration: Vec<Vec<f64>>,
     flux: Vec<f64>,
-    /// N > 1: Δt G_{α+1/2} of one cell, α = 0..=N (bed and surface 0).
-    exchange: Vec<f64>,
 }
 
 impl TracerTransport {
@@ -80,9 +78,47 @@ impl TracerTransport {
         n: usize,
         tracers: &mut [Tracer],
     ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2.
+            unsafe { self.after_step_avx2(mass_flux, layers, h, r, n, tracers) };
+            return;
+        }
+        self.after_step_portable(mass_flux, layers, h, r, n, tracers);
+    }
+
+    /// [`after_step`](Self::after_step) compiled for AVX2: the same operations in the
+    /// same order (no fused multiply-add: Rust does not contract a·b + c), the same
+    /// bits.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn after_step_avx2(
+        &mut self,
+        mass_flux: &[f64],
+        layers: Option<(&[f64], &[f64])>,
+        h: &[f64],
+        r: f64,
+        n: usize,
+        tracers: &mut [Tracer],
+    ) {
+        self.after_step_portable(mass_flux, layers, h, r, n, tracers)
+    }
+
+    #[inline(always)]
+    fn after_step_portable(
+        &mut self,
+        mass_flux: &[f64],
+        layers: Option<(&[f64], &[f64])>,
+        h: &[f64],
+        r: f64,
+        n: usize,
+        tracers: &mut [Tracer],
+    ) {
         let nx = mass_flux.len() - 1;
         self.flux.resize(mass_flux.len() * n, 0.0);
-        self.exchange.resize(n + 1, 0.0);
         for (c, tracer) in self.concentration.iter().zip(tracers.iter_mut()) {
             match layers {
                 None => {
@@ -95,10 +131,13 @@ impl TracerTransport {
                 }
                 Some((departure, _)) => {
                     for (k, &f) in mass_flux.iter().enumerate() {
+                        // Slices of length n: a select per layer, no bounds checks.
+                        let (cl, cr) = (&c[k * n..][..n], &c[(k + 1) * n..][..n]);
+                        let d = &departure[k * n..][..n];
+                        let flux = &mut self.flux[k * n..][..n];
                         for a in 0..n {
-                            let fa = f + departure[k * n + a];
-                            let donor = if fa > 0.0 { k } else { k + 1 };
-                            self.flux[k * n + a] = fa * c[donor * n + a];
+                            let fa = f + d[a];
+                            flux[a] = fa * if fa > 0.0 { cl[a] } else { cr[a] };
                         }
                     }
                 }
@@ -106,43 +145,29 @@ impl TracerTransport {
             for (i, &hi) in h.iter().enumerate().take(nx + 1).skip(1) {
                 let wet = hi > H_DRY;
                 if let (Some((departure, l)), true) = (layers, wet) {
-                    // Δt G_{α+1/2} from the layers' flux departures (running sum).
-                    let (right, left) = (
-                        &departure[i * n..(i + 1) * n],
-                        &departure[(i - 1) * n..i * n],
-                    );
-                    let exchange = &mut self.exchange[..=n];
-                    let mut g = 0.0;
-                    exchange[0] = 0.0;
-                    for (((e, &la), &dr), &dl) in
-                        exchange[1..n].iter_mut().zip(l).zip(right).zip(left)
-                    {
-                        g += r * la * (dr - dl);
-                        *e = g;
-                    }
-                    exchange[n] = 0.0;
-                    let conc = &c[i * n..(i + 1) * n];
-                    // Upwind concentration at the interface above layer a (a + 1/2).
-                    let at = |a: usize, g: f64| -> f64 {
-                        if a == 0 || a == n {
-                            0.0
-                        } else if g > 0.0 {
-                            conc[a]
-                        } else {
-                            conc[a - 1]
-                        }
-                    };
                     // Slices of equal length: one bounds check each, not one per layer.
-                    let (fr, fl) = (
-                        &self.flux[i * n..(i + 1) * n],
-                        &self.flux[(i - 1) * n..i * n],
-                    );
-                    let qs = &mut tracer.q[i * n..(i + 1) * n];
+                    let (right, left) = (&departure[i * n..][..n], &departure[(i - 1) * n..][..n]);
+                    let conc = &c[i * n..][..n];
+                    let (fr, fl) = (&self.flux[i * n..][..n], &self.flux[(i - 1) * n..][..n]);
+                    let qs = &mut tracer.q[i * n..][..n];
                     let l = &l[..n];
+                    // Δt G_{α+1/2} from the layers' flux departures (running sum g),
+                    // and t = c_{α+1/2} Δt G_{α+1/2} with the upwind concentration at
+                    // the interface above layer α; the bed's and the surface's t are
+                    // 0 (G = 0 there). Layer α takes (t_{α+1/2} − t_{α−1/2})/l_α: each
+                    // t is formed once, for the layers below and above it.
+                    let mut g = 0.0;
+                    let mut below = 0.0;
                     for a in 0..n {
-                        let (below, above) = (exchange[a], exchange[a + 1]);
-                        let vertical = (at(a + 1, above) * above - at(a, below) * below) / l[a];
+                        let above = if a + 1 < n {
+                            g += r * l[a] * (right[a] - left[a]);
+                            (if g > 0.0 { conc[a + 1] } else { conc[a] }) * g
+                        } else {
+                            0.0
+                        };
+                        let vertical = (above - below) / l[a];
                         qs[a] += vertical - r * (fr[a] - fl[a]);
+                        below = above;
                     }
                     continue;
                 }

@@ -162,6 +162,27 @@ impl MultilayerOperator {
     /// the last update (steps 2 and 3 of a time step share an operator,
     /// [`SharedOperator`], and h does not change in between).
     pub fn update(&mut self, mesh: &Mesh, state: &LayeredState) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2.
+            unsafe { self.update_avx2(mesh, state) };
+            return;
+        }
+        self.update_portable(mesh, state);
+    }
+
+    /// [`update`](Self::update) compiled for AVX2 (the same operations, the same bits).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn update_avx2(&mut self, mesh: &Mesh, state: &LayeredState) {
+        self.update_portable(mesh, state)
+    }
+
+    #[inline(always)]
+    fn update_portable(&mut self, mesh: &Mesh, state: &LayeredState) {
         let (nx, n) = (self.nx, self.layers);
         debug_assert_eq!(state.layers, n);
         let h = &state.h[..];
