@@ -226,6 +226,31 @@ impl MultilayerOperator {
             let (hl, hr) = (face_depth(h[c - 1], hc), face_depth(hc, h[c + 1]));
             let db = 0.25 * (self.two_b[c + 1] - self.two_b[c - 1]) * inv_dx;
             let (dhl, dhr) = ((hc - hl) * inv_dx, (hr - hc) * inv_dx);
+            if wl && wr {
+                // Both faces wet (the common case): the terms below without branches,
+                // the top of layer N (the free surface) last.
+                let half_db = 0.5 * db;
+                for a in 0..n {
+                    let (lb, lt) = (level[a], level[a + 1]);
+                    let la = l[a];
+                    let (cl, cr) = (0.5 * la * hl * inv_dx, -0.5 * la * hr * inv_dx);
+                    coef[a] = LayerCoefficients {
+                        u: [
+                            cl - half_db - lb * dhl,
+                            cl + half_db + lt * dhl,
+                            cr - half_db - lb * dhr,
+                            cr + half_db + lt * dhr,
+                        ],
+                        w: [0.5, -0.5, 0.5, -0.5],
+                    };
+                }
+                let top = &mut coef[n - 1];
+                top.u[LEFT + 1] = 0.0;
+                top.u[RIGHT + 1] = 0.0;
+                top.w[LEFT + 1] = 0.0;
+                top.w[RIGHT + 1] = 0.0;
+                continue;
+            }
             for a in 0..n {
                 let top = a + 1 < n;
                 let (lb, lt) = (level[a], level[a + 1]);
