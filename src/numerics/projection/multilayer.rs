@@ -680,12 +680,18 @@ impl MultilayerRows<'_> {
                 }
             };
             let (at_a, at_b) = (cell(f), cell(f + 1));
-            if a_real && next {
-                // The common case: both cells, both faces wet. Two passes over the
-                // layers (few live values each, no spills): cell f's terms, then cell
-                // f + 1's added after them, each entry's terms still in the order of
-                // (cell, layer). A layer's terms for column j + 1 (where it is layer
-                // j − 1) are carried to the next iteration.
+            // Coefficients of t_w are ±½ at every wet face except those of an edge
+            // cell merged with its outflow face (`update`).
+            let plain = !(op.merged_left && f == 1 || op.merged_right && f + 1 == nx);
+            if a_real && next && plain {
+                // The common case: both cells, both faces wet, t_w = (½, −½, ½, −½) on
+                // the entries used (the top of layer N has 0 at 1 and 3; those terms
+                // are not used). Then t_w[s1] t_w[s2] = ±¼ and t_w[s] w = ±(½ w)
+                // exactly, so they are taken as constants: the same values, the same
+                // sums. Two passes over the layers (few live values each): cell f's
+                // terms, then cell f + 1's added after them, each entry's terms still
+                // in the order of (cell, layer). A layer's terms for column j + 1
+                // (where it is layer j − 1) are carried to the next iteration.
                 let (ka, kb) = (&op.coef[f * n..][..n], &op.coef[(f + 1) * n..][..n]);
                 let (ma, mb) = (&op.inv_m[f * n..][..n], &op.inv_m[(f + 1) * n..][..n]);
                 let (hua, hwa) = (&self.hu[f * n..][..n], &self.hw[f * n..][..n]);
@@ -694,6 +700,10 @@ impl MultilayerRows<'_> {
                 let r = &mut r[..n];
                 assert!(cols.len() == n * w);
                 let at = cols.as_mut_ptr();
+                debug_assert!(ka
+                    .iter()
+                    .all(|k| k.w[2] == 0.5 && (k.w[3] == -0.5 || k.w[3] == 0.0)));
+                debug_assert!(kb.iter().all(|k| k.w[0] == 0.5 && k.w[2] == 0.5));
                 // SAFETY: column j is cols[j·w .. j·w + w] and the entries written are
                 // at offsets ≤ n + 1 < w (asserted above), so every pointer below is
                 // inside `cols`, and nothing else refers to it meanwhile.
@@ -704,11 +714,10 @@ impl MultilayerRows<'_> {
                     let (mut a33, mut ac3) = (0.0, 0.0);
                     for j in 0..n {
                         let [_, _, u2, u3] = ka[j].u;
-                        let [_, _, w2, w3] = ka[j].w;
                         let m = ma[j];
-                        let (u, v) = (hua[j] * ia, hwa[j] * ia);
-                        let a22 = (u2 * u2 + w2 * w2) * m;
-                        let ac2 = u2 * u + w2 * v;
+                        let (u, hv) = (hua[j] * ia, 0.5 * (hwa[j] * ia));
+                        let a22 = (u2 * u2 + 0.25) * m;
+                        let ac2 = u2 * u + hv;
                         if j == 0 {
                             *col(0, 0) = a22;
                             r[0] = 0.0 - ac2;
@@ -717,22 +726,21 @@ impl MultilayerRows<'_> {
                             r[j] = 0.0 - ac3 - ac2;
                         }
                         if j + 1 < n {
-                            *col(j, 1) = (u3 * u2 + w3 * w2) * m;
+                            *col(j, 1) = (u3 * u2 - 0.25) * m;
                         }
-                        a33 = (u3 * u3 + w3 * w3) * m;
-                        ac3 = u3 * u + w3 * v;
+                        a33 = (u3 * u3 + 0.25) * m;
+                        ac3 = u3 * u - hv;
                     }
                     // Cell f + 1: (1, 1), (2, 1), (3, 1) of layer j − 1 and (0, 0),
                     // (1, 0), (2, 0), (3, 0) of layer j.
                     let (mut b11, mut b21, mut b31, mut bc1) = (0.0, 0.0, 0.0, 0.0);
                     for j in 0..n {
                         let [u0, u1, u2, u3] = kb[j].u;
-                        let [w0, w1, w2, w3] = kb[j].w;
                         let m = mb[j];
-                        let (u, v) = (hub[j] * ib, hwb[j] * ib);
-                        let b00 = (u0 * u0 + w0 * w0) * m;
-                        let b20 = (u2 * u0 + w2 * w0) * m;
-                        let bc0 = u0 * u + w0 * v;
+                        let (u, hv) = (hub[j] * ib, 0.5 * (hwb[j] * ib));
+                        let b00 = (u0 * u0 + 0.25) * m;
+                        let b20 = (u2 * u0 + 0.25) * m;
+                        let bc0 = u0 * u + hv;
                         if j == 0 {
                             *col(0, 0) += b00;
                             *col(0, n) = b20;
@@ -744,13 +752,13 @@ impl MultilayerRows<'_> {
                             r[j] = r[j] - bc1 - bc0;
                         }
                         if j + 1 < n {
-                            *col(j, 1) += (u1 * u0 + w1 * w0) * m;
-                            *col(j, n + 1) = (u3 * u0 + w3 * w0) * m;
+                            *col(j, 1) += (u1 * u0 - 0.25) * m;
+                            *col(j, n + 1) = (u3 * u0 - 0.25) * m;
                         }
-                        b11 = (u1 * u1 + w1 * w1) * m;
-                        b21 = (u2 * u1 + w2 * w1) * m;
-                        b31 = (u3 * u1 + w3 * w1) * m;
-                        bc1 = u1 * u + w1 * v;
+                        b11 = (u1 * u1 + 0.25) * m;
+                        b21 = (u2 * u1 - 0.25) * m;
+                        b31 = (u3 * u1 + 0.25) * m;
+                        bc1 = u1 * u - hv;
                     }
                 }
                 continue;
