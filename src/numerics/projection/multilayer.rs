@@ -387,11 +387,27 @@ impl MultilayerOperator {
             let (left, right) = (&pi[(c - 1) * n..][..n], &pi[c * n..][..n]);
             let coef = &self.coef[c * n..][..n];
             let (hu, hw) = (&mut hu[c * n..][..n], &mut hw[c * n..][..n]);
-            for a in 0..n - 1 {
-                let k = &coef[a];
-                let p = [left[a], left[a + 1], right[a], right[a + 1]];
-                hu[a] += dot(&k.u, p) * inv_l[a];
-                hw[a] += dot(&k.w, p) * inv_l[a];
+            // Both faces wet, not a merged edge cell: t_w = (½, −½, ½, −½) below the
+            // top layer (as in the assembly), the same products with constants.
+            let plain = self.wet[c - 1]
+                && self.wet[c]
+                && !(self.merged_left && c == 1 || self.merged_right && c == nx);
+            if plain {
+                let tw = [0.5, -0.5, 0.5, -0.5];
+                for a in 0..n - 1 {
+                    let k = &coef[a];
+                    debug_assert_eq!(k.w, tw);
+                    let p = [left[a], left[a + 1], right[a], right[a + 1]];
+                    hu[a] += dot(&k.u, p) * inv_l[a];
+                    hw[a] += dot(&tw, p) * inv_l[a];
+                }
+            } else {
+                for a in 0..n - 1 {
+                    let k = &coef[a];
+                    let p = [left[a], left[a + 1], right[a], right[a + 1]];
+                    hu[a] += dot(&k.u, p) * inv_l[a];
+                    hw[a] += dot(&k.w, p) * inv_l[a];
+                }
             }
             let a = n - 1;
             let k = &coef[a];
@@ -1213,6 +1229,52 @@ mod tests {
                         assert_eq!(bits(&rhs), bits(&rhs_cells), "N = {layers}");
                     }
                 }
+            }
+        }
+    }
+
+    /// `apply_impulses` gives the bits of its plain form (778d9cc: every layer's
+    /// four coefficients read, Σ of the four products in order, times 1/l_α), near
+    /// dry faces and at every boundary too.
+    #[test]
+    fn impulses_have_the_bits_of_the_plain_sum() {
+        for layers in [1, 2, 3, 20] {
+            for (left, right) in BOUNDARIES {
+                let (state, op) = operator_with_a_dry_cell(layers, left, right, true);
+                let n = layers;
+                let faces = op.nx + 1;
+                let pi: Vec<f64> = (0..faces * n)
+                    .map(|k| {
+                        let wet = op.wet[k / n]
+                            || (op.merged_left && k / n == 0)
+                            || (op.merged_right && k / n == op.nx);
+                        if wet {
+                            (0.37 * k as f64).sin() - 0.1
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect();
+                let mut a = state.clone();
+                op.apply_impulses(&mut a, &pi);
+                let mut b = state.clone();
+                let (c0, c1) = (op.span.start.max(1), op.span.end.min(op.nx));
+                for c in c0..=c1 {
+                    for j in 0..n {
+                        let k = &op.coef[c * n + j];
+                        let top = |f: usize| if j + 1 < n { pi[f * n + j + 1] } else { 0.0 };
+                        let p = [pi[(c - 1) * n + j], top(c - 1), pi[c * n + j], top(c)];
+                        let du: f64 = k.u.iter().zip(&p).map(|(c, p)| c * p).sum();
+                        let dw: f64 = k.w.iter().zip(&p).map(|(c, p)| c * p).sum();
+                        let inv_l = 1.0 / op.l[j];
+                        b.hu[c * n + j] += du * inv_l;
+                        b.hw_mut()[c * n + j] += dw * inv_l;
+                    }
+                }
+                let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&a.hu), bits(&b.hu), "N = {layers}");
+                assert_eq!(bits(a.hw()), bits(b.hw()), "N = {layers}");
+                assert!(a.hu != state.hu);
             }
         }
     }
