@@ -523,6 +523,53 @@ impl CellLayer<'_> {
     }
 }
 
+/// The terms of layer j of cell f in the columns of face f (its right face), in the
+/// common case t_w = (½, −½, ½, −½): e(2, 2), e(3, 2), e(3, 3) (e(s1, s2) = (t_u[s1]
+/// t_u[s2] + t_w[s1] t_w[s2]) m) and c(2), c(3) (c(s) = t_u[s] u + t_w[s] w), for the
+/// coefficients `k`, m = 1/(l_α h), the discharges and 1/h.
+#[inline(always)]
+fn left_cell_terms(
+    k: &LayerCoefficients,
+    m: f64,
+    hu: f64,
+    hw: f64,
+    inv_h: f64,
+) -> (f64, f64, f64, f64, f64) {
+    let [_, _, u2, u3] = k.u;
+    let (u, hv) = (hu * inv_h, 0.5 * (hw * inv_h));
+    let a22 = (u2 * u2 + 0.25) * m;
+    let a32 = (u3 * u2 - 0.25) * m;
+    let a33 = (u3 * u3 + 0.25) * m;
+    (a22, a32, a33, u2 * u + hv, u3 * u - hv)
+}
+
+/// The terms of layer j of cell f + 1 in the columns of face f (its left face), as
+/// [`left_cell_terms`]: e(0, 0), e(1, 0), e(2, 0), e(3, 0) for column j; e(1, 1),
+/// e(2, 1), e(3, 1) for column j + 1; c(0), c(1).
+#[inline(always)]
+fn right_cell_terms(
+    k: &LayerCoefficients,
+    m: f64,
+    hu: f64,
+    hw: f64,
+    inv_h: f64,
+) -> ([f64; 4], [f64; 3], (f64, f64)) {
+    let [u0, u1, u2, u3] = k.u;
+    let (u, hv) = (hu * inv_h, 0.5 * (hw * inv_h));
+    let b00 = (u0 * u0 + 0.25) * m;
+    let b10 = (u1 * u0 - 0.25) * m;
+    let b20 = (u2 * u0 + 0.25) * m;
+    let b30 = (u3 * u0 - 0.25) * m;
+    let b11 = (u1 * u1 + 0.25) * m;
+    let b21 = (u2 * u1 - 0.25) * m;
+    let b31 = (u3 * u1 + 0.25) * m;
+    (
+        [b00, b10, b20, b30],
+        [b11, b21, b31],
+        (u0 * u + hv, u1 * u - hv),
+    )
+}
+
 /// The band's columns are zeroed in pieces of at most this many values (1920 bytes):
 /// glibc's `memset` switches to `rep stosb` from 2048 bytes, which costs more
 /// instructions (callgrind counts its iterations) than its vector loop.
@@ -725,56 +772,60 @@ impl MultilayerRows<'_> {
                 // inside `cols`, and nothing else refers to it meanwhile.
                 unsafe {
                     let col = |j: usize, d: usize| at.add(j * w + d);
+                    // Layer j of cell f: (2, 2), (3, 2), (3, 3) and c(2), c(3).
                     // Cell f: the diagonal (3, 3) of layer j − 1 and (2, 2) of layer j,
-                    // offset 1 (3, 2) of layer j; right-hand side.
-                    let (mut a33, mut ac3) = (0.0, 0.0);
-                    for j in 0..n {
-                        let [_, _, u2, u3] = ka[j].u;
-                        let m = ma[j];
-                        let (u, hv) = (hua[j] * ia, 0.5 * (hwa[j] * ia));
-                        let a22 = (u2 * u2 + 0.25) * m;
-                        let ac2 = u2 * u + hv;
-                        if j == 0 {
-                            *col(0, 0) = a22;
-                            r[0] = 0.0 - ac2;
-                        } else {
+                    // offset 1 (3, 2) of layer j; right-hand side. The first and the
+                    // last columns out of the loop (no branches in it).
+                    let (a22, a32, mut a33, ac2, mut ac3) =
+                        left_cell_terms(&ka[0], ma[0], hua[0], hwa[0], ia);
+                    *col(0, 0) = a22;
+                    r[0] = 0.0 - ac2;
+                    if n > 1 {
+                        *col(0, 1) = a32;
+                        for j in 1..n - 1 {
+                            let (a22, a32, a33_j, ac2, ac3_j) =
+                                left_cell_terms(&ka[j], ma[j], hua[j], hwa[j], ia);
                             *col(j, 0) = a33 + a22;
                             r[j] = 0.0 - ac3 - ac2;
+                            *col(j, 1) = a32;
+                            (a33, ac3) = (a33_j, ac3_j);
                         }
-                        if j + 1 < n {
-                            *col(j, 1) = (u3 * u2 - 0.25) * m;
-                        }
-                        a33 = (u3 * u3 + 0.25) * m;
-                        ac3 = u3 * u - hv;
+                        let j = n - 1;
+                        let (a22, _, _, ac2, _) =
+                            left_cell_terms(&ka[j], ma[j], hua[j], hwa[j], ia);
+                        *col(j, 0) = a33 + a22;
+                        r[j] = 0.0 - ac3 - ac2;
                     }
-                    // Cell f + 1: (1, 1), (2, 1), (3, 1) of layer j − 1 and (0, 0),
-                    // (1, 0), (2, 0), (3, 0) of layer j.
-                    let (mut b11, mut b21, mut b31, mut bc1) = (0.0, 0.0, 0.0, 0.0);
-                    for j in 0..n {
-                        let [u0, u1, u2, u3] = kb[j].u;
-                        let m = mb[j];
-                        let (u, hv) = (hub[j] * ib, 0.5 * (hwb[j] * ib));
-                        let b00 = (u0 * u0 + 0.25) * m;
-                        let b20 = (u2 * u0 + 0.25) * m;
-                        let bc0 = u0 * u + hv;
-                        if j == 0 {
-                            *col(0, 0) += b00;
-                            *col(0, n) = b20;
-                            r[0] -= bc0;
-                        } else {
+                    // Layer j of cell f + 1: (0, 0), (1, 0), (2, 0), (3, 0), c(0) for
+                    // column j and (1, 1), (2, 1), (3, 1), c(1) for column j + 1.
+                    let ([b00, b10, b20, b30], mut b1, (bc0, mut bc1)) =
+                        right_cell_terms(&kb[0], mb[0], hub[0], hwb[0], ib);
+                    *col(0, 0) += b00;
+                    *col(0, n) = b20;
+                    r[0] -= bc0;
+                    if n > 1 {
+                        *col(0, 1) += b10;
+                        *col(0, n + 1) = b30;
+                        for j in 1..n - 1 {
+                            let ([b00, b10, b20, b30], b1_j, (bc0, bc1_j)) =
+                                right_cell_terms(&kb[j], mb[j], hub[j], hwb[j], ib);
+                            let [b11, b21, b31] = b1;
                             *col(j, 0) = *col(j, 0) + b11 + b00;
                             *col(j, n - 1) = b21;
                             *col(j, n) = b31 + b20;
                             r[j] = r[j] - bc1 - bc0;
+                            *col(j, 1) += b10;
+                            *col(j, n + 1) = b30;
+                            (b1, bc1) = (b1_j, bc1_j);
                         }
-                        if j + 1 < n {
-                            *col(j, 1) += (u1 * u0 - 0.25) * m;
-                            *col(j, n + 1) = (u3 * u0 - 0.25) * m;
-                        }
-                        b11 = (u1 * u1 + 0.25) * m;
-                        b21 = (u2 * u1 - 0.25) * m;
-                        b31 = (u3 * u1 + 0.25) * m;
-                        bc1 = u1 * u - hv;
+                        let j = n - 1;
+                        let ([b00, _, b20, _], _, (bc0, _)) =
+                            right_cell_terms(&kb[j], mb[j], hub[j], hwb[j], ib);
+                        let [b11, b21, b31] = b1;
+                        *col(j, 0) = *col(j, 0) + b11 + b00;
+                        *col(j, n - 1) = b21;
+                        *col(j, n) = b31 + b20;
+                        r[j] = r[j] - bc1 - bc0;
                     }
                 }
                 continue;
