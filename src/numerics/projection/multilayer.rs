@@ -1308,6 +1308,9 @@ mod tests {
                     .collect();
                 let mut a = state.clone();
                 op.apply_impulses(&mut a, &pi);
+                // The portable build (the AVX2 one above where the CPU has it).
+                let mut portable = state.clone();
+                op.apply_impulses_portable(&mut portable, &pi);
                 let mut b = state.clone();
                 let (c0, c1) = (op.span.start.max(1), op.span.end.min(op.nx));
                 for c in c0..=c1 {
@@ -1325,7 +1328,30 @@ mod tests {
                 let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&a.hu), bits(&b.hu), "N = {layers}");
                 assert_eq!(bits(a.hw()), bits(b.hw()), "N = {layers}");
+                assert_eq!(bits(&portable.hu), bits(&b.hu), "N = {layers}");
+                assert_eq!(bits(portable.hw()), bits(b.hw()), "N = {layers}");
                 assert!(a.hu != state.hu);
+                // `update`'s two builds give the same coefficients.
+                let mesh_state = moving_state(60, layers, left, right, true);
+                let (mesh, mut s2) = mesh_state;
+                s2.h[40] = 1e-9;
+                s2.fill_ghosts(&mesh);
+                let (mut x, mut y) = (
+                    MultilayerOperator::new(&mesh, &s2.l),
+                    MultilayerOperator::new(&mesh, &s2.l),
+                );
+                x.update(&mesh, &s2);
+                y.update_portable(&mesh, &s2);
+                let coef_bits = |o: &MultilayerOperator| {
+                    o.coef
+                        .iter()
+                        .flat_map(|k| k.u.iter().chain(&k.w))
+                        .chain(&o.inv_m)
+                        .map(|v| v.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(coef_bits(&x), coef_bits(&y), "N = {layers}");
+                assert_eq!(x.wet, y.wet);
             }
         }
     }
