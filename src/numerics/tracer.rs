@@ -50,6 +50,27 @@ impl TracerTransport {
     /// Remembers the concentrations of `tracers` in the state (h, q) before step 1.
     /// The loop is branch-free (selects), so that it vectorises.
     pub fn before_step(&mut self, h: &[f64], layers: usize, tracers: &[Tracer]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2.
+            unsafe { self.before_step_avx2(h, layers, tracers) };
+            return;
+        }
+        self.before_step_portable(h, layers, tracers);
+    }
+
+    /// [`before_step`](Self::before_step) compiled for AVX2 (the same operations).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn before_step_avx2(&mut self, h: &[f64], layers: usize, tracers: &[Tracer]) {
+        self.before_step_portable(h, layers, tracers)
+    }
+
+    #[inline(always)]
+    fn before_step_portable(&mut self, h: &[f64], layers: usize, tracers: &[Tracer]) {
         self.concentration.resize_with(tracers.len(), Vec::new);
         for (c, tracer) in self.concentration.iter_mut().zip(tracers) {
             c.resize(tracer.q.len(), 0.0);
@@ -265,10 +286,11 @@ mod tests {
             let run = |portable: bool| {
                 let mut t = TracerTransport::default();
                 let mut tracers = vec![tracer.clone()];
-                t.before_step(&h, n, &tracers);
                 if portable {
+                    t.before_step_portable(&h, n, &tracers);
                     t.after_step_portable(&flux, layers, &h, 0.3, n, &mut tracers);
                 } else {
+                    t.before_step(&h, n, &tracers);
                     t.after_step(&flux, layers, &h, 0.3, n, &mut tracers);
                 }
                 tracers[0].q.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
