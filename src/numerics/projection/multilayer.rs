@@ -516,7 +516,7 @@ impl CellLayer<'_> {
         (self.k.u[s1] * self.k.u[s2] + self.k.w[s1] * self.k.w[s2]) * self.m
     }
 
-    /// Its part of 𝒞 at its unknown s: t_u[s] u_α + t_w[s] w_α.
+    /// Its part of 𝒞 at its unknown s: t_u,s u_α + t_w,s w_α.
     #[inline(always)]
     fn c(&self, s: usize) -> f64 {
         self.k.u[s] * self.u + self.k.w[s] * self.v
@@ -524,8 +524,8 @@ impl CellLayer<'_> {
 }
 
 /// The terms of layer j of cell f in the columns of face f (its right face), in the
-/// common case t_w = (½, −½, ½, −½): e(2, 2), e(3, 2), e(3, 3) (e(s1, s2) = (t_u[s1]
-/// t_u[s2] + t_w[s1] t_w[s2]) m) and c(2), c(3) (c(s) = t_u[s] u + t_w[s] w), for the
+/// common case t_w = (½, −½, ½, −½): e(2, 2), e(3, 2), e(3, 3) (e(s1, s2) = (t_u,s1
+/// t_u,s2 + t_w,s1 t_w,s2) m) and c(2), c(3) (c(s) = t_u,s u + t_w,s w), for the
 /// coefficients `k`, m = 1/(l_α h), the discharges and 1/h.
 #[inline(always)]
 fn left_cell_terms(
@@ -603,7 +603,7 @@ impl PressureRows for MultilayerRows<'_> {
     /// t_w of wet faces in it, so 0 + e = e).
     ///
     /// A face's columns are final once written, and are handed to `ready` every
-    /// [`READY_CELLS`] faces.
+    /// `READY_CELLS` faces.
     fn assemble_band(
         &self,
         band: &mut [f64],
