@@ -376,8 +376,11 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             // p^nh at t^n at the cell centres: the mean of the two faces.
             self.p_nh.resize((mesh.nx + 2) * n, 0.0);
             for i in 1..=mesh.nx {
-                for a in 0..n {
-                    self.p_nh[i * n + a] = 0.5 * (nh.p[(i - 1) * n + a] + nh.p[i * n + a]);
+                // Slices of length n: no bounds check per layer (the loop vectorises).
+                let (left, right) = (&nh.p[(i - 1) * n..][..n], &nh.p[i * n..][..n]);
+                let cell = &mut self.p_nh[i * n..][..n];
+                for ((p, &pl), &pr) in cell.iter_mut().zip(left).zip(right) {
+                    *p = 0.5 * (pl + pr);
                 }
             }
         }

@@ -75,7 +75,7 @@ use super::{PressureSolver, ProjectionOperator};
 use crate::mesh::BoundaryKind;
 use crate::mesh::Mesh;
 use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
-use crate::numerics::banded::{band_index, BandedCholesky, StencilRow};
+use crate::numerics::banded::{BandedCholesky, StencilRow};
 use crate::numerics::linalg::{BandReady, PressureRows};
 
 /// Coefficients of one layer of one cell: the impulses of its base (α − 1/2) and top
@@ -113,6 +113,11 @@ pub struct MultilayerOperator {
     nx: usize,
     /// The thickness of the last update (its coefficients depend on nothing else).
     h_last: Vec<f64>,
+    /// 1/(l_α h_i) per cell and layer (cell-major, as `coef`), for the cells of the
+    /// span at the last update: M⁻¹ of the system, computed once per step.
+    inv_m: Vec<f64>,
+    /// 1/l_α.
+    inv_l: Vec<f64>,
 }
 
 impl MultilayerOperator {
@@ -138,6 +143,8 @@ impl MultilayerOperator {
             span: 0..0,
             nx: mesh.nx,
             h_last: Vec::with_capacity(mesh.nx + 2),
+            inv_m: vec![0.0; (mesh.nx + 2) * n],
+            inv_l: l.iter().map(|&l| 1.0 / l).collect(),
         }
     }
 
@@ -155,6 +162,27 @@ impl MultilayerOperator {
     /// the last update (steps 2 and 3 of a time step share an operator,
     /// [`SharedOperator`], and h does not change in between).
     pub fn update(&mut self, mesh: &Mesh, state: &LayeredState) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2.
+            unsafe { self.update_avx2(mesh, state) };
+            return;
+        }
+        self.update_portable(mesh, state);
+    }
+
+    /// [`update`](Self::update) compiled for AVX2 (the same operations, the same bits).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn update_avx2(&mut self, mesh: &Mesh, state: &LayeredState) {
+        self.update_portable(mesh, state)
+    }
+
+    #[inline(always)]
+    fn update_portable(&mut self, mesh: &Mesh, state: &LayeredState) {
         let (nx, n) = (self.nx, self.layers);
         debug_assert_eq!(state.layers, n);
         let h = &state.h[..];
@@ -191,9 +219,38 @@ impl MultilayerOperator {
             let (wl, wr) = (self.wet[c - 1], self.wet[c]);
             let coef = &mut self.coef[c * n..(c + 1) * n];
             let hc = h[c];
+            let inv_h = 1.0 / hc;
+            for (m, &la) in self.inv_m[c * n..(c + 1) * n].iter_mut().zip(l) {
+                *m = inv_h / la;
+            }
             let (hl, hr) = (face_depth(h[c - 1], hc), face_depth(hc, h[c + 1]));
             let db = 0.25 * (self.two_b[c + 1] - self.two_b[c - 1]) * inv_dx;
             let (dhl, dhr) = ((hc - hl) * inv_dx, (hr - hc) * inv_dx);
+            if wl && wr {
+                // Both faces wet (the common case): the terms below without branches,
+                // the top of layer N (the free surface) last.
+                let half_db = 0.5 * db;
+                for a in 0..n {
+                    let (lb, lt) = (level[a], level[a + 1]);
+                    let la = l[a];
+                    let (cl, cr) = (0.5 * la * hl * inv_dx, -0.5 * la * hr * inv_dx);
+                    coef[a] = LayerCoefficients {
+                        u: [
+                            cl - half_db - lb * dhl,
+                            cl + half_db + lt * dhl,
+                            cr - half_db - lb * dhr,
+                            cr + half_db + lt * dhr,
+                        ],
+                        w: [0.5, -0.5, 0.5, -0.5],
+                    };
+                }
+                let top = &mut coef[n - 1];
+                top.u[LEFT + 1] = 0.0;
+                top.u[RIGHT + 1] = 0.0;
+                top.w[LEFT + 1] = 0.0;
+                top.w[RIGHT + 1] = 0.0;
+                continue;
+            }
             for a in 0..n {
                 let top = a + 1 < n;
                 let (lb, lt) = (level[a], level[a + 1]);
@@ -288,6 +345,28 @@ impl MultilayerOperator {
     /// Δt p̃) and for the explicit terms of step 2 (Π = Δt pⁿ). Faces without an
     /// unknown contribute nothing (their coefficients are 0).
     pub fn apply_impulses(&self, state: &mut LayeredState, pi: &[f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2.
+            unsafe { self.apply_impulses_avx2(state, pi) };
+            return;
+        }
+        self.apply_impulses_portable(state, pi);
+    }
+
+    /// [`apply_impulses`](Self::apply_impulses) compiled for AVX2 (the same operations
+    /// in the same order, no fused multiply-add: the same bits).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn apply_impulses_avx2(&self, state: &mut LayeredState, pi: &[f64]) {
+        self.apply_impulses_portable(state, pi)
+    }
+
+    #[inline(always)]
+    fn apply_impulses_portable(&self, state: &mut LayeredState, pi: &[f64]) {
         let (nx, n) = (self.nx, self.layers);
         if self.span.is_empty() {
             return;
@@ -299,22 +378,42 @@ impl MultilayerOperator {
             .expect("a non-hydrostatic state carries hw")
             .q;
         let (c0, c1) = (self.span.start.max(1), self.span.end.min(nx));
-        let l = &self.l[..n];
+        let inv_l = &self.inv_l[..n];
+        // δ = (k[0] Π_L,base + k[1] Π_L,top + k[2] Π_R,base + k[3] Π_R,top)/l_α, summed
+        // in that order (the top of layer N is the free surface: Π = 0 there).
+        let dot = |k: &[f64; 4], p: [f64; 4]| k[0] * p[0] + k[1] * p[1] + k[2] * p[2] + k[3] * p[3];
         for c in c0..=c1 {
-            let (left, right) = (&pi[(c - 1) * n..c * n], &pi[c * n..(c + 1) * n]);
             // The cell's slices, all of length n: no bounds check per layer.
-            let coef = &self.coef[c * n..(c + 1) * n];
-            let (hu, hw) = (&mut hu[c * n..(c + 1) * n], &mut hw[c * n..(c + 1) * n]);
-            for a in 0..n {
-                let k = &coef[a];
-                let top = |side: &[f64]| if a + 1 < n { side[a + 1] } else { 0.0 };
-                let p = [left[a], top(left), right[a], top(right)];
-                let du: f64 = k.u.iter().zip(&p).map(|(c, p)| c * p).sum();
-                let dw: f64 = k.w.iter().zip(&p).map(|(c, p)| c * p).sum();
-                let inv_l = 1.0 / l[a];
-                hu[a] += du * inv_l;
-                hw[a] += dw * inv_l;
+            let (left, right) = (&pi[(c - 1) * n..][..n], &pi[c * n..][..n]);
+            let coef = &self.coef[c * n..][..n];
+            let (hu, hw) = (&mut hu[c * n..][..n], &mut hw[c * n..][..n]);
+            // Both faces wet, not a merged edge cell: t_w = (½, −½, ½, −½) below the
+            // top layer (as in the assembly), the same products with constants.
+            let plain = self.wet[c - 1]
+                && self.wet[c]
+                && !(self.merged_left && c == 1 || self.merged_right && c == nx);
+            if plain {
+                let tw = [0.5, -0.5, 0.5, -0.5];
+                for a in 0..n - 1 {
+                    let k = &coef[a];
+                    debug_assert_eq!(k.w, tw);
+                    let p = [left[a], left[a + 1], right[a], right[a + 1]];
+                    hu[a] += dot(&k.u, p) * inv_l[a];
+                    hw[a] += dot(&tw, p) * inv_l[a];
+                }
+            } else {
+                for a in 0..n - 1 {
+                    let k = &coef[a];
+                    let p = [left[a], left[a + 1], right[a], right[a + 1]];
+                    hu[a] += dot(&k.u, p) * inv_l[a];
+                    hw[a] += dot(&k.w, p) * inv_l[a];
+                }
             }
+            let a = n - 1;
+            let k = &coef[a];
+            let p = [left[a], 0.0, right[a], 0.0];
+            hu[a] += dot(&k.u, p) * inv_l[a];
+            hw[a] += dot(&k.w, p) * inv_l[a];
         }
     }
 
@@ -400,20 +499,83 @@ impl MultilayerRows<'_> {
     }
 }
 
-/// Zeros the `n` columns of a face from column `c0` of the band (stride `w`), column
-/// by column (short fills); a face without unknowns gets identity rows (no cell adds
-/// to them).
-#[inline(always)]
-fn zero_face(band: &mut [f64], c0: usize, n: usize, w: usize, wet: bool) {
-    for col in band[c0 * w..(c0 + n) * w].chunks_exact_mut(w) {
-        col.fill(0.0);
-        if !wet {
-            col[0] = 1.0;
-        }
+/// One layer of one cell as the assembly reads it: its coefficients, 1/(l_α h_i) and
+/// its velocities u_α = (h u_α)/h, w_α = (h w_α)/h.
+#[derive(Clone, Copy)]
+struct CellLayer<'a> {
+    k: &'a LayerCoefficients,
+    m: f64,
+    u: f64,
+    v: f64,
+}
+
+impl CellLayer<'_> {
+    /// Entry (s1, s2) of its outer product (t_u t_uᵀ + t_w t_wᵀ)/(l_α h_i).
+    #[inline(always)]
+    fn e(&self, s1: usize, s2: usize) -> f64 {
+        (self.k.u[s1] * self.k.u[s2] + self.k.w[s1] * self.k.w[s2]) * self.m
+    }
+
+    /// Its part of 𝒞 at its unknown s: t_u,s u_α + t_w,s w_α.
+    #[inline(always)]
+    fn c(&self, s: usize) -> f64 {
+        self.k.u[s] * self.u + self.k.w[s] * self.v
     }
 }
 
-/// The assembly hands finished columns to the solver every this many cells (8 cells
+/// The terms of layer j of cell f in the columns of face f (its right face), in the
+/// common case t_w = (½, −½, ½, −½): e(2, 2), e(3, 2), e(3, 3) (e(s1, s2) = (t_u,s1
+/// t_u,s2 + t_w,s1 t_w,s2) m) and c(2), c(3) (c(s) = t_u,s u + t_w,s w), for the
+/// coefficients `k`, m = 1/(l_α h), the discharges and 1/h.
+#[inline(always)]
+fn left_cell_terms(
+    k: &LayerCoefficients,
+    m: f64,
+    hu: f64,
+    hw: f64,
+    inv_h: f64,
+) -> (f64, f64, f64, f64, f64) {
+    let [_, _, u2, u3] = k.u;
+    let (u, hv) = (hu * inv_h, 0.5 * (hw * inv_h));
+    let a22 = (u2 * u2 + 0.25) * m;
+    let a32 = (u3 * u2 - 0.25) * m;
+    let a33 = (u3 * u3 + 0.25) * m;
+    (a22, a32, a33, u2 * u + hv, u3 * u - hv)
+}
+
+/// The terms of layer j of cell f + 1 in the columns of face f (its left face), as
+/// [`left_cell_terms`]: e(0, 0), e(1, 0), e(2, 0), e(3, 0) for column j; e(1, 1),
+/// e(2, 1), e(3, 1) for column j + 1; c(0), c(1).
+#[inline(always)]
+fn right_cell_terms(
+    k: &LayerCoefficients,
+    m: f64,
+    hu: f64,
+    hw: f64,
+    inv_h: f64,
+) -> ([f64; 4], [f64; 3], (f64, f64)) {
+    let [u0, u1, u2, u3] = k.u;
+    let (u, hv) = (hu * inv_h, 0.5 * (hw * inv_h));
+    let b00 = (u0 * u0 + 0.25) * m;
+    let b10 = (u1 * u0 - 0.25) * m;
+    let b20 = (u2 * u0 + 0.25) * m;
+    let b30 = (u3 * u0 - 0.25) * m;
+    let b11 = (u1 * u1 + 0.25) * m;
+    let b21 = (u2 * u1 - 0.25) * m;
+    let b31 = (u3 * u1 + 0.25) * m;
+    (
+        [b00, b10, b20, b30],
+        [b11, b21, b31],
+        (u0 * u + hv, u1 * u - hv),
+    )
+}
+
+/// The band's columns are zeroed in pieces of at most this many values (1920 bytes):
+/// glibc's `memset` switches to `rep stosb` from 2048 bytes, which costs more
+/// instructions (callgrind counts its iterations) than its vector loop.
+const ZERO_PIECE: usize = 240;
+
+/// The assembly hands finished columns to the solver every this many faces (8 faces
 /// of 20 layers: 160 columns of the band, 37 KB, still in cache).
 const READY_CELLS: usize = 8;
 
@@ -424,14 +586,24 @@ impl PressureRows for MultilayerRows<'_> {
         self.op.active_unknowns()
     }
 
-    /// A = 𝒯ᵀ M⁻¹ 𝒯 assembled cell by cell and layer by layer: each (cell, layer)
-    /// adds (t_u t_uᵀ + t_w t_wᵀ)/(l_α h_i) on its four unknowns (base and top of the
-    /// layer at its two faces), and −(t_u u_α + t_w w_α) to their right-hand sides; the
-    /// same sums as [`row`](Self::row), about a fifth of its work. Faces of the span
-    /// without an unknown get identity rows.
+    /// A = 𝒯ᵀ M⁻¹ 𝒯 assembled face by face, each column of the band written once:
+    /// each (cell, layer) adds (t_u t_uᵀ + t_w t_wᵀ)/(l_α h_i) on its four unknowns
+    /// (base and top of the layer at its two faces), and −(t_u u_α + t_w w_α) to their
+    /// right-hand sides; the same sums as [`row`](Self::row), about a fifth of its work.
+    /// Faces of the span without an unknown get identity rows.
     ///
-    /// Face f's columns are final once cell f + 1 is added (cells f and f + 1 hold the
-    /// face), and are then handed to `ready`.
+    /// Column (f, j) (face f, interface j − 1/2) receives from the two cells that hold
+    /// face f (cell f, which has it on its right, and cell f + 1) and their layers j − 1
+    /// and j, at five places: the diagonal, the rows of interface j + 1/2 at face f
+    /// (offset 1) and of interfaces j − 1/2, j + 1/2 and j + 3/2 at face f + 1 (offsets
+    /// n − 1, n, n + 1); the other entries of the column are zero. Each entry is the
+    /// sum of its terms in the order of (cell, layer), the order in which a cell-by-cell
+    /// assembly adds them to a zeroed band, so the bits are those of that assembly
+    /// (a first term is never −0: it is a sum of squares, or has the product ±¼ of two
+    /// t_w of wet faces in it, so 0 + e = e).
+    ///
+    /// A face's columns are final once written, and are handed to `ready` every
+    /// `READY_CELLS` faces.
     fn assemble_band(
         &self,
         band: &mut [f64],
@@ -440,98 +612,12 @@ impl PressureRows for MultilayerRows<'_> {
         stride: usize,
         ready: &mut BandReady,
     ) -> bool {
-        let op = self.op;
-        let n = op.layers;
-        debug_assert_eq!(p, n + 1);
-        let w = stride; // column c of the band from c·w, the diagonal first
-        let active = op.active_unknowns();
-        let (s, len) = (active.start, active.len());
-        rhs[..len].fill(0.0);
-        if len == 0 {
-            return true;
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2.
+            return unsafe { self.assemble_band_avx2(band, rhs, p, stride, ready) };
         }
-        // The columns of a face are zeroed just before its first contribution (then
-        // they are in cache when the cells add to them), column by column (short
-        // fills, not one pass over the whole band first).
-        let mut zeroed = op.span.start; // first face not zeroed yet
-        let (c0, c1) = (op.span.start.max(1), op.span.end.min(op.nx));
-        for c in c0..=c1 {
-            // Faces before c − 1 are final (cells c − 1 and earlier are added); handed
-            // on every READY_CELLS cells (a call costs a few hundred instructions).
-            if c % READY_CELLS == 0 && (c - 1) * n > s {
-                ready(band, rhs, ((c - 1) * n - s).min(len));
-            }
-            while zeroed <= c.min(op.span.end - 1) {
-                zero_face(band, zeroed * n - s, n, w, op.wet[zeroed]);
-                zeroed += 1;
-            }
-            let inv_h = 1.0 / self.h[c];
-            let (wl, wr) = (op.wet[c - 1], op.wet[c]);
-            for a in 0..n {
-                let k = &op.coef[c * n + a];
-                let inv_m = inv_h / op.l[a];
-                let (u, v) = (self.hu[c * n + a] * inv_h, self.hw[c * n + a] * inv_h);
-                let top = a + 1 < n;
-                if wl && wr && top {
-                    // The common case, unrolled: the four unknowns LB < LT < RB < RT
-                    // at distances 1, n − 1, n, n + 1.
-                    let (tu, tw) = (&k.u, &k.w);
-                    let e = |s1: usize, s2: usize| (tu[s1] * tu[s2] + tw[s1] * tw[s2]) * inv_m;
-                    let r0 = (c - 1) * n + a - s;
-                    // The four unknowns are active (both faces wet, a + 1 < n), so
-                    // r0 + n + 1 < len, and every offset below is ≤ p < w: one
-                    // check here instead of one per entry.
-                    assert!((r0 + n + 2) * w <= band.len() && r0 + n + 1 < rhs.len());
-                    let (r1, r2, r3) = (r0 + 1, r0 + n, r0 + n + 1);
-                    // SAFETY: indices bounded as asserted above.
-                    unsafe {
-                        for (si, r) in [r0, r1, r2, r3].into_iter().enumerate() {
-                            *rhs.get_unchecked_mut(r) -= tu[si] * u + tw[si] * v;
-                        }
-                        let mut add = |i: usize, v: f64| *band.get_unchecked_mut(i) += v;
-                        // Entry (r, c) at c·w + r − c.
-                        add(r0 * w, e(0, 0));
-                        add(r0 * w + 1, e(1, 0));
-                        add(r1 * w, e(1, 1));
-                        add(r0 * w + n, e(2, 0));
-                        add(r1 * w + n - 1, e(2, 1));
-                        add(r2 * w, e(2, 2));
-                        add(r0 * w + p, e(3, 0));
-                        add(r1 * w + n, e(3, 1));
-                        add(r2 * w + 1, e(3, 2));
-                        add(r3 * w, e(3, 3));
-                    }
-                    continue;
-                }
-                let idx = [
-                    (c - 1) * n + a,
-                    (c - 1) * n + a + 1,
-                    c * n + a,
-                    c * n + a + 1,
-                ];
-                let valid = [wl, wl && top, wr, wr && top];
-                for s1 in 0..4 {
-                    if !valid[s1] {
-                        continue;
-                    }
-                    let r = idx[s1] - s;
-                    rhs[r] -= k.u[s1] * u + k.w[s1] * v;
-                    for s2 in 0..4 {
-                        if !valid[s2] || idx[s2] > idx[s1] {
-                            continue;
-                        }
-                        let e = (k.u[s1] * k.u[s2] + k.w[s1] * k.w[s2]) * inv_m;
-                        band[band_index(r, idx[s2] - s, w)] += e;
-                    }
-                }
-            }
-        }
-        while zeroed < op.span.end {
-            zero_face(band, zeroed * n - s, n, w, op.wet[zeroed]);
-            zeroed += 1;
-        }
-        ready(band, rhs, len);
-        true
+        self.assemble_band_portable(band, rhs, p, stride, ready)
     }
 
     fn row(&self, k: usize) -> StencilRow {
@@ -575,6 +661,233 @@ impl PressureRows for MultilayerRows<'_> {
             }
         }
         row
+    }
+}
+
+impl MultilayerRows<'_> {
+    /// [`PressureRows::assemble_band`] compiled for AVX2 (three-operand instructions,
+    /// fewer register copies); the same operations in the same order (no fused
+    /// multiply-add: Rust does not contract a·b + c), so the same bits.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn assemble_band_avx2(
+        &self,
+        band: &mut [f64],
+        rhs: &mut [f64],
+        p: usize,
+        stride: usize,
+        ready: &mut BandReady,
+    ) -> bool {
+        self.assemble_band_portable(band, rhs, p, stride, ready)
+    }
+
+    /// The assembly ([`PressureRows::assemble_band`]), inlined into each build.
+    #[inline(always)]
+    fn assemble_band_portable(
+        &self,
+        band: &mut [f64],
+        rhs: &mut [f64],
+        p: usize,
+        stride: usize,
+        ready: &mut BandReady,
+    ) -> bool {
+        let op = self.op;
+        let (n, nx) = (op.layers, op.nx);
+        debug_assert_eq!(p, n + 1);
+        let w = stride; // column c of the band from c·w, the diagonal first
+        let active = op.active_unknowns();
+        let (s, len) = (active.start, active.len());
+        if len == 0 {
+            return true;
+        }
+        // Every entry of a column is among its first n + 2 = p + 1 ≤ w values.
+        assert!(band.len() >= len * w && rhs.len() >= len && n + 2 <= w);
+        for f in op.span.clone() {
+            // Faces before f are final: handed on every READY_CELLS faces (a call costs
+            // a few hundred instructions).
+            if f % READY_CELLS == 0 && f * n > s {
+                ready(band, rhs, f * n - s);
+            }
+            let c0 = f * n - s;
+            let cols = &mut band[c0 * w..(c0 + n) * w];
+            let r = &mut rhs[c0..c0 + n];
+            for piece in cols.chunks_mut(ZERO_PIECE) {
+                piece.fill(0.0);
+            }
+            if !op.wet[f] {
+                for col in cols.chunks_exact_mut(w) {
+                    col[0] = 1.0;
+                }
+                r.fill(0.0);
+                continue;
+            }
+            // Cells f and f + 1 hold face f; a ghost cell is not in 𝒯. `next`: face
+            // f + 1 carries unknowns (rows at offsets n − 1 ..= n + 1).
+            let (a_real, b_real) = (f >= 1, f < nx);
+            let next = b_real && op.wet[f + 1];
+            // Cell c's slices, all of length n.
+            let cell = |c: usize| {
+                let inv_h = 1.0 / self.h[c];
+                let k = &op.coef[c * n..(c + 1) * n];
+                let m = &op.inv_m[c * n..(c + 1) * n];
+                let hu = &self.hu[c * n..(c + 1) * n];
+                let hw = &self.hw[c * n..(c + 1) * n];
+                move |j: usize| CellLayer {
+                    k: &k[j],
+                    m: m[j],
+                    u: hu[j] * inv_h,
+                    v: hw[j] * inv_h,
+                }
+            };
+            let (at_a, at_b) = (cell(f), cell(f + 1));
+            // Coefficients of t_w are ±½ at every wet face except those of an edge
+            // cell merged with its outflow face (`update`).
+            let plain = !(op.merged_left && f == 1 || op.merged_right && f + 1 == nx);
+            if a_real && next && plain {
+                // The common case: both cells, both faces wet, t_w = (½, −½, ½, −½) on
+                // the entries used (the top of layer N has 0 at 1 and 3; those terms
+                // are not used). Then t_w[s1] t_w[s2] = ±¼ and t_w[s] w = ±(½ w)
+                // exactly, so they are taken as constants: the same values, the same
+                // sums. Two passes over the layers (few live values each): cell f's
+                // terms, then cell f + 1's added after them, each entry's terms still
+                // in the order of (cell, layer). A layer's terms for column j + 1
+                // (where it is layer j − 1) are carried to the next iteration.
+                let (ka, kb) = (&op.coef[f * n..][..n], &op.coef[(f + 1) * n..][..n]);
+                let (ma, mb) = (&op.inv_m[f * n..][..n], &op.inv_m[(f + 1) * n..][..n]);
+                let (hua, hwa) = (&self.hu[f * n..][..n], &self.hw[f * n..][..n]);
+                let (hub, hwb) = (&self.hu[(f + 1) * n..][..n], &self.hw[(f + 1) * n..][..n]);
+                let (ia, ib) = (1.0 / self.h[f], 1.0 / self.h[f + 1]);
+                let r = &mut r[..n];
+                assert!(cols.len() == n * w);
+                let at = cols.as_mut_ptr();
+                debug_assert!(ka
+                    .iter()
+                    .all(|k| k.w[2] == 0.5 && (k.w[3] == -0.5 || k.w[3] == 0.0)));
+                debug_assert!(kb.iter().all(|k| k.w[0] == 0.5 && k.w[2] == 0.5));
+                // SAFETY: column j is cols[j·w .. j·w + w] and the entries written are
+                // at offsets ≤ n + 1 < w (asserted above), so every pointer below is
+                // inside `cols`, and nothing else refers to it meanwhile.
+                unsafe {
+                    let col = |j: usize, d: usize| at.add(j * w + d);
+                    // Layer j of cell f: (2, 2), (3, 2), (3, 3) and c(2), c(3).
+                    // Cell f: the diagonal (3, 3) of layer j − 1 and (2, 2) of layer j,
+                    // offset 1 (3, 2) of layer j; right-hand side. The first and the
+                    // last columns out of the loop (no branches in it).
+                    let (a22, a32, mut a33, ac2, mut ac3) =
+                        left_cell_terms(&ka[0], ma[0], hua[0], hwa[0], ia);
+                    *col(0, 0) = a22;
+                    r[0] = 0.0 - ac2;
+                    if n > 1 {
+                        *col(0, 1) = a32;
+                        for j in 1..n - 1 {
+                            let (a22, a32, a33_j, ac2, ac3_j) =
+                                left_cell_terms(&ka[j], ma[j], hua[j], hwa[j], ia);
+                            *col(j, 0) = a33 + a22;
+                            r[j] = 0.0 - ac3 - ac2;
+                            *col(j, 1) = a32;
+                            (a33, ac3) = (a33_j, ac3_j);
+                        }
+                        let j = n - 1;
+                        let (a22, _, _, ac2, _) =
+                            left_cell_terms(&ka[j], ma[j], hua[j], hwa[j], ia);
+                        *col(j, 0) = a33 + a22;
+                        r[j] = 0.0 - ac3 - ac2;
+                    }
+                    // Layer j of cell f + 1: (0, 0), (1, 0), (2, 0), (3, 0), c(0) for
+                    // column j and (1, 1), (2, 1), (3, 1), c(1) for column j + 1.
+                    let ([b00, b10, b20, b30], mut b1, (bc0, mut bc1)) =
+                        right_cell_terms(&kb[0], mb[0], hub[0], hwb[0], ib);
+                    *col(0, 0) += b00;
+                    *col(0, n) = b20;
+                    r[0] -= bc0;
+                    if n > 1 {
+                        *col(0, 1) += b10;
+                        *col(0, n + 1) = b30;
+                        for j in 1..n - 1 {
+                            let ([b00, b10, b20, b30], b1_j, (bc0, bc1_j)) =
+                                right_cell_terms(&kb[j], mb[j], hub[j], hwb[j], ib);
+                            let [b11, b21, b31] = b1;
+                            *col(j, 0) = *col(j, 0) + b11 + b00;
+                            *col(j, n - 1) = b21;
+                            *col(j, n) = b31 + b20;
+                            r[j] = r[j] - bc1 - bc0;
+                            *col(j, 1) += b10;
+                            *col(j, n + 1) = b30;
+                            (b1, bc1) = (b1_j, bc1_j);
+                        }
+                        let j = n - 1;
+                        let ([b00, _, b20, _], _, (bc0, _)) =
+                            right_cell_terms(&kb[j], mb[j], hub[j], hwb[j], ib);
+                        let [b11, b21, b31] = b1;
+                        *col(j, 0) = *col(j, 0) + b11 + b00;
+                        *col(j, n - 1) = b21;
+                        *col(j, n) = b31 + b20;
+                        r[j] = r[j] - bc1 - bc0;
+                    }
+                }
+                continue;
+            }
+            // Near a dry face or the end of the domain: the same terms, those of absent
+            // cells and unknowns left out.
+            for (j, col) in cols.chunks_exact_mut(w).enumerate() {
+                let (first, top) = (j >= 1, j + 1 < n);
+                let (mut diag, mut d1, mut dn1, mut dn, mut dn2, mut rr) =
+                    (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+                if a_real {
+                    let aj = at_a(j);
+                    if first {
+                        let ap = at_a(j - 1);
+                        diag += ap.e(3, 3);
+                        rr -= ap.c(3);
+                    }
+                    diag += aj.e(2, 2);
+                    rr -= aj.c(2);
+                    if top {
+                        d1 += aj.e(3, 2);
+                    }
+                }
+                if b_real {
+                    let bj = at_b(j);
+                    if first {
+                        let bp = at_b(j - 1);
+                        diag += bp.e(1, 1);
+                        rr -= bp.c(1);
+                        if next {
+                            dn1 += bp.e(2, 1);
+                            dn += bp.e(3, 1);
+                        }
+                    }
+                    diag += bj.e(0, 0);
+                    rr -= bj.c(0);
+                    if top {
+                        d1 += bj.e(1, 0);
+                    }
+                    if next {
+                        dn += bj.e(2, 0);
+                        if top {
+                            dn2 += bj.e(3, 0);
+                        }
+                    }
+                }
+                // Offsets 1 and n − 1 coincide for N = 2, 1 and n for N = 1: write only
+                // the entries that exist.
+                col[0] = diag;
+                col[n] = dn;
+                if first {
+                    col[n - 1] = dn1;
+                }
+                if top {
+                    col[1] = d1;
+                    col[n + 1] = dn2;
+                }
+                r[j] = rr;
+            }
+        }
+        ready(band, rhs, len);
+        true
     }
 }
 
@@ -881,6 +1194,164 @@ mod tests {
                         "N = {layers}"
                     );
                 }
+            }
+        }
+    }
+
+    /// The assembly as it was before the face-by-face one (778d9cc): the band zeroed,
+    /// then each (cell, layer) adding its outer product to its four unknowns, cells
+    /// and layers in increasing order.
+    fn assemble_cell_by_cell(rows: &MultilayerRows, band: &mut [f64], rhs: &mut [f64], w: usize) {
+        let op = rows.op;
+        let n = op.layers;
+        let active = op.active_unknowns();
+        let (s, len) = (active.start, active.len());
+        band[..len * w].fill(0.0);
+        rhs[..len].fill(0.0);
+        for f in op.span.clone() {
+            if !op.wet[f] {
+                for j in 0..n {
+                    band[(f * n + j - s) * w] = 1.0;
+                }
+            }
+        }
+        let (c0, c1) = (op.span.start.max(1), op.span.end.min(op.nx));
+        for c in c0..=c1 {
+            let inv_h = 1.0 / rows.h[c];
+            let (wl, wr) = (op.wet[c - 1], op.wet[c]);
+            for a in 0..n {
+                let k = &op.coef[c * n + a];
+                let inv_m = inv_h / op.l[a];
+                let (u, v) = (rows.hu[c * n + a] * inv_h, rows.hw[c * n + a] * inv_h);
+                let top = a + 1 < n;
+                let idx = [
+                    (c - 1) * n + a,
+                    (c - 1) * n + a + 1,
+                    c * n + a,
+                    c * n + a + 1,
+                ];
+                let valid = [wl, wl && top, wr, wr && top];
+                for s1 in 0..4 {
+                    if !valid[s1] {
+                        continue;
+                    }
+                    let r = idx[s1] - s;
+                    rhs[r] -= k.u[s1] * u + k.w[s1] * v;
+                    for s2 in 0..=s1 {
+                        if valid[s2] {
+                            let e = (k.u[s1] * k.u[s2] + k.w[s1] * k.w[s2]) * inv_m;
+                            band[(idx[s2] - s) * w + idx[s1] - idx[s2]] += e;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// The face-by-face assembly gives the bits of the cell-by-cell one (each entry's
+    /// terms in the same order), near dry faces and at every boundary too, and its
+    /// AVX2 build the bits of its portable one.
+    #[test]
+    fn assembled_band_has_the_bits_of_the_cell_by_cell_assembly() {
+        for layers in [1, 2, 3, 5, 20] {
+            for (left, right) in BOUNDARIES {
+                for film in [false, true] {
+                    let (state, op) = operator_with_a_dry_cell(layers, left, right, film);
+                    let rows = op.rows(&state);
+                    let (p, w) = (layers + 1, layers + 8);
+                    let n = rows.active().len();
+                    let (mut band, mut rhs) = (vec![7.0; n * w], vec![7.0; n]);
+                    let (mut by_cells, mut rhs_cells) = (vec![7.0; n * w], vec![7.0; n]);
+                    assemble_cell_by_cell(&rows, &mut by_cells, &mut rhs_cells, w);
+                    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                    let mut none = |_: &mut [f64], _: &mut [f64], _: usize| {};
+                    assert!(rows.assemble_band_portable(&mut band, &mut rhs, p, w, &mut none));
+                    assert_eq!(bits(&band), bits(&by_cells), "N = {layers}");
+                    assert_eq!(bits(&rhs), bits(&rhs_cells), "N = {layers}");
+                    #[cfg(target_arch = "x86_64")]
+                    if std::arch::is_x86_feature_detected!("avx2") {
+                        band.fill(7.0);
+                        rhs.fill(7.0);
+                        // SAFETY: the CPU supports AVX2.
+                        assert!(unsafe {
+                            rows.assemble_band_avx2(&mut band, &mut rhs, p, w, &mut none)
+                        });
+                        assert_eq!(bits(&band), bits(&by_cells), "N = {layers}");
+                        assert_eq!(bits(&rhs), bits(&rhs_cells), "N = {layers}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// `apply_impulses` gives the bits of its plain form (778d9cc: every layer's
+    /// four coefficients read, Σ of the four products in order, times 1/l_α), near
+    /// dry faces and at every boundary too.
+    #[test]
+    fn impulses_have_the_bits_of_the_plain_sum() {
+        for layers in [1, 2, 3, 20] {
+            for (left, right) in BOUNDARIES {
+                let (state, op) = operator_with_a_dry_cell(layers, left, right, true);
+                let n = layers;
+                let faces = op.nx + 1;
+                let pi: Vec<f64> = (0..faces * n)
+                    .map(|k| {
+                        let wet = op.wet[k / n]
+                            || (op.merged_left && k / n == 0)
+                            || (op.merged_right && k / n == op.nx);
+                        if wet {
+                            (0.37 * k as f64).sin() - 0.1
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect();
+                let mut a = state.clone();
+                op.apply_impulses(&mut a, &pi);
+                // The portable build (the AVX2 one above where the CPU has it).
+                let mut portable = state.clone();
+                op.apply_impulses_portable(&mut portable, &pi);
+                let mut b = state.clone();
+                let (c0, c1) = (op.span.start.max(1), op.span.end.min(op.nx));
+                for c in c0..=c1 {
+                    for j in 0..n {
+                        let k = &op.coef[c * n + j];
+                        let top = |f: usize| if j + 1 < n { pi[f * n + j + 1] } else { 0.0 };
+                        let p = [pi[(c - 1) * n + j], top(c - 1), pi[c * n + j], top(c)];
+                        let du: f64 = k.u.iter().zip(&p).map(|(c, p)| c * p).sum();
+                        let dw: f64 = k.w.iter().zip(&p).map(|(c, p)| c * p).sum();
+                        let inv_l = 1.0 / op.l[j];
+                        b.hu[c * n + j] += du * inv_l;
+                        b.hw_mut()[c * n + j] += dw * inv_l;
+                    }
+                }
+                let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&a.hu), bits(&b.hu), "N = {layers}");
+                assert_eq!(bits(a.hw()), bits(b.hw()), "N = {layers}");
+                assert_eq!(bits(&portable.hu), bits(&b.hu), "N = {layers}");
+                assert_eq!(bits(portable.hw()), bits(b.hw()), "N = {layers}");
+                assert!(a.hu != state.hu);
+                // `update`'s two builds give the same coefficients.
+                let mesh_state = moving_state(60, layers, left, right, true);
+                let (mesh, mut s2) = mesh_state;
+                s2.h[40] = 1e-9;
+                s2.fill_ghosts(&mesh);
+                let (mut x, mut y) = (
+                    MultilayerOperator::new(&mesh, &s2.l),
+                    MultilayerOperator::new(&mesh, &s2.l),
+                );
+                x.update(&mesh, &s2);
+                y.update_portable(&mesh, &s2);
+                let coef_bits = |o: &MultilayerOperator| {
+                    o.coef
+                        .iter()
+                        .flat_map(|k| k.u.iter().chain(&k.w))
+                        .chain(&o.inv_m)
+                        .map(|v| v.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(coef_bits(&x), coef_bits(&y), "N = {layers}");
+                assert_eq!(x.wet, y.wet);
             }
         }
     }
