@@ -11,8 +11,8 @@
 //! n = (nx + 1) N unknowns: O(nx N³) with no iteration, against seed 003's block
 //! Gauss–Seidel with a tolerance.
 //!
-//! [`BandedCholesky`] assembles the lower band by columns (the operator writes it cell
-//! by cell, [`PressureRows::assemble_band`]; other row sources row by row) and
+//! [`BandedCholesky`] assembles the lower band by columns (the operator writes it face
+//! by face, [`PressureRows::assemble_band`]; other row sources row by row) and
 //! factorises it in place, left-looking column by column (`factor_to`), each column
 //! as soon as the assembly has finished it (so the band is factorised while it is in
 //! cache, not in a second pass through it). Column j is loaded into ⌈(p + 1)/4⌉ AVX
