@@ -306,41 +306,24 @@ pub(super) fn multilayer(
             ("implicit", Visc::Implicit),
         ],
     )?;
-    let viscosity = match visc {
-        Visc::Frozen | Visc::Lagged => {
-            for (key, given) in [
-                (
-                    "rheology.viscosity_tolerance",
-                    v.viscosity_tolerance.is_some(),
-                ),
-                (
-                    "rheology.viscosity_iterations",
-                    v.viscosity_iterations.is_some(),
-                ),
-            ] {
-                if given {
-                    return err(key, "only used by viscosity = \"implicit\"; remove it");
-                }
-            }
-            if visc == Visc::Frozen {
-                ViscosityTime::Frozen
-            } else {
-                ViscosityTime::Lagged
-            }
-        }
-        Visc::Implicit => ViscosityTime::Implicit {
+    let implicit_only = "only used by viscosity = \"implicit\"; remove it";
+    let viscosity = match (visc, v.viscosity_tolerance, v.viscosity_iterations) {
+        (Visc::Implicit, tolerance, iterations) => ViscosityTime::Implicit {
             tolerance: positive(
                 "rheology.viscosity_tolerance",
-                v.viscosity_tolerance.unwrap_or(DEFAULT_VISCOSITY_TOLERANCE),
+                tolerance.unwrap_or(DEFAULT_VISCOSITY_TOLERANCE),
             )?,
             max_iterations: int_in(
                 "rheology.viscosity_iterations",
-                v.viscosity_iterations
-                    .unwrap_or(DEFAULT_VISCOSITY_ITERATIONS),
+                iterations.unwrap_or(DEFAULT_VISCOSITY_ITERATIONS),
                 1,
                 100_000,
             )?,
         },
+        (_, Some(_), _) => return err("rheology.viscosity_tolerance", implicit_only),
+        (_, _, Some(_)) => return err("rheology.viscosity_iterations", implicit_only),
+        (Visc::Frozen, None, None) => ViscosityTime::Frozen,
+        (Visc::Lagged, None, None) => ViscosityTime::Lagged,
     };
     Ok(MultilayerSpec {
         layer_fractions,
