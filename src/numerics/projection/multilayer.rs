@@ -577,7 +577,7 @@ const ZERO_PIECE: usize = 240;
 
 /// The assembly hands finished columns to the solver every this many faces (8 faces
 /// of 20 layers: 160 columns of the band, 37 KB, still in cache).
-const READY_CELLS: usize = 8;
+const READY_FACES: usize = 8;
 
 impl PressureRows for MultilayerRows<'_> {
     type Row = StencilRow;
@@ -603,7 +603,7 @@ impl PressureRows for MultilayerRows<'_> {
     /// t_w of wet faces in it, so 0 + e = e).
     ///
     /// A face's columns are final once written, and are handed to `ready` every
-    /// `READY_CELLS` faces.
+    /// `READY_FACES` faces.
     fn assemble_band(
         &self,
         band: &mut [f64],
@@ -706,9 +706,9 @@ impl MultilayerRows<'_> {
         // Every entry of a column is among its first n + 2 = p + 1 ≤ w values.
         assert!(band.len() >= len * w && rhs.len() >= len && n + 2 <= w);
         for f in op.span.clone() {
-            // Faces before f are final: handed on every READY_CELLS faces (a call costs
+            // Faces before f are final: handed on every READY_FACES faces (a call costs
             // a few hundred instructions).
-            if f % READY_CELLS == 0 && f * n > s {
+            if f % READY_FACES == 0 && f * n > s {
                 ready(band, rhs, f * n - s);
             }
             let c0 = f * n - s;
