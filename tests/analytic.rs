@@ -1,8 +1,7 @@
 //! Exact solutions: frictionless dam breaks (Ritter, Stoker) and Coulomb friction on
 //! a uniform layer (u' = g(sin θ − μ cos θ), stopping without reversal).
 
-mod common;
-use common::{l1, observed_order, run, tan_deg, Case};
+use crate::common::{l1, observed_order, run, tan_deg, Case};
 use granflow::physics::GRAVITY as G;
 use granflow::scenario::{BoundaryKind, FrictionLaw};
 

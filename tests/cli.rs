@@ -6,11 +6,10 @@ use std::path::Path;
 
 use assert_cmd::Command;
 
-mod common;
 
-use common::read_h5;
+use crate::common::read_h5;
 
-use common::MINIMAL;
+use crate::common::MINIMAL;
 
 fn granflow() -> Command {
     Command::cargo_bin("granflow").unwrap()
@@ -134,7 +133,7 @@ fn run_writes_hdf5_and_front_csv_and_prints_a_summary() {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    common::assert_success(&out);
+    crate::common::assert_success(&out);
     assert!(stdout.contains("runout"), "{stdout}");
     assert!(stdout.contains("stage times   hyperbolic"), "{stdout}");
     assert!(h5.exists());
@@ -221,7 +220,7 @@ fn bed_from_a_csv_table_is_interpolated_relative_to_the_scenario_file() {
         .current_dir("/")
         .output()
         .unwrap();
-    common::assert_success(&out);
+    crate::common::assert_success(&out);
     let f = rust_hdf5::H5File::open(&h5).unwrap();
     let x = read_h5(&f, "grid/x");
     let b = read_h5(&f, "grid/b");

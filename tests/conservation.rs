@@ -1,8 +1,7 @@
 //! Mass conservation to round-off between walls, and h ≥ 0 everywhere, always,
 //! including at dry fronts and wall reflections.
 
-mod common;
-use common::{run, Case};
+use crate::common::{run, Case};
 use granflow::scenario::FrictionLaw;
 
 fn check(mut case: Case, slope_deg: f64) {

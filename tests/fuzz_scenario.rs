@@ -4,8 +4,8 @@
 //! overflow, out of memory) or a hang.
 //!
 //! By default a fixed number of cases runs (deterministic, about a second). CI runs it
-//! for a time budget: `GRANFLOW_FUZZ_SECONDS=60 cargo test --release --test
-//! fuzz_scenario`. A failing input is printed (proptest shrinks it first).
+//! for a time budget: `GRANFLOW_FUZZ_SECONDS=60 cargo test --release --test main
+//! fuzz_scenario::`. A failing input is printed (proptest shrinks it first).
 
 use std::path::Path;
 use std::time::{Duration, Instant};

@@ -4,7 +4,6 @@
 //! shapes, bad keys are refused with exit code 2, and a lake at rest reads a constant
 //! surface at every gauge.
 
-mod common;
 
 use std::path::Path;
 
@@ -226,7 +225,7 @@ fn the_files_hold_the_documented_shapes() {
         .args(["--set", "output.gauge_every=0.1"])
         .output()
         .unwrap();
-    common::assert_success(&out);
+    crate::common::assert_success(&out);
     let f = rust_hdf5::H5File::open(&h5).unwrap();
     let read = |name: &str| f.dataset(name).unwrap().read_raw::<f64>().unwrap();
     let shape = |name: &str| f.dataset(name).unwrap().shape();
@@ -268,7 +267,7 @@ fn the_files_hold_the_documented_shapes() {
         ])
         .output()
         .unwrap();
-    common::assert_success(&out);
+    crate::common::assert_success(&out);
     assert!(!dir.path().join("plain_gauges.csv").exists());
     let f = rust_hdf5::H5File::open(&plain).unwrap();
     assert!(f.dataset("gauges/t").is_err());

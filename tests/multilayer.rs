@@ -7,10 +7,9 @@
 //! The numbers each test measures are printed (`cargo test --test multilayer --
 //! --nocapture`) and recorded in docs/numerics.md.
 
-mod common;
 use std::path::{Path, PathBuf};
 
-use common::{run, tan_deg, Case};
+use crate::common::{run, tan_deg, Case};
 use granflow::model::granular::Granular;
 use granflow::output::memory::MemorySink;
 use granflow::physics::GRAVITY as G;
@@ -759,7 +758,7 @@ fn multilayer_output_has_w_and_static_interface() {
     let h_last = &h[3 * 160..];
     assert!(last.iter().zip(h_last).any(|(s, h)| *s > 0.0 && *s < *h));
     assert!(w[3 * 6 * 160..].iter().any(|&w| w < -1e-3));
-    common::check_output_with_h5py(&h5, 6);
+    crate::common::check_output_with_h5py(&h5, 6);
 }
 
 /// Many short steps (CFL 0.1, Δt shortened to land on frequent output times) must

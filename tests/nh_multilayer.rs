@@ -2,7 +2,6 @@
 //! constraint after every step, conservation and positivity, the well-balanced test
 //! of Table 6, the hydrostatic path left untouched, and determinism.
 
-mod common;
 
 use std::path::Path;
 
@@ -237,7 +236,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta() {
     assert!(eh > 1e-5 && eu > 1e-5, "{eh:e} {eu:e}");
 }
 
-use common::fingerprint;
+use crate::common::fingerprint;
 
 /// (h, hu) fingerprint of the §5.1 collapse with 4 layers switched to the hydrostatic
 /// pressure, recorded with the code of main at ecc2685 (before this model): the

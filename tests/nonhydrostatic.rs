@@ -2,7 +2,6 @@
 //! well-balancing, the hydrostatic path left untouched, conservation, and the paper's
 //! qualitative results (§4.1 wedge, §4.3 collapse).
 
-mod common;
 
 use std::path::Path;
 
@@ -35,7 +34,7 @@ fn run(file: &str, sets: &[&str]) -> (Sim, MemorySink, RunSummary) {
     (sim, sink, summary)
 }
 
-use common::fingerprint;
+use crate::common::fingerprint;
 
 /// (h, hu, Δt series) fingerprints of a run.
 fn fingerprints(file: &str, sets: &[&str]) -> [u64; 3] {

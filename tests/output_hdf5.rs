@@ -7,7 +7,6 @@
 //! a Python with h5py and numpy is found (`common::python_with_h5py`; SKIPPED otherwise).
 //! `GRANFLOW_KEEP_H5=path` keeps the file of `full_run_round_trips` for other checks.
 
-mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -165,7 +164,7 @@ fn shape(f: &H5File, name: &str) -> Vec<usize> {
     f.dataset(name).unwrap().shape()
 }
 
-use common::read_h5 as read;
+use crate::common::read_h5 as read;
 
 fn units(f: &H5File, name: &str) -> String {
     let ds = f.dataset(name).unwrap();
@@ -566,7 +565,7 @@ fn run_sinks_write_both_files() {
 /// a Python with h5py and numpy is found (SKIPPED otherwise).
 #[test]
 fn python_reader_accepts_the_file() {
-    let Some(python) = common::python_with_h5py() else {
+    let Some(python) = crate::common::python_with_h5py() else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -574,7 +573,7 @@ fn python_reader_accepts_the_file() {
         let path = temp_h5(&dir, name);
         let mut sink = Hdf5Sink::create(&path).unwrap();
         s.write(&mut sink);
-        let stdout = common::check_output_with_h5py(&path, s.nl).expect("python set");
+        let stdout = crate::common::check_output_with_h5py(&path, s.nl).expect("python set");
         assert!(stdout.starts_with("OK"), "{stdout}");
 
         let attrs = format!(
@@ -597,6 +596,6 @@ assert f["front"].attrs["threshold"] == {THRESHOLD:e}
             .arg(&path)
             .output()
             .unwrap();
-        common::assert_success(&out);
+        crate::common::assert_success(&out);
     }
 }

@@ -2,8 +2,7 @@
 //! friction, a run between walls keeps h ≥ 0, conserves mass to round-off and never
 //! produces a non-finite value.
 
-mod common;
-use common::Case;
+use crate::common::Case;
 use granflow::scenario::FrictionLaw;
 use proptest::prelude::*;
 

@@ -11,9 +11,8 @@ use std::time::{Duration, Instant};
 
 use assert_cmd::Command;
 
-mod common;
 
-use common::MINIMAL;
+use crate::common::MINIMAL;
 
 fn bin() -> PathBuf {
     assert_cmd::cargo::cargo_bin("granflow")

@@ -1,9 +1,8 @@
 //! The generic run loop: stop rules decide how a run ends, and the sink is finished
 //! whatever ends it (also an output error).
 
-mod common;
 
-use common::Case;
+use crate::common::Case;
 use granflow::model::granular::Granular;
 use granflow::output::{
     GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
@@ -85,7 +84,7 @@ impl StopRule for StepBudget {
 fn a_stop_rule_ends_the_run_with_its_status() {
     let mut sim = collapse();
     sim.add_rule(Box::new(StepBudget(7)));
-    let (sink, summary) = common::run(&mut sim);
+    let (sink, summary) = crate::common::run(&mut sim);
     assert_eq!(summary.status, "step_budget");
     assert_eq!(summary.steps, 7);
     assert_eq!(sink.steps.len(), 8, "t = 0 and seven steps");

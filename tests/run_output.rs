@@ -6,9 +6,8 @@ use std::path::Path;
 use assert_cmd::Command;
 use rust_hdf5::H5File;
 
-mod common;
 
-use common::read_h5 as read;
+use crate::common::read_h5 as read;
 
 fn shape(f: &H5File, name: &str) -> Vec<usize> {
     f.dataset(name).unwrap().shape()
@@ -30,7 +29,7 @@ fn collapse_output_honours_the_contract() {
         ])
         .output()
         .unwrap();
-    common::assert_success(&out);
+    crate::common::assert_success(&out);
     let f = H5File::open(&h5).unwrap();
 
     // Root attributes.

@@ -1,8 +1,7 @@
 //! Well-balancing: states at rest stay at rest to round-off (seed 000 eq. 16,
 //! seed 003 §5.3), and a state just beyond the repose angle moves.
 
-mod common;
-use common::{run, tan_deg, Case};
+use crate::common::{run, tan_deg, Case};
 use granflow::scenario::{BoundaryKind, FrictionLaw};
 
 /// Deterministic stand-in for RAND(X) ∈ [0, 1) (the seeds draw it at run time).

@@ -1,0 +1,28 @@
+//! The integration tests, one crate with a module per area (linked once).
+//!
+//! Run one area with `cargo test --test main AREA::`, e.g.
+//! `cargo test --test main analytic::`. Tests marked `#[ignore]` are the long ones
+//! (converged references, paper tables); CI runs them with `-- --ignored`.
+
+mod common;
+
+mod analytic;
+mod cli;
+mod conservation;
+mod dilatant;
+mod fuzz_scenario;
+mod gauges;
+mod multilayer;
+mod newcomer;
+mod nh_multilayer;
+mod nonhydrostatic;
+mod output_hdf5;
+mod properties;
+mod robustness;
+mod run_loop;
+mod run_output;
+mod scenarios;
+mod submarine;
+mod submarine_paper;
+mod sweep;
+mod well_balanced;
