@@ -1,5 +1,5 @@
 //! Cost of a non-hydrostatic time step relative to a hydrostatic one on the same grid
-//! (issue 3; seed 000 §3 reports about 2.4×, the target is ≤ 1.6×). Results and
+//! (issue 3; Garres-Díaz et al. 2021, §3 reports about 2.4×, the target is ≤ 1.6×). Results and
 //! machine: docs/performance.md, "Non-hydrostatic".
 //!
 //!     CARGO_TARGET_DIR=... cargo bench --bench nonhydrostatic [-- --quick] [-- --hydrostatic-only]
@@ -32,13 +32,13 @@ struct Case {
 
 const CASES: &[Case] = &[
     Case {
-        name: "collapse 22°, 640 cells, 20 layers (seed 003 Table 2 grid, issue 10), h_i = 1.82 mm, from t = 0.3 s",
+        name: "collapse 22°, 640 cells, 20 layers (Escalante et al. 2023, Table 2 grid, issue 10), h_i = 1.82 mm, from t = 0.3 s",
         sets: &["model.layers=20", "initial.erodible_bed=1.82e-3"],
         t0: 0.3,
         steps: 200,
     },
     Case {
-        name: "collapse 22°, 640 cells (seed 000 grid), from t = 0.3 s",
+        name: "collapse 22°, 640 cells (the grid of Garres-Díaz et al. 2021), from t = 0.3 s",
         sets: &[],
         t0: 0.3,
         steps: 800,
