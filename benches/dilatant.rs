@@ -1,4 +1,4 @@
-//! Cost of a time step of the dilatant μ(I)–φ model (Bouchut et al. 2021, issue 11) relative to a
+//! Cost of a time step of the dilatant μ(I)–φ model (Bouchut et al. 2021) relative to a
 //! step of the hydrostatic Savage–Hutter μ(I) monolayer on the same grid (not a test:
 //! nothing is asserted; target ≤ 1.5×), for the default split scheme and the
 //! Appendix B one (`dilatancy.scheme`).

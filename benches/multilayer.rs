@@ -8,7 +8,7 @@
 //!
 //! Prints the wall time of each run and, per stage, the cost per cell and layer of one
 //! time step (stage time / (steps · cells · layers)); the viscous stage's time includes
-//! freezing its coefficients at t^n. Results: docs/performance.md, "Multilayer".
+//! freezing its coefficients at t^n. Results: docs/performance.md, "Hydrostatic multilayer".
 
 use std::path::Path;
 use std::time::Instant;
@@ -39,7 +39,9 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(3);
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/erodible_bed.toml");
-    println!("Escalante et al. 2023, Table 9, θ = 22°, 640 cells, CFL 0.1, t = 3 s; best of {reps}");
+    println!(
+        "Escalante et al. 2023, Table 9, θ = 22°, 640 cells, CFL 0.1, t = 3 s; best of {reps}"
+    );
     for (label, layers, paper) in [
         ("H-1 l.", 1, 7.1),
         ("H-10 l.", 10, 41.0),

@@ -1,6 +1,6 @@
 #![allow(clippy::needless_range_loop)] // index arithmetic mirrors the block algebra
 //! The exact solvers for the pressure system of the multilayer non-hydrostatic model
-//! (Escalante et al. 2023, eq. 31–32, Appendix A; issue 10), timed on the Table 2 grid: 640 cells,
+//! (Escalante et al. 2023, eq. 31–32, Appendix A), timed on the Table 2 grid: 640 cells,
 //! 20 layers (12 820 unknowns), every face wet, a sheared state on the collapse's
 //! geometry (domain [−0.2, 3] m, wall/outflow).
 //!

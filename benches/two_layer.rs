@@ -4,7 +4,7 @@
 //!   cargo bench --bench two_layer
 //!
 //! 1. Fernández-Nieto et al. 2008, §5.3: the 30 km tsunami, 500 cells, CFL 0.8, δ₀ = 12°, to 600 s (the
-//!    issue's target: under 0.1 s), kernels only ([`TwoLayerSolver::step`]) and the
+//!    target: under 0.1 s), kernels only ([`TwoLayerSolver::step`]) and the
 //!    whole simulation (CFL, stages, diagnostics, in-memory output), best of 5.
 //! 2. Cost of one two-layer step per cell against one monolayer Savage–Hutter Coulomb
 //!    step per cell (target ≤ 2.5×), both whole steps through `Simulation::step`
