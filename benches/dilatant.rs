@@ -1,11 +1,11 @@
-//! Cost of a time step of the dilatant μ(I)–φ model (seed 002, issue 11) relative to a
+//! Cost of a time step of the dilatant μ(I)–φ model (Bouchut et al. 2021) relative to a
 //! step of the hydrostatic Savage–Hutter μ(I) monolayer on the same grid (not a test:
 //! nothing is asserted; target ≤ 1.5×), for the default split scheme and the
 //! Appendix B one (`dilatancy.scheme`).
 //!
 //!   cargo bench --bench dilatant
 //!
-//! Both models run the seed 002 §4 collapse (14 cm × 20 cm column, 22°, Δx = 5 mm on
+//! Both models run the collapse of Bouchut et al. 2021, §4 (14 cm × 20 cm column, 22°, Δx = 5 mm on
 //! [−0.2, 3] m, 640 cells; the dilatant one dense, φ0 = 0.62, Table 1) to t0 untimed,
 //! then steps (CFL + all stages) are timed in bursts that alternate between the two;
 //! the best burst of each is kept (the machine is shared). Second case: the same with
@@ -91,7 +91,7 @@ impl Split {
     }
 }
 
-/// The seed 002 §4 collapse on `cells` cells of 5 mm from x = −0.2 m (22°, wall on the
+/// The collapse of Bouchut et al. 2021, §4 on `cells` cells of 5 mm from x = −0.2 m (22°, wall on the
 /// left, outflow on the right): the 14 cm column on x ≤ 0, `layer` m of grains beyond.
 fn collapse(cells: usize, layer: f64) -> (Mesh, Vec<f64>) {
     let spec = MeshSpec {

@@ -3,8 +3,8 @@
 //!   cargo bench --bench hydrostatic
 //!
 //! 1. Throughput of each stage in cell updates per second, single thread, on the
-//!    seed 000 §4.3 collapse at 640 and 20 000 cells.
-//! 2. Seed 003 Table 9 "H-1 l.": θ = 0°, h_i = 1 mm, 640 cells, CFL 0.1, to 1.5 s
+//!    Garres-Díaz et al. 2021, §4.3 collapse at 640 and 20 000 cells.
+//! 2. Escalante et al. 2023, Table 9 "H-1 l.": θ = 0°, h_i = 1 mm, 640 cells, CFL 0.1, to 1.5 s
 //!    (4.7 s in the paper), whole run with the in-memory sink and with HDF5 output.
 
 use std::path::Path;
@@ -71,7 +71,7 @@ fn table9_h1() {
         "time.t_end=1.5",
         "time.stop_at_rest=false",
         "output.every=0.05",
-        // seed 003 Table 1, μ(I) coefficients + 0.1 for sidewall friction (its §5)
+        // Escalante et al. 2023, Table 1, μ(I) coefficients + 0.1 for sidewall friction (its §5)
         "rheology.mu_s_deg=29.983894",
         "rheology.mu_2_deg=39.575179",
     ]);

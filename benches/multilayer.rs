@@ -1,4 +1,4 @@
-//! Benchmark of the hydrostatic multilayer model: seed 003 Table 9, θ = 22° — the
+//! Benchmark of the hydrostatic multilayer model: Escalante et al. 2023, Table 9, θ = 22° — the
 //! collapse of §5.1 (domain [−0.2, 3] m, 640 cells, h_i = 1.82 mm, Table 1 material,
 //! δ = 1e-5) with CFL 0.1 to t = 3 s, for 1, 10 and 20 layers ("H-1 l.", "H-10 l.",
 //! "H-20 l."; the paper took 7.1, 41.0 and 79.4 s). Single thread.
@@ -8,7 +8,7 @@
 //!
 //! Prints the wall time of each run and, per stage, the cost per cell and layer of one
 //! time step (stage time / (steps · cells · layers)); the viscous stage's time includes
-//! freezing its coefficients at t^n. Results: docs/performance.md, "Multilayer".
+//! freezing its coefficients at t^n. Results: docs/performance.md, "Hydrostatic multilayer".
 
 use std::path::Path;
 use std::time::Instant;
@@ -17,8 +17,8 @@ use granflow::output::memory::SummarySink;
 use granflow::scenario::load_file;
 use granflow::setup::build_granular;
 
-/// Seed 003 Table 9 settings on top of `scenarios/erodible_bed.toml` (seed 001 §4.2,
-/// the same collapse): μ_2 = tan 36° (seed 003 Table 1), δ regularisation, CFL 0.1.
+/// Escalante et al. 2023, Table 9 settings on top of `scenarios/erodible_bed.toml` (Fernández-Nieto et al. 2016, §4.2,
+/// the same collapse): μ_2 = tan 36° (Escalante et al. 2023, Table 1), δ regularisation, CFL 0.1.
 fn settings(layers: usize) -> Vec<String> {
     [
         format!("model.layers={layers}"),
@@ -39,7 +39,9 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(3);
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/erodible_bed.toml");
-    println!("seed 003 Table 9, θ = 22°, 640 cells, CFL 0.1, t = 3 s; best of {reps}");
+    println!(
+        "Escalante et al. 2023, Table 9, θ = 22°, 640 cells, CFL 0.1, t = 3 s; best of {reps}"
+    );
     for (label, layers, paper) in [
         ("H-1 l.", 1, 7.1),
         ("H-10 l.", 10, 41.0),

@@ -1,6 +1,6 @@
 #![allow(clippy::needless_range_loop)] // index arithmetic mirrors the block algebra
 //! The exact solvers for the pressure system of the multilayer non-hydrostatic model
-//! (seed 003 eq. 31–32, Appendix A; issue 10), timed on the Table 2 grid: 640 cells,
+//! (Escalante et al. 2023, eq. 31–32, Appendix A), timed on the Table 2 grid: 640 cells,
 //! 20 layers (12 820 unknowns), every face wet, a sheared state on the collapse's
 //! geometry (domain [−0.2, 3] m, wall/outflow).
 //!
@@ -11,7 +11,7 @@
 //!   (forming the rows included);
 //! - `block-nalgebra`: block Cholesky (block Thomas) with dense N×N nalgebra blocks,
 //!   from the same rows (storing them included);
-//! - `block-gauss-seidel`: seed 003's algorithm (§4, with a Thomas solve per layer,
+//! - `block-gauss-seidel`: Escalante et al. 2023's algorithm (§4, with a Thomas solve per layer,
 //!   l2 tolerance 1e-6 on the increments, from a zero guess), for scale.
 //!
 //! Each reports the time and the relative residual max|AΠ − b| / max|b|.
@@ -172,7 +172,7 @@ impl BlockCholesky {
     }
 }
 
-/// Seed 003 §4's block Gauss–Seidel: per layer (interface) j, a tridiagonal solve over
+/// The block Gauss–Seidel of Escalante et al. 2023, §4: per layer (interface) j, a tridiagonal solve over
 /// the faces with the other interfaces frozen; l2 stopping test on the increments.
 fn gauss_seidel<R: PressureRows<Row = StencilRow>>(
     rows: &R,

@@ -1,17 +1,17 @@
 //! Cost of a non-hydrostatic time step relative to a hydrostatic one on the same grid
-//! (issue 3; seed 000 §3 reports about 2.4×, the target is ≤ 1.6×). Results and
-//! machine: docs/performance.md, "Non-hydrostatic".
+//! (Garres-Díaz et al. 2021, §3 reports about 2.4×, the target is ≤ 1.6×). Results and
+//! machine: docs/performance.md, "Non-hydrostatic monolayer".
 //!
 //!     CARGO_TARGET_DIR=... cargo bench --bench nonhydrostatic [-- --quick] [-- --hydrostatic-only]
-//!     cargo bench --bench nonhydrostatic -- --multilayer-only   # the 20-layer case (issue 10: target ≤ 3×)
+//!     cargo bench --bench nonhydrostatic -- --multilayer-only   # the 20-layer case (target ≤ 3×)
 //!
 //! Each case is `scenarios/collapse.toml` run with `model.pressure` hydrostatic and
 //! non-hydrostatic: both are advanced (untimed) to `t0`, then `steps` steps are timed,
 //! each with its own CFL Δt (the cost of a step does not depend on Δt), in bursts that
 //! alternate between the two models; the best burst of each is kept, which filters out
-//! other processes on a shared machine. `--hydrostatic-only` times the hydrostatic model alone, which
-//! also runs on the code before the non-hydrostatic model existed (the architecture
-//! rule: a hydrostatic run costs the same whether or not that code exists).
+//! other processes on a shared machine. `--hydrostatic-only` times the hydrostatic model alone, to
+//! compare builds (the architecture rule: a hydrostatic run costs the same whether or
+//! not the non-hydrostatic code exists).
 
 use std::path::Path;
 use std::time::Instant;
@@ -32,13 +32,13 @@ struct Case {
 
 const CASES: &[Case] = &[
     Case {
-        name: "collapse 22°, 640 cells, 20 layers (seed 003 Table 2 grid, issue 10), h_i = 1.82 mm, from t = 0.3 s",
+        name: "collapse 22°, 640 cells, 20 layers (Escalante et al. 2023, Table 2 grid), h_i = 1.82 mm, from t = 0.3 s",
         sets: &["model.layers=20", "initial.erodible_bed=1.82e-3"],
         t0: 0.3,
         steps: 200,
     },
     Case {
-        name: "collapse 22°, 640 cells (seed 000 grid), from t = 0.3 s",
+        name: "collapse 22°, 640 cells (the grid of Garres-Díaz et al. 2021), from t = 0.3 s",
         sets: &[],
         t0: 0.3,
         steps: 800,

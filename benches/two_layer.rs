@@ -1,10 +1,10 @@
-//! Benchmarks of the two-layer submarine-avalanche model (seed 004; nothing is
+//! Benchmarks of the two-layer submarine-avalanche model (Fernández-Nieto et al. 2008; nothing is
 //! asserted):
 //!
 //!   cargo bench --bench two_layer
 //!
-//! 1. Seed 004 §5.3: the 30 km tsunami, 500 cells, CFL 0.8, δ₀ = 12°, to 600 s (the
-//!    issue's target: under 0.1 s), kernels only ([`TwoLayerSolver::step`]) and the
+//! 1. Fernández-Nieto et al. 2008, §5.3: the 30 km tsunami, 500 cells, CFL 0.8, δ₀ = 12°, to 600 s (the
+//!    target: under 0.1 s), kernels only ([`TwoLayerSolver::step`]) and the
 //!    whole simulation (CFL, stages, diagnostics, in-memory output), best of 5.
 //! 2. Cost of one two-layer step per cell against one monolayer Savage–Hutter Coulomb
 //!    step per cell (target ≤ 2.5×), both whole steps through `Simulation::step`
@@ -41,7 +41,7 @@ const CELLS: usize = 2000;
 const STEPS: usize = 200;
 const BURSTS: usize = 7;
 
-/// Seed 004 §5.3: water depth H(x) over the bed b = 2500 − H.
+/// Fernández-Nieto et al. 2008, §5.3: water depth H(x) over the bed b = 2500 − H.
 fn depth(x: f64) -> f64 {
     if x <= 10_000.0 {
         10.0 + 490.0 * (-6.1429e-4 * (10_000.0 - x)).exp()

@@ -1,11 +1,11 @@
 //! Driver for instruction counts of the multilayer non-hydrostatic step against the
-//! hydrostatic one (issue 10, docs/performance.md): the §5.1 collapse (640 cells,
+//! hydrostatic one (docs/performance.md, "Multilayer non-hydrostatic"): the §5.1 collapse (640 cells,
 //! 20 layers, h_i = 1.82 mm) advanced to t = 0.3 s, then `steps` more steps.
 //!
 //!   valgrind --tool=callgrind target/release/examples/nh_step_cost nonhydrostatic 60
 //!
 //! Optional arguments: the layers (default 20) and `rheology.viscosity` ("frozen", this
-//! driver's default so that its counts compare with the earlier ones, "lagged", the
+//! driver's default, the paper's step 2; "lagged", the
 //! scenarios' default, the same step plus one copy of h u_α, or "implicit"), e.g.
 //! `nh_step_cost hydrostatic 60 20 implicit`.
 //!

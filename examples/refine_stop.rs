@@ -1,5 +1,5 @@
-//! Stop time, settled time and runout of one scenario under grid refinement (issue 13
-//! item 1, docs/validation.md "Stop time and runout under refinement"):
+//! Stop time, settled time and runout of one scenario under grid refinement
+//! (docs/validation.md, "Stop time and runout under refinement"):
 //!
 //!   cargo run --release --example refine_stop -- scenarios/collapse.toml 640 1280 2560 5120
 //!

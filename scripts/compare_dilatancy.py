@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Dense, loose and incompressible collapses of seed 002 §4.3 on one slope.
+"""Dense, loose and incompressible collapses of Bouchut et al. 2021, §4.3 on one slope.
 
     python scripts/compare_dilatancy.py [--slope 22] [--out out/dilatancy] [--cells 640]
 
@@ -7,7 +7,7 @@ Runs scenarios/dilatancy_dense.toml (φ0 = 0.62), scenarios/dilatancy_loose.toml
 (φ0 = 0.55) and the dense file with dilatancy.k = 0 (incompressible) on the slope,
 then prints and plots, against time, the front position (h > 1 mm) and the maximum
 thickness of the three runs, and the relative volume change ∫h/∫h(0) of the dilatant
-ones (seed 002 Fig. 9 and 14). Needs the release binary (cargo build --release),
+ones (Bouchut et al. 2021, Fig. 9 and 14). Needs the release binary (cargo build --release),
 h5py, numpy and matplotlib.
 """
 
@@ -77,7 +77,7 @@ def main():
     for a in (a1, a2, a3):
         a.set_xlabel("t (s)")
         a.legend(fontsize=8)
-    fig.suptitle(f"seed 002 §4.3 collapse, θ = {args.slope:g}°, {args.cells} cells")
+    fig.suptitle(f"Bouchut et al. 2021, §4.3 collapse, θ = {args.slope:g}°, {args.cells} cells")
     fig.tight_layout()
     png = out / f"dilatancy_{args.slope:g}.png"
     fig.savefig(png, dpi=110)

@@ -6,7 +6,7 @@
 SWEEP_DIR is the output of `granflow sweep scenarios/sweeps/erodible_bed.toml`. For
 each slope, prints the runout change between the thinnest and the thickest bed of the
 sweep, next to the change measured in the laboratory and computed by the models of
-seed 001 (§4.2.4 gives these numbers only at 19° and 22°; its figures, not its text,
+Fernández-Nieto et al. 2016 (§4.2.4 gives these numbers only at 19° and 22°; its figures, not its text,
 hold the other slopes). Also prints the wall time of the sweep's runs, so accuracy can
 be weighed against cost.
 """
@@ -15,7 +15,7 @@ import csv
 import pathlib
 import sys
 
-# seed 001 §4.2.4: (h_i from, h_i to) in m -> runout change in % for
+# Fernández-Nieto et al. 2016, §4.2.4: (h_i from, h_i to) in m -> runout change in % for
 # lab, μ(I)-monolayer, μ(I)-MSM (20 layers), μ(I)-C-MSM
 PAPER = {
     19.0: ((1.5e-3, 5.3e-3), {"lab": 15.1, "monolayer": -1.1, "MSM": 2.5, "C-MSM": 6.8}),

@@ -13,7 +13,7 @@ granflow command or script), and replaces the block with its output, the command
 and whether it passed. Without IDs, all blocks; --list prints the IDs. The block
 `provenance` records the commit, the date and the machine. Numbers in those blocks
 therefore always come from a run; rerun this after a change to the numerics (for
-example the per-cell CFL time step of issue 9, which changes step counts).
+example to the CFL time step, which changes step counts).
 Needs the Python of the comparison scripts (h5py, numpy, matplotlib) as `python`
 on PATH or as this script's interpreter; builds with cargo.
 """

@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
-"""Error against run time for the granular model family (seed 003 §5.5.3, Table 9).
+"""Error against run time for the granular model family (Escalante et al. 2023, §5.5.3, Table 9).
 
     python scripts/error_vs_runtime.py [--granflow PATH] [--jobs N] [--out DIR]
                                        [--slopes 0,22] [--set KEY=VALUE ...]
 
-Runs, through one `granflow sweep` per slope, the collapse of seed 003 §5.1/§5.5
+Runs, through one `granflow sweep` per slope, the collapse of Escalante et al. 2023, §5.1/§5.5
 (scenarios/nh_multilayer_collapse.toml: domain [-0.2, 3] m, 640 cells, Table 1
 material, CFL 0.1) with the models of Table 9 — H-1, H-10, H-20 l. and NH-1, NH-2,
 NH-5, NH-8, NH-10 l. — and the reference NH-20 l., for

@@ -31,7 +31,7 @@ class Run:
             self.p_nh = snaps["p_nh"][:] if "p_nh" in snaps else None
             self.static_interface = (snaps["static_interface"][:]
                                      if "static_interface" in snaps else None)
-            # Volume fraction of the dilatant model (seed 002), None for the others.
+            # Volume fraction of the dilatant model (Bouchut et al. 2021), None for the others.
             self.phi = f["snapshots/phi"][:] if "snapshots/phi" in f else None
             self.front_t = f["front/t"][:]
             self.front_x = f["front/x"][:]

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Mesh convergence of the final deposit of seed 004 §5.1 and §5.2 (Fig. 4 and 6).
+"""Mesh convergence of the final deposit of Fernández-Nieto et al. 2008, §5.1 and §5.2 (Fig. 4 and 6).
 
 Runs a submarine scenario at Δx = 1/20, 1/40, 1/80, 1/160, 1/320 (10 m channel:
 200 ... 3200 cells), reads the final interface b + H₂cos²θ and the grain thickness,

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Convergence of the multilayer non-hydrostatic model (seed 003 §5.2, Table 5).
+"""Convergence of the multilayer non-hydrostatic model (Escalante et al. 2023, §5.2, Table 5).
 
     python scripts/table5_convergence.py [--granflow PATH] [--jobs N] [--out DIR]
                                          [--reference NX N] [--family NX,N ...]
@@ -12,7 +12,7 @@ t = 0.15 s), the family (Nx, N) = (100, 2), (200, 4), (400, 8), (800, 16), (1600
 (cells and layers refined together) and a reference, by default the paper's
 (6400, 128) (3614 s and 1 GiB here, on a shared 2-vCPU machine; --reference 3200 64:
 2 min). It reads the snapshot at t = 0.15 s of every run, averages the reference onto
-each run's cells and layers (the projection of seed 003 eq. 35, as `project` in
+each run's cells and layers (the projection of Escalante et al. 2023, eq. 35, as `project` in
 tests/nh_multilayer.rs), and prints the L1 errors of eq. (35),
 
     ||h - h_ref||_1 = dx sum_i |h_i - h_ref_i|,
@@ -61,7 +61,7 @@ REFERENCE = (6400, 128)
 QUICK_FAMILY = [(100, 2), (200, 4)]
 QUICK_REFERENCE = (800, 16)
 
-# Seed 003 Table 5 (reference (6400, 128)): (Nx, N) -> errors and orders of h, u(z),
+# Escalante et al. 2023, Table 5 (reference (6400, 128)): (Nx, N) -> errors and orders of h, u(z),
 # w(z). The paper's w(z) errors repeat its h errors digit for digit while its w(z)
 # orders differ from those of h: they are printed as they are.
 PAPER = {
@@ -223,7 +223,7 @@ def main():
         return 1
 
     ref = final_state(Run(out / f"{summary[reference]['run']}.h5"))
-    print(f"\nseed 003 Table 5 at t = {T_FINAL} s against ({nx_f}, {n_f}) "
+    print(f"\nEscalante et al. 2023, Table 5 at t = {T_FINAL} s against ({nx_f}, {n_f}) "
           f"(paper's values in brackets, its reference (6400, 128))"
           + (f"; every run with {' '.join(args.sets)}" if args.sets else ""))
     print(f"{'(Nx, N)':>11}  {'error h':>20} {'order h':>12}  {'error u(z)':>20} {'order u':>12}  "

@@ -4,7 +4,7 @@
     python examples/lab_gauges/make_synthetic.py [GRANFLOW]
 
 GRANFLOW is the granflow binary (default target/release/granflow). The data come from
-a granflow run of scenarios/lake_landslide.toml (seed 004 §5.2, δ₀ = 10°) on a finer
+a granflow run of scenarios/lake_landslide.toml (Fernández-Nieto et al. 2008, §5.2, δ₀ = 10°) on a finer
 mesh than the scenario's (400 cells instead of 200) up to t = 10 s, so that comparing
 the scenario as shipped with them shows small but non-zero errors:
 
