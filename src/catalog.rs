@@ -243,7 +243,7 @@ mod tests {
         let c = find("collapse").unwrap();
         assert_eq!(
             c.description(),
-            "Granular column collapse on an inclined plane (seed 000 §4.3, lab experiments \
+            "Granular column collapse on an inclined plane (Garres-Díaz et al. 2021, §4.3, lab experiments \
              of Mangeney et al. 2010)"
         );
         assert_eq!(

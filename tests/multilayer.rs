@@ -4,7 +4,7 @@
 //! well-balancing with N layers (seed 003 Table 6), mass and positivity, and the
 //! erodible-bed effect of seed 001 §4.2.4 (Figs. 11–12).
 //!
-//! The numbers each test measures are printed (`cargo test --test multilayer --
+//! The numbers each test measures are printed (`cargo test --test main multilayer:: --
 //! --nocapture`) and recorded in docs/numerics.md.
 
 use std::path::{Path, PathBuf};
