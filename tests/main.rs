@@ -1,8 +1,7 @@
 //! The integration tests, one crate with a module per area (linked once).
 //!
 //! Run one area with `cargo test --test main AREA::`, e.g.
-//! `cargo test --test main analytic::`. Tests marked `#[ignore]` are the long ones
-//! (converged references, paper tables); CI runs them with `-- --ignored`.
+//! `cargo test --test main analytic::`.
 
 mod common;
 

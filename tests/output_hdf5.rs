@@ -413,7 +413,7 @@ fn killed_run_keeps_its_snapshots() {
     let child = Command::new(std::env::current_exe().unwrap())
         .args([
             "--exact",
-            "killed_run_keeps_its_snapshots",
+            "output_hdf5::killed_run_keeps_its_snapshots",
             "--test-threads=1",
         ])
         .env("GRANFLOW_TEST_ABORT_CHILD", &path)
