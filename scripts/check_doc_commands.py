@@ -245,12 +245,54 @@ def check_synopsis(toks, env, cwd):
     return True, f"options {' '.join(flags) or '(none)'} in --help"
 
 
+def check_test_filter(text, tests):
+    """A quoted `cargo test [--test main] FILTER [-- --exact]` selects at least one test."""
+    toks = shlex.split(text)
+    before, _, after = " ".join(toks).partition(" -- ")
+    words = before.split()[2:]
+    filters, skip_next = [], False
+    for w in words:
+        if skip_next:
+            skip_next = False
+        elif w in ("--test", "--features", "-p", "--package", "--lib", "--bin"):
+            skip_next = w not in ("--lib",)
+        elif not w.startswith("-"):
+            filters.append(w)
+    if not filters:
+        return True, "whole target"
+    exact = "--exact" in after.split()
+    for f in filters:
+        if not any((t == f) if exact else (f in t) for t in tests):
+            return False, f"no test {'named' if exact else 'matching'} {f!r} in the test crate"
+    return True, "tests exist"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--granflow", default=str(ROOT / "target/release/granflow"))
     ap.add_argument("--list", action="store_true", help="list the commands, run nothing")
     ap.add_argument("--keep", help="scratch directory to use and keep (default: a temp dir)")
+    ap.add_argument("--test-list", help="output of `cargo test --test main -- --list`: every "
+                    "quoted `cargo test` must then name tests that exist")
     args = ap.parse_args()
+    tests = None
+    if args.test_list:
+        tests = [l.split(": test")[0] for l in pathlib.Path(args.test_list).read_text().splitlines()
+                 if l.endswith(": test")]
+        # Inline `cargo test …` spans anywhere in the docs, even mid-sentence and
+        # broken across lines, must name tests that exist.
+        bad = 0
+        for md in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+            text = md.read_text()
+            for m in re.finditer(r"`(cargo test[^`]*)`", text):
+                cmd = " ".join(m.group(1).replace("//!", " ").split())
+                ok, why = check_test_filter(cmd, tests)
+                if not ok:
+                    line = text.count("\n", 0, m.start()) + 1
+                    print(f"FAIL      {md.relative_to(ROOT)}:{line}: {cmd}  ({why})")
+                    bad += 1
+        if bad:
+            return 1
     cmds = collect()
     if args.list:
         for c in cmds:
@@ -280,6 +322,12 @@ def main():
         kind, what = classify(c)
         counts[kind] += 1
         if kind == "skip":
+            if tests is not None and c.text.startswith("cargo test"):
+                ok, why = check_test_filter(c.text, tests)
+                if not ok:
+                    print(f"FAIL      {c.where()}: {c.text}  ({why})")
+                    failures.append((c, why))
+                    continue
             print(f"skip      {c.where()}: {c.text}  ({what})")
             continue
         if kind == "synopsis":
