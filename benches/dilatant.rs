@@ -23,10 +23,10 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use granflow::mesh::{Mesh, MeshSpec};
-use granflow::model::granular::state::LayeredState as State;
+use granflow::grid::{Line, LineSpec};
+use granflow::state::layered::LayeredState as State;
 use granflow::numerics::dilatant::split::SplitScheme;
-use granflow::numerics::dilatant::state::DilatantState;
+use granflow::state::dilatant::DilatantState;
 use granflow::numerics::dilatant::step::{DilatantOptions, DilatantScheme};
 use granflow::numerics::friction::CoulombFrictionStep;
 use granflow::numerics::hydrostatic::HydrostaticStep;
@@ -51,7 +51,7 @@ struct SavageHutter {
 }
 
 impl SavageHutter {
-    fn step(&mut self, mesh: &Mesh) {
+    fn step(&mut self, mesh: &Line) {
         let s = &self.state;
         let speed = (1..=mesh.nx)
             .map(|j| s.mean_velocity(j).abs() + (mesh.g_n * s.h[j]).sqrt())
@@ -68,7 +68,7 @@ struct Dilatant {
 }
 
 impl Dilatant {
-    fn step(&mut self, mesh: &Mesh) {
+    fn step(&mut self, mesh: &Line) {
         let dt = self.scheme.max_dt(mesh, &self.state);
         self.scheme.step(mesh, &mut self.state, 0.0, dt).unwrap();
     }
@@ -81,7 +81,7 @@ struct Split {
 }
 
 impl Split {
-    fn step(&mut self, mesh: &Mesh) {
+    fn step(&mut self, mesh: &Line) {
         let s = &self.state;
         let speed = (1..=mesh.nx)
             .map(|j| velocity(s.h[j], s.hu[j]).abs() + (mesh.g_n * s.h[j]).sqrt())
@@ -93,8 +93,8 @@ impl Split {
 
 /// The collapse of Bouchut et al. 2021, §4 on `cells` cells of 5 mm from x = −0.2 m (22°, wall on the
 /// left, outflow on the right): the 14 cm column on x ≤ 0, `layer` m of grains beyond.
-fn collapse(cells: usize, layer: f64) -> (Mesh, Vec<f64>) {
-    let spec = MeshSpec {
+fn collapse(cells: usize, layer: f64) -> (Line, Vec<f64>) {
+    let spec = LineSpec {
         x_min: -0.2,
         x_max: -0.2 + cells as f64 * 0.005,
         cells,
@@ -103,7 +103,7 @@ fn collapse(cells: usize, layer: f64) -> (Mesh, Vec<f64>) {
         left: BoundaryKind::Wall,
         right: BoundaryKind::Outflow,
     };
-    let mesh = Mesh::new(&spec, vec![0.0; cells]);
+    let mesh = Line::new(&spec, vec![0.0; cells]);
     let h = mesh
         .x
         .iter()
@@ -113,7 +113,7 @@ fn collapse(cells: usize, layer: f64) -> (Mesh, Vec<f64>) {
 }
 
 impl SavageHutter {
-    fn new(mesh: &Mesh, h: &[f64]) -> Self {
+    fn new(mesh: &Line, h: &[f64]) -> Self {
         SavageHutter {
             state: State::from_profiles(mesh, &[1.0], h, &vec![0.0; mesh.nx]),
             hyperbolic: HydrostaticStep::new(MU_I, mesh.nx),
@@ -124,7 +124,7 @@ impl SavageHutter {
 
 impl Split {
     /// The dense column (φ0 = 0.62, Table 1) with the viscosity coefficients ξ.
-    fn new(mesh: &Mesh, h: &[f64], xi: f64) -> Self {
+    fn new(mesh: &Line, h: &[f64], xi: f64) -> Self {
         let nx = mesh.nx;
         let mut options = DilatantOptions::default();
         options.viscosity.xi = [xi; 3];

@@ -19,16 +19,16 @@
 
 use std::time::Instant;
 
-use granflow::mesh::{BoundaryKind, Coordinates};
-use granflow::mesh::{Mesh, MeshSpec};
-use granflow::model::granular::state::{fill_tracer_ghosts, LayeredState};
+use granflow::grid::{BoundaryKind, Coordinates};
+use granflow::grid::{Line, LineSpec};
+use granflow::state::layered::{fill_tracer_ghosts, LayeredState};
 use granflow::numerics::banded::{stencil_residual, BandedCholesky, StencilRow};
 use granflow::numerics::linalg::{thomas, PressureRows};
 use granflow::numerics::projection::multilayer::MultilayerOperator;
 use nalgebra::DMatrix;
 
-fn collapse_state(cells: usize, layers: usize) -> (Mesh, LayeredState) {
-    let spec = MeshSpec {
+fn collapse_state(cells: usize, layers: usize) -> (Line, LayeredState) {
+    let spec = LineSpec {
         x_min: -0.2,
         x_max: 3.0,
         cells,
@@ -38,7 +38,7 @@ fn collapse_state(cells: usize, layers: usize) -> (Mesh, LayeredState) {
         right: BoundaryKind::Outflow,
     };
     let x = spec.centres();
-    let mesh = Mesh::new(&spec, vec![0.0; cells]);
+    let mesh = Line::new(&spec, vec![0.0; cells]);
     let h: Vec<f64> = x
         .iter()
         .map(|x| 0.00182 + 0.12 * (-((x - 0.1) / 0.35f64).powi(2)).exp())

@@ -30,7 +30,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use granflow::model::Model;
-use granflow::numerics::two_layer::{TwoLayerGeometry, TwoLayerSolver, TwoLayerState};
+use granflow::numerics::two_layer::{CurvedLine, TwoLayerSolver, TwoLayerState};
 use granflow::output::memory::MemorySink;
 use granflow::physics::two_layer::TwoLayerParams;
 use granflow::scenario::{load_file, load_str, BoundaryKind, Scenario};
@@ -50,12 +50,12 @@ fn depth(x: f64) -> f64 {
     }
 }
 
-fn tsunami(nx: usize) -> (TwoLayerGeometry, TwoLayerState) {
+fn tsunami(nx: usize) -> (CurvedLine, TwoLayerState) {
     let dx = 30_000.0 / nx as f64;
     let bed: Vec<f64> = (0..nx)
         .map(|i| 2500.0 - depth((i as f64 + 0.5) * dx))
         .collect();
-    let g = TwoLayerGeometry::new(0.0, dx, &bed, BoundaryKind::Outflow, BoundaryKind::Outflow);
+    let g = CurvedLine::new(0.0, dx, &bed, BoundaryKind::Outflow, BoundaryKind::Outflow);
     let mut s = TwoLayerState::zeros(nx);
     for i in 1..=nx {
         let x = g.x(i);
@@ -67,9 +67,9 @@ fn tsunami(nx: usize) -> (TwoLayerGeometry, TwoLayerState) {
 }
 
 /// Kernels only: runs to `t_end`; returns (wall seconds, steps).
-fn run_kernels(g: &TwoLayerGeometry, s0: &TwoLayerState, t_end: f64) -> (f64, u64) {
+fn run_kernels(g: &CurvedLine, s0: &TwoLayerState, t_end: f64) -> (f64, u64) {
     let mut s = s0.clone();
-    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 12.0), 0.8, g.nx);
+    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 12.0), 0.8, g.line.nx);
     let start = Instant::now();
     let (mut t, mut steps) = (0.0, 0u64);
     while t < t_end {

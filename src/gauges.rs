@@ -3,7 +3,8 @@
 //!
 //! **In space**, a gauge at x between the cell centres x_i ≤ x ≤ x_{i+1} reads
 //! v = (1 − w) v_i + w v_{i+1}, w = (x − x_i)/Δx, from the model's cell values
-//! ([`Model::gauge_cell`]); a gauge in the outer half cell of the domain (x < x_0 or
+//! ([`Model::gauge_cell`]) with the cells and weights of [`Grid::locate`]; a gauge in
+//! the outer half cell of the domain (x < x_0 or
 //! x > x_{nx−1}) reads the boundary cell's value. So a gauge at a cell centre reads
 //! exactly that cell, and the gauge series at a snapshot time is the snapshot's field
 //! interpolated by [`interpolation`].
@@ -15,40 +16,18 @@
 //! that step's values exactly; the last time of the run is recorded too when it is
 //! not already.
 
-use crate::mesh::Mesh;
+use crate::grid::{Grid, Point, Stencil};
 use crate::model::Model;
 use crate::output::{GaugeRecord, OutputError, OutputSink};
 
-/// Left cell and weight of the linear interpolation at `xg` between the cell centres
-/// `x` (uniform spacing `dx`): v(xg) = (1 − w) v\[i\] + w v\[i + 1\] (v\[i\] alone when
-/// w = 0, which is also the answer outside the centres).
-pub fn interpolation(x: &[f64], dx: f64, xg: f64) -> (usize, f64) {
-    let n = x.len();
-    if n < 2 || xg <= x[0] {
-        return (0, 0.0);
-    }
-    if xg >= x[n - 1] {
-        return (n - 1, 0.0);
-    }
-    let mut i = (((xg - x[0]) / dx).floor() as usize).min(n - 2);
-    // Guard the floor against rounding of the centres.
-    if xg < x[i] && i > 0 {
-        i -= 1;
-    } else if xg >= x[i + 1] {
-        i += 1;
-    }
-    if xg == x[i] {
-        return (i, 0.0);
-    }
-    (i, ((xg - x[i]) / dx).clamp(0.0, 1.0))
-}
+pub use crate::grid::line::interpolate as interpolation;
 
 /// The gauges of one run: positions, interpolation weights and the buffers of the
 /// current and previous values (allocated once).
 #[derive(Debug, Clone)]
 pub struct Gauges {
     x: Vec<f64>,
-    at: Vec<(usize, f64)>,
+    at: Vec<Stencil>,
     every: Option<f64>,
     /// Values after the current step: free surface, grain depth.
     eta: Vec<f64>,
@@ -66,15 +45,12 @@ pub struct Gauges {
 }
 
 impl Gauges {
-    /// Gauges at `x` (inside the mesh), recorded every step or every `every` seconds.
-    pub fn new(mesh: &Mesh, x: &[f64], every: Option<f64>) -> Gauges {
+    /// Gauges at `x` (inside the grid), recorded every step or every `every` seconds.
+    pub fn new<G: Grid>(grid: &G, x: &[f64], every: Option<f64>) -> Gauges {
         let n = x.len();
         Gauges {
             x: x.to_vec(),
-            at: x
-                .iter()
-                .map(|&xg| interpolation(&mesh.x, mesh.dx, xg))
-                .collect(),
+            at: x.iter().map(|&x| grid.locate(Point { x, y: 0.0 })).collect(),
             every,
             eta: vec![0.0; n],
             h: vec![0.0; n],
@@ -95,21 +71,29 @@ impl Gauges {
 
     /// Reads the gauges of `state` into the current values; false if the model has no
     /// gauge values.
-    fn read<M: Model>(&mut self, model: &M, mesh: &Mesh, state: &M::State) -> bool {
+    fn read<M: Model>(&mut self, model: &M, grid: &M::Grid, state: &M::State) -> bool {
         std::mem::swap(&mut self.eta, &mut self.prev_eta);
         std::mem::swap(&mut self.h, &mut self.prev_h);
-        for (k, &(i, w)) in self.at.iter().enumerate() {
-            let Some((eta, h)) = model.gauge_cell(mesh, state, i) else {
+        for (k, stencil) in self.at.iter().enumerate() {
+            let Some((eta, h)) = model.gauge_cell(grid, state, stencil.first()) else {
                 return false;
             };
-            (self.eta[k], self.h[k]) = if w == 0.0 {
-                (eta, h)
-            } else {
+            if stencil.len() == 1 {
+                (self.eta[k], self.h[k]) = (eta, h);
+                continue;
+            }
+            // Σ w_k v_k, the first term from the values already read.
+            let mut pairs = stencil.pairs();
+            let (_, w0) = pairs.next().expect("a stencil has a cell");
+            let (mut eta_sum, mut h_sum) = (w0 * eta, w0 * h);
+            for (cell, w) in pairs {
                 let (eta1, h1) = model
-                    .gauge_cell(mesh, state, i + 1)
+                    .gauge_cell(grid, state, cell)
                     .unwrap_or((f64::NAN, f64::NAN));
-                ((1.0 - w) * eta + w * eta1, (1.0 - w) * h + w * h1)
-            };
+                eta_sum += w * eta1;
+                h_sum += w * h1;
+            }
+            (self.eta[k], self.h[k]) = (eta_sum, h_sum);
         }
         true
     }
@@ -118,11 +102,11 @@ impl Gauges {
     pub fn begin<M: Model>(
         &mut self,
         model: &M,
-        mesh: &Mesh,
+        grid: &M::Grid,
         state: &M::State,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
-        if !self.read(model, mesh, state) {
+        if !self.read(model, grid, state) {
             return Err(OutputError::Io {
                 path: "output.gauges".into(),
                 message: format!("the {} model records no gauges", model.kind()),
@@ -147,12 +131,12 @@ impl Gauges {
     pub fn after_step<M: Model>(
         &mut self,
         model: &M,
-        mesh: &Mesh,
+        grid: &M::Grid,
         state: &M::State,
         t: f64,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
-        self.read(model, mesh, state);
+        self.read(model, grid, state);
         let Some(every) = self.every else {
             return self.emit_current(t, sink);
         };

@@ -1,7 +1,8 @@
 //! granflow: shallow-layer simulator for dry granular flows.
 //!
 //! Architecture (see `docs/architecture.md`): a validated [`scenario::Scenario`] names
-//! a [`model::Model`]; [`setup`] builds its [`mesh::Mesh`], its state and its
+//! a [`model::Model`]; [`setup`] builds its grid (the [`grid`] floor: a
+//! [`grid::Line`] or a [`grid::CurvedLine`]), its state ([`state`]) and its
 //! [`pipeline`] of sub-steps (hyperbolic → friction/viscous → projection, seed 000 §3
 //! and seed 003 §4), which the generic [`simulation::Simulation`] advances in time,
 //! consulting its [`stop`] rules and reporting to an [`output::OutputSink`].
@@ -10,9 +11,9 @@ pub mod catalog;
 pub mod cli;
 pub mod discover;
 pub mod gauges;
+pub mod grid;
 pub mod interrupt;
 pub mod lock;
-pub mod mesh;
 pub mod model;
 pub mod numerics;
 pub mod output;
@@ -24,5 +25,6 @@ pub mod runner;
 pub mod scenario;
 pub mod setup;
 pub mod simulation;
+pub mod state;
 pub mod stop;
 pub mod sweep;

@@ -5,17 +5,17 @@
 
 use std::time::{Duration, Instant};
 
-use crate::mesh::Mesh;
 use crate::numerics::{Stage, StageError};
 
-/// The stages of one model's time step, with their accumulated wall times.
-pub struct Pipeline<S> {
-    stages: Vec<Box<dyn Stage<S>>>,
+/// The stages of one model's time step on grid `G`, acting on state `S`, with their
+/// accumulated wall times.
+pub struct Pipeline<G, S> {
+    stages: Vec<Box<dyn Stage<G, S>>>,
     times: Vec<Duration>,
 }
 
-impl<S> Pipeline<S> {
-    pub fn new(stages: Vec<Box<dyn Stage<S>>>) -> Self {
+impl<G, S> Pipeline<G, S> {
+    pub fn new(stages: Vec<Box<dyn Stage<G, S>>>) -> Self {
         let times = vec![Duration::ZERO; stages.len()];
         Pipeline { stages, times }
     }
@@ -26,17 +26,18 @@ impl<S> Pipeline<S> {
     }
 
     /// Advances `state` by `dt`: every stage's `prepare` with the state at t^n, then
-    /// every stage's `apply` in order. On error the stages leave the state as it was
-    /// before the failing stage; the caller retries from its own copy if it needs one.
-    pub fn advance(&mut self, mesh: &Mesh, dt: f64, state: &mut S) -> Result<(), StageError> {
+    /// every stage's `apply` in order. On error the state is part-way through the step
+    /// (the stages before the failing one have been applied): the caller restores its
+    /// copy of the state at t^n ([`crate::simulation::Simulation::step`] does).
+    pub fn advance(&mut self, grid: &G, dt: f64, state: &mut S) -> Result<(), StageError> {
         for (stage, time) in self.stages.iter_mut().zip(&mut self.times) {
             let start = Instant::now();
-            stage.prepare(mesh, state);
+            stage.prepare(grid, state);
             *time += start.elapsed();
         }
         for (stage, time) in self.stages.iter_mut().zip(&mut self.times) {
             let start = Instant::now();
-            stage.apply(mesh, dt, state)?;
+            stage.apply(grid, dt, state)?;
             *time += start.elapsed();
         }
         Ok(())

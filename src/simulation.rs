@@ -1,11 +1,13 @@
-//! One run of any [`Model`]: owns the mesh, the model, its state and its pipeline, and
+//! One run of any [`Model`]: owns the grid, the model, its state and its pipeline, and
 //! advances them to the end time, reporting snapshots and per-step records to an
 //! output sink.
 //!
 //! Time stepping: Δt = CFL Δx / s, s the model's signal speed (a bound on the wave
 //! speeds its fluxes use, from the diagnostics of the state), shortened to land exactly
 //! on every output time and on t_end; a step that would make h negative (possible only
-//! if the CFL bound is violated) is retried with half the Δt. After every step the
+//! if the CFL bound is violated) is retried with half the Δt from the state before the
+//! step, whichever stage refused it (the loop keeps a copy of the state of t^n in a
+//! buffer allocated once). After every step the
 //! [stop rules](crate::stop) decide whether the run goes on, ends or fails; a failure
 //! names where and when, and what was written stays valid: the sink is always
 //! finished, whatever ends the run.
@@ -13,7 +15,7 @@
 use std::time::Instant;
 
 use crate::gauges::Gauges;
-use crate::mesh::{Grid, Mesh};
+use crate::grid::Grid;
 use crate::model::{Diagnostics, Model};
 use crate::numerics::StageError;
 use crate::output::{GridData, OutputError, OutputSink, RunInfo, RunSummary, StepRecord};
@@ -56,10 +58,13 @@ pub enum RunError {
 const MAX_RETRIES: usize = 12;
 
 pub struct Simulation<M: Model> {
-    pub mesh: Mesh,
+    pub grid: M::Grid,
     pub model: M,
     pub state: M::State,
-    pipeline: Pipeline<M::State>,
+    /// The state at the start of the current step, restored when a stage refuses it
+    /// (allocated once, copied into with `clone_from`).
+    backup: M::State,
+    pipeline: Pipeline<M::Grid, M::State>,
     rules: Vec<Box<dyn StopRule>>,
     pub config: RunConfig,
     pub info: RunInfo,
@@ -103,17 +108,18 @@ impl Tally {
 impl<M: Model> Simulation<M> {
     #[allow(clippy::too_many_arguments)]
     pub fn new(
-        mesh: Mesh,
+        grid: M::Grid,
         model: M,
         state: M::State,
-        pipeline: Pipeline<M::State>,
+        pipeline: Pipeline<M::Grid, M::State>,
         rules: Vec<Box<dyn StopRule>>,
         config: RunConfig,
         info: RunInfo,
     ) -> Simulation<M> {
         Simulation {
-            mesh,
+            grid,
             model,
+            backup: state.clone(),
             state,
             pipeline,
             rules,
@@ -136,7 +142,7 @@ impl<M: Model> Simulation<M> {
     }
 
     pub fn diagnostics(&self) -> Diagnostics {
-        self.model.diagnose(&self.mesh, &self.state)
+        self.model.diagnose(&self.grid, &self.state)
     }
 
     /// Diagnostics of the current state, remembering its signal speed for the next Δt.
@@ -149,13 +155,17 @@ impl<M: Model> Simulation<M> {
     /// The CFL step for the signal speed `s` (∞ when nothing moves).
     fn cfl_dt(&self, s: f64) -> f64 {
         if s > 0.0 {
-            self.config.cfl * self.mesh.cfl_length() / s
+            self.config.cfl * self.grid.cfl_length() / s
         } else {
             f64::INFINITY
         }
     }
 
     /// Advances one step of at most `dt_max`; returns the Δt taken.
+    ///
+    /// The step is transactional: if a stage refuses it, the state of t^n is restored
+    /// before the retry with half the Δt (or before the run fails), whichever stage
+    /// refused and whatever the stages before it changed.
     pub fn step(&mut self, dt_max: f64) -> Result<f64, RunError> {
         let s = match self.signal_speed.take() {
             Some(s) => s,
@@ -163,31 +173,38 @@ impl<M: Model> Simulation<M> {
         };
         let mut dt = self.cfl_dt(s).min(dt_max);
         let mut last_failure = None;
+        self.backup.clone_from(&self.state);
         for _ in 0..=MAX_RETRIES {
-            match self.pipeline.advance(&self.mesh, dt, &mut self.state) {
+            match self.pipeline.advance(&self.grid, dt, &mut self.state) {
                 Ok(()) => {
                     self.steps += 1;
                     return Ok(dt);
                 }
-                Err(StageError::NegativeThickness { x, h }) => {
-                    last_failure = Some((x, h, dt));
+                Err(StageError::NegativeThickness { cell, h }) => {
+                    self.state.clone_from(&self.backup);
+                    last_failure = Some((cell, h, dt));
                     dt *= 0.5;
                 }
-                Err(StageError::Inadmissible { x, quantity, value }) => {
-                    return Err(
-                        self.failure(FailureReason::Inadmissible { quantity, value }, Some(x))
-                    )
+                Err(StageError::Inadmissible {
+                    cell,
+                    quantity,
+                    value,
+                }) => {
+                    self.state.clone_from(&self.backup);
+                    let reason = FailureReason::Inadmissible { quantity, value };
+                    return Err(self.failure(reason, Some(cell)));
                 }
             }
         }
-        let (x, h, dt) = last_failure.expect("at least one attempt");
-        Err(self.failure(FailureReason::NegativeThickness { h, dt }, Some(x)))
+        let (cell, h, dt) = last_failure.expect("at least one attempt");
+        Err(self.failure(FailureReason::NegativeThickness { h, dt }, Some(cell)))
     }
 
-    fn failure(&self, reason: FailureReason, x: Option<f64>) -> RunError {
+    /// The failure `reason` in physical cell `cell` (0-based), placed at its centre.
+    fn failure(&self, reason: FailureReason, cell: Option<usize>) -> RunError {
         RunError::Solver(SolverFailure {
             reason,
-            x,
+            x: cell.map(|i| self.grid.centre(i).x),
             t: self.t,
             step: self.steps,
         })
@@ -205,7 +222,7 @@ impl<M: Model> Simulation<M> {
     }
 
     fn snapshot(&self, sink: &mut dyn OutputSink) -> Result<(), OutputError> {
-        self.model.snapshot(&self.mesh, &self.state, self.t, sink)
+        self.model.snapshot(&self.grid, &self.state, self.t, sink)
     }
 
     /// Runs to `t_end` (or until a stop rule ends it), writing to `sink`. The sink is
@@ -217,8 +234,8 @@ impl<M: Model> Simulation<M> {
     ) -> Result<RunSummary, RunError> {
         let wall = Instant::now();
         let grid = GridData {
-            x: self.mesh.centres(),
-            b: self.mesh.bed(),
+            x: self.grid.axis(0),
+            b: self.grid.bed(),
             h_bed: self.model.bed_layer(),
         };
         sink.begin(&self.info, &grid)?;
@@ -228,7 +245,7 @@ impl<M: Model> Simulation<M> {
             front0: d0.front_x,
             last: d0,
             rest_since: (d0.max_speed <= self.model.rest_speed()).then_some(0.0),
-            max_wave: self.model.wave_amplitude(&self.mesh, &self.state),
+            max_wave: self.model.wave_amplitude(&self.grid, &self.state),
             mass0: d0.mass,
             ke_peak: d0.kinetic_energy,
             settled_since: None,
@@ -259,13 +276,13 @@ impl<M: Model> Simulation<M> {
         d0: Diagnostics,
     ) -> Result<&'static str, RunError> {
         if let Some(i) = d0.non_finite_at {
-            return Err(self.failure(FailureReason::NonFinite, Some(self.mesh.centres()[i])));
+            return Err(self.failure(FailureReason::NonFinite, Some(i)));
         }
         sink.step(&self.record(&d0, 0.0))?;
         let mut gauges = (!self.config.gauges.is_empty())
-            .then(|| Gauges::new(&self.mesh, &self.config.gauges, self.config.gauge_every));
+            .then(|| Gauges::new(&self.grid, &self.config.gauges, self.config.gauge_every));
         if let Some(g) = gauges.as_mut() {
-            g.begin(&self.model, &self.mesh, &self.state, sink)?;
+            g.begin(&self.model, &self.grid, &self.state, sink)?;
         }
         self.snapshot(sink)?;
         let status = self.time_loop(sink, progress, tally, gauges.as_mut());
@@ -300,7 +317,7 @@ impl<M: Model> Simulation<M> {
                 steps: self.steps,
                 diagnostics: &d,
                 next_dt: self.cfl_dt(d.signal_speed),
-                x: self.mesh.centres(),
+                x: self.grid.axis(0),
                 at_rest,
                 mass0: tally.mass0,
             };
@@ -316,9 +333,9 @@ impl<M: Model> Simulation<M> {
             }
             sink.step(&self.record(&d, dt))?;
             if let Some(g) = gauges.as_deref_mut() {
-                g.after_step(&self.model, &self.mesh, &self.state, self.t, sink)?;
+                g.after_step(&self.model, &self.grid, &self.state, self.t, sink)?;
             }
-            if let Some(a) = self.model.wave_amplitude(&self.mesh, &self.state) {
+            if let Some(a) = self.model.wave_amplitude(&self.grid, &self.state) {
                 tally.max_wave = Some(tally.max_wave.map_or(a, |m| m.max(a)));
             }
             tally.rest_since = if at_rest {

@@ -3,14 +3,14 @@
 //! energy, stiff dilatancy, the uniform steady flow on an incline, and the collapse
 //! results of seed 002 §4.3.
 
-use granflow::mesh::{Mesh, MeshSpec};
+use granflow::grid::{Line, LineSpec};
 use granflow::numerics::dilatant::stabilisation::Viscosity;
-use granflow::numerics::dilatant::state::DilatantState;
+use granflow::state::dilatant::DilatantState;
 use granflow::numerics::dilatant::step::{DilatantError, DilatantOptions, DilatantScheme};
 use granflow::physics::dilatancy::DilatantLaw;
 use granflow::scenario::{BoundaryKind, Coordinates};
 
-fn mesh(x_min: f64, x_max: f64, cells: usize, slope_deg: f64, walls: (bool, bool)) -> Mesh {
+fn mesh(x_min: f64, x_max: f64, cells: usize, slope_deg: f64, walls: (bool, bool)) -> Line {
     let kind = |wall: bool| {
         if wall {
             BoundaryKind::Wall
@@ -18,7 +18,7 @@ fn mesh(x_min: f64, x_max: f64, cells: usize, slope_deg: f64, walls: (bool, bool
             BoundaryKind::Outflow
         }
     };
-    let spec = MeshSpec {
+    let spec = LineSpec {
         x_min,
         x_max,
         cells,
@@ -27,11 +27,11 @@ fn mesh(x_min: f64, x_max: f64, cells: usize, slope_deg: f64, walls: (bool, bool
         left: kind(walls.0),
         right: kind(walls.1),
     };
-    Mesh::new(&spec, vec![0.0; cells])
+    Line::new(&spec, vec![0.0; cells])
 }
 
 fn state(
-    mesh: &Mesh,
+    mesh: &Line,
     h: impl Fn(f64) -> f64,
     v: impl Fn(f64) -> f64,
     phi: impl Fn(f64) -> f64,
@@ -45,7 +45,7 @@ fn state(
 /// Runs to `t_end` with the CFL step, calling `each` after every step with (t, dt).
 fn run(
     scheme: &mut DilatantScheme,
-    mesh: &Mesh,
+    mesh: &Line,
     s: &mut DilatantState,
     t_end: f64,
     mut each: impl FnMut(&DilatantState, f64, f64),
@@ -132,11 +132,11 @@ fn mass_above_repose_moves() {
 }
 
 /// Column collapse of seed 002 §4: 14 cm × 20 cm behind a wall at x = −0.2 m.
-fn collapse(slope: f64, x_max: f64, cells: usize) -> Mesh {
+fn collapse(slope: f64, x_max: f64, cells: usize) -> Line {
     mesh(-0.2, x_max, cells, slope, (true, false))
 }
 
-fn column(mesh: &Mesh, phi0: f64) -> DilatantState {
+fn column(mesh: &Line, phi0: f64) -> DilatantState {
     state(
         mesh,
         |x| if x <= 0.0 { 0.14 } else { 0.0 },
@@ -216,7 +216,7 @@ fn stiff_dilatancy_does_not_shorten_the_step() {
     }
 }
 
-fn scheme_cfl(mesh: &Mesh, s: &DilatantState) -> f64 {
+fn scheme_cfl(mesh: &Line, s: &DilatantState) -> f64 {
     let scheme = DilatantScheme::new(DilatantLaw::table1(), DilatantOptions::default(), mesh.nx);
     scheme.max_dt(mesh, s)
 }
@@ -271,7 +271,7 @@ fn uniform_flow_on_an_incline_reaches_the_critical_state() {
 }
 
 /// Front position (largest x with h > 1 mm) and maximum thickness.
-fn front_and_max(mesh: &Mesh, s: &DilatantState) -> (f64, f64) {
+fn front_and_max(mesh: &Line, s: &DilatantState) -> (f64, f64) {
     let mut front = mesh.x_min;
     let mut h_max: f64 = 0.0;
     for j in 1..=s.nx {
@@ -390,8 +390,8 @@ fn paper_viscosity_breaks_the_fraction_bound_at_the_front() {
 
 /// The existing Savage–Hutter μ(I) monolayer (src/numerics/hydrostatic.rs +
 /// friction.rs) on the same collapse, to t_end: returns the thickness per cell.
-fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (Mesh, Vec<f64>) {
-    use granflow::model::granular::state::LayeredState as State;
+fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (Line, Vec<f64>) {
+    use granflow::state::layered::LayeredState as State;
     use granflow::numerics::friction::CoulombFrictionStep;
     use granflow::numerics::hydrostatic::HydrostaticStep;
     use granflow::numerics::Stage;
@@ -874,7 +874,7 @@ mod split_scheme {
     use super::*;
     use granflow::numerics::dilatant::split::SplitScheme;
 
-    fn cfl_dt(mesh: &Mesh, s: &DilatantState) -> f64 {
+    fn cfl_dt(mesh: &Line, s: &DilatantState) -> f64 {
         let speed = (1..=s.nx)
             .map(|j| {
                 let u = if s.h[j] > 1e-10 {
@@ -890,7 +890,7 @@ mod split_scheme {
 
     fn run_split(
         scheme: &mut SplitScheme,
-        mesh: &Mesh,
+        mesh: &Line,
         s: &mut DilatantState,
         t_end: f64,
         mut each: impl FnMut(&DilatantState),

@@ -5,16 +5,16 @@
 //! raise a smaller wave; Fig. 8a: deposits for δ₀ ≤ 12° fully submerged, 13° not;
 //! §5.3 a positive wave ahead of the slide and a trough above it.
 
-use granflow::numerics::two_layer::{TwoLayerGeometry, TwoLayerSolver, TwoLayerState};
+use granflow::numerics::two_layer::{CurvedLine, TwoLayerSolver, TwoLayerState};
 use granflow::physics::two_layer::TwoLayerParams;
 use granflow::scenario::BoundaryKind;
 
 const FREE: BoundaryKind = BoundaryKind::Outflow;
 
-fn geometry(nx: usize, len: f64, bed: impl Fn(f64) -> f64) -> TwoLayerGeometry {
+fn geometry(nx: usize, len: f64, bed: impl Fn(f64) -> f64) -> CurvedLine {
     let dx = len / nx as f64;
     let b: Vec<f64> = (0..nx).map(|i| bed((i as f64 + 0.5) * dx)).collect();
-    TwoLayerGeometry::new(0.0, dx, &b, FREE, FREE)
+    CurvedLine::new(0.0, dx, &b, FREE, FREE)
 }
 
 fn all_stopped(s: &TwoLayerState) -> bool {
@@ -32,18 +32,18 @@ fn sane(s: &TwoLayerState) -> bool {
 #[test]
 fn submarine_landslide_stops_on_the_slope_and_its_waves_leave() {
     let g = geometry(200, 10.0, |x| 0.2 * x);
-    let mut s = TwoLayerState::zeros(g.nx);
-    for i in 1..=g.nx {
+    let mut s = TwoLayerState::zeros(g.line.nx);
+    for i in 1..=g.line.nx {
         if (7.0..=8.0).contains(&g.x(i)) {
             s.h2[i] = 1.0 / g.cos[i];
         }
-        s.h1[i] = (2.7 - g.b[i]) / g.cos2[i] - s.h2[i];
+        s.h1[i] = (2.7 - g.b()[i]) / g.cos2[i] - s.h2[i];
     }
-    let v2 = s.volume(2, g.dx);
-    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 25.0), 0.8, g.nx);
+    let v2 = s.volume(2, g.line.dx);
+    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 25.0), 0.8, g.line.nx);
     let (mut t, mut t_stop, mut amp_max) = (0.0, None, 0.0f64);
     let amp = |s: &TwoLayerState| {
-        (1..=g.nx)
+        (1..=g.line.nx)
             .map(|i| (s.eta(&g, i) - 2.7).abs())
             .fold(0.0, f64::max)
     };
@@ -56,7 +56,7 @@ fn submarine_landslide_stops_on_the_slope_and_its_waves_leave() {
     }
     assert!(sane(&s));
     let t_stop = t_stop.expect("the slide never stopped");
-    let front = (1..=g.nx)
+    let front = (1..=g.line.nx)
         .filter(|&i| s.h2[i] > 1e-4)
         .map(|i| g.x(i))
         .fold(10.0, f64::min);
@@ -64,7 +64,7 @@ fn submarine_landslide_stops_on_the_slope_and_its_waves_leave() {
     // Measured (200 cells): stops at 2.22 s, front 3.725, wave 0.338 m, 4.6e-3 m left.
     assert!(t_stop < 5.0 && all_stopped(&s));
     // Stopped on the slope: no grain reached the boundary, none left the domain.
-    assert!(front > 1.0 && (s.volume(2, g.dx) - v2).abs() < 1e-12 * v2);
+    assert!(front > 1.0 && (s.volume(2, g.line.dx) - v2).abs() < 1e-12 * v2);
     assert!(amp_max > 0.1, "no wave raised");
     assert!(amp(&s) < 0.05 * amp_max, "the waves did not leave");
 }
@@ -83,19 +83,19 @@ struct LakeResult {
 /// slope above the shoreline; its text says the grains sit on [1.5, 2.5].
 fn lake(delta0: f64, t_end: f64) -> LakeResult {
     let g = geometry(200, 10.0, |x| if x <= 5.0 { 1.0 - x / 5.0 } else { 0.0 });
-    let mut s = TwoLayerState::zeros(g.nx);
-    for i in 1..=g.nx {
+    let mut s = TwoLayerState::zeros(g.line.nx);
+    for i in 1..=g.line.nx {
         if (1.5..=2.5).contains(&g.x(i)) {
-            s.h2[i] = (0.7 - g.b[i]).max(0.0) / g.cos2[i];
+            s.h2[i] = (0.7 - g.b()[i]).max(0.0) / g.cos2[i];
         }
-        s.h1[i] = (0.4 - g.b[i]).max(0.0) / g.cos2[i];
+        s.h1[i] = (0.4 - g.b()[i]).max(0.0) / g.cos2[i];
     }
-    let v2 = s.volume(2, g.dx);
-    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, delta0), 0.8, g.nx);
+    let v2 = s.volume(2, g.line.dx);
+    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, delta0), 0.8, g.line.nx);
     let (mut t, mut wave) = (0.0, 0.0f64);
     while t < t_end {
         t += solver.step(&g, &mut s, t_end - t);
-        for i in 1..=g.nx {
+        for i in 1..=g.line.nx {
             if s.h1[i] > 1e-6 {
                 wave = wave.max(s.eta(&g, i) - 0.4);
             }
@@ -105,7 +105,7 @@ fn lake(delta0: f64, t_end: f64) -> LakeResult {
         }
     }
     assert!(sane(&s));
-    assert!((s.volume(2, g.dx) - v2).abs() < 1e-12 * v2);
+    assert!((s.volume(2, g.line.dx) - v2).abs() < 1e-12 * v2);
     let mut r = LakeResult {
         front: 0.0,
         stopped: all_stopped(&s),
@@ -117,13 +117,13 @@ fn lake(delta0: f64, t_end: f64) -> LakeResult {
     // edge cell with a dry neighbour feels half the slope (first-order front, in the
     // paper's scheme too) and can keep a sub-millimetre residue where the slide
     // started (0.24 mm for δ₀ = 11.31°), which Fig. 8 cannot show.
-    for i in 1..=g.nx {
+    for i in 1..=g.line.nx {
         if s.h2[i] > 1e-3 {
             r.front = r.front.max(g.x(i));
             if s.h1[i] > 1e-6 {
-                r.submerged += s.h2[i] * g.dx;
+                r.submerged += s.h2[i] * g.line.dx;
             } else {
-                r.emerged += s.h2[i] * g.dx;
+                r.emerged += s.h2[i] * g.line.dx;
             }
         }
     }

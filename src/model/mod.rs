@@ -1,6 +1,7 @@
 //! Models: what is simulated, apart from how the time loop runs it.
 //!
-//! A [`Model`] owns its conserved variables (the associated `State`), its diagnostics
+//! A [`Model`] names its grid (the associated `Grid`, from `grid/`) and its conserved
+//! variables (the associated `State`, from `state/`), and owns its diagnostics
 //! (masses, energy, front, the signal speed of the CFL step) and its output fields.
 //! Its physics (pointwise fluxes, wave speeds, sources) lives in `physics/`, its loops
 //! over the grid are [`Stage`](crate::numerics::Stage)s of `numerics/` acting on its
@@ -12,13 +13,15 @@
 //! - [`granular`]: the layered family of seeds 000, 001 and 003 (Savage–Hutter with
 //!   Coulomb or μ(I) friction, the multilayer μ(I) model, the weakly non-hydrostatic
 //!   monolayer model).
+//! - [`submarine`]: the two-layer water-over-grains model of seed 004, on a
+//!   [`CurvedLine`](crate::grid::CurvedLine).
 //! - [`dilatant`]: the compressible μ(I)–φ model of seed 002 (volume fraction φ).
 
 pub mod dilatant;
 pub mod granular;
 pub mod submarine;
 
-use crate::mesh::Mesh;
+use crate::grid::Grid;
 use crate::output::{OutputError, OutputSink};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,16 +65,20 @@ pub struct Diagnostics {
     pub non_finite_at: Option<usize>,
 }
 
-/// A simulated model: its state, its diagnostics and its output.
+/// A simulated model: its grid, its state, its diagnostics and its output.
 pub trait Model: Send + 'static {
-    /// The conserved variables (cell averages with ghost cells).
-    type State: Send;
+    /// The grid its stages loop over.
+    type Grid: Grid;
+    /// The conserved variables (cell averages with ghost cells). `Clone` so that the
+    /// run loop can keep the state of t^n (copied with `clone_from` into one buffer)
+    /// and restore it when a step is refused.
+    type State: Clone + Send;
 
     /// `model.kind`, as written to the output file.
     fn kind(&self) -> &'static str;
 
     /// Diagnostics of `state` in one pass over the cells.
-    fn diagnose(&self, mesh: &Mesh, state: &Self::State) -> Diagnostics;
+    fn diagnose(&self, grid: &Self::Grid, state: &Self::State) -> Diagnostics;
 
     /// Largest speed (m/s) of a mass that counts as at rest (0: exactly at rest).
     fn rest_speed(&self) -> f64 {
@@ -85,21 +92,21 @@ pub trait Model: Send + 'static {
     /// depth), in m. The run loop interpolates them linearly between cell centres
     /// ([`crate::gauges`]). `None` (the default): the model records no gauges, and a
     /// run that asks for them fails before its first step.
-    fn gauge_cell(&self, _mesh: &Mesh, _state: &Self::State, _i: usize) -> Option<(f64, f64)> {
+    fn gauge_cell(&self, _grid: &Self::Grid, _state: &Self::State, _i: usize) -> Option<(f64, f64)> {
         None
     }
 
     /// For models with a water surface: the largest |η − η₀| over the cells wet now and
     /// at t = 0 (m), η₀ the initial surface. The run loop reports its maximum over time
     /// as the summary's `max_wave_amplitude`. `None` (the default): no water surface.
-    fn wave_amplitude(&self, _mesh: &Mesh, _state: &Self::State) -> Option<f64> {
+    fn wave_amplitude(&self, _grid: &Self::Grid, _state: &Self::State) -> Option<f64> {
         None
     }
 
     /// Hands the snapshot of `state` at time `t` to `sink`.
     fn snapshot(
         &self,
-        mesh: &Mesh,
+        grid: &Self::Grid,
         state: &Self::State,
         t: f64,
         sink: &mut dyn OutputSink,

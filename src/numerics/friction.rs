@@ -16,8 +16,8 @@
 //! centred split ½ g_n h̄ Δη of the printed scheme and is not needed (docs/numerics.md).
 
 use super::{Stage, StageError};
-use crate::mesh::Mesh;
-use crate::model::granular::state::LayeredState;
+use crate::grid::Line;
+use crate::state::layered::LayeredState;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
 
@@ -44,12 +44,12 @@ pub fn coulomb_update(q: f64, dt_sigma: f64) -> f64 {
     }
 }
 
-impl<L: BasalFriction> Stage<LayeredState> for CoulombFrictionStep<L> {
+impl<L: BasalFriction> Stage<Line, LayeredState> for CoulombFrictionStep<L> {
     fn name(&self) -> &'static str {
         "friction"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, 1);
         let g_n = mesh.g_n;
         let nx = mesh.nx;

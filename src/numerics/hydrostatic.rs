@@ -119,8 +119,8 @@
 
 use super::tracer::TracerTransport;
 use super::{Stage, StageError};
-use crate::mesh::Mesh;
-use crate::model::granular::state::LayeredState;
+use crate::grid::Line;
+use crate::state::layered::LayeredState;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{sheared_celerity, velocity, H_DRY};
 
@@ -553,7 +553,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     /// term at every interface k (between cells k and k + 1, ghosts included).
     fn interfaces<F: FaceFriction>(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         dt: f64,
         l_frac: &[f64],
         h: &[f64],
@@ -634,7 +634,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     /// order: the results are those of the N-layer path with N = 1).
     fn monolayer_interfaces<F: FaceFriction>(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         dt: f64,
         h: &[f64],
         hu: &[f64],
@@ -772,12 +772,12 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     }
 }
 
-impl<L: BasalFriction> Stage<LayeredState> for HydrostaticStep<L> {
+impl<L: BasalFriction> Stage<Line, LayeredState> for HydrostaticStep<L> {
     fn name(&self) -> &'static str {
         "hyperbolic"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         let law = self.law;
         self.apply_with_friction(mesh, dt, state, &law)
     }
@@ -790,7 +790,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     /// itself, which ignores the face: same operations, same results.
     pub fn apply_with_friction<F: FaceFriction>(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         dt: f64,
         state: &mut LayeredState,
         faces: &F,
@@ -820,7 +820,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         let tolerance = -1e-14 * (1.0 + state.h[worst.1].abs());
         if worst.0 < tolerance {
             return Err(StageError::NegativeThickness {
-                x: mesh.x[worst.1 - 1],
+                cell: worst.1 - 1,
                 h: worst.0,
             });
         }

@@ -1,6 +1,11 @@
 //! Numerics: loops over the grid. The time step is a pipeline of [`Stage`]s built
 //! from the scenario (seed 000 §3, seed 003 §4): hyperbolic → friction or viscous
 //! (→ projection).
+//!
+//! A stage is written for one grid type and one state type (`Stage<Line,
+//! LayeredState>`, `Stage<CurvedLine, TwoLayerState>`): its face loops are that grid's.
+//! This module imports the grid floor (`grid/`), the states (`state/`) and `physics/`,
+//! never `model/` or `scenario/`.
 
 pub mod banded;
 pub mod dilatant;
@@ -15,30 +20,30 @@ pub mod tracer;
 pub mod two_layer;
 pub mod viscous;
 
-use crate::mesh::Mesh;
-
-/// Why a stage could not complete a step.
+/// Why a stage could not complete a step. The place is a physical cell index (0-based,
+/// as [`crate::grid::Grid::centre`] takes it); the run loop turns it into a position.
 #[derive(Debug, Clone, PartialEq)]
 pub enum StageError {
-    /// The step would make h negative at x: retry with a smaller Δt.
-    NegativeThickness { x: f64, h: f64 },
-    /// The step would leave the model's admissible states at x (e.g. a volume fraction
-    /// outside (0, 1)): the run fails, naming the place and the quantity.
+    /// The step would make h negative in `cell`: retry with a smaller Δt.
+    NegativeThickness { cell: usize, h: f64 },
+    /// The step would leave the model's admissible states in `cell` (e.g. a volume
+    /// fraction outside (0, 1)): the run fails, naming the place and the quantity.
     Inadmissible {
-        x: f64,
+        cell: usize,
         quantity: &'static str,
         value: f64,
     },
 }
 
-/// One sub-step of the splitting scheme, acting on a model's state `S`.
-pub trait Stage<S>: Send {
+/// One sub-step of the splitting scheme, on grid `G`, acting on a model's state `S`.
+pub trait Stage<G, S>: Send {
     /// Stable name, used for the stage timers (`time_<name>_s`).
     fn name(&self) -> &'static str;
     /// Called once per time step, before any stage is applied, with the state at t^n
     /// (again when a step is retried). Stages whose coefficients are frozen at t^n
     /// (the multilayer viscous step) compute them here; the default does nothing.
-    fn prepare(&mut self, _mesh: &Mesh, _state: &S) {}
-    /// Advances `state` by `dt`. On error the state must be left unchanged.
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut S) -> Result<(), StageError>;
+    fn prepare(&mut self, _grid: &G, _state: &S) {}
+    /// Advances `state` by `dt`. On error the state may be left part-way: the run loop
+    /// restores the state of t^n before it retries or fails.
+    fn apply(&mut self, grid: &G, dt: f64, state: &mut S) -> Result<(), StageError>;
 }

@@ -31,8 +31,8 @@
 use super::projection::multilayer::SharedOperator;
 use super::viscous::MultilayerViscousStep;
 use super::{Stage, StageError};
-use crate::mesh::Mesh;
-use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
+use crate::grid::Line;
+use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
 
@@ -54,14 +54,14 @@ pub struct NhViscousStep<L: BasalFriction + LocalFriction> {
 }
 
 impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
-    pub fn new(mesh: &Mesh, l: &[f64], viscous: MultilayerViscousStep<L>) -> Self {
+    pub fn new(mesh: &Line, l: &[f64], viscous: MultilayerViscousStep<L>) -> Self {
         Self::with_operator(mesh, SharedOperator::new(mesh, l), viscous)
     }
 
     /// With the operator that the projection of step 3 uses too (its coefficients
     /// are then computed once per step).
     pub fn with_operator(
-        mesh: &Mesh,
+        mesh: &Line,
         operator: SharedOperator,
         viscous: MultilayerViscousStep<L>,
     ) -> Self {
@@ -84,7 +84,7 @@ impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
     }
 
     /// Adds the explicit terms Δt 𝒯 pⁿ to hu and hw (the first half of the step).
-    pub fn apply_explicit_pressure(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) {
+    pub fn apply_explicit_pressure(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) {
         let nh = state.nh.as_ref().expect("non-hydrostatic state");
         if nh.p.iter().all(|&p| p == 0.0) {
             return;
@@ -100,12 +100,12 @@ impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
     }
 }
 
-impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for NhViscousStep<L> {
+impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for NhViscousStep<L> {
     fn name(&self) -> &'static str {
         "viscous"
     }
 
-    fn prepare(&mut self, mesh: &Mesh, state: &LayeredState) {
+    fn prepare(&mut self, mesh: &Line, state: &LayeredState) {
         if !self.lagged || self.viscous_hu.len() != state.hu.len() {
             // The paper's freezing at tⁿ, and the first step of a lagged run.
             self.viscous.prepare(mesh, state);
@@ -117,7 +117,7 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for NhViscousStep<L> 
             .prepare_with_discharges(mesh, state, &self.viscous_hu);
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         self.apply_explicit_pressure(mesh, dt, state);
         self.viscous.apply(mesh, dt, state)?;
         if self.lagged {
@@ -150,8 +150,8 @@ impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for NhViscousStep<L> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::MeshSpec;
-    use crate::mesh::{BoundaryKind, Coordinates};
+    use crate::grid::LineSpec;
+    use crate::grid::{BoundaryKind, Coordinates};
     use crate::numerics::projection::multilayer::MultilayerOperator;
     use crate::numerics::viscous::ViscousOptions;
     use crate::numerics::viscous::{BasalCondition, Regularization};
@@ -178,8 +178,8 @@ mod tests {
         }
     }
 
-    fn setup(layers: usize) -> (Mesh, LayeredState) {
-        let spec = MeshSpec {
+    fn setup(layers: usize) -> (Line, LayeredState) {
+        let spec = LineSpec {
             x_min: 0.0,
             x_max: 0.5,
             cells: 50,
@@ -189,7 +189,7 @@ mod tests {
             right: BoundaryKind::Wall,
         };
         let x = spec.centres();
-        let mesh = Mesh::new(&spec, vec![0.0; 50]);
+        let mesh = Line::new(&spec, vec![0.0; 50]);
         let h: Vec<f64> = x
             .iter()
             .map(|x| 0.02 + 0.05 * (-(x - 0.25f64).powi(2) / 0.01).exp())

@@ -22,8 +22,8 @@
 
 use super::projection::monolayer::{cell_coefficients, doubled_bed};
 use super::{Stage, StageError};
-use crate::mesh::Mesh;
-use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
+use crate::grid::Line;
+use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
 
@@ -35,7 +35,7 @@ pub struct NhFrictionStep<L: BasalFriction> {
 }
 
 impl<L: BasalFriction> NhFrictionStep<L> {
-    pub fn new(law: L, mesh: &Mesh) -> Self {
+    pub fn new(law: L, mesh: &Line) -> Self {
         NhFrictionStep {
             law,
             two_b: doubled_bed(mesh),
@@ -43,12 +43,12 @@ impl<L: BasalFriction> NhFrictionStep<L> {
     }
 }
 
-impl<L: BasalFriction> Stage<LayeredState> for NhFrictionStep<L> {
+impl<L: BasalFriction> Stage<Line, LayeredState> for NhFrictionStep<L> {
     fn name(&self) -> &'static str {
         "friction"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, 1);
         let g_n = mesh.g_n;
         let inv_dx = 1.0 / mesh.dx;

@@ -35,7 +35,7 @@
 //!
 //! [`HydrostaticStep`]: super::hydrostatic::HydrostaticStep
 
-use crate::model::granular::state::{fill_tracer_ghosts, Tracer};
+use crate::state::layered::{fill_tracer_ghosts, Tracer};
 use crate::physics::shallow::H_DRY;
 
 /// Scratch of the transport: concentrations before the step and face fluxes.
@@ -205,8 +205,8 @@ impl TracerTransport {
 
 #[cfg(test)]
 mod tests {
-    use crate::mesh::{BoundaryKind, Coordinates, Mesh, MeshSpec};
-    use crate::model::granular::state::LayeredState;
+    use crate::grid::{BoundaryKind, Coordinates, Line, LineSpec};
+    use crate::state::layered::LayeredState;
     use crate::numerics::hydrostatic::HydrostaticStep;
     use crate::numerics::Stage;
     use crate::physics::rheology::Coulomb;
@@ -215,8 +215,8 @@ mod tests {
     const N: usize = 4;
     const NX: usize = 400;
 
-    fn mesh() -> Mesh {
-        let spec = MeshSpec {
+    fn mesh() -> Line {
+        let spec = LineSpec {
             x_min: 0.0,
             x_max: 1.0,
             cells: NX,
@@ -225,11 +225,11 @@ mod tests {
             left: BoundaryKind::Wall,
             right: BoundaryKind::Wall,
         };
-        Mesh::new(&spec, vec![0.0; NX])
+        Line::new(&spec, vec![0.0; NX])
     }
 
     /// A sheared column: u_α = ū + s_α sin(2πx), Σ l_α s_α = 0, w_α given per layer.
-    fn state(mesh: &Mesh, h: impl Fn(f64) -> f64, u_mean: f64, w: [f64; N]) -> LayeredState {
+    fn state(mesh: &Line, h: impl Fn(f64) -> f64, u_mean: f64, w: [f64; N]) -> LayeredState {
         let l = vec![1.0 / N as f64; N];
         let x = &mesh.x;
         let hs: Vec<f64> = x.iter().map(|&x| h(x)).collect();
@@ -251,7 +251,7 @@ mod tests {
         s
     }
 
-    fn step(mesh: &Mesh, s: &mut LayeredState, dt: f64) {
+    fn step(mesh: &Line, s: &mut LayeredState, dt: f64) {
         // μ = 0: no Coulomb-aware diffusion, so that only the transport acts on hw.
         let mut hyp = HydrostaticStep::with_layers(Coulomb { mu: 0.0 }, NX, N);
         hyp.apply(mesh, dt, s).unwrap();
@@ -262,7 +262,7 @@ mod tests {
     #[test]
     fn both_builds_give_the_same_bits() {
         use super::TracerTransport;
-        use crate::model::granular::state::Tracer;
+        use crate::state::layered::Tracer;
         for n in [1, 3, 20] {
             let nx = 50;
             let wave = |k: usize, a: f64| (0.37 * k as f64 + a).sin();

@@ -63,8 +63,8 @@
 
 use super::friction::coulomb_update;
 use super::{Stage, StageError};
-use crate::mesh::Mesh;
-use crate::model::granular::state::LayeredState;
+use crate::grid::Line;
+use crate::state::layered::LayeredState;
 use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::{velocity, H_DRY};
 use crate::physics::GRAVITY;
@@ -356,7 +356,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     /// Freezes the coefficients of one wet cell `i` at the state t^n, with the layer
     /// discharges `hu` (those of `state`, or of the last viscous solve for the
     /// non-hydrostatic model's lagged freezing).
-    fn freeze_cell(&mut self, mesh: &Mesh, state: &LayeredState, hu: &[f64], i: usize) {
+    fn freeze_cell(&mut self, mesh: &Line, state: &LayeredState, hu: &[f64], i: usize) {
         let n = self.layers;
         let inv_h = 1.0 / state.h[i];
         for (u, q) in self.velocity.iter_mut().zip(&hu[i * n..(i + 1) * n]) {
@@ -368,7 +368,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     /// [`Stage::prepare`] with the discharges `hu` in place of `state.hu` (h, the layer
     /// fractions and p^nh are those of `state`): the lagged freezing of
     /// [`crate::numerics::nh_multilayer::NhViscousStep`].
-    pub fn prepare_with_discharges(&mut self, mesh: &Mesh, state: &LayeredState, hu: &[f64]) {
+    pub fn prepare_with_discharges(&mut self, mesh: &Line, state: &LayeredState, hu: &[f64]) {
         debug_assert_eq!(state.layers, self.layers);
         debug_assert_eq!(hu.len(), state.hu.len());
         let n = self.layers;
@@ -397,7 +397,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     /// Computes the coefficients of cell `i` (thicknesses `hs`, layer fractions `l`)
     /// for the velocities in `self.velocity`; the C-MSM x-derivative takes the
     /// neighbours' discharges from `around`.
-    fn freeze_loaded(&mut self, mesh: &Mesh, hs: &[f64], l: &[f64], around: &[f64], i: usize) {
+    fn freeze_loaded(&mut self, mesh: &Line, hs: &[f64], l: &[f64], around: &[f64], i: usize) {
         let n = self.layers;
         let g_n = mesh.g_n;
         let h = hs[i];
@@ -488,7 +488,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     /// p^nh_{α+1/2} (module documentation); `velocity` holds u^n.
     fn freeze_cell_nonhydrostatic(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         hs: &[f64],
         l: &[f64],
         around: &[f64],
@@ -678,16 +678,16 @@ fn eliminate_column<const K: usize>(
     }
 }
 
-impl<L: BasalFriction + LocalFriction> Stage<LayeredState> for MultilayerViscousStep<L> {
+impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for MultilayerViscousStep<L> {
     fn name(&self) -> &'static str {
         "viscous"
     }
 
-    fn prepare(&mut self, mesh: &Mesh, state: &LayeredState) {
+    fn prepare(&mut self, mesh: &Line, state: &LayeredState) {
         self.prepare_with_discharges(mesh, state, &state.hu);
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         let n = self.layers;
         let g_n = mesh.g_n;
         let implicit = match self.opts.viscosity {
@@ -784,7 +784,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     #[allow(clippy::too_many_arguments)]
     fn evaluate(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         dt: f64,
         hs: &[f64],
         l: &[f64],
@@ -1023,7 +1023,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     /// fails, until [`evaluate`](Self::evaluate) accepts the iterate.
     fn iterate(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         dt: f64,
         state: &mut LayeredState,
         q_star: &[f64],
@@ -1058,7 +1058,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
             while !ok {
                 if solves >= max_iterations {
                     return Err(StageError::Inadmissible {
-                        x: mesh.x[i - 1],
+                        cell: i - 1,
                         quantity: "residual (m/s) of the implicit viscous step after \
                                    rheology.viscosity_iterations solves (rheology.viscosity = \"implicit\")",
                         value: worst,
@@ -1160,12 +1160,12 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
 #[allow(clippy::needless_range_loop)] // index arithmetic mirrors the equations
 mod tests {
     use super::*;
-    use crate::mesh::{BoundaryKind, Coordinates};
-    use crate::mesh::{Mesh, MeshSpec};
+    use crate::grid::{BoundaryKind, Coordinates};
+    use crate::grid::{Line, LineSpec};
     use crate::physics::rheology::{Coulomb, MuI};
 
-    fn mesh(cells: usize, slope_deg: f64) -> Mesh {
-        let spec = MeshSpec {
+    fn mesh(cells: usize, slope_deg: f64) -> Line {
+        let spec = LineSpec {
             x_min: 0.0,
             x_max: cells as f64 * 0.01,
             cells,
@@ -1174,7 +1174,7 @@ mod tests {
             left: BoundaryKind::Outflow,
             right: BoundaryKind::Outflow,
         };
-        Mesh::new(&spec, vec![0.0; cells])
+        Line::new(&spec, vec![0.0; cells])
     }
 
     fn options(basal: BasalCondition) -> ViscousOptions {

@@ -22,7 +22,7 @@ pub use validate::{load_file, load_str};
 
 use std::path::PathBuf;
 
-pub use crate::mesh::{BoundaryKind, Coordinates};
+pub use crate::grid::{BoundaryKind, Coordinates};
 pub use crate::model::dilatant::DilatantSpec;
 pub use crate::model::granular::config::{MultilayerSpec, Pressure};
 pub use crate::model::submarine::SubmarineSpec;

@@ -3,14 +3,15 @@
 //! centres and builds the one-stage pipeline. Everything that can be wrong with the
 //! scenario was refused by its validation.
 
+use crate::grid::Line;
 use crate::model::dilatant::{Dilatant, DilatantScheme, REST_SPEED};
 use crate::numerics::dilatant::split::SplitScheme;
-use crate::numerics::dilatant::state::DilatantState;
+use crate::state::dilatant::DilatantState;
 use crate::numerics::dilatant::step::SchemeKind;
 use crate::numerics::Stage;
 use crate::pipeline::Pipeline;
 use crate::scenario::Scenario;
-use crate::setup::{mesh_of, run_config, run_info};
+use crate::setup::{line_of, run_config, run_info};
 use crate::simulation::Simulation;
 
 pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
@@ -22,7 +23,7 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
         .phi
         .as_ref()
         .expect("validation requires initial.phi for model.kind = \"dilatant\"");
-    let mesh = mesh_of(scn);
+    let mesh = line_of(scn);
     let sample = |f: &dyn Fn(f64, f64) -> f64| -> Vec<f64> {
         mesh.x.iter().zip(&mesh.b).map(|(&x, &b)| f(x, b)).collect()
     };
@@ -30,7 +31,7 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
     let u = sample(&|x, b| scn.initial.u.eval(x, b));
     let phi = sample(&|x, b| phi0.eval(x, b));
     let state = DilatantState::from_profiles(&mesh, spec.options.flux.alpha, &h, &u, &phi);
-    let (stage, rest_depth, rest_speed): (Box<dyn Stage<DilatantState>>, f64, f64) =
+    let (stage, rest_depth, rest_speed): (Box<dyn Stage<Line, DilatantState>>, f64, f64) =
         match spec.options.scheme {
             SchemeKind::Split => {
                 let scheme = SplitScheme::new(spec.law, spec.options, mesh.nx, scn.material.phi);

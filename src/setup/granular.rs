@@ -7,14 +7,14 @@
 
 use crate::model::granular::config::Pressure;
 use crate::model::granular::pipeline;
-use crate::model::granular::state::LayeredState;
+use crate::state::layered::LayeredState;
 use crate::model::granular::Granular;
 use crate::scenario::Scenario;
-use crate::setup::{mesh_of, run_config, run_info};
+use crate::setup::{line_of, run_config, run_info};
 use crate::simulation::Simulation;
 
 pub fn build(scn: &Scenario) -> Simulation<Granular> {
-    let mesh = mesh_of(scn);
+    let mesh = line_of(scn);
     let x = &mesh.x;
     let h_i = scn.initial.erodible_bed;
     let sample = |f: &dyn Fn(f64, f64) -> f64| -> Vec<f64> {

@@ -1,5 +1,5 @@
 //! From a validated [`Scenario`] to a ready run of its model: the pieces every model
-//! shares (mesh, time-loop settings, run metadata), the dispatch on `model.kind`, and
+//! shares (grid, time-loop settings, run metadata), the dispatch on `model.kind`, and
 //! one module per model that reads its part of the scenario. This is the only place
 //! where scenarios meet models: `model/` and `numerics/` never read a scenario.
 
@@ -7,7 +7,7 @@ mod dilatant;
 mod granular;
 mod submarine;
 
-use crate::mesh::{Grid, Mesh, MeshSpec};
+use crate::grid::{Grid, Line, LineSpec};
 use crate::model::granular::Granular;
 use crate::model::ModelKind;
 use crate::output::{OutputSink, RunInfo, RunSummary};
@@ -44,7 +44,7 @@ impl<M: crate::model::Model> Run for Simulation<M> {
         Simulation::stage_names(self)
     }
     fn cells(&self) -> usize {
-        self.mesh.cells()
+        self.grid.cells()
     }
     fn mass(&self) -> f64 {
         self.diagnostics().mass
@@ -78,10 +78,10 @@ pub fn build_granular(scn: &Scenario) -> Simulation<Granular> {
     granular::build(scn)
 }
 
-/// The mesh of a scenario, with its bed sampled at the cell centres.
-pub fn mesh_of(scn: &Scenario) -> Mesh {
+/// The line of a scenario, with its bed sampled at the cell centres.
+pub fn line_of(scn: &Scenario) -> Line {
     let d = &scn.domain;
-    let spec = MeshSpec {
+    let spec = LineSpec {
         x_min: d.x_min,
         x_max: d.x_max,
         cells: d.cells,
@@ -95,7 +95,7 @@ pub fn mesh_of(scn: &Scenario) -> Mesh {
         .iter()
         .map(|&x| scn.bed.eval(x, 0.0))
         .collect();
-    Mesh::new(&spec, b)
+    Line::new(&spec, b)
 }
 
 /// The time-loop settings of a scenario.

@@ -3,16 +3,16 @@
 //! the water up to the surface `initial.eta` (H₁cos²θ = max(0, η − b − H₂cos²θ)), at rest.
 
 use crate::model::submarine::Submarine;
-use crate::numerics::two_layer::{TwoLayerGeometry, TwoLayerSolver, TwoLayerStage, TwoLayerState};
+use crate::numerics::two_layer::{CurvedLine, TwoLayerSolver, TwoLayerStage, TwoLayerState};
 use crate::numerics::Stage;
 use crate::physics::rheology::FrictionLaw;
 use crate::pipeline::Pipeline;
 use crate::scenario::Scenario;
-use crate::setup::{mesh_of, run_config, run_info};
+use crate::setup::{line_of, run_config, run_info};
 use crate::simulation::Simulation;
 
 pub fn build(scn: &Scenario) -> Simulation<Submarine> {
-    let mesh = mesh_of(scn);
+    let grid = CurvedLine::new(line_of(scn));
     let spec = scn
         .submarine
         .expect("validated: a submarine scenario has its spec");
@@ -21,10 +21,10 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
         FrictionLaw::MuI { .. } => unreachable!("validated: Coulomb friction"),
     };
     let params = spec.params(mu);
-    let geometry = TwoLayerGeometry::new(mesh.x_min, mesh.dx, &mesh.b, mesh.left, mesh.right);
-    let mut state = TwoLayerState::zeros(mesh.nx);
-    for i in 1..=mesh.nx {
-        let (x, b, c2) = (mesh.x[i - 1], geometry.b[i], geometry.cos2[i]);
+    let nx = grid.line.nx;
+    let mut state = TwoLayerState::zeros(nx);
+    for i in 1..=nx {
+        let (x, b, c2) = (grid.x(i), grid.b()[i], grid.cos2[i]);
         let d2 = scn.initial.h.eval(x, b);
         state.h2[i] = d2 / c2;
         state.q2[i] = state.h2[i] * scn.initial.u.eval(x, b);
@@ -32,25 +32,23 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
             state.h1[i] = (eta.eval(x, b) - b - d2).max(0.0) / c2;
         }
     }
-    state.fill_ghosts(&geometry);
+    state.fill_ghosts(&grid);
     let stage = TwoLayerStage {
-        solver: TwoLayerSolver::new(params, scn.time.cfl, mesh.nx),
-        geometry: geometry.clone(),
+        solver: TwoLayerSolver::new(params, scn.time.cfl, nx),
     };
-    let stages: Vec<Box<dyn Stage<TwoLayerState>>> = vec![Box::new(stage)];
-    let eta0 = Submarine::initial_surface(&geometry, &state, scn.output.front_threshold);
+    let stages: Vec<Box<dyn Stage<CurvedLine, TwoLayerState>>> = vec![Box::new(stage)];
+    let eta0 = Submarine::initial_surface(&grid, &state, scn.output.front_threshold);
     let model = Submarine {
         params,
-        geometry,
         front_threshold: scn.output.front_threshold,
-        h_bed: vec![0.0; mesh.nx],
+        h_bed: vec![0.0; nx],
         eta0,
     };
     // Snapshots carry the grain layer in h, u (one layer) and the water in extra fields.
     let info = run_info(scn, "hydrostatic", 1);
     let rules = crate::stop::default_rules(&scn.time);
     Simulation::new(
-        mesh,
+        grid,
         model,
         state,
         Pipeline::new(stages),

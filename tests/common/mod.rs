@@ -1,7 +1,7 @@
 //! Builds runs from plain closures, without scenario files.
 #![allow(dead_code)]
 
-use granflow::mesh::MeshSpec;
+use granflow::grid::LineSpec;
 use granflow::model::granular::Granular;
 use granflow::output::memory::MemorySink;
 use granflow::output::RunSummary;
@@ -14,7 +14,7 @@ use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
 
 pub struct Case {
-    pub mesh: MeshSpec,
+    pub mesh: LineSpec,
     pub law: FrictionLaw,
     pub cfl: f64,
     pub t_end: f64,
@@ -25,7 +25,7 @@ pub struct Case {
 impl Case {
     pub fn new(x_min: f64, x_max: f64, cells: usize) -> Case {
         Case {
-            mesh: MeshSpec {
+            mesh: LineSpec {
                 x_min,
                 x_max,
                 cells,

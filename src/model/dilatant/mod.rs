@@ -11,9 +11,9 @@
 //! cells at least `rest_depth` thick; snapshots carry φ per cell as the extra field
 //! `phi`.
 
-use crate::mesh::Mesh;
+use crate::grid::Line;
 use crate::model::{Diagnostics, Model};
-use crate::numerics::dilatant::state::DilatantState;
+use crate::state::dilatant::DilatantState;
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
 use crate::physics::shallow::{celerity, velocity};
 
@@ -50,6 +50,7 @@ pub struct Dilatant {
 }
 
 impl Model for Dilatant {
+    type Grid = Line;
     type State = DilatantState;
 
     fn kind(&self) -> &'static str {
@@ -60,7 +61,7 @@ impl Model for Dilatant {
     /// same operations, so that a K = 0 run takes the Savage–Hutter run's time steps,
     /// plus the grain volume ∫φh as `mass`. Cells thinner than `rest_depth` do not count
     /// for the largest speed.
-    fn diagnose(&self, mesh: &Mesh, s: &DilatantState) -> Diagnostics {
+    fn diagnose(&self, mesh: &Line, s: &DilatantState) -> Diagnostics {
         let nx = s.nx;
         let (mut mass, mut ke, mut q_sum, mut max_speed, mut h_max) =
             (0.0, 0.0, 0.0, 0.0f64, 0.0f64);
@@ -113,13 +114,13 @@ impl Model for Dilatant {
     }
 
     /// The top of the mixture b + h and its thickness h, as for the granular model.
-    fn gauge_cell(&self, mesh: &Mesh, s: &DilatantState, i: usize) -> Option<(f64, f64)> {
+    fn gauge_cell(&self, mesh: &Line, s: &DilatantState, i: usize) -> Option<(f64, f64)> {
         Some((mesh.b[i] + s.h[i + 1], s.h[i + 1]))
     }
 
     fn snapshot(
         &self,
-        _mesh: &Mesh,
+        _mesh: &Line,
         s: &DilatantState,
         t: f64,
         sink: &mut dyn OutputSink,

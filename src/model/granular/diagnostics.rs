@@ -20,13 +20,13 @@
 //! different cells: never smaller, often much larger (a fast thin front and a slow
 //! thick column), so more steps than the flux needs.
 
-use crate::mesh::Mesh;
-use crate::model::granular::state::LayeredState;
+use crate::grid::Line;
+use crate::state::layered::LayeredState;
 use crate::model::Diagnostics;
 use crate::physics::shallow::{celerity, velocity, H_DRY};
 
 pub fn diagnose(
-    mesh: &Mesh,
+    mesh: &Line,
     state: &LayeredState,
     h_bed: &[f64],
     front_threshold: f64,
@@ -115,14 +115,14 @@ fn mean_and_shear(q: &[f64], l: &[f64], inv_h: f64) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{BoundaryKind, Coordinates, MeshSpec};
+    use crate::grid::{BoundaryKind, Coordinates, LineSpec};
     use crate::physics::shallow::sheared_celerity;
     use proptest::prelude::*;
 
     /// The Einfeldt bounds S_L, S_R of every face, from their definition (seed 000 after
     /// eq. 21, with the sheared celerity of seed 003 for N > 1): the speeds the HLL
     /// flux of step 1 uses. The CFL signal speed must bound them all.
-    fn largest_face_speed(mesh: &Mesh, s: &LayeredState) -> f64 {
+    fn largest_face_speed(mesh: &Line, s: &LayeredState) -> f64 {
         let n = s.layers;
         let column = |j: usize| {
             let h = s.h[j];
@@ -148,9 +148,9 @@ mod tests {
         largest
     }
 
-    fn state(layers: usize, h: &[f64], q: &[f64]) -> (Mesh, LayeredState) {
+    fn state(layers: usize, h: &[f64], q: &[f64]) -> (Line, LayeredState) {
         let nx = h.len();
-        let spec = MeshSpec {
+        let spec = LineSpec {
             x_min: 0.0,
             x_max: 1.0,
             cells: nx,
@@ -159,7 +159,7 @@ mod tests {
             left: BoundaryKind::Wall,
             right: BoundaryKind::Wall,
         };
-        let mesh = Mesh::new(&spec, vec![0.0; nx]);
+        let mesh = Line::new(&spec, vec![0.0; nx]);
         let l = vec![1.0 / layers as f64; layers];
         let mut s = LayeredState::from_profiles(&mesh, &l, h, &vec![0.0; nx]);
         for i in 0..nx {

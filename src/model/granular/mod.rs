@@ -1,5 +1,5 @@
 //! The granular family of seeds 000, 001 and 003: one material in N layers of fixed
-//! fractions ([`state::LayeredState`]).
+//! fractions ([`LayeredState`]).
 //!
 //! - `layers = 1`, hydrostatic: the Savage–Hutter model with Coulomb or μ(I) friction
 //!   (seed 000 Remark 1): hyperbolic → friction.
@@ -17,14 +17,13 @@ pub mod config;
 pub mod diagnostics;
 pub mod pipeline;
 pub mod profiles;
-pub mod state;
 
-use crate::mesh::Mesh;
+use crate::grid::Line;
 use crate::model::{Diagnostics, Model};
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
 use crate::physics::shallow::velocity;
 use profiles::{normal_velocities, static_interface};
-use state::LayeredState;
+use crate::state::LayeredState;
 
 /// The granular model's run-time parameters (the physics of its stages is in the
 /// pipeline).
@@ -44,13 +43,14 @@ pub struct Granular {
 }
 
 impl Model for Granular {
+    type Grid = Line;
     type State = LayeredState;
 
     fn kind(&self) -> &'static str {
         "granular"
     }
 
-    fn diagnose(&self, mesh: &Mesh, state: &LayeredState) -> Diagnostics {
+    fn diagnose(&self, mesh: &Line, state: &LayeredState) -> Diagnostics {
         diagnostics::diagnose(mesh, state, &self.h_bed, self.front_threshold)
     }
 
@@ -63,14 +63,14 @@ impl Model for Granular {
     }
 
     /// The top of the flow b + h and the flow thickness h.
-    fn gauge_cell(&self, mesh: &Mesh, state: &LayeredState, i: usize) -> Option<(f64, f64)> {
+    fn gauge_cell(&self, mesh: &Line, state: &LayeredState, i: usize) -> Option<(f64, f64)> {
         let h = state.h[i + 1];
         Some((mesh.b[i] + h, h))
     }
 
     fn snapshot(
         &self,
-        mesh: &Mesh,
+        mesh: &Line,
         state: &LayeredState,
         t: f64,
         sink: &mut dyn OutputSink,

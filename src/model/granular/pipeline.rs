@@ -5,9 +5,9 @@
 //! viscous solve. The hyperbolic stage is the same code for every N and every
 //! pressure; the non-hydrostatic normal discharge rides it as a tracer.
 
-use crate::mesh::Mesh;
+use crate::grid::Line;
 use crate::model::granular::config::{MultilayerSpec, Pressure};
-use crate::model::granular::state::LayeredState;
+use crate::state::layered::LayeredState;
 use crate::numerics::banded::BandedCholesky;
 use crate::numerics::friction::CoulombFrictionStep;
 use crate::numerics::hydrostatic::HydrostaticStep;
@@ -46,13 +46,13 @@ pub fn with_law<W: WithLaw>(law: &FrictionLaw, material: &Material, w: W) -> W::
 /// The stages of a granular run: hyperbolic, then friction (N = 1) or viscous
 /// (N > 1), then the projection of a non-hydrostatic run.
 pub struct Stages<'a> {
-    pub mesh: &'a Mesh,
+    pub mesh: &'a Line,
     pub pressure: Pressure,
     pub multilayer: &'a MultilayerSpec,
 }
 
 impl WithLaw for Stages<'_> {
-    type Out = Vec<Box<dyn Stage<LayeredState>>>;
+    type Out = Vec<Box<dyn Stage<Line, LayeredState>>>;
 
     fn with<L: BasalFriction + LocalFriction + 'static>(self, law: L) -> Self::Out {
         let (mesh, spec) = (self.mesh, self.multilayer);
@@ -110,10 +110,10 @@ impl WithLaw for Stages<'_> {
 pub fn granular(
     law: &FrictionLaw,
     material: &Material,
-    mesh: &Mesh,
+    mesh: &Line,
     pressure: Pressure,
     multilayer: &MultilayerSpec,
-) -> Pipeline<LayeredState> {
+) -> Pipeline<Line, LayeredState> {
     let stages = Stages {
         mesh,
         pressure,

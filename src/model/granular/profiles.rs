@@ -18,13 +18,13 @@
 //! layer, from the bottom, whose speed exceeds a threshold (the whole thickness h when
 //! no layer does; seed 001 §4.2.5 uses 1e-3 m/s).
 
-use crate::mesh::Coordinates;
-use crate::mesh::Mesh;
-use crate::model::granular::state::LayeredState;
+use crate::grid::Coordinates;
+use crate::grid::Line;
+use crate::state::layered::LayeredState;
 use crate::physics::shallow::{velocity, H_DRY};
 
 /// Normal velocity of every layer at its midpoint, layer-major (α·nx + i), into `w`.
-pub fn normal_velocities(mesh: &Mesh, state: &LayeredState, w: &mut [f64]) {
+pub fn normal_velocities(mesh: &Line, state: &LayeredState, w: &mut [f64]) {
     let (nx, n) = (mesh.nx, state.layers);
     assert_eq!(w.len(), n * nx);
     let two_dx = 2.0 * mesh.dx;
@@ -82,11 +82,11 @@ pub fn static_interface(state: &LayeredState, threshold: f64, out: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::BoundaryKind;
-    use crate::mesh::MeshSpec;
+    use crate::grid::BoundaryKind;
+    use crate::grid::LineSpec;
 
-    fn mesh(slope_deg: f64, coordinates: Coordinates, b: impl Fn(f64) -> f64) -> Mesh {
-        let spec = MeshSpec {
+    fn mesh(slope_deg: f64, coordinates: Coordinates, b: impl Fn(f64) -> f64) -> Line {
+        let spec = LineSpec {
             x_min: 0.0,
             x_max: 1.0,
             cells: 10,
@@ -96,7 +96,7 @@ mod tests {
             right: BoundaryKind::Outflow,
         };
         let bed = spec.centres().iter().map(|&x| b(x)).collect();
-        Mesh::new(&spec, bed)
+        Line::new(&spec, bed)
     }
 
     /// Uniform thickness, flat bed, every layer with u = a x: incompressibility gives

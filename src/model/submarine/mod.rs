@@ -9,16 +9,14 @@
 //! kinetic energy is ∫ ½(H₂U₂² + r H₁U₁²) dx (per unit grain density), the maximum
 //! speed is over both layers (a run stops "at rest" only when the water is still too).
 
-use crate::mesh::Mesh;
 use crate::model::{Diagnostics, Model};
-use crate::numerics::two_layer::{max_face_speed, sweep_speeds, TwoLayerGeometry, TwoLayerState};
+use crate::numerics::two_layer::{max_face_speed, sweep_speeds, CurvedLine, TwoLayerState};
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
 use crate::physics::two_layer::{layer_velocity, max_num, TwoLayerParams};
 
 #[derive(Debug, Clone)]
 pub struct Submarine {
     pub params: TwoLayerParams,
-    pub geometry: TwoLayerGeometry,
     pub front_threshold: f64,
     /// No erodible bed: zeros (nx).
     pub h_bed: Vec<f64>,
@@ -29,8 +27,8 @@ pub struct Submarine {
 
 impl Submarine {
     /// η₀ of [`Submarine::eta0`] for the initial state `s`.
-    pub fn initial_surface(g: &TwoLayerGeometry, s: &TwoLayerState, threshold: f64) -> Vec<f64> {
-        (1..=g.nx)
+    pub fn initial_surface(g: &CurvedLine, s: &TwoLayerState, threshold: f64) -> Vec<f64> {
+        (1..=g.line.nx)
             .map(|i| {
                 if s.h1[i] > threshold {
                     s.eta(g, i)
@@ -43,11 +41,12 @@ impl Submarine {
 }
 
 /// The largest |λ| over the faces, from the same bounds the scheme upwinds with.
-pub fn signal_speed(p: &TwoLayerParams, g: &TwoLayerGeometry, s: &TwoLayerState) -> f64 {
+pub fn signal_speed(p: &TwoLayerParams, g: &CurvedLine, s: &TwoLayerState) -> f64 {
     max_face_speed(p, g, s)
 }
 
 impl Model for Submarine {
+    type Grid = CurvedLine;
     type State = TwoLayerState;
 
     fn kind(&self) -> &'static str {
@@ -56,10 +55,9 @@ impl Model for Submarine {
 
     /// One sweep over the cells and faces ([`sweep_speeds`]): the signal speed of the
     /// face bounds, and the per-cell sums from the same views.
-    fn diagnose(&self, mesh: &Mesh, s: &TwoLayerState) -> Diagnostics {
-        let g = &self.geometry;
-        let nx = g.nx;
-        let (r, dx) = (self.params.r, mesh.dx);
+    fn diagnose(&self, g: &CurvedLine, s: &TwoLayerState) -> Diagnostics {
+        let nx = g.line.nx;
+        let (r, dx) = (self.params.r, g.line.dx);
         let mut d = Diagnostics {
             mass: 0.0,
             kinetic_energy: 0.0,
@@ -82,7 +80,7 @@ impl Model for Submarine {
             }
         });
         d.signal_speed = smax;
-        d.front_x = front.map_or(f64::NAN, |i| mesh.x[i]);
+        d.front_x = front.map_or(f64::NAN, |i| g.line.x[i]);
         // A non-finite value poisons the sum; only then search for the cell (a sum of
         // finite values that overflows finds none).
         if !all.is_finite() {
@@ -102,13 +100,12 @@ impl Model for Submarine {
 
     /// The water surface η = b + (H₁ + H₂)cos²θ (the grain top where there is no
     /// water) and the grain depth H₂ (the `h` of the snapshots).
-    fn gauge_cell(&self, _mesh: &Mesh, s: &TwoLayerState, i: usize) -> Option<(f64, f64)> {
-        Some((s.eta(&self.geometry, i + 1), s.h2[i + 1]))
+    fn gauge_cell(&self, g: &CurvedLine, s: &TwoLayerState, i: usize) -> Option<(f64, f64)> {
+        Some((s.eta(g, i + 1), s.h2[i + 1]))
     }
 
     /// max |η − η₀| over the cells with H₁ above the front threshold now and at t = 0.
-    fn wave_amplitude(&self, _mesh: &Mesh, s: &TwoLayerState) -> Option<f64> {
-        let g = &self.geometry;
+    fn wave_amplitude(&self, g: &CurvedLine, s: &TwoLayerState) -> Option<f64> {
         let mut a = 0.0f64;
         for (i, &eta0) in self.eta0.iter().enumerate() {
             if s.h1[i + 1] > self.front_threshold && eta0.is_finite() {
@@ -120,13 +117,12 @@ impl Model for Submarine {
 
     fn snapshot(
         &self,
-        mesh: &Mesh,
+        g: &CurvedLine,
         s: &TwoLayerState,
         t: f64,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
-        let nx = mesh.nx;
-        let g = &self.geometry;
+        let nx = g.line.nx;
         let mut u2 = vec![0.0; nx];
         let mut u1 = vec![0.0; nx];
         let mut eta = vec![0.0; nx];

@@ -13,7 +13,7 @@
 //! 3. the semi-implicit dilatancy step (3.15)–(3.19) ([`source`]), unconditionally
 //!    stable: it never shortens Δt, whatever K and d.
 //!
-//! [`state`] holds the conservative variables and [`step`] runs one time step,
+//! [`crate::state::DilatantState`] holds the conservative variables and [`step`] runs one time step,
 //! refusing any state with φh < 0 or φ ∉ (0, 1) with the cell and the time.
 
 pub mod flux;
@@ -21,5 +21,4 @@ pub mod reconstruction;
 pub mod source;
 pub mod split;
 pub mod stabilisation;
-pub mod state;
 pub mod step;

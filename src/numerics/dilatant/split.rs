@@ -74,10 +74,10 @@
 use super::flux::proj_friction;
 use super::source::relax_towards;
 use super::stabilisation::diffuse_run;
-use super::state::DilatantState;
+use crate::state::DilatantState;
 use super::step::DilatantOptions;
-use crate::mesh::Mesh;
-use crate::model::granular::state::LayeredState;
+use crate::grid::Line;
+use crate::state::layered::LayeredState;
 use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
@@ -331,7 +331,7 @@ impl SplitScheme {
     }
 
     /// Advances `s` by `dt`; on error `s` is as it was.
-    pub fn step(&mut self, mesh: &Mesh, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
+    pub fn step(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
         std::mem::swap(&mut self.shell.h, &mut s.h);
         std::mem::swap(&mut self.shell.hu, &mut s.hu);
         self.backup[0].copy_from_slice(&self.shell.h);
@@ -349,7 +349,7 @@ impl SplitScheme {
         result
     }
 
-    fn advance(&mut self, mesh: &Mesh, s: &DilatantState, dt: f64) -> Result<(), StageError> {
+    fn advance(&mut self, mesh: &Line, s: &DilatantState, dt: f64) -> Result<(), StageError> {
         if self.law.k == 0.0 {
             // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step).
             self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
@@ -375,7 +375,7 @@ impl SplitScheme {
         };
         let last = nx - 1 - h.iter().rev().position(|&h| h > 0.0).unwrap_or(0);
         let wet = first + 1..=last + 1;
-        self.transport(mesh, &s.phi, r, wet.clone())?;
+        self.transport(&s.phi, r, wet.clone())?;
         fill_fraction_ghosts(&mut self.phi_new);
         self.cells(mesh, dt, wet.clone())?;
         self.shell.fill_ghosts(mesh);
@@ -388,7 +388,6 @@ impl SplitScheme {
     /// Step 2: φ^{n+1} from the mass fluxes of the hyperbolic step.
     fn transport(
         &mut self,
-        mesh: &Mesh,
         phi: &[f64],
         r: f64,
         wet: RangeInclusive<usize>,
@@ -412,7 +411,7 @@ impl SplitScheme {
             let value = p - r * change / hj;
             if !(value > 0.0 && value < 1.0) {
                 return Err(StageError::Inadmissible {
-                    x: mesh.x[j - 1],
+                    cell: j - 1,
                     quantity: "volume fraction φ (transport)",
                     value,
                 });
@@ -425,7 +424,7 @@ impl SplitScheme {
     /// Step 3: φ-gradient pressure, friction, dilatancy, cell by cell.
     fn cells(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         dt: f64,
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
@@ -440,7 +439,7 @@ impl SplitScheme {
     /// the loop carries no test of either.
     fn cells_with<const DILATANT: bool, const STABILISE: bool>(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         dt: f64,
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
@@ -506,7 +505,7 @@ impl SplitScheme {
                 let next = relax_towards(law, self.opt.update, dt, rate, p, phi_eq);
                 if !(next > 0.0 && next < 1.0) {
                     return Err(StageError::Inadmissible {
-                        x: mesh.x[i - 1],
+                        cell: i - 1,
                         quantity: "volume fraction φ (dilatancy step)",
                         value: next,
                     });
@@ -536,7 +535,7 @@ impl SplitScheme {
     #[inline(never)]
     fn stabilise(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         dt: f64,
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
@@ -624,7 +623,7 @@ impl SplitScheme {
                 let p = phi_from_ratio(w[j] / m[j], alpha);
                 if !(p > 0.0 && p < 1.0) {
                     return Err(StageError::Inadmissible {
-                        x: mesh.x[j - 1],
+                        cell: j - 1,
                         quantity: "volume fraction φ (stabilisation step)",
                         value: p,
                     });
@@ -665,12 +664,12 @@ fn fill_fraction_ghosts(phi: &mut [f64]) {
     phi[n - 1] = phi[n - 2];
 }
 
-impl Stage<DilatantState> for SplitScheme {
+impl Stage<Line, DilatantState> for SplitScheme {
     fn name(&self) -> &'static str {
         "dilatant"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
         self.step(mesh, state, dt)
     }
 }

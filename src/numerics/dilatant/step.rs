@@ -16,8 +16,8 @@ use super::flux::{interface_flux, total_topography_jump, FaceGrid, FluxOptions};
 use super::reconstruction::Side;
 use super::source::{relax_fraction, DilatancyUpdate};
 use super::stabilisation::{diffuse, Viscosity};
-use super::state::DilatantState;
-use crate::mesh::Mesh;
+use crate::state::DilatantState;
+use crate::grid::Line;
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, DilatantLaw};
 
@@ -109,7 +109,7 @@ impl DilatantScheme {
 
     /// The hyperbolic CFL bound CFL Δx / max(|v| + √(g_c h)) (∞ for a state at rest
     /// with no depth).
-    pub fn max_dt(&self, mesh: &Mesh, s: &DilatantState) -> f64 {
+    pub fn max_dt(&self, mesh: &Line, s: &DilatantState) -> f64 {
         let speed = (1..=s.nx)
             .map(|j| s.v[j].abs() + (mesh.g_n * s.h[j]).sqrt())
             .fold(0.0, f64::max);
@@ -123,7 +123,7 @@ impl DilatantScheme {
     /// Advances `s` from t to t + dt. On error `s` is left as it was at t.
     pub fn step(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         s: &mut DilatantState,
         t: f64,
         dt: f64,
@@ -143,7 +143,7 @@ impl DilatantScheme {
 
     fn advance(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         s: &mut DilatantState,
         t: f64,
         dt: f64,
@@ -167,7 +167,7 @@ impl DilatantScheme {
     }
 
     /// (3.5): U_i ← U_i − Δt/Δx (F_l(U_i, U_{i+1}, Δz_{i+1/2}) − F_r(U_{i−1}, U_i, Δz_{i−1/2})).
-    fn finite_volumes(&mut self, mesh: &Mesh, s: &mut DilatantState, dt: f64) {
+    fn finite_volumes(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) {
         let (nx, g_c, dx) = (s.nx, mesh.g_n, mesh.dx);
         let alpha = self.opt.flux.alpha;
         let side = |j: usize| Side {
@@ -201,7 +201,7 @@ impl DilatantScheme {
     }
 
     /// (3.20)–(3.22), sub-cycled; returns the number of sub-steps (0 when off).
-    fn stabilise(&mut self, mesh: &Mesh, s: &mut DilatantState, dt: f64) -> usize {
+    fn stabilise(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> usize {
         let visc = self.opt.viscosity;
         if visc.is_off() {
             return 0;
@@ -232,7 +232,7 @@ impl DilatantScheme {
     /// where f0 or f1 underflow (then the step is refused).
     fn dilatancy(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         s: &mut DilatantState,
         t: f64,
         dt: f64,
@@ -271,7 +271,7 @@ impl DilatantScheme {
 /// φh ≥ 0 (round-off below zero is set to 0), 0 < φ < 1, all finite; updates (h, v, φ)
 /// of the physical cells, the ghosts and the dry fractions (3.14).
 fn check_and_update(
-    mesh: &Mesh,
+    mesh: &Line,
     s: &mut DilatantState,
     t: f64,
     stage: &'static str,
@@ -319,23 +319,26 @@ fn check_and_update(
 }
 
 /// The whole dilatant time step as one stage of the run loop. The loop does not pass
-/// the time, so the error carries x, the quantity and its value; the loop adds t.
-impl Stage<DilatantState> for DilatantScheme {
+/// the time, so the error carries the cell, the quantity and its value; the loop adds
+/// the position and t.
+impl Stage<Line, DilatantState> for DilatantScheme {
     fn name(&self) -> &'static str {
         "dilatant"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
         match self.step(mesh, state, f64::NAN, dt) {
             Ok(_) => Ok(()),
-            Err(DilatantError::NegativeMass { x, m, .. }) => Err(StageError::Inadmissible {
-                x,
+            Err(DilatantError::NegativeMass { cell, m, .. }) => Err(StageError::Inadmissible {
+                cell,
                 quantity: "grain mass φh",
                 value: m,
             }),
-            Err(DilatantError::FractionOutOfBounds { x, phi, stage, .. }) => {
+            Err(DilatantError::FractionOutOfBounds {
+                cell, phi, stage, ..
+            }) => {
                 Err(StageError::Inadmissible {
-                    x,
+                    cell,
                     quantity: match stage {
                         "finite-volume" => "volume fraction φ (finite-volume step)",
                         "stabilisation" => "volume fraction φ (stabilisation step)",
@@ -344,8 +347,8 @@ impl Stage<DilatantState> for DilatantScheme {
                     value: phi,
                 })
             }
-            Err(DilatantError::NonFinite { x, .. }) => Err(StageError::Inadmissible {
-                x,
+            Err(DilatantError::NonFinite { cell, .. }) => Err(StageError::Inadmissible {
+                cell,
                 quantity: "non-finite value",
                 value: f64::NAN,
             }),

@@ -30,8 +30,8 @@ pub mod multilayer;
 
 use super::linalg::{thomas_rows, PressureRows, ScalarRow};
 use super::{Stage, StageError};
-use crate::mesh::Mesh;
-use crate::model::granular::state::LayeredState;
+use crate::grid::Line;
+use crate::state::layered::LayeredState;
 
 /// Solves the (block-)tridiagonal pressure system of one projection, given row by row.
 pub trait PressureSolver: Send + std::fmt::Debug {
@@ -70,7 +70,7 @@ pub trait ProjectionOperator: Send + std::fmt::Debug {
     /// carry no constraint (dry faces, outflow boundaries) are conditions on Π instead.
     fn solve<S: PressureSolver<Row = Self::Row>>(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         state: &LayeredState,
         solver: &mut S,
         pi: &mut [f64],
@@ -79,7 +79,7 @@ pub trait ProjectionOperator: Send + std::fmt::Debug {
     /// Applies the correction of the impulses `pi` to the discharges (hu, hw) of
     /// `state` (h has not changed since [`solve`](Self::solve)), and advances the
     /// pressure, p ← p + Π/Δt, resetting it to 0 on faces without a constraint.
-    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64);
+    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt: f64);
 }
 
 /// The "projection" stage: form and solve the pressure system, correct.
@@ -106,14 +106,14 @@ impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> ProjectionStage<O, 
     }
 }
 
-impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> Stage<LayeredState>
+impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> Stage<Line, LayeredState>
     for ProjectionStage<O, S>
 {
     fn name(&self) -> &'static str {
         "projection"
     }
 
-    fn apply(&mut self, mesh: &Mesh, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         self.operator
             .solve(mesh, state, &mut self.solver, &mut self.pi);
         self.operator.correct(mesh, state, &self.pi, dt);

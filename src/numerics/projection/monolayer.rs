@@ -49,11 +49,11 @@
 use std::ops::Range;
 
 use super::{PressureSolver, ProjectionOperator};
-use crate::mesh::Mesh;
+use crate::grid::Line;
 use crate::numerics::linalg::{PressureRows, ScalarRow};
 
-use crate::mesh::BoundaryKind;
-use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
+use crate::grid::BoundaryKind;
+use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 
 /// A face carries the constraint only when both neighbouring cells are thicker than
 /// this fraction of Δx (see the module documentation).
@@ -68,7 +68,7 @@ fn wet_face(h_l: f64, h_r: f64, h_min: f64) -> bool {
 
 /// 2b with one ghost on each side (the ghost bed repeats the edge bed, for walls and
 /// outflows alike; `mesh.z` does the same for its bed part).
-pub fn doubled_bed(mesh: &Mesh) -> Vec<f64> {
+pub fn doubled_bed(mesh: &Line) -> Vec<f64> {
     let nx = mesh.nx;
     let mut two_b = vec![0.0; nx + 2];
     for i in 0..nx {
@@ -131,7 +131,7 @@ pub struct MonolayerOperator {
 }
 
 impl MonolayerOperator {
-    pub fn new(mesh: &Mesh) -> Self {
+    pub fn new(mesh: &Line) -> Self {
         MonolayerOperator {
             two_b: doubled_bed(mesh),
             span: 0..0,
@@ -244,7 +244,7 @@ impl ProjectionOperator for MonolayerOperator {
 
     fn solve<S: PressureSolver<Row = ScalarRow>>(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         state: &LayeredState,
         solver: &mut S,
         pi: &mut [f64],
@@ -274,7 +274,7 @@ impl ProjectionOperator for MonolayerOperator {
         solver.solve(&rows, pi);
     }
 
-    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64) {
+    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt: f64) {
         let nx = mesh.nx;
         let LayeredState {
             h, hu, tracers, nh, ..
@@ -346,7 +346,7 @@ impl ConstraintResidual {
 /// Evaluates the discrete constraint 𝒞 = 𝒯ᵀ(u, w) (seed 000 eq. 27 divided by h,
 /// discretised at the faces as in the projection, module documentation) on the
 /// current state.
-pub fn constraint_residual(mesh: &Mesh, state: &LayeredState) -> ConstraintResidual {
+pub fn constraint_residual(mesh: &Line, state: &LayeredState) -> ConstraintResidual {
     let nx = mesh.nx;
     let two_b = doubled_bed(mesh);
     let inv_dx = 1.0 / mesh.dx;
@@ -375,15 +375,15 @@ pub fn constraint_residual(mesh: &Mesh, state: &LayeredState) -> ConstraintResid
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::Coordinates;
-    use crate::mesh::MeshSpec;
+    use crate::grid::Coordinates;
+    use crate::grid::LineSpec;
     use crate::numerics::linalg::thomas;
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
     use crate::numerics::Stage;
 
     /// A wet, moving state on a curved bed (Cartesian, walls): every face constrained.
-    fn moving_state(cells: usize) -> (Mesh, LayeredState) {
-        let spec = MeshSpec {
+    fn moving_state(cells: usize) -> (Line, LayeredState) {
+        let spec = LineSpec {
             x_min: 0.0,
             x_max: 1.0,
             cells,
@@ -397,7 +397,7 @@ mod tests {
         let h: Vec<f64> = x.iter().map(|x| 0.1 + 0.04 * (9.0 * x).cos()).collect();
         let u: Vec<f64> = x.iter().map(|x| 0.5 * (4.0 * x).sin()).collect();
         let w: Vec<f64> = x.iter().map(|x| 0.1 * (5.0 * x).cos()).collect();
-        let mesh = Mesh::new(&spec, b);
+        let mesh = Line::new(&spec, b);
         let mut state = LayeredState::from_profiles(&mesh, &[1.0], &h, &u);
         state.add_nonhydrostatic(&w);
         (mesh, state)
@@ -474,7 +474,7 @@ mod tests {
     /// The stencil printed after seed 000 eq. (28): eq. (28) discretised directly at
     /// the faces (centred ∂_X q̃ over 2Δx, minmod ∂_XX G, 4q̃ at the face), then the
     /// corrections of the paper. Returns the relative residual of (27) afterwards.
-    fn printed_stencil_residual(mesh: &Mesh, state: &mut LayeredState) -> f64 {
+    fn printed_stencil_residual(mesh: &Line, state: &mut LayeredState) -> f64 {
         let nx = mesh.nx;
         let (dx, h) = (mesh.dx, state.h.clone());
         let two_b = doubled_bed(mesh);

@@ -72,9 +72,9 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::monolayer::{doubled_bed, face_depth, ConstraintResidual, NH_FILM_FRACTION};
 use super::{PressureSolver, ProjectionOperator};
-use crate::mesh::BoundaryKind;
-use crate::mesh::Mesh;
-use crate::model::granular::state::{fill_tracer_ghosts, LayeredState, HW};
+use crate::grid::BoundaryKind;
+use crate::grid::Line;
+use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 use crate::numerics::banded::{BandedCholesky, StencilRow};
 use crate::numerics::linalg::{BandReady, PressureRows};
 
@@ -121,7 +121,7 @@ pub struct MultilayerOperator {
 }
 
 impl MultilayerOperator {
-    pub fn new(mesh: &Mesh, l: &[f64]) -> Self {
+    pub fn new(mesh: &Line, l: &[f64]) -> Self {
         let n = l.len();
         assert!(n >= 1);
         let mut level = vec![0.0; n + 1];
@@ -161,7 +161,7 @@ impl MultilayerOperator {
     /// `state` (module documentation). Nothing to do when h is bit for bit that of
     /// the last update (steps 2 and 3 of a time step share an operator,
     /// [`SharedOperator`], and h does not change in between).
-    pub fn update(&mut self, mesh: &Mesh, state: &LayeredState) {
+    pub fn update(&mut self, mesh: &Line, state: &LayeredState) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2.
@@ -177,12 +177,12 @@ impl MultilayerOperator {
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn update_avx2(&mut self, mesh: &Mesh, state: &LayeredState) {
+    unsafe fn update_avx2(&mut self, mesh: &Line, state: &LayeredState) {
         self.update_portable(mesh, state)
     }
 
     #[inline(always)]
-    fn update_portable(&mut self, mesh: &Mesh, state: &LayeredState) {
+    fn update_portable(&mut self, mesh: &Line, state: &LayeredState) {
         let (nx, n) = (self.nx, self.layers);
         debug_assert_eq!(state.layers, n);
         let h = &state.h[..];
@@ -900,7 +900,7 @@ impl ProjectionOperator for MultilayerOperator {
 
     fn solve<S: PressureSolver<Row = StencilRow>>(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         state: &LayeredState,
         solver: &mut S,
         pi: &mut [f64],
@@ -910,7 +910,7 @@ impl ProjectionOperator for MultilayerOperator {
         solver.solve(&rows, pi);
     }
 
-    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64) {
+    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt: f64) {
         let (nx, n) = (self.nx, self.layers);
         self.apply_impulses(state, pi);
         let nh = state.nh.as_mut().expect("a non-hydrostatic state");
@@ -943,7 +943,7 @@ impl ProjectionOperator for MultilayerOperator {
 pub struct SharedOperator(pub Arc<Mutex<MultilayerOperator>>);
 
 impl SharedOperator {
-    pub fn new(mesh: &Mesh, l: &[f64]) -> Self {
+    pub fn new(mesh: &Line, l: &[f64]) -> Self {
         SharedOperator(Arc::new(Mutex::new(MultilayerOperator::new(mesh, l))))
     }
 
@@ -961,7 +961,7 @@ impl ProjectionOperator for SharedOperator {
 
     fn solve<S: PressureSolver<Row = StencilRow>>(
         &mut self,
-        mesh: &Mesh,
+        mesh: &Line,
         state: &LayeredState,
         solver: &mut S,
         pi: &mut [f64],
@@ -969,7 +969,7 @@ impl ProjectionOperator for SharedOperator {
         self.lock().solve(mesh, state, solver, pi);
     }
 
-    fn correct(&mut self, mesh: &Mesh, state: &mut LayeredState, pi: &[f64], dt: f64) {
+    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt: f64) {
         self.lock().correct(mesh, state, pi, dt);
     }
 }
@@ -987,8 +987,8 @@ impl PressureSolver for BandedCholesky {
 #[allow(clippy::needless_range_loop)] // index arithmetic mirrors the matrices
 mod tests {
     use super::*;
-    use crate::mesh::Coordinates;
-    use crate::mesh::MeshSpec;
+    use crate::grid::Coordinates;
+    use crate::grid::LineSpec;
     use crate::numerics::banded::{assemble_rows, stencil_residual};
     use crate::numerics::projection::monolayer::{constraint_residual, MonolayerOperator};
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
@@ -1019,8 +1019,8 @@ mod tests {
         left: BoundaryKind,
         right: BoundaryKind,
         film: bool,
-    ) -> (Mesh, LayeredState) {
-        let spec = MeshSpec {
+    ) -> (Line, LayeredState) {
+        let spec = LineSpec {
             x_min: 0.0,
             x_max: 1.0,
             cells,
@@ -1035,7 +1035,7 @@ mod tests {
         if film {
             h[cells / 3] = 0.06 / cells as f64 + 1e-4; // just above the wet threshold
         }
-        let mesh = Mesh::new(&spec, b);
+        let mesh = Line::new(&spec, b);
         let l = vec![1.0 / layers as f64; layers];
         let mut state = LayeredState::from_profiles(&mesh, &l, &h, &vec![0.0; cells]);
         state.add_nonhydrostatic(&vec![0.0; cells]);
@@ -1056,7 +1056,7 @@ mod tests {
     }
 
     fn stage(
-        mesh: &Mesh,
+        mesh: &Line,
         state: &LayeredState,
     ) -> ProjectionStage<MultilayerOperator, BandedCholesky> {
         let n = state.layers;
@@ -1067,7 +1067,7 @@ mod tests {
         )
     }
 
-    fn residual(mesh: &Mesh, state: &LayeredState) -> ConstraintResidual {
+    fn residual(mesh: &Line, state: &LayeredState) -> ConstraintResidual {
         let mut op = MultilayerOperator::new(mesh, &state.l);
         op.update(mesh, state);
         op.residual(state)
@@ -1127,7 +1127,7 @@ mod tests {
         for layers in [1, 3, 10] {
             for (left, right) in BOUNDARIES {
                 let cells = 40;
-                let spec = MeshSpec {
+                let spec = LineSpec {
                     x_min: 0.0,
                     x_max: 1.0,
                     cells,
@@ -1136,7 +1136,7 @@ mod tests {
                     left,
                     right,
                 };
-                let mesh = Mesh::new(&spec, vec![0.0; cells]);
+                let mesh = Line::new(&spec, vec![0.0; cells]);
                 let l = vec![1.0 / layers as f64; layers];
                 let speed = if left == BoundaryKind::Wall { 0.0 } else { 0.3 };
                 let mut state =
@@ -1598,7 +1598,7 @@ mod tests {
         let pf = |x: f64, j: usize| (1.0 - level[j]) * (2.0 + (4.0 * x).sin());
         let dp = |x: f64, j: usize| (1.0 - level[j]) * 4.0 * (4.0 * x).cos();
         let error = |cells: usize| -> f64 {
-            let spec = MeshSpec {
+            let spec = LineSpec {
                 x_min: 0.0,
                 x_max: 1.0,
                 cells,
@@ -1608,7 +1608,7 @@ mod tests {
                 right: BoundaryKind::Wall,
             };
             let x = spec.centres();
-            let mesh = Mesh::new(&spec, x.iter().map(|&x| bf(x)).collect());
+            let mesh = Line::new(&spec, x.iter().map(|&x| bf(x)).collect());
             let h: Vec<f64> = x.iter().map(|&x| hf(x)).collect();
             let mut state = LayeredState::from_profiles(&mesh, &l, &h, &vec![0.0; cells]);
             state.add_nonhydrostatic(&vec![0.0; cells]);

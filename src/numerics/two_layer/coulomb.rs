@@ -21,7 +21,7 @@
 //! along the bed (the exact solution of eq. 45), which the printed form misses by
 //! (1 − r) g cos θ(1 − cos θ) tan δ₀.
 
-use super::{TwoLayerGeometry, TwoLayerState};
+use super::{CurvedLine, TwoLayerState};
 use crate::physics::two_layer::{
     coulomb_normal_stress, layer_velocity, TwoLayerParams, H_DRY_TWO_LAYER,
 };
@@ -30,12 +30,12 @@ use crate::physics::two_layer::{
 /// solver applies [`coulomb_cell`] inside its update pass instead (the same operations).
 pub fn coulomb_step(
     p: &TwoLayerParams,
-    geom: &TwoLayerGeometry,
+    geom: &CurvedLine,
     state: &mut TwoLayerState,
     dt: f64,
 ) {
     let (cos_mean, dsin_dx) = geom.coulomb_terms();
-    for i in 1..=geom.nx {
+    for i in 1..=geom.line.nx {
         state.q2[i] = coulomb_cell(
             p,
             state.h1[i],
@@ -49,7 +49,7 @@ pub fn coulomb_step(
 }
 
 /// Q₂ⁿ⁺¹ of one cell from its H₁, H₂, Q₂* and the bed terms ½(cos θ_{i−½} + cos θ_{i+½})
-/// and (sin θ_{i+½} − sin θ_{i−½})/Δx ([`TwoLayerGeometry::coulomb_terms`]).
+/// and (sin θ_{i+½} − sin θ_{i−½})/Δx ([`CurvedLine::coulomb_terms`]).
 #[inline(always)]
 pub fn coulomb_cell(
     p: &TwoLayerParams,

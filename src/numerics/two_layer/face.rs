@@ -50,7 +50,7 @@
 //! velocity is seen as zero: the face is a wall for that layer, with no spurious
 //! pressure force (a lake's shoreline, the upper edge of a deposit).
 
-use super::geometry::FaceGeometry;
+use crate::grid::curved::FaceGeometry;
 use crate::physics::two_layer::{
     coulomb_normal_stress, max_num, min_num, speed_bounds, TwoLayerParams, H_DRY_TWO_LAYER,
 };

@@ -24,69 +24,12 @@
 
 pub mod coulomb;
 pub mod face;
-pub mod geometry;
 
-pub use geometry::TwoLayerGeometry;
+pub use crate::grid::CurvedLine;
+pub use crate::state::TwoLayerState;
 
-use crate::mesh::BoundaryKind;
 use crate::physics::two_layer::{max_num, speed_bounds, TwoLayerParams, H_DRY_TWO_LAYER};
 use face::{face_flux, face_speeds_with, roe_velocities, CellView, FaceOut, StepTerms};
-
-/// Two-layer state with one ghost cell on each side (length nx + 2).
-#[derive(Debug, Clone, PartialEq)]
-pub struct TwoLayerState {
-    pub h1: Vec<f64>,
-    pub q1: Vec<f64>,
-    pub h2: Vec<f64>,
-    pub q2: Vec<f64>,
-}
-
-impl TwoLayerState {
-    pub fn zeros(nx: usize) -> Self {
-        TwoLayerState {
-            h1: vec![0.0; nx + 2],
-            q1: vec![0.0; nx + 2],
-            h2: vec![0.0; nx + 2],
-            q2: vec![0.0; nx + 2],
-        }
-    }
-
-    pub fn nx(&self) -> usize {
-        self.h1.len() - 2
-    }
-
-    /// Fills the ghosts: a wall mirrors thicknesses and reverses discharges; a free
-    /// boundary copies the edge state (zero gradient).
-    pub fn fill_ghosts(&mut self, geom: &TwoLayerGeometry) {
-        let nx = self.nx();
-        for (ghost, edge, kind) in [(0, 1, geom.left), (nx + 1, nx, geom.right)] {
-            let sign = match kind {
-                BoundaryKind::Wall => -1.0,
-                BoundaryKind::Outflow => 1.0,
-            };
-            self.h1[ghost] = self.h1[edge];
-            self.h2[ghost] = self.h2[edge];
-            self.q1[ghost] = sign * self.q1[edge];
-            self.q2[ghost] = sign * self.q2[edge];
-        }
-    }
-
-    /// Volume Σ H_k Δx of layer k ∈ {1, 2} over the physical cells.
-    pub fn volume(&self, layer: usize, dx: f64) -> f64 {
-        let h = if layer == 1 { &self.h1 } else { &self.h2 };
-        h[1..=self.nx()].iter().sum::<f64>() * dx
-    }
-
-    /// Water free surface η = b + (H₁ + H₂) cos²θ at physical cell i (1-based).
-    pub fn eta(&self, geom: &TwoLayerGeometry, i: usize) -> f64 {
-        geom.b[i] + (self.h1[i] + self.h2[i]) * geom.cos2[i]
-    }
-
-    /// Interface ζ = b + H₂ cos²θ at physical cell i (1-based).
-    pub fn interface(&self, geom: &TwoLayerGeometry, i: usize) -> f64 {
-        geom.b[i] + self.h2[i] * geom.cos2[i]
-    }
-}
 
 /// The two-layer hyperbolic + Coulomb step, with its face buffers.
 #[derive(Debug)]
@@ -135,14 +78,14 @@ struct Cells<'a> {
 
 impl<'a> Cells<'a> {
     #[inline(always)]
-    fn new(geom: &'a TwoLayerGeometry, s: &'a TwoLayerState) -> Self {
-        let n = geom.nx + 2;
+    fn new(geom: &'a CurvedLine, s: &'a TwoLayerState) -> Self {
+        let n = geom.line.nx + 2;
         Cells {
             h1: &s.h1[..n],
             q1: &s.q1[..n],
             h2: &s.h2[..n],
             q2: &s.q2[..n],
-            b: &geom.b[..n],
+            b: &geom.b()[..n],
             cos: &geom.cos[..n],
             cos2: &geom.cos2[..n],
         }
@@ -170,11 +113,11 @@ impl<'a> Cells<'a> {
 #[inline(always)]
 pub fn for_each_face(
     p: &TwoLayerParams,
-    geom: &TwoLayerGeometry,
+    geom: &CurvedLine,
     state: &TwoLayerState,
     mut per_face: impl FnMut(usize, &CellView, &CellView, (f64, f64), f64, f64),
 ) {
-    let n = geom.nx + 2;
+    let n = geom.line.nx + 2;
     let faces = &geom.faces()[..n - 1];
     let cells = Cells::new(geom, state);
     let mut left = cells.view(p, 0);
@@ -189,7 +132,7 @@ pub fn for_each_face(
 
 /// The largest |λ| of the face speed bounds of `state` (ghosts filled; 0 when both
 /// layers are absent everywhere): the CFL speed of the scheme.
-pub fn max_face_speed(p: &TwoLayerParams, geom: &TwoLayerGeometry, state: &TwoLayerState) -> f64 {
+pub fn max_face_speed(p: &TwoLayerParams, geom: &CurvedLine, state: &TwoLayerState) -> f64 {
     sweep_speeds(p, geom, state, |_, _| {})
 }
 
@@ -205,11 +148,11 @@ pub fn max_face_speed(p: &TwoLayerParams, geom: &TwoLayerGeometry, state: &TwoLa
 #[inline(always)]
 pub fn sweep_speeds(
     p: &TwoLayerParams,
-    geom: &TwoLayerGeometry,
+    geom: &CurvedLine,
     state: &TwoLayerState,
     mut per_cell: impl FnMut(usize, &CellView),
 ) -> f64 {
-    let nx = geom.nx;
+    let nx = geom.line.nx;
     let faces = &geom.faces()[..nx + 1];
     let cells = Cells::new(geom, state);
     let mut left = cells.view(p, 0);
@@ -249,17 +192,17 @@ impl TwoLayerSolver {
 
     /// The largest |λ| of the face speed bounds of `state` (ghosts filled; 0 when both
     /// layers are absent everywhere), [`max_face_speed`].
-    pub fn max_speed(&self, geom: &TwoLayerGeometry, state: &TwoLayerState) -> f64 {
+    pub fn max_speed(&self, geom: &CurvedLine, state: &TwoLayerState) -> f64 {
         max_face_speed(&self.params, geom, state)
     }
 
     /// Advances `state` by one step of at most `dt_max` and returns the Δt taken
     /// (CFL-limited). Ghosts are filled on entry and on exit.
-    pub fn step(&mut self, geom: &TwoLayerGeometry, state: &mut TwoLayerState, dt_max: f64) -> f64 {
+    pub fn step(&mut self, geom: &CurvedLine, state: &mut TwoLayerState, dt_max: f64) -> f64 {
         state.fill_ghosts(geom);
         let smax = self.max_speed(geom, state);
         let dt = if smax > 0.0 {
-            (self.cfl * geom.dx / smax).min(dt_max)
+            (self.cfl * geom.line.dx / smax).min(dt_max)
         } else {
             dt_max
         };
@@ -269,7 +212,7 @@ impl TwoLayerSolver {
 
     /// Advances `state` by exactly `dt` (the caller has chosen it from the CFL
     /// condition on the same speed bounds, [`crate::model::submarine::signal_speed`]).
-    pub fn step_with(&mut self, geom: &TwoLayerGeometry, state: &mut TwoLayerState, dt: f64) {
+    pub fn step_with(&mut self, geom: &CurvedLine, state: &mut TwoLayerState, dt: f64) {
         state.fill_ghosts(geom);
         self.advance(geom, state, dt);
     }
@@ -278,9 +221,9 @@ impl TwoLayerSolver {
     /// and fluxes in one sweep, with the check whether any cell would be drained),
     /// then the cell updates with the Coulomb rule of each cell applied as soon as its
     /// Q₂* is known (the rule is local to the cell).
-    fn advance(&mut self, geom: &TwoLayerGeometry, state: &mut TwoLayerState, dt: f64) {
-        let nx = geom.nx;
-        let dx = geom.dx;
+    fn advance(&mut self, geom: &CurvedLine, state: &mut TwoLayerState, dt: f64) {
+        let nx = geom.line.nx;
+        let dx = geom.line.dx;
         let lam = dt / dx;
         let p = self.params;
         let film = self.film;
@@ -394,22 +337,21 @@ mod tests;
 #[derive(Debug)]
 pub struct TwoLayerStage {
     pub solver: TwoLayerSolver,
-    pub geometry: TwoLayerGeometry,
 }
 
-impl crate::numerics::Stage<TwoLayerState> for TwoLayerStage {
+impl crate::numerics::Stage<CurvedLine, TwoLayerState> for TwoLayerStage {
     fn name(&self) -> &'static str {
         "two_layer"
     }
 
     fn apply(
         &mut self,
-        _mesh: &crate::mesh::Mesh,
+        grid: &CurvedLine,
         dt: f64,
         state: &mut TwoLayerState,
     ) -> Result<(), crate::numerics::StageError> {
         // Both sub-steps keep H ≥ 0 by construction (draining limiter): no retry needed.
-        self.solver.step_with(&self.geometry, state, dt);
+        self.solver.step_with(grid, state, dt);
         Ok(())
     }
 }

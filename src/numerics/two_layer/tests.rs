@@ -4,23 +4,23 @@
 use super::*;
 use crate::physics::two_layer::{Buoyancy, TwoLayerParams};
 
-fn geometry(nx: usize, len: f64, bed: impl Fn(f64) -> f64, kind: BoundaryKind) -> TwoLayerGeometry {
+fn geometry(nx: usize, len: f64, bed: impl Fn(f64) -> f64, kind: BoundaryKind) -> CurvedLine {
     let dx = len / nx as f64;
     let b: Vec<f64> = (0..nx).map(|i| bed((i as f64 + 0.5) * dx)).collect();
-    TwoLayerGeometry::new(0.0, dx, &b, kind, kind)
+    CurvedLine::new(0.0, dx, &b, kind, kind)
 }
 
 /// Sets each layer from the vertical levels: interface ζ(x) ≥ b, surface η(x) ≥ ζ.
 fn from_levels(
-    geom: &TwoLayerGeometry,
+    geom: &CurvedLine,
     zeta: impl Fn(f64) -> f64,
     eta: impl Fn(f64) -> f64,
 ) -> TwoLayerState {
-    let mut s = TwoLayerState::zeros(geom.nx);
-    for i in 1..=geom.nx {
+    let mut s = TwoLayerState::zeros(geom.line.nx);
+    for i in 1..=geom.line.nx {
         let x = geom.x(i);
-        let z = zeta(x).max(geom.b[i]);
-        s.h2[i] = (z - geom.b[i]) / geom.cos2[i];
+        let z = zeta(x).max(geom.b()[i]);
+        s.h2[i] = (z - geom.b()[i]) / geom.cos2[i];
         s.h1[i] = (eta(x) - z).max(0.0) / geom.cos2[i];
     }
     s.fill_ghosts(geom);
@@ -35,7 +35,7 @@ struct RunStats {
 
 fn run(
     solver: &mut TwoLayerSolver,
-    geom: &TwoLayerGeometry,
+    geom: &CurvedLine,
     s: &mut TwoLayerState,
     t_end: f64,
 ) -> RunStats {
@@ -84,7 +84,7 @@ fn lake_bed(x: f64) -> f64 {
 /// interface of slope 0.05 (< tan δ₀) that crosses the bed at x ≈ 2.67 (upper edge of
 /// the deposit, in air) and the water surface at x = 4 (shoreline on the grains),
 /// over the slope break at x = 5.
-fn lake_with_deposit(nx: usize) -> (TwoLayerGeometry, TwoLayerState) {
+fn lake_with_deposit(nx: usize) -> (CurvedLine, TwoLayerState) {
     let g = geometry(nx, 10.0, lake_bed, BoundaryKind::Wall);
     let s = from_levels(&g, |x| 0.6 - 0.05 * x, |_| 0.4);
     (g, s)
@@ -99,11 +99,11 @@ fn lake_and_deposit_at_rest_stay_exactly_at_rest() {
         assert!(s0.h2[1] == 0.0 && s0.h1[30] == 0.0 && s0.h2[30] > 0.0 && s0.h1[90] > 0.0);
         let mut p = TwoLayerParams::isotropic(0.2, 25.0);
         p.buoyancy = buoyancy;
-        let mut solver = TwoLayerSolver::new(p, 0.8, g.nx);
+        let mut solver = TwoLayerSolver::new(p, 0.8, g.line.nx);
         let mut s = s0.clone();
         let stats = run(&mut solver, &g, &mut s, 20.0);
         assert!(stats.steps > 300);
-        for i in 1..=g.nx {
+        for i in 1..=g.line.nx {
             assert_eq!(s.q2[i], 0.0, "grains moved at cell {i}");
             assert!(
                 s.q1[i].abs() < 1e-14,
@@ -130,10 +130,10 @@ fn lake_and_deposit_at_rest_stay_exactly_at_rest() {
 #[test]
 fn a_deposit_steeper_than_the_friction_angle_moves() {
     let (g, s0) = lake_with_deposit(100);
-    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 2.0), 0.8, g.nx);
+    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 2.0), 0.8, g.line.nx);
     let mut s = s0.clone();
     run(&mut solver, &g, &mut s, 1.0);
-    let moved = (1..=g.nx).filter(|&i| s.q2[i] != 0.0).count();
+    let moved = (1..=g.line.nx).filter(|&i| s.q2[i] != 0.0).count();
     assert!(moved > 20, "only {moved} cells moving");
 }
 
@@ -152,16 +152,16 @@ fn both_volumes_are_conserved_and_depths_stay_nonnegative_with_walls() {
         },
         |_| 0.4,
     );
-    let (v1, v2) = (s0.volume(1, g.dx), s0.volume(2, g.dx));
-    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 10.0), 0.8, g.nx);
+    let (v1, v2) = (s0.volume(1, g.line.dx), s0.volume(2, g.line.dx));
+    let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 10.0), 0.8, g.line.nx);
     let mut s = s0.clone();
     let mut max_q2 = 0.0f64;
     for _ in 0..40 {
         run(&mut solver, &g, &mut s, 0.25);
         assert_sane(&s);
         max_q2 = max_q2.max(s.q2.iter().fold(0.0f64, |m, q| m.max(q.abs())));
-        assert!((s.volume(1, g.dx) - v1).abs() <= 1e-13 * v1);
-        assert!((s.volume(2, g.dx) - v2).abs() <= 1e-13 * v2);
+        assert!((s.volume(1, g.line.dx) - v1).abs() <= 1e-13 * v1);
+        assert!((s.volume(2, g.line.dx) - v2).abs() <= 1e-13 * v2);
     }
     // The slide accelerates at ≈ g(sin θ − 0.8 cos θ tan 10°) ≈ 0.57 m/s² on the plane.
     assert!(max_q2 > 0.03, "the slide never moved");
@@ -173,12 +173,12 @@ fn both_volumes_are_conserved_and_depths_stay_nonnegative_with_walls() {
 fn uniform_slide_accelerates_at_g_sin_minus_friction() {
     // Long enough that the free boundaries (flat ghosts) do not reach [8, 12] by t = 1.
     let g = geometry(200, 20.0, |x| -0.2 * x, BoundaryKind::Outflow);
-    let mut s = TwoLayerState::zeros(g.nx);
-    for i in 1..=g.nx {
+    let mut s = TwoLayerState::zeros(g.line.nx);
+    for i in 1..=g.line.nx {
         s.h2[i] = 0.3;
     }
     let p = TwoLayerParams::isotropic(0.2, 5.0);
-    let mut solver = TwoLayerSolver::new(p, 0.8, g.nx);
+    let mut solver = TwoLayerSolver::new(p, 0.8, g.line.nx);
     let t = 1.0;
     run(&mut solver, &g, &mut s, t);
     let theta = (0.2f64).atan();
@@ -199,18 +199,18 @@ fn uniform_slide_accelerates_at_g_sin_minus_friction() {
 #[test]
 fn friction_stops_a_sliding_mass_and_never_reverses_it() {
     let g = geometry(10, 1.0, |_| 0.0, BoundaryKind::Outflow);
-    let mut s = TwoLayerState::zeros(g.nx);
-    for i in 1..=g.nx {
+    let mut s = TwoLayerState::zeros(g.line.nx);
+    for i in 1..=g.line.nx {
         s.h2[i] = 0.5;
         s.q2[i] = 0.5 * 2.0;
     }
     let p = TwoLayerParams::isotropic(0.2, 20.0);
-    let mut solver = TwoLayerSolver::new(p, 0.8, g.nx);
+    let mut solver = TwoLayerSolver::new(p, 0.8, g.line.nx);
     let t_stop = 2.0 / (0.8 * p.g * p.tan_delta);
     let mut t = 0.0;
     while t < 2.0 * t_stop {
         t += solver.step(&g, &mut s, 0.01);
-        for i in 1..=g.nx {
+        for i in 1..=g.line.nx {
             assert!(s.q2[i] >= 0.0, "reversed at t = {t}");
             let expected = 0.5 * (2.0 - 0.8 * p.g * p.tan_delta * t).max(0.0);
             assert!(
@@ -254,7 +254,7 @@ fn l1_dam_break(nx: usize, grains: bool) -> f64 {
     assert_sane(&s);
     let h = if grains { &s.h2 } else { &s.h1 };
     (1..=nx)
-        .map(|i| (h[i] - ritter(1.0, 5.0, g.x(i), 0.5, solver.params.g)).abs() * g.dx)
+        .map(|i| (h[i] - ritter(1.0, 5.0, g.x(i), 0.5, solver.params.g)).abs() * g.line.dx)
         .sum()
 }
 
@@ -325,7 +325,7 @@ fn wet_dam_break_converges_to_stoker() {
         let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 25.0), 0.8, nx);
         run(&mut solver, &g, &mut s, 0.5);
         let e: f64 = (1..=nx)
-            .map(|i| (s.h1[i] - stoker(1.0, 0.1, 5.0, g.x(i), 0.5, solver.params.g)).abs() * g.dx)
+            .map(|i| (s.h1[i] - stoker(1.0, 0.1, 5.0, g.x(i), 0.5, solver.params.g)).abs() * g.line.dx)
             .sum();
         errs.push(e);
     }
@@ -342,8 +342,8 @@ fn wet_dam_break_converges_to_stoker() {
 fn fast_slide_into_shallow_water_and_film_over_moving_grains_stay_sane() {
     let g = geometry(200, 10.0, |x| 0.3 - 0.03 * x, BoundaryKind::Outflow);
     for (film, speed) in [(0.01, 5.0), (1e-6, 3.0)] {
-        let mut s = TwoLayerState::zeros(g.nx);
-        for i in 1..=g.nx {
+        let mut s = TwoLayerState::zeros(g.line.nx);
+        for i in 1..=g.line.nx {
             let x = g.x(i);
             if (1.0..=3.0).contains(&x) {
                 s.h2[i] = 0.5;
@@ -356,7 +356,7 @@ fn fast_slide_into_shallow_water_and_film_over_moving_grains_stay_sane() {
                 s.h1[i] = film;
             }
         }
-        let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 15.0), 0.8, g.nx);
+        let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 15.0), 0.8, g.line.nx);
         let stats = run(&mut solver, &g, &mut s, 2.0);
         assert_sane(&s);
         assert!(
@@ -419,7 +419,7 @@ fn fused_sweeps_give_the_separate_passes_results_to_the_bit() {
         let p = TwoLayerParams::isotropic(0.2, 5.0 + 20.0 * rand());
         let view = |i: usize| {
             face::CellView::new(
-                &p, s.h1[i], s.q1[i], s.h2[i], s.q2[i], g.b[i], g.cos[i], g.cos2[i],
+                &p, s.h1[i], s.q1[i], s.h2[i], s.q2[i], g.b()[i], g.cos[i], g.cos2[i],
             )
         };
         let mut direct = 0.0f64;
@@ -435,12 +435,12 @@ fn fused_sweeps_give_the_separate_passes_results_to_the_bit() {
         );
 
         // One step both ways with the same Δt.
-        let dt = 0.5 * g.dx / fused;
+        let dt = 0.5 * g.line.dx / fused;
         let mut a = s.clone();
         let mut solver = TwoLayerSolver::new(p, 0.8, nx);
         solver.step_with(&g, &mut a, dt);
         let mut b = s.clone();
-        let terms = face::StepTerms::new(&p, dt, g.dx);
+        let terms = face::StepTerms::new(&p, dt, g.line.dx);
         let faces: Vec<face::FaceOut> = (0..=nx)
             .map(|j| {
                 let (l, r) = (view(j), view(j + 1));
@@ -451,7 +451,7 @@ fn fused_sweeps_give_the_separate_passes_results_to_the_bit() {
             .collect();
         let mut limiter = TwoLayerSolver::new(p, 0.8, nx);
         limiter.faces.clone_from(&faces);
-        let lam = dt / g.dx;
+        let lam = dt / g.line.dx;
         let limited =
             limiter.limit_layer(&s.h1, lam, nx, true) | limiter.limit_layer(&s.h2, lam, nx, false);
         assert_eq!(limited, solver.limited_steps == 1, "trial {trial}: limiter");

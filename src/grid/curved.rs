@@ -1,36 +1,31 @@
-//! Bed geometry of the two-layer model in Cartesian coordinates (seed 004 §4): the bed
-//! b(x) at the cell centres and the bed angle θ_i with tan θ_i = b'(x_i), from the
+//! A curved line: the grid of the two-layer model in Cartesian coordinates (seed 004
+//! §4), a [`Line`] whose bed angle θ_i with tan θ_i = b'(x_i) enters the equations, from the
 //! midpoint (centred) difference of b (seed 004 Remark 11 and §5.2: at a slope break
 //! the bed is seen as a parabola, so the curvature ∂_x(cos²θ), ∂_x(sin θ) stays
 //! finite: one cell on each side of the break carries the mean slope).
 //!
 //! Arrays have one ghost cell on each side (index 0 and nx + 1). A ghost copies the
-//! edge cell's bed and angle, so the boundary face carries no bed jump: a free
+//! edge cell's bed (the line's `b_ghost`) and angle, so the boundary face carries no bed jump: a free
 //! (zero-gradient) boundary lets a uniform state leave unchanged, a wall mirrors it.
 //!
 //! The face means and differences of cos θ, cos²θ and sin θ that the face kernel
-//! ([`super::face`]) and the Coulomb step ([`super::coulomb`]) use are computed here
+//! (`numerics::two_layer::face`) and the Coulomb step (`numerics::two_layer::coulomb`) use are computed here
 //! once, with the same operations as those kernels would do per step (so results do
 //! not depend on where they are computed): [`FaceGeometry`] per face, and per cell the
 //! mean cos θ and ∂ₓ sin θ of the Coulomb step.
 
-use crate::mesh::BoundaryKind;
+use super::{Grid, Line, Point, Stencil};
 
 #[derive(Debug, Clone)]
-pub struct TwoLayerGeometry {
-    pub nx: usize,
-    pub dx: f64,
-    pub x_min: f64,
-    /// Bed elevation b with ghosts (nx + 2).
-    pub b: Vec<f64>,
+pub struct CurvedLine {
+    /// The cells, the bed b (`b_ghost`: with ghosts, nx + 2) and the boundaries.
+    pub line: Line,
     /// cos θ, cos²θ, sin θ with ghosts (nx + 2).
     pub cos: Vec<f64>,
     pub cos2: Vec<f64>,
     pub sin: Vec<f64>,
-    pub left: BoundaryKind,
-    pub right: BoundaryKind,
     /// Per face j (between cells j and j + 1, nx + 1 faces): derived from `cos`,
-    /// `cos2`, `sin` by [`TwoLayerGeometry::new`] (do not edit those afterwards).
+    /// `cos2`, `sin` by [`CurvedLine::new`] (do not edit those afterwards).
     faces: Vec<FaceGeometry>,
     /// Per cell with ghosts (nx + 2, interior filled): ½(cos θ_{i−½} + cos θ_{i+½}) and
     /// (sin θ_{i+½} − sin θ_{i−½})/Δx of the Coulomb step.
@@ -50,15 +45,12 @@ pub struct FaceGeometry {
     pub dsin_dx: f64,
 }
 
-impl TwoLayerGeometry {
-    /// Geometry from the bed sampled at the nx cell centres x_i = x_min + (i + ½)Δx.
-    pub fn new(x_min: f64, dx: f64, bed: &[f64], left: BoundaryKind, right: BoundaryKind) -> Self {
-        let nx = bed.len();
+impl CurvedLine {
+    /// The angle terms of `line`'s bed (sampled at its nx cell centres).
+    pub fn new(line: Line) -> Self {
+        let (nx, dx) = (line.nx, line.dx);
         assert!(nx >= 2, "the two-layer scheme needs at least two cells");
-        let mut b = Vec::with_capacity(nx + 2);
-        b.push(bed[0]);
-        b.extend_from_slice(bed);
-        b.push(bed[nx - 1]);
+        let b = &line.b_ghost;
         let mut cos = vec![1.0; nx + 2];
         let mut cos2 = vec![1.0; nx + 2];
         let mut sin = vec![0.0; nx + 2];
@@ -104,16 +96,11 @@ impl TwoLayerGeometry {
             coulomb_cos[i] = 0.5 * (cl + cr);
             coulomb_dsin[i] = (sr - sl) / dx;
         }
-        TwoLayerGeometry {
-            nx,
-            dx,
-            x_min,
-            b,
+        CurvedLine {
+            line,
             cos,
             cos2,
             sin,
-            left,
-            right,
             faces,
             coulomb_cos,
             coulomb_dsin,
@@ -134,17 +121,44 @@ impl TwoLayerGeometry {
 
     /// Centre of physical cell i (1-based, as in the arrays).
     pub fn x(&self, i: usize) -> f64 {
-        self.x_min + (i as f64 - 0.5) * self.dx
+        self.line.x[i - 1]
     }
 
-    pub fn x_max(&self) -> f64 {
-        self.x_min + self.nx as f64 * self.dx
+    /// Bed elevation b with ghosts (nx + 2).
+    #[inline(always)]
+    pub fn b(&self) -> &[f64] {
+        &self.line.b_ghost
+    }
+}
+
+impl Grid for CurvedLine {
+    fn cells(&self) -> usize {
+        self.line.cells()
+    }
+    fn centre(&self, cell: usize) -> Point {
+        self.line.centre(cell)
+    }
+    fn axis_names(&self) -> &'static [&'static str] {
+        self.line.axis_names()
+    }
+    fn axis(&self, axis: usize) -> &[f64] {
+        self.line.axis(axis)
+    }
+    fn bed(&self) -> &[f64] {
+        self.line.bed()
+    }
+    fn locate(&self, p: Point) -> Stencil {
+        self.line.locate(p)
+    }
+    fn cfl_length(&self) -> f64 {
+        self.line.cfl_length()
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::BoundaryKind;
 
     #[test]
     fn constant_slope_gives_its_angle_and_a_break_is_smoothed_over_two_cells() {
@@ -159,7 +173,8 @@ mod tests {
                 }
             })
             .collect();
-        let g = TwoLayerGeometry::new(0.0, dx, &bed, BoundaryKind::Outflow, BoundaryKind::Outflow);
+        let free = BoundaryKind::Outflow;
+        let g = CurvedLine::new(Line::cartesian(0.0, dx, &bed, free, free));
         let c = 1.0 / (1.0f64 + 0.04).sqrt();
         assert!((g.cos[2] - c).abs() < 1e-15);
         assert!((g.sin[2] + 0.2 * c).abs() < 1e-15);

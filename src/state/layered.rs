@@ -12,11 +12,10 @@
 //! them with its own mass fluxes (`numerics::tracer`), as Basilisk's `tracers` list
 //! carries w in `layered/nh.h`. A hydrostatic run has none and pays nothing for them.
 
-use crate::mesh::BoundaryKind;
-use crate::mesh::Mesh;
+use crate::grid::Line;
 use crate::physics::shallow::velocity;
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct LayeredState {
     pub nx: usize,
     pub layers: usize,
@@ -34,11 +33,55 @@ pub struct LayeredState {
 
 /// A passive quantity q_α = h c_α per cell and layer (ghosts included, cell-major like
 /// `hu`), transported with the layer's mass flux and the upwind concentration c.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct Tracer {
     /// Name of the quantity, e.g. "hw".
     pub name: &'static str,
     pub q: Vec<f64>,
+}
+
+// `Clone` by hand: the derived `clone_from` would allocate a new copy, and the run
+// loop copies the state into its backup every step (`clone_from` into the buffers
+// allocated once).
+impl Clone for LayeredState {
+    fn clone(&self) -> Self {
+        LayeredState {
+            nx: self.nx,
+            layers: self.layers,
+            l: self.l.clone(),
+            h: self.h.clone(),
+            hu: self.hu.clone(),
+            tracers: self.tracers.clone(),
+            nh: self.nh.clone(),
+        }
+    }
+
+    fn clone_from(&mut self, source: &Self) {
+        self.nx = source.nx;
+        self.layers = source.layers;
+        self.l.clone_from(&source.l);
+        self.h.clone_from(&source.h);
+        self.hu.clone_from(&source.hu);
+        self.tracers.clone_from(&source.tracers);
+        match (&mut self.nh, &source.nh) {
+            (Some(nh), Some(src)) => nh.p.clone_from(&src.p),
+            (nh, src) => nh.clone_from(src),
+        }
+    }
+}
+
+impl Clone for Tracer {
+    fn clone(&self) -> Self {
+        Tracer {
+            name: self.name,
+            q: self.q.clone(),
+        }
+    }
+
+    fn clone_from(&mut self, source: &Self) {
+        self.name = source.name;
+        self.q.clone_from(&source.q);
+    }
 }
 
 /// Name of the normal-discharge tracer h w_α of the non-hydrostatic models.
@@ -47,7 +90,7 @@ pub const HW: &str = "hw";
 impl LayeredState {
     /// A state with thickness `h` and depth-averaged velocity `u` (physical cells),
     /// every layer moving with u.
-    pub fn from_profiles(mesh: &Mesh, l: &[f64], h: &[f64], u: &[f64]) -> LayeredState {
+    pub fn from_profiles(mesh: &Line, l: &[f64], h: &[f64], u: &[f64]) -> LayeredState {
         let nx = mesh.nx;
         let layers = l.len();
         assert!(h.len() == nx && u.len() == nx && layers >= 1);
@@ -72,15 +115,11 @@ impl LayeredState {
 
     /// Ghost cells per seed 003 Remark 6: thickness copied (homogeneous Neumann);
     /// discharge copied (outflow) or reversed (wall).
-    pub fn fill_ghosts(&mut self, mesh: &Mesh) {
+    pub fn fill_ghosts(&mut self, mesh: &Line) {
         let (nx, n) = (self.nx, self.layers);
         self.h[0] = self.h[1];
         self.h[nx + 1] = self.h[nx];
-        let sign = |kind: BoundaryKind| match kind {
-            BoundaryKind::Wall => -1.0,
-            BoundaryKind::Outflow => 1.0,
-        };
-        let (sl, sr) = (sign(mesh.left), sign(mesh.right));
+        let (sl, sr) = (mesh.left.discharge_sign(), mesh.right.discharge_sign());
         for a in 0..n {
             self.hu[a] = sl * self.hu[n + a];
             self.hu[(nx + 1) * n + a] = sr * self.hu[nx * n + a];

@@ -6,12 +6,11 @@
 //! after eq. 3.13), so φ of a dry cell is max(φ_{i−1}, φ_{i+1}) over its wet
 //! neighbours (eq. 3.14), or its last value when both are dry.
 
-use crate::mesh::Mesh;
+use crate::grid::Line;
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, Conserved, Primitive};
 use crate::physics::shallow::{velocity, H_DRY};
-use crate::scenario::BoundaryKind;
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct DilatantState {
     pub nx: usize,
     /// α of the third variable (seed 002 uses 2).
@@ -24,15 +23,45 @@ pub struct DilatantState {
     pub h: Vec<f64>,
     pub v: Vec<f64>,
     pub phi: Vec<f64>,
-    /// Thickness discharge hv with ghosts. The split scheme (`split.rs`) advances
+    /// Thickness discharge hv with ghosts. The split scheme (`numerics::dilatant::split`) advances
     /// (h, hv, φ) only and leaves m, q, w, v stale; the Appendix B scheme keeps hv = h v.
     /// Diagnostics, snapshots and [`Self::grain_volume`], [`Self::energy`] read (h, hv, φ).
     pub hu: Vec<f64>,
 }
 
+// `Clone` by hand: `clone_from` copies into the existing buffers (the run loop's
+// backup of the state at t^n), where the derived one would allocate.
+impl Clone for DilatantState {
+    fn clone(&self) -> Self {
+        DilatantState {
+            nx: self.nx,
+            alpha: self.alpha,
+            m: self.m.clone(),
+            q: self.q.clone(),
+            w: self.w.clone(),
+            h: self.h.clone(),
+            v: self.v.clone(),
+            phi: self.phi.clone(),
+            hu: self.hu.clone(),
+        }
+    }
+
+    fn clone_from(&mut self, source: &Self) {
+        self.nx = source.nx;
+        self.alpha = source.alpha;
+        self.m.clone_from(&source.m);
+        self.q.clone_from(&source.q);
+        self.w.clone_from(&source.w);
+        self.h.clone_from(&source.h);
+        self.v.clone_from(&source.v);
+        self.phi.clone_from(&source.phi);
+        self.hu.clone_from(&source.hu);
+    }
+}
+
 impl DilatantState {
     /// A state from thickness, velocity and volume fraction at the physical cells.
-    pub fn from_profiles(mesh: &Mesh, alpha: f64, h: &[f64], v: &[f64], phi: &[f64]) -> Self {
+    pub fn from_profiles(mesh: &Line, alpha: f64, h: &[f64], v: &[f64], phi: &[f64]) -> Self {
         let nx = mesh.nx;
         assert!(h.len() == nx && v.len() == nx && phi.len() == nx);
         let mut s = DilatantState {
@@ -72,16 +101,12 @@ impl DilatantState {
 
     /// Ghosts of (h, hv) as the monolayer's: h copied, hv copied (outflow) or
     /// reversed (wall).
-    pub fn fill_thickness_ghosts(&mut self, mesh: &Mesh) {
+    pub fn fill_thickness_ghosts(&mut self, mesh: &Line) {
         let nx = self.nx;
         self.h[0] = self.h[1];
         self.h[nx + 1] = self.h[nx];
-        let sign = |kind: BoundaryKind| match kind {
-            BoundaryKind::Wall => -1.0,
-            BoundaryKind::Outflow => 1.0,
-        };
-        self.hu[0] = sign(mesh.left) * self.hu[1];
-        self.hu[nx + 1] = sign(mesh.right) * self.hu[nx];
+        self.hu[0] = mesh.left.discharge_sign() * self.hu[1];
+        self.hu[nx + 1] = mesh.right.discharge_sign() * self.hu[nx];
     }
 
     /// Conservative variables of cell j.
@@ -96,22 +121,18 @@ impl DilatantState {
 
     /// Ghost cells: a wall mirrors the edge cell with the discharge reversed, an
     /// outflow copies it (as the other models, seed 003 Remark 6).
-    pub fn fill_ghosts(&mut self, mesh: &Mesh) {
+    pub fn fill_ghosts(&mut self, mesh: &Line) {
         let nx = self.nx;
-        let sign = |kind: BoundaryKind| match kind {
-            BoundaryKind::Wall => -1.0,
-            BoundaryKind::Outflow => 1.0,
-        };
         for (ghost, edge, kind) in [(0, 1, mesh.left), (nx + 1, nx, mesh.right)] {
             self.m[ghost] = self.m[edge];
-            self.q[ghost] = sign(kind) * self.q[edge];
+            self.q[ghost] = kind.discharge_sign() * self.q[edge];
             self.w[ghost] = self.w[edge];
         }
     }
 
     /// Fills the ghosts and recomputes (h, v, φ) everywhere; dry cells take φ from
     /// eq. (3.14).
-    pub fn update_primitives(&mut self, mesh: &Mesh) {
+    pub fn update_primitives(&mut self, mesh: &Line) {
         self.fill_ghosts(mesh);
         for j in 0..self.nx + 2 {
             self.update_cell(j);
@@ -169,12 +190,12 @@ impl DilatantState {
     }
 
     /// Mass of grains ∫φh dx over the physical cells (per unit width, per ρ_s).
-    pub fn grain_volume(&self, mesh: &Mesh) -> f64 {
+    pub fn grain_volume(&self, mesh: &Line) -> f64 {
         (1..=self.nx).map(|j| self.phi[j] * self.h[j]).sum::<f64>() * mesh.dx
     }
 
     /// Total energy ∫(φh v²/2 + g_c φh²/2 + g_c φh b̂) dx (seed 002 eq. 2.7, per ρ_s).
-    pub fn energy(&self, mesh: &Mesh) -> f64 {
+    pub fn energy(&self, mesh: &Line) -> f64 {
         (1..=self.nx)
             .map(|j| {
                 Primitive {
