@@ -24,9 +24,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use granflow::grid::{Line, LineSpec};
-use granflow::state::layered::LayeredState as State;
 use granflow::numerics::dilatant::split::SplitScheme;
-use granflow::state::dilatant::DilatantState;
 use granflow::numerics::dilatant::step::{DilatantOptions, DilatantScheme};
 use granflow::numerics::friction::CoulombFrictionStep;
 use granflow::numerics::hydrostatic::HydrostaticStep;
@@ -35,6 +33,8 @@ use granflow::physics::dilatancy::DilatantLaw;
 use granflow::physics::rheology::MuI;
 use granflow::physics::shallow::velocity;
 use granflow::scenario::{BoundaryKind, Coordinates};
+use granflow::state::dilatant::DilatantState;
+use granflow::state::layered::LayeredState as State;
 
 const MU_I: MuI = MuI {
     mu_s: 0.48,

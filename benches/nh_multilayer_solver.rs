@@ -21,10 +21,10 @@ use std::time::Instant;
 
 use granflow::grid::{BoundaryKind, Coordinates};
 use granflow::grid::{Line, LineSpec};
-use granflow::state::layered::{fill_tracer_ghosts, LayeredState};
 use granflow::numerics::banded::{stencil_residual, BandedCholesky, StencilRow};
 use granflow::numerics::linalg::{thomas, PressureRows};
 use granflow::numerics::projection::multilayer::MultilayerOperator;
+use granflow::state::layered::{fill_tracer_ghosts, LayeredState};
 use nalgebra::DMatrix;
 
 fn collapse_state(cells: usize, layers: usize) -> (Line, LayeredState) {

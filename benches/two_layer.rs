@@ -29,13 +29,15 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
 
+use granflow::grid::{CurvedLine, Line};
 use granflow::model::Model;
-use granflow::numerics::two_layer::{CurvedLine, TwoLayerSolver, TwoLayerState};
+use granflow::numerics::two_layer::TwoLayerSolver;
 use granflow::output::memory::MemorySink;
 use granflow::physics::two_layer::TwoLayerParams;
 use granflow::scenario::{load_file, load_str, BoundaryKind, Scenario};
 use granflow::setup::{build_granular, build_submarine};
 use granflow::simulation::Simulation;
+use granflow::state::TwoLayerState;
 
 const CELLS: usize = 2000;
 const STEPS: usize = 200;
@@ -55,7 +57,8 @@ fn tsunami(nx: usize) -> (CurvedLine, TwoLayerState) {
     let bed: Vec<f64> = (0..nx)
         .map(|i| 2500.0 - depth((i as f64 + 0.5) * dx))
         .collect();
-    let g = CurvedLine::new(0.0, dx, &bed, BoundaryKind::Outflow, BoundaryKind::Outflow);
+    let free = BoundaryKind::Outflow;
+    let g = CurvedLine::new(Line::cartesian(0.0, dx, &bed, free, free));
     let mut s = TwoLayerState::zeros(nx);
     for i in 1..=nx {
         let x = g.x(i);

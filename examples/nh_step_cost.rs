@@ -41,9 +41,9 @@ fn main() {
     }
     // Faces whose two cells are thicker than the projection's wet threshold
     // (NH_FILM_FRACTION Δx): the ones that carry pressure unknowns.
-    let h_min = granflow::numerics::projection::monolayer::NH_FILM_FRACTION * sim.mesh.dx;
+    let h_min = granflow::numerics::projection::monolayer::NH_FILM_FRACTION * sim.grid.dx;
     let h = &sim.state.h;
-    let nx = sim.mesh.nx;
+    let nx = sim.grid.nx;
     let wet = (0..=nx)
         .filter(|&f| h[f] > h_min && h[f + 1] > h_min)
         .count();

@@ -50,7 +50,10 @@ impl Gauges {
         let n = x.len();
         Gauges {
             x: x.to_vec(),
-            at: x.iter().map(|&x| grid.locate(Point { x, y: 0.0 })).collect(),
+            at: x
+                .iter()
+                .map(|&x| grid.locate(Point { x, y: 0.0 }))
+                .collect(),
             every,
             eta: vec![0.0; n],
             h: vec![0.0; n],

@@ -80,7 +80,7 @@ fn dam_break_error(h_l: f64, h_r: f64, cells: usize, t: f64) -> f64 {
     assert_eq!(summary.t_end, t);
     let exact = DamBreak::new(h_l, h_r);
     let reference: Vec<f64> = sink.x.iter().map(|&x| exact.h(x, t)).collect();
-    l1(&sink.snapshots.last().unwrap().h, &reference, sim.mesh.dx)
+    l1(&sink.snapshots.last().unwrap().h, &reference, sim.grid.dx)
 }
 
 fn convergence(h_l: f64, h_r: f64) -> (Vec<f64>, f64) {

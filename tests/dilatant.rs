@@ -5,10 +5,10 @@
 
 use granflow::grid::{Line, LineSpec};
 use granflow::numerics::dilatant::stabilisation::Viscosity;
-use granflow::state::dilatant::DilatantState;
 use granflow::numerics::dilatant::step::{DilatantError, DilatantOptions, DilatantScheme};
 use granflow::physics::dilatancy::DilatantLaw;
 use granflow::scenario::{BoundaryKind, Coordinates};
+use granflow::state::dilatant::DilatantState;
 
 fn mesh(x_min: f64, x_max: f64, cells: usize, slope_deg: f64, walls: (bool, bool)) -> Line {
     let kind = |wall: bool| {
@@ -391,11 +391,11 @@ fn paper_viscosity_breaks_the_fraction_bound_at_the_front() {
 /// The existing Savage–Hutter μ(I) monolayer (src/numerics/hydrostatic.rs +
 /// friction.rs) on the same collapse, to t_end: returns the thickness per cell.
 fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (Line, Vec<f64>) {
-    use granflow::state::layered::LayeredState as State;
     use granflow::numerics::friction::CoulombFrictionStep;
     use granflow::numerics::hydrostatic::HydrostaticStep;
     use granflow::numerics::Stage;
     use granflow::physics::rheology::MuI;
+    use granflow::state::layered::LayeredState as State;
     let mesh = collapse(slope, x_max, cells);
     let law = MuI {
         mu_s: 0.48,
@@ -734,7 +734,7 @@ fn scenario_series(file: &str, sets: &[String]) -> (Vec<Row>, f64) {
     let scn = granflow::scenario::load_file(&dir.join("scenarios").join(file), sets).unwrap();
     let threshold = scn.output.front_threshold;
     let mut sim = granflow::setup::build_dilatant(&scn);
-    let (x, dx) = (sim.mesh.x.clone(), sim.mesh.dx);
+    let (x, dx) = (sim.grid.x.clone(), sim.grid.dx);
     let mut sink = MemorySink::default();
     let summary = sim.run(&mut sink, &mut |_| {}).unwrap();
     let series = sink

@@ -185,7 +185,7 @@ fn bagnold_profile_converges_at_second_order_in_the_layers() {
                 "output.every=200",
             ]),
         );
-        assert!((sim.mesh.theta - theta).abs() < 1e-9);
+        assert!((sim.grid.theta - theta).abs() < 1e-9);
         run(&mut sim);
         let h = sim.state.h[1];
         assert!((h - 1.0).abs() < 1e-12, "h = {h}");
@@ -231,7 +231,7 @@ fn bagnold_flow_stays_uniform_on_thirty_cells() {
         "bagnold.toml",
         &sets(&["model.layers=4", "time.t_end=50", "output.every=50"]),
     );
-    assert_eq!(sim.mesh.nx, 30);
+    assert_eq!(sim.grid.nx, 30);
     run(&mut sim);
     let h = sim.state.h_interior();
     let worst = h.iter().fold(0.0f64, |m, h| m.max((h - 1.0).abs()));
@@ -428,7 +428,7 @@ fn at_rest_run(delta: f64, surface_deg: f64) -> (f64, f64) {
     );
     let (sink, _) = run(&mut sim);
     assert!(sim.steps > 400, "{} steps", sim.steps);
-    departures_from_rest(&sink, sim.mesh.dx, sim.state.layers)
+    departures_from_rest(&sink, sim.grid.dx, sim.state.layers)
 }
 
 /// Seed 003 §5.3, Table 6: a mass at rest exactly at the repose slope stays at rest
@@ -514,7 +514,7 @@ fn creep_at_rest_follows_the_frozen_viscosity_recursion() {
     };
     let fixed_point = |r: f64| 2.0 * r / (1.0 - r * r).sqrt();
     let check = |sim: &Sim, inside: f64, edge: f64, label: &str| {
-        let nx = sim.mesh.nx;
+        let nx = sim.grid.nx;
         let (shear, bottom) = interface_shear(sim, delta, 1..nx - 1);
         println!(
             "  {label}: {} steps, inside s/δ mean {:.3} (min {:.3}, max {:.3}), expected {inside:.3}; bottom layer ≤ {bottom:.2e} m/s",
@@ -632,7 +632,7 @@ fn erodible_runout(h_i: f64, constant_friction: bool, extra: &[&str]) -> f64 {
     };
     let mut sim = build_granular(&scn);
     assert_eq!(sim.state.layers, 20);
-    assert_eq!(sim.mesh.theta.to_degrees().round(), 22.0);
+    assert_eq!(sim.grid.theta.to_degrees().round(), 22.0);
     let (_, summary) = run(&mut sim);
     assert_eq!(summary.status, "stopped_at_rest", "h_i = {h_i} {extra:?}");
     summary.runout

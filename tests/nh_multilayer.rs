@@ -39,12 +39,12 @@ fn run(sim: &mut Sim) -> MemorySink {
 /// returns the worst relative residual and the largest number of constrained
 /// unknowns seen.
 fn worst_constraint_residual(sim: &mut Sim, steps: usize) -> (f64, usize) {
-    let mut op = MultilayerOperator::new(&sim.mesh, &sim.state.l);
+    let mut op = MultilayerOperator::new(&sim.grid, &sim.state.l);
     let (mut worst, mut constrained) = (0.0f64, 0usize);
     for _ in 0..steps {
         let dt = sim.step(f64::INFINITY).expect("step succeeds");
         sim.t += dt;
-        op.update(&sim.mesh, &sim.state);
+        op.update(&sim.grid, &sim.state);
         let r = op.residual(&sim.state);
         assert!(r.relative().is_finite());
         worst = worst.max(r.relative());
@@ -179,7 +179,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
             &[&format!("rheology.delta={delta:e}")],
         );
         let sink = run(&mut sim);
-        let [eh, eu, ew] = departures_inside(&sink, sim.mesh.dx, sim.state.layers, 3);
+        let [eh, eu, ew] = departures_inside(&sink, sim.grid.dx, sim.state.layers, 3);
         println!("  δ = {delta:.0e}, inside: {eh:.3e} {eu:.3e} {ew:.3e}");
         assert!(
             eh <= 60.0 * delta && eu <= 250.0 * delta && ew <= 150.0 * delta,
@@ -216,7 +216,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta() {
         );
         let sink = run(&mut sim);
         assert!(sim.steps > 400, "{} steps", sim.steps);
-        let [eh, eu, ew] = departures_from_rest(&sink, sim.mesh.dx, sim.state.layers);
+        let [eh, eu, ew] = departures_from_rest(&sink, sim.grid.dx, sim.state.layers);
         println!("  δ = {delta:.0e}: {eh:.3e} {eu:.3e} {ew:.3e}");
         assert!(
             eh <= 100.0 * delta && eu <= 250.0 * delta && ew <= 200.0 * delta,
@@ -232,7 +232,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta() {
         ],
     );
     let sink = run(&mut sim);
-    let [eh, eu, _] = departures_from_rest(&sink, sim.mesh.dx, sim.state.layers);
+    let [eh, eu, _] = departures_from_rest(&sink, sim.grid.dx, sim.state.layers);
     assert!(eh > 1e-5 && eu > 1e-5, "{eh:e} {eu:e}");
 }
 
@@ -327,7 +327,7 @@ fn convergence_run_with(
             }
         }
     }
-    (h, u, w, sim.mesh.dx)
+    (h, u, w, sim.grid.dx)
 }
 
 /// The layered L1 norm of seed 003 eq. (35): Δx Σ_i (h_i/N) Σ_α |v_{α,i} − r_{α,i}|,
@@ -654,7 +654,7 @@ fn mass_below_the_repose_slope_stays_at_rest() {
             ],
         );
         let sink = run(&mut sim);
-        departures_per_snapshot(&sink, sim.mesh.dx, sim.state.layers, 0)
+        departures_per_snapshot(&sink, sim.grid.dx, sim.state.layers, 0)
             .iter()
             .map(|e| e[1])
             .collect::<Vec<f64>>()

@@ -57,7 +57,7 @@ fn worst_constraint_residual(sim: &mut Sim, steps: usize) -> f64 {
     for _ in 0..steps {
         let dt = sim.step(f64::INFINITY).expect("step succeeds");
         sim.t += dt;
-        let r = constraint_residual(&sim.mesh, &sim.state);
+        let r = constraint_residual(&sim.grid, &sim.state);
         assert!(r.relative().is_finite());
         worst = worst.max(r.relative());
         constrained = constrained.max(r.faces);
@@ -235,7 +235,7 @@ fn nonhydrostatic_collapse_conserves_mass_and_keeps_h_nonnegative() {
 #[test]
 fn snapshots_carry_w_and_the_interface_pressure() {
     let (sim, sink, _) = run("collapse_nh.toml", &["time.t_end=0.1", "output.every=0.05"]);
-    let nx = sim.mesh.nx;
+    let nx = sim.grid.nx;
     assert_eq!(sink.snapshots.len(), 3);
     let last: &Snapshot = sink.snapshots.last().unwrap();
     let (w, p) = (last.w.as_ref().unwrap(), last.p_nh.as_ref().unwrap());

@@ -106,8 +106,8 @@ fn collapse_regression_norms() {
     let mut sink = MemorySink::default();
     let summary = sim.run(&mut sink, &mut |_| {}).unwrap();
     let last = sink.snapshots.last().unwrap();
-    let l1_h: f64 = last.h.iter().sum::<f64>() * sim.mesh.dx;
-    let l2_h: f64 = (last.h.iter().map(|h| h * h).sum::<f64>() * sim.mesh.dx).sqrt();
+    let l1_h: f64 = last.h.iter().sum::<f64>() * sim.grid.dx;
+    let l2_h: f64 = (last.h.iter().map(|h| h * h).sum::<f64>() * sim.grid.dx).sqrt();
     eprintln!(
         "runout {:.6}, settled {:.6}, steps {}, L1 {:.12}, L2 {:.9}, hmax {:.9}",
         summary.runout, summary.settled_time, summary.steps, l1_h, l2_h, summary.h_max_final

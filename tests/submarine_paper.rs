@@ -5,16 +5,18 @@
 //! raise a smaller wave; Fig. 8a: deposits for δ₀ ≤ 12° fully submerged, 13° not;
 //! §5.3 a positive wave ahead of the slide and a trough above it.
 
-use granflow::numerics::two_layer::{CurvedLine, TwoLayerSolver, TwoLayerState};
+use granflow::grid::{CurvedLine, Line};
+use granflow::numerics::two_layer::TwoLayerSolver;
 use granflow::physics::two_layer::TwoLayerParams;
 use granflow::scenario::BoundaryKind;
+use granflow::state::TwoLayerState;
 
 const FREE: BoundaryKind = BoundaryKind::Outflow;
 
 fn geometry(nx: usize, len: f64, bed: impl Fn(f64) -> f64) -> CurvedLine {
     let dx = len / nx as f64;
     let b: Vec<f64> = (0..nx).map(|i| bed((i as f64 + 0.5) * dx)).collect();
-    CurvedLine::new(0.0, dx, &b, FREE, FREE)
+    CurvedLine::new(Line::cartesian(0.0, dx, &b, FREE, FREE))
 }
 
 fn all_stopped(s: &TwoLayerState) -> bool {

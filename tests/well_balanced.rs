@@ -130,7 +130,7 @@ fn coulomb_mass_leaves_no_film_on_slopes_steeper_than_its_friction_angle() {
         let (sink, summary) = run(&mut sim);
         assert_eq!(summary.status, "stopped_at_rest", "{cells} cells");
         let last = sink.snapshots.last().unwrap();
-        let dx = sim.mesh.dx;
+        let dx = sim.grid.dx;
         let total: f64 = last.h.iter().sum::<f64>() * dx;
         let mut stuck = 0.0;
         let mut thickest: f64 = 0.0;

@@ -92,7 +92,12 @@ pub trait Model: Send + 'static {
     /// depth), in m. The run loop interpolates them linearly between cell centres
     /// ([`crate::gauges`]). `None` (the default): the model records no gauges, and a
     /// run that asks for them fails before its first step.
-    fn gauge_cell(&self, _grid: &Self::Grid, _state: &Self::State, _i: usize) -> Option<(f64, f64)> {
+    fn gauge_cell(
+        &self,
+        _grid: &Self::Grid,
+        _state: &Self::State,
+        _i: usize,
+    ) -> Option<(f64, f64)> {
         None
     }
 

@@ -17,9 +17,9 @@
 
 use super::{Stage, StageError};
 use crate::grid::Line;
-use crate::state::layered::LayeredState;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
+use crate::state::layered::LayeredState;
 
 #[derive(Debug)]
 pub struct CoulombFrictionStep<L: BasalFriction> {

@@ -120,9 +120,9 @@
 use super::tracer::TracerTransport;
 use super::{Stage, StageError};
 use crate::grid::Line;
-use crate::state::layered::LayeredState;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{sheared_celerity, velocity, H_DRY};
+use crate::state::layered::LayeredState;
 
 /// The friction coefficient that the Coulomb-aware reconstruction (ΔC) uses at a face:
 /// `face` k lies between the ghost-inclusive cells k and k + 1 (k = 0..=nx), `speed` is

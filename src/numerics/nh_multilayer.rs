@@ -32,9 +32,9 @@ use super::projection::multilayer::SharedOperator;
 use super::viscous::MultilayerViscousStep;
 use super::{Stage, StageError};
 use crate::grid::Line;
-use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
+use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 
 /// Values per piece of the lagged copy of h u_α (1920 bytes).
 const COPY_PIECE: usize = 240;

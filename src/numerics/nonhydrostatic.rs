@@ -23,9 +23,9 @@
 use super::projection::monolayer::{cell_coefficients, doubled_bed};
 use super::{Stage, StageError};
 use crate::grid::Line;
-use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
+use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 
 /// Step 2: explicit p^n terms and Coulomb friction with the total basal pressure.
 #[derive(Debug)]

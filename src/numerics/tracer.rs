@@ -35,8 +35,8 @@
 //!
 //! [`HydrostaticStep`]: super::hydrostatic::HydrostaticStep
 
-use crate::state::layered::{fill_tracer_ghosts, Tracer};
 use crate::physics::shallow::H_DRY;
+use crate::state::layered::{fill_tracer_ghosts, Tracer};
 
 /// Scratch of the transport: concentrations before the step and face fluxes.
 #[derive(Debug, Default)]
@@ -206,10 +206,10 @@ impl TracerTransport {
 #[cfg(test)]
 mod tests {
     use crate::grid::{BoundaryKind, Coordinates, Line, LineSpec};
-    use crate::state::layered::LayeredState;
     use crate::numerics::hydrostatic::HydrostaticStep;
     use crate::numerics::Stage;
     use crate::physics::rheology::Coulomb;
+    use crate::state::layered::LayeredState;
     use std::f64::consts::PI;
 
     const N: usize = 4;

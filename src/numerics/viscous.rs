@@ -64,10 +64,10 @@
 use super::friction::coulomb_update;
 use super::{Stage, StageError};
 use crate::grid::Line;
-use crate::state::layered::LayeredState;
 use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::{velocity, H_DRY};
 use crate::physics::GRAVITY;
+use crate::state::layered::LayeredState;
 
 /// Thickness (m) below which a cell is solved as a monolayer (seed 003 Remark 2).
 pub const THIN_LAYER: f64 = 1e-6;

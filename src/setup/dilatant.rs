@@ -6,13 +6,13 @@
 use crate::grid::Line;
 use crate::model::dilatant::{Dilatant, DilatantScheme, REST_SPEED};
 use crate::numerics::dilatant::split::SplitScheme;
-use crate::state::dilatant::DilatantState;
 use crate::numerics::dilatant::step::SchemeKind;
 use crate::numerics::Stage;
 use crate::pipeline::Pipeline;
 use crate::scenario::Scenario;
 use crate::setup::{line_of, run_config, run_info};
 use crate::simulation::Simulation;
+use crate::state::dilatant::DilatantState;
 
 pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
     let spec = scn

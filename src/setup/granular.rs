@@ -7,11 +7,11 @@
 
 use crate::model::granular::config::Pressure;
 use crate::model::granular::pipeline;
-use crate::state::layered::LayeredState;
 use crate::model::granular::Granular;
 use crate::scenario::Scenario;
 use crate::setup::{line_of, run_config, run_info};
 use crate::simulation::Simulation;
+use crate::state::layered::LayeredState;
 
 pub fn build(scn: &Scenario) -> Simulation<Granular> {
     let mesh = line_of(scn);

@@ -2,14 +2,16 @@
 //! b(x), the grains' vertical thickness `initial.h` = H₂cos²θ and velocity `initial.u`,
 //! the water up to the surface `initial.eta` (H₁cos²θ = max(0, η − b − H₂cos²θ)), at rest.
 
+use crate::grid::CurvedLine;
 use crate::model::submarine::Submarine;
-use crate::numerics::two_layer::{CurvedLine, TwoLayerSolver, TwoLayerStage, TwoLayerState};
+use crate::numerics::two_layer::{TwoLayerSolver, TwoLayerStage};
 use crate::numerics::Stage;
 use crate::physics::rheology::FrictionLaw;
 use crate::pipeline::Pipeline;
 use crate::scenario::Scenario;
 use crate::setup::{line_of, run_config, run_info};
 use crate::simulation::Simulation;
+use crate::state::TwoLayerState;
 
 pub fn build(scn: &Scenario) -> Simulation<Submarine> {
     let grid = CurvedLine::new(line_of(scn));

@@ -76,4 +76,3 @@ impl TwoLayerState {
         geom.b()[i] + self.h2[i] * geom.cos2[i]
     }
 }
-

@@ -13,9 +13,9 @@
 
 use crate::grid::Line;
 use crate::model::{Diagnostics, Model};
-use crate::state::dilatant::DilatantState;
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
 use crate::physics::shallow::{celerity, velocity};
+use crate::state::dilatant::DilatantState;
 
 pub use crate::numerics::dilatant::step::{DilatantOptions, DilatantScheme};
 pub use crate::physics::dilatancy::DilatantLaw;

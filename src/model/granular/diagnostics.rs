@@ -21,9 +21,9 @@
 //! thick column), so more steps than the flux needs.
 
 use crate::grid::Line;
-use crate::state::layered::LayeredState;
 use crate::model::Diagnostics;
 use crate::physics::shallow::{celerity, velocity, H_DRY};
+use crate::state::layered::LayeredState;
 
 pub fn diagnose(
     mesh: &Line,

@@ -22,8 +22,8 @@ use crate::grid::Line;
 use crate::model::{Diagnostics, Model};
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
 use crate::physics::shallow::velocity;
-use profiles::{normal_velocities, static_interface};
 use crate::state::LayeredState;
+use profiles::{normal_velocities, static_interface};
 
 /// The granular model's run-time parameters (the physics of its stages is in the
 /// pipeline).

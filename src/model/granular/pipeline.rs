@@ -7,7 +7,6 @@
 
 use crate::grid::Line;
 use crate::model::granular::config::{MultilayerSpec, Pressure};
-use crate::state::layered::LayeredState;
 use crate::numerics::banded::BandedCholesky;
 use crate::numerics::friction::CoulombFrictionStep;
 use crate::numerics::hydrostatic::HydrostaticStep;
@@ -21,6 +20,7 @@ use crate::numerics::Stage;
 use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, MuI};
 use crate::physics::Material;
 use crate::pipeline::Pipeline;
+use crate::state::layered::LayeredState;
 
 /// Something built for a concrete friction law type.
 pub trait WithLaw {

@@ -20,8 +20,8 @@
 
 use crate::grid::Coordinates;
 use crate::grid::Line;
-use crate::state::layered::LayeredState;
 use crate::physics::shallow::{velocity, H_DRY};
+use crate::state::layered::LayeredState;
 
 /// Normal velocity of every layer at its midpoint, layer-major (α·nx + i), into `w`.
 pub fn normal_velocities(mesh: &Line, state: &LayeredState, w: &mut [f64]) {

@@ -9,10 +9,12 @@
 //! kinetic energy is ∫ ½(H₂U₂² + r H₁U₁²) dx (per unit grain density), the maximum
 //! speed is over both layers (a run stops "at rest" only when the water is still too).
 
+use crate::grid::CurvedLine;
 use crate::model::{Diagnostics, Model};
-use crate::numerics::two_layer::{max_face_speed, sweep_speeds, CurvedLine, TwoLayerState};
+use crate::numerics::two_layer::{max_face_speed, sweep_speeds};
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
 use crate::physics::two_layer::{layer_velocity, max_num, TwoLayerParams};
+use crate::state::TwoLayerState;
 
 #[derive(Debug, Clone)]
 pub struct Submarine {

@@ -74,15 +74,15 @@
 use super::flux::proj_friction;
 use super::source::relax_towards;
 use super::stabilisation::diffuse_run;
-use crate::state::DilatantState;
 use super::step::DilatantOptions;
 use crate::grid::Line;
-use crate::state::layered::LayeredState;
 use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
 use crate::physics::rheology::{inertial_number, BasalFriction, MuI, STATIC_ROUNDOFF};
 use crate::physics::shallow::H_DRY;
+use crate::state::layered::LayeredState;
+use crate::state::DilatantState;
 use std::ops::RangeInclusive;
 
 /// The split dilatant stepper with its work arrays (allocated once).

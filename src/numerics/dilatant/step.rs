@@ -16,10 +16,10 @@ use super::flux::{interface_flux, total_topography_jump, FaceGrid, FluxOptions};
 use super::reconstruction::Side;
 use super::source::{relax_fraction, DilatancyUpdate};
 use super::stabilisation::{diffuse, Viscosity};
-use crate::state::DilatantState;
 use crate::grid::Line;
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, DilatantLaw};
+use crate::state::DilatantState;
 
 /// A state that left the admissible set.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -336,17 +336,15 @@ impl Stage<Line, DilatantState> for DilatantScheme {
             }),
             Err(DilatantError::FractionOutOfBounds {
                 cell, phi, stage, ..
-            }) => {
-                Err(StageError::Inadmissible {
-                    cell,
-                    quantity: match stage {
-                        "finite-volume" => "volume fraction φ (finite-volume step)",
-                        "stabilisation" => "volume fraction φ (stabilisation step)",
-                        _ => "volume fraction φ (dilatancy step)",
-                    },
-                    value: phi,
-                })
-            }
+            }) => Err(StageError::Inadmissible {
+                cell,
+                quantity: match stage {
+                    "finite-volume" => "volume fraction φ (finite-volume step)",
+                    "stabilisation" => "volume fraction φ (stabilisation step)",
+                    _ => "volume fraction φ (dilatancy step)",
+                },
+                value: phi,
+            }),
             Err(DilatantError::NonFinite { cell, .. }) => Err(StageError::Inadmissible {
                 cell,
                 quantity: "non-finite value",

@@ -74,9 +74,9 @@ use super::monolayer::{doubled_bed, face_depth, ConstraintResidual, NH_FILM_FRAC
 use super::{PressureSolver, ProjectionOperator};
 use crate::grid::BoundaryKind;
 use crate::grid::Line;
-use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 use crate::numerics::banded::{BandedCholesky, StencilRow};
 use crate::numerics::linalg::{BandReady, PressureRows};
+use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 
 /// Coefficients of one layer of one cell: the impulses of its base (α − 1/2) and top
 /// (α + 1/2) interfaces at its left and right faces, in δ(h_α u_α) and δ(h_α w_α).

@@ -28,12 +28,7 @@ use crate::physics::two_layer::{
 
 /// Applies the stopping rule to every physical cell (ghosts must be filled). The
 /// solver applies [`coulomb_cell`] inside its update pass instead (the same operations).
-pub fn coulomb_step(
-    p: &TwoLayerParams,
-    geom: &CurvedLine,
-    state: &mut TwoLayerState,
-    dt: f64,
-) {
+pub fn coulomb_step(p: &TwoLayerParams, geom: &CurvedLine, state: &mut TwoLayerState, dt: f64) {
     let (cos_mean, dsin_dx) = geom.coulomb_terms();
     for i in 1..=geom.line.nx {
         state.q2[i] = coulomb_cell(

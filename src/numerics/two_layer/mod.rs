@@ -25,8 +25,8 @@
 pub mod coulomb;
 pub mod face;
 
-pub use crate::grid::CurvedLine;
-pub use crate::state::TwoLayerState;
+use crate::grid::CurvedLine;
+use crate::state::TwoLayerState;
 
 use crate::physics::two_layer::{max_num, speed_bounds, TwoLayerParams, H_DRY_TWO_LAYER};
 use face::{face_flux, face_speeds_with, roe_velocities, CellView, FaceOut, StepTerms};

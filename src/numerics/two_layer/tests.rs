@@ -2,12 +2,13 @@
 //! Coulomb rule, exact solutions (seed 004 §3–4).
 
 use super::*;
+use crate::grid::{BoundaryKind, Line};
 use crate::physics::two_layer::{Buoyancy, TwoLayerParams};
 
 fn geometry(nx: usize, len: f64, bed: impl Fn(f64) -> f64, kind: BoundaryKind) -> CurvedLine {
     let dx = len / nx as f64;
     let b: Vec<f64> = (0..nx).map(|i| bed((i as f64 + 0.5) * dx)).collect();
-    CurvedLine::new(0.0, dx, &b, kind, kind)
+    CurvedLine::new(Line::cartesian(0.0, dx, &b, kind, kind))
 }
 
 /// Sets each layer from the vertical levels: interface ζ(x) ≥ b, surface η(x) ≥ ζ.
@@ -325,7 +326,9 @@ fn wet_dam_break_converges_to_stoker() {
         let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 25.0), 0.8, nx);
         run(&mut solver, &g, &mut s, 0.5);
         let e: f64 = (1..=nx)
-            .map(|i| (s.h1[i] - stoker(1.0, 0.1, 5.0, g.x(i), 0.5, solver.params.g)).abs() * g.line.dx)
+            .map(|i| {
+                (s.h1[i] - stoker(1.0, 0.1, 5.0, g.x(i), 0.5, solver.params.g)).abs() * g.line.dx
+            })
             .sum();
         errs.push(e);
     }
@@ -419,7 +422,14 @@ fn fused_sweeps_give_the_separate_passes_results_to_the_bit() {
         let p = TwoLayerParams::isotropic(0.2, 5.0 + 20.0 * rand());
         let view = |i: usize| {
             face::CellView::new(
-                &p, s.h1[i], s.q1[i], s.h2[i], s.q2[i], g.b()[i], g.cos[i], g.cos2[i],
+                &p,
+                s.h1[i],
+                s.q1[i],
+                s.h2[i],
+                s.q2[i],
+                g.b()[i],
+                g.cos[i],
+                g.cos2[i],
             )
         };
         let mut direct = 0.0f64;
