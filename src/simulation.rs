@@ -391,3 +391,127 @@ fn failure_message(e: &RunError) -> String {
         RunError::Output(o) => o.to_string(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{BoundaryKind, Coordinates, Line, LineSpec};
+    use crate::model::granular::Granular;
+    use crate::numerics::Stage;
+    use crate::state::LayeredState;
+
+    /// Adds `dt` to h of the first physical cell.
+    struct Grow;
+
+    impl Stage<Line, LayeredState> for Grow {
+        fn name(&self) -> &'static str {
+            "grow"
+        }
+        fn apply(&mut self, _: &Line, dt: f64, s: &mut LayeredState) -> Result<(), StageError> {
+            s.h[1] += dt;
+            Ok(())
+        }
+    }
+
+    /// Refuses the first `failures` steps it sees with `error`, then does nothing.
+    struct Refuse {
+        failures: usize,
+        error: StageError,
+    }
+
+    impl Stage<Line, LayeredState> for Refuse {
+        fn name(&self) -> &'static str {
+            "refuse"
+        }
+        fn apply(&mut self, _: &Line, _: f64, _: &mut LayeredState) -> Result<(), StageError> {
+            if self.failures > 0 {
+                self.failures -= 1;
+                return Err(self.error.clone());
+            }
+            Ok(())
+        }
+    }
+
+    /// A layer at rest on a flat bed (signal speed √(g h) > 0), with `second` as the
+    /// pipeline's second stage after [`Grow`].
+    fn simulation(second: Refuse) -> Simulation<Granular> {
+        let spec = LineSpec {
+            x_min: 0.0,
+            x_max: 1.0,
+            cells: 10,
+            slope_deg: 0.0,
+            coordinates: Coordinates::Cartesian,
+            left: BoundaryKind::Wall,
+            right: BoundaryKind::Wall,
+        };
+        let line = Line::new(&spec, vec![0.0; 10]);
+        let state = LayeredState::from_profiles(&line, &[1.0], &[0.1; 10], &[0.0; 10]);
+        let model = Granular {
+            h_bed: vec![0.0; 10],
+            front_threshold: 1e-3,
+            static_threshold: 1e-3,
+            rest_speed: 0.0,
+        };
+        let config = RunConfig {
+            t_end: 1.0,
+            cfl: 0.5,
+            output_every: 1.0,
+            gauges: Vec::new(),
+            gauge_every: None,
+            settle_fraction: 0.0,
+        };
+        let info = RunInfo {
+            granflow_version: String::new(),
+            model: "granular".into(),
+            pressure: "hydrostatic".into(),
+            layers: 1,
+            coordinates: "cartesian".into(),
+            slope_deg: 0.0,
+            scenario_toml: String::new(),
+            front_threshold: 1e-3,
+        };
+        let pipeline = Pipeline::new(vec![Box::new(Grow), Box::new(second)]);
+        Simulation::new(line, model, state, pipeline, Vec::new(), config, info)
+    }
+
+    #[test]
+    fn a_step_refused_by_a_later_stage_is_retried_from_the_state_before_it() {
+        let refuse = Refuse {
+            failures: 1,
+            error: StageError::NegativeThickness { cell: 3, h: -1.0 },
+        };
+        let mut sim = simulation(refuse);
+        let h0 = sim.state.h[1];
+        let cfl_dt = sim.cfl_dt(sim.diagnostics().signal_speed);
+        let dt = sim.step(1.0).expect("the retry succeeds");
+        assert_eq!(dt, 0.5 * cfl_dt);
+        // Only the accepted (halved) step has grown the cell: the growth of the refused
+        // attempt was undone with the rest of that step.
+        assert_eq!(sim.state.h[1], h0 + dt);
+        assert_eq!(sim.steps, 1);
+    }
+
+    #[test]
+    fn a_failed_step_leaves_the_state_of_its_start_and_names_the_cell_centre() {
+        let refuse = Refuse {
+            failures: 1,
+            error: StageError::Inadmissible {
+                cell: 3,
+                quantity: "test quantity",
+                value: 2.0,
+            },
+        };
+        let mut sim = simulation(refuse);
+        let before = sim.state.clone();
+        let Err(RunError::Solver(failure)) = sim.step(1.0) else {
+            panic!("the step fails");
+        };
+        assert_eq!(sim.state, before);
+        let x = sim.grid.x[3];
+        assert_eq!(failure.x, Some(x));
+        assert!(
+            failure.to_string().contains(&format!("x = {x} m")),
+            "{failure}"
+        );
+    }
+}

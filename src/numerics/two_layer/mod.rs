@@ -211,7 +211,8 @@ impl TwoLayerSolver {
     }
 
     /// Advances `state` by exactly `dt` (the caller has chosen it from the CFL
-    /// condition on the same speed bounds, [`crate::model::submarine::signal_speed`]).
+    /// condition on the same speed bounds, [`max_face_speed`], as the submarine model's
+    /// diagnostics do).
     pub fn step_with(&mut self, geom: &CurvedLine, state: &mut TwoLayerState, dt: f64) {
         state.fill_ghosts(geom);
         self.advance(geom, state, dt);
