@@ -803,30 +803,16 @@ impl<L: BasalFriction> HydrostaticStep<L> {
                 self.layer_flux = vec![0.0; (nx + 1) * n];
             }
         }
-        // Mass first; limit the fluxes of cells that would empty, then refuse the step
-        // (state untouched) if anything is still negative beyond round-off.
         let r = dt / mesh.dx;
-        let mut worst = if n == 1 {
-            self.monolayer_interfaces(mesh, dt, &state.h, &state.hu, r, faces)
+        if n == 1 {
+            self.advance_monolayer(mesh, dt, &mut state.h, &mut state.hu, faces)?;
         } else {
+            // Mass first; limit the fluxes of cells that would empty, then refuse the
+            // step (state untouched) if anything is still negative beyond round-off.
             self.velocities(state);
             self.interfaces(mesh, dt, &state.l, &state.h, faces);
-            self.update_mass(&state.h, r)
-        };
-        if worst.0 < 0.0 {
-            self.limit_draining(&state.h, r);
-            worst = self.update_mass(&state.h, r);
-        }
-        let tolerance = -1e-14 * (1.0 + state.h[worst.1].abs());
-        if worst.0 < tolerance {
-            return Err(StageError::NegativeThickness {
-                cell: worst.1 - 1,
-                h: worst.0,
-            });
-        }
-        if n == 1 {
-            self.update_monolayer(&mut state.h[..nx + 2], &mut state.hu[..nx + 2], r);
-        } else {
+            let worst = self.update_mass(&state.h, r);
+            self.refuse_negative(&state.h, r, worst)?;
             self.update_layers(state, nx, r);
         }
         state.fill_ghosts(mesh);
@@ -840,6 +826,66 @@ impl<L: BasalFriction> HydrostaticStep<L> {
 }
 
 impl<L: BasalFriction> HydrostaticStep<L> {
+    /// The monolayer step (N = 1, no tracers) on the thickness `h` and discharge `hu`
+    /// of any state (nx + 2 each, ghosts filled), with the friction threshold of
+    /// `faces`; the ghosts are left to the caller (the layered state's `fill_ghosts`,
+    /// the dilatant state's `fill_thickness_ghosts`: the same copy and sign). This is
+    /// the path [`Stage::apply`] takes for one layer: same operations, same results.
+    /// On error `h` and `hu` are unchanged.
+    pub fn advance_monolayer<F: FaceFriction>(
+        &mut self,
+        mesh: &Line,
+        dt: f64,
+        h: &mut [f64],
+        hu: &mut [f64],
+        faces: &F,
+    ) -> Result<(), StageError> {
+        debug_assert_eq!(self.layers, 1);
+        let nx = mesh.nx;
+        // Mass first; limit the fluxes of cells that would empty, then refuse the step
+        // (state untouched) if anything is still negative beyond round-off.
+        let r = dt / mesh.dx;
+        let worst = self.monolayer_interfaces(mesh, dt, h, hu, r, faces);
+        self.refuse_negative(h, r, worst)?;
+        self.update_monolayer(&mut h[..nx + 2], &mut hu[..nx + 2], r);
+        Ok(())
+    }
+
+    /// [`Self::advance_monolayer`] with the step's own law.
+    pub fn advance_monolayer_with_law(
+        &mut self,
+        mesh: &Line,
+        dt: f64,
+        h: &mut [f64],
+        hu: &mut [f64],
+    ) -> Result<(), StageError> {
+        let law = self.law;
+        self.advance_monolayer(mesh, dt, h, hu, &law)
+    }
+
+    /// Given the smallest new thickness `worst` (value, cell) of the mass update: if
+    /// negative, limits the draining fluxes and updates the mass again; refuses the
+    /// step if h is still negative beyond round-off.
+    fn refuse_negative(
+        &mut self,
+        h: &[f64],
+        r: f64,
+        mut worst: (f64, usize),
+    ) -> Result<(), StageError> {
+        if worst.0 < 0.0 {
+            self.limit_draining(h, r);
+            worst = self.update_mass(h, r);
+        }
+        let tolerance = -1e-14 * (1.0 + h[worst.1].abs());
+        if worst.0 < tolerance {
+            return Err(StageError::NegativeThickness {
+                cell: worst.1 - 1,
+                h: worst.0,
+            });
+        }
+        Ok(())
+    }
+
     /// Mass fluxes 𝓕^h of the last step at the faces k = 0..=nx (face k lies between
     /// the ghost-inclusive cells k and k + 1).
     pub fn mass_flux(&self) -> &[f64] {

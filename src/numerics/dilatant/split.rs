@@ -81,7 +81,6 @@ use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
 use crate::physics::rheology::{inertial_number, BasalFriction, MuI, STATIC_ROUNDOFF};
 use crate::physics::shallow::H_DRY;
-use crate::state::layered::LayeredState;
 use crate::state::DilatantState;
 use std::ops::RangeInclusive;
 
@@ -91,8 +90,6 @@ pub struct SplitScheme {
     pub law: DilatantLaw,
     pub opt: DilatantOptions,
     hyperbolic: HydrostaticStep<MuI>,
-    /// A one-layer state whose h and hv are the dilatant state's, swapped in and out.
-    shell: LayeredState,
     /// φ after the transport (nx + 2).
     phi_new: Vec<f64>,
     /// (h, hv) at t^n, restored when a later sub-step fails.
@@ -307,20 +304,10 @@ fn dilatant_friction(
 impl SplitScheme {
     /// `phi_ref`: the material's φ (the Savage–Hutter law's).
     pub fn new(law: DilatantLaw, opt: DilatantOptions, nx: usize, phi_ref: f64) -> Self {
-        let shell = LayeredState {
-            nx,
-            layers: 1,
-            l: vec![1.0],
-            h: Vec::new(),
-            hu: Vec::new(),
-            tracers: Vec::new(),
-            nh: None,
-        };
         SplitScheme {
             law,
             opt,
             hyperbolic: HydrostaticStep::new(reconstruction_law(&law, phi_ref), nx),
-            shell,
             phi_new: vec![0.0; nx + 2],
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
@@ -332,27 +319,27 @@ impl SplitScheme {
 
     /// Advances `s` by `dt`; on error `s` is as it was.
     pub fn step(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
-        std::mem::swap(&mut self.shell.h, &mut s.h);
-        std::mem::swap(&mut self.shell.hu, &mut s.hu);
-        self.backup[0].copy_from_slice(&self.shell.h);
-        self.backup[1].copy_from_slice(&self.shell.hu);
+        self.backup[0].copy_from_slice(&s.h);
+        self.backup[1].copy_from_slice(&s.hu);
         let result = self.advance(mesh, s, dt);
-        if result.is_err() {
-            self.shell.h.copy_from_slice(&self.backup[0]);
-            self.shell.hu.copy_from_slice(&self.backup[1]);
-        }
-        std::mem::swap(&mut self.shell.h, &mut s.h);
-        std::mem::swap(&mut self.shell.hu, &mut s.hu);
         if result.is_ok() {
             std::mem::swap(&mut self.phi_new, &mut s.phi);
+        } else {
+            s.h.copy_from_slice(&self.backup[0]);
+            s.hu.copy_from_slice(&self.backup[1]);
         }
         result
     }
 
-    fn advance(&mut self, mesh: &Line, s: &DilatantState, dt: f64) -> Result<(), StageError> {
+    /// Steps 1–4 on (h, hv) of `s` in place, φ^{n+1} into `phi_new` (`s.phi` keeps
+    /// φ^n).
+    fn advance(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
+        // The monolayer's hyperbolic step on the state's own (h, hv), ghosts as the
+        // monolayer's.
         if self.law.k == 0.0 {
             // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step).
-            self.hyperbolic.apply(mesh, dt, &mut self.shell)?;
+            self.hyperbolic
+                .advance_monolayer_with_law(mesh, dt, &mut s.h, &mut s.hu)?;
         } else {
             // μ_eff with the mass-weighted φ of each face's two cells at t^n; backup[0]
             // holds h at t^n.
@@ -362,25 +349,27 @@ impl SplitScheme {
                 phi: &s.phi,
             };
             self.hyperbolic
-                .apply_with_friction(mesh, dt, &mut self.shell, &faces)?;
+                .advance_monolayer(mesh, dt, &mut s.h, &mut s.hu, &faces)?;
         }
+        s.fill_thickness_ghosts(mesh);
         let r = dt / mesh.dx;
         self.phi_new.copy_from_slice(&s.phi);
         // Cells holding mass after the step: every pass below is restricted to them (a
         // cell outside keeps h = 0, hv = 0 and its φ).
         let nx = mesh.nx;
-        let h = &self.shell.h[1..=nx];
+        let h = &s.h[1..=nx];
         let Some(first) = h.iter().position(|&h| h > 0.0) else {
             return Ok(());
         };
         let last = nx - 1 - h.iter().rev().position(|&h| h > 0.0).unwrap_or(0);
         let wet = first + 1..=last + 1;
-        self.transport(&s.phi, r, wet.clone())?;
+        self.transport(&s.h, &s.phi, r, wet.clone())?;
         fill_fraction_ghosts(&mut self.phi_new);
-        self.cells(mesh, dt, wet.clone())?;
-        self.shell.fill_ghosts(mesh);
+        self.cells(mesh, dt, &mut s.h, &mut s.hu, wet.clone())?;
+        s.fill_thickness_ghosts(mesh);
         if self.law.k != 0.0 && !self.opt.viscosity.is_off() {
-            self.stabilise(mesh, dt, wet)?;
+            self.stabilise(mesh, dt, &mut s.h, &mut s.hu, wet)?;
+            s.fill_thickness_ghosts(mesh);
         }
         Ok(())
     }
@@ -388,13 +377,14 @@ impl SplitScheme {
     /// Step 2: φ^{n+1} from the mass fluxes of the hyperbolic step.
     fn transport(
         &mut self,
+        h: &[f64],
         phi: &[f64],
         r: f64,
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
         let (lo, end) = (*wet.start(), *wet.end() + 1);
         let flux = self.hyperbolic.mass_flux();
-        let (h, out) = (&self.shell.h, &mut self.phi_new);
+        let out = &mut self.phi_new;
         // Faces lo − 1..end, cells lo − 1..=end: checked once, not per cell.
         assert!(lo >= 1 && end < phi.len() && end <= flux.len());
         assert!(phi.len() == h.len() && h.len() == out.len());
@@ -426,12 +416,14 @@ impl SplitScheme {
         &mut self,
         mesh: &Line,
         dt: f64,
+        h: &mut [f64],
+        hu: &mut [f64],
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
         match (self.law.k != 0.0, !self.opt.viscosity.is_off()) {
-            (false, _) => self.cells_with::<false, false>(mesh, dt, wet),
-            (true, false) => self.cells_with::<true, false>(mesh, dt, wet),
-            (true, true) => self.cells_with::<true, true>(mesh, dt, wet),
+            (false, _) => self.cells_with::<false, false>(mesh, dt, h, hu, wet),
+            (true, false) => self.cells_with::<true, false>(mesh, dt, h, hu, wet),
+            (true, true) => self.cells_with::<true, true>(mesh, dt, h, hu, wet),
         }
     }
 
@@ -441,11 +433,13 @@ impl SplitScheme {
         &mut self,
         mesh: &Line,
         dt: f64,
+        h: &mut [f64],
+        hu: &mut [f64],
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
-        let (nx, g_c, dx) = (self.shell.nx, mesh.g_n, mesh.dx);
+        let (nx, g_c, dx) = (mesh.nx, mesh.g_n, mesh.dx);
         let law = &self.law;
-        let (h, hu, phi) = (&mut self.shell.h, &mut self.shell.hu, &mut self.phi_new);
+        let phi = &mut self.phi_new;
         let mu = &mut self.mu;
         let (lo, hi_end) = (*wet.start(), *wet.end() + 1);
         // Every index below is < hi_end + 1 ≤ nx + 2: checked once, not per cell.
@@ -537,12 +531,14 @@ impl SplitScheme {
         &mut self,
         mesh: &Line,
         dt: f64,
+        h: &mut [f64],
+        hu: &mut [f64],
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
         let (g_c, dx) = (mesh.g_n, mesh.dx);
         let alpha = self.opt.flux.alpha;
         let law = &self.law;
-        let (h, hu, phi) = (&self.shell.h, &self.shell.hu, &self.phi_new);
+        let phi = &self.phi_new;
         let (mu, z) = (&self.mu, &mesh.z);
         let (drive, active) = (&mut self.drive, &mut self.active);
         active.clear();
@@ -617,7 +613,7 @@ impl SplitScheme {
                 }
             }
         }
-        let (h, hu, phi) = (&mut self.shell.h, &mut self.shell.hu, &mut self.phi_new);
+        let phi = &mut self.phi_new;
         for &(a, b) in active {
             for j in a..=b + 1 {
                 let p = phi_from_ratio(w[j] / m[j], alpha);
@@ -634,7 +630,6 @@ impl SplitScheme {
             }
         }
         fill_fraction_ghosts(&mut self.phi_new);
-        self.shell.fill_ghosts(mesh);
         Ok(())
     }
 }
