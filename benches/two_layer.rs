@@ -29,6 +29,7 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
 
+use granflow::grid::line::cell_centre;
 use granflow::grid::{CurvedLine, Line};
 use granflow::model::Model;
 use granflow::numerics::two_layer::TwoLayerSolver;
@@ -55,7 +56,7 @@ fn depth(x: f64) -> f64 {
 fn tsunami(nx: usize) -> (CurvedLine, TwoLayerState) {
     let dx = 30_000.0 / nx as f64;
     let bed: Vec<f64> = (0..nx)
-        .map(|i| 2500.0 - depth((i as f64 + 0.5) * dx))
+        .map(|i| 2500.0 - depth(cell_centre(0.0, dx, i)))
         .collect();
     let free = BoundaryKind::Outflow;
     let g = CurvedLine::new(Line::cartesian(0.0, dx, &bed, free, free));

@@ -11,7 +11,7 @@ use assert_cmd::Command;
 use granflow::gauges::interpolation;
 use granflow::output::memory::MemorySink;
 use granflow::scenario::{load_str, Scenario};
-use granflow::setup::{build, build_granular, line_of};
+use granflow::setup::{build, build_granular, scenario_line};
 
 const LAKE_FILE: &str = include_str!("../scenarios/lake_landslide.toml");
 const COLLAPSE: &str = include_str!("../scenarios/collapse.toml");
@@ -90,7 +90,7 @@ fn submarine_gauges_are_the_snapshot_surface_and_grain_depth() {
         sets.extend(every);
         let scn = load(&LAKE, &sets);
         let sink = run(&scn);
-        let n = gauges_match_snapshots(&sink, line_of(&scn).dx, |k, i| {
+        let n = gauges_match_snapshots(&sink, scenario_line(&scn).dx, |k, i| {
             sink.snapshots[k].field("eta").expect("eta")[i]
         });
         assert_eq!(n, 7 * 6, "7 snapshots (0, 0.5, …, 3) × 6 gauges");
@@ -107,7 +107,7 @@ fn submarine_gauges_are_the_snapshot_surface_and_grain_depth() {
 fn granular_gauges_read_the_top_of_the_flow_and_its_thickness() {
     let scn = load(COLLAPSE, &["output.gauges=[0.05, 0.3, 0.77]"]);
     let sink = run(&scn);
-    let n = gauges_match_snapshots(&sink, line_of(&scn).dx, |k, i| {
+    let n = gauges_match_snapshots(&sink, scenario_line(&scn).dx, |k, i| {
         sink.b[i] + sink.snapshots[k].h[i]
     });
     assert_eq!(n, sink.snapshots.len() * 3);

@@ -5,6 +5,7 @@
 //! raise a smaller wave; Fig. 8a: deposits for δ₀ ≤ 12° fully submerged, 13° not;
 //! §5.3 a positive wave ahead of the slide and a trough above it.
 
+use granflow::grid::line::cell_centre;
 use granflow::grid::{CurvedLine, Line};
 use granflow::numerics::two_layer::TwoLayerSolver;
 use granflow::physics::two_layer::TwoLayerParams;
@@ -15,7 +16,7 @@ const FREE: BoundaryKind = BoundaryKind::Outflow;
 
 fn geometry(nx: usize, len: f64, bed: impl Fn(f64) -> f64) -> CurvedLine {
     let dx = len / nx as f64;
-    let b: Vec<f64> = (0..nx).map(|i| bed((i as f64 + 0.5) * dx)).collect();
+    let b: Vec<f64> = (0..nx).map(|i| bed(cell_centre(0.0, dx, i))).collect();
     CurvedLine::new(Line::cartesian(0.0, dx, &b, FREE, FREE))
 }
 

@@ -10,7 +10,7 @@ use crate::numerics::dilatant::step::SchemeKind;
 use crate::numerics::Stage;
 use crate::pipeline::Pipeline;
 use crate::scenario::Scenario;
-use crate::setup::{line_of, run_config, run_info};
+use crate::setup::{run_config, run_info, scenario_line};
 use crate::simulation::Simulation;
 use crate::state::dilatant::DilatantState;
 
@@ -23,7 +23,7 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
         .phi
         .as_ref()
         .expect("validation requires initial.phi for model.kind = \"dilatant\"");
-    let mesh = line_of(scn);
+    let mesh = scenario_line(scn);
     let sample = |f: &dyn Fn(f64, f64) -> f64| -> Vec<f64> {
         mesh.x.iter().zip(&mesh.b).map(|(&x, &b)| f(x, b)).collect()
     };

@@ -9,12 +9,12 @@ use crate::model::granular::config::Pressure;
 use crate::model::granular::pipeline;
 use crate::model::granular::Granular;
 use crate::scenario::Scenario;
-use crate::setup::{line_of, run_config, run_info};
+use crate::setup::{run_config, run_info, scenario_line};
 use crate::simulation::Simulation;
 use crate::state::layered::LayeredState;
 
 pub fn build(scn: &Scenario) -> Simulation<Granular> {
-    let mesh = line_of(scn);
+    let mesh = scenario_line(scn);
     let x = &mesh.x;
     let h_i = scn.initial.erodible_bed;
     let sample = |f: &dyn Fn(f64, f64) -> f64| -> Vec<f64> {

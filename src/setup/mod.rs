@@ -79,7 +79,7 @@ pub fn build_granular(scn: &Scenario) -> Simulation<Granular> {
 }
 
 /// The line of a scenario, with its bed sampled at the cell centres.
-pub fn line_of(scn: &Scenario) -> Line {
+pub fn scenario_line(scn: &Scenario) -> Line {
     let d = &scn.domain;
     let spec = LineSpec {
         x_min: d.x_min,

@@ -9,12 +9,12 @@ use crate::numerics::Stage;
 use crate::physics::rheology::FrictionLaw;
 use crate::pipeline::Pipeline;
 use crate::scenario::Scenario;
-use crate::setup::{line_of, run_config, run_info};
+use crate::setup::{run_config, run_info, scenario_line};
 use crate::simulation::Simulation;
 use crate::state::TwoLayerState;
 
 pub fn build(scn: &Scenario) -> Simulation<Submarine> {
-    let grid = CurvedLine::new(line_of(scn));
+    let grid = CurvedLine::new(scenario_line(scn));
     let spec = scn
         .submarine
         .expect("validated: a submarine scenario has its spec");

@@ -2,12 +2,13 @@
 //! Coulomb rule, exact solutions (seed 004 §3–4).
 
 use super::*;
+use crate::grid::line::cell_centre;
 use crate::grid::{BoundaryKind, Line};
 use crate::physics::two_layer::{Buoyancy, TwoLayerParams};
 
 fn geometry(nx: usize, len: f64, bed: impl Fn(f64) -> f64, kind: BoundaryKind) -> CurvedLine {
     let dx = len / nx as f64;
-    let b: Vec<f64> = (0..nx).map(|i| bed((i as f64 + 0.5) * dx)).collect();
+    let b: Vec<f64> = (0..nx).map(|i| bed(cell_centre(0.0, dx, i))).collect();
     CurvedLine::new(Line::cartesian(0.0, dx, &b, kind, kind))
 }
 

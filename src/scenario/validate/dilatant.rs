@@ -9,6 +9,7 @@ use super::super::{
 };
 use super::check::*;
 use super::granular::coefficient;
+use crate::grid::line::cell_centre;
 use crate::numerics::dilatant::flux::FluxOptions;
 use crate::numerics::dilatant::source::DilatancyUpdate;
 use crate::numerics::dilatant::stabilisation::Viscosity;
@@ -211,7 +212,7 @@ pub(super) fn sample_fraction(domain: &Domain, bed: &Profile, phi: &Profile) -> 
     let n = domain.cells;
     let dx = (domain.x_max - domain.x_min) / n as f64;
     for i in 0..n {
-        let x = domain.x_min + (i as f64 + 0.5) * dx;
+        let x = cell_centre(domain.x_min, dx, i);
         let b = bed.eval(x, 0.0);
         match phi.try_eval(x, b) {
             Ok(v) if v > 0.0 && v < 1.0 => {}

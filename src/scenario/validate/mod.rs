@@ -3,6 +3,7 @@
 //! Every check names its dotted key; the line is added afterwards by the
 //! [`Locator`](super::document::Locator) from the key, so this file never deals with spans.
 
+use crate::grid::line::cell_centre;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
@@ -464,7 +465,7 @@ fn sample_profiles(
     let n = domain.cells;
     let dx = (domain.x_max - domain.x_min) / n as f64;
     let x_min = domain.x_min;
-    let centre = move |i: usize| x_min + (i as f64 + 0.5) * dx;
+    let centre = move |i: usize| cell_centre(x_min, dx, i);
     let first_bad = |bad: &(dyn Fn(usize) -> bool + Sync)| -> Option<usize> {
         (0..n).into_par_iter().position_first(bad)
     };

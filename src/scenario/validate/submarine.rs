@@ -3,6 +3,7 @@
 //! friction, one hydrostatic layer, no erodible bed, no w).
 
 use super::check::*;
+use crate::grid::line::cell_centre;
 use crate::model::submarine::SubmarineSpec;
 use crate::physics::two_layer::Buoyancy;
 use crate::scenario::raw::RawSubmarine;
@@ -114,7 +115,7 @@ pub(super) fn submarine(
     if let Some(eta) = &initial.eta {
         let dx = (domain.x_max - domain.x_min) / domain.cells as f64;
         for i in 0..domain.cells {
-            let x = domain.x_min + (i as f64 + 0.5) * dx;
+            let x = cell_centre(domain.x_min, dx, i);
             let v = eta.eval(x, bed.eval(x, 0.0));
             if !v.is_finite() {
                 return err("initial.eta", format!("evaluates to {v} at x = {x}"));
