@@ -40,7 +40,7 @@ fn submarine_landslide_stops_on_the_slope_and_its_waves_leave() {
         if (7.0..=8.0).contains(&g.x(i)) {
             s.h2[i] = 1.0 / g.cos[i];
         }
-        s.h1[i] = (2.7 - g.b()[i]) / g.cos2[i] - s.h2[i];
+        s.h1[i] = (2.7 - g.line.b_ghost[i]) / g.cos2[i] - s.h2[i];
     }
     let v2 = s.volume(2, g.line.dx);
     let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, 25.0), 0.8, g.line.nx);
@@ -89,9 +89,9 @@ fn lake(delta0: f64, t_end: f64) -> LakeResult {
     let mut s = TwoLayerState::zeros(g.line.nx);
     for i in 1..=g.line.nx {
         if (1.5..=2.5).contains(&g.x(i)) {
-            s.h2[i] = (0.7 - g.b()[i]).max(0.0) / g.cos2[i];
+            s.h2[i] = (0.7 - g.line.b_ghost[i]).max(0.0) / g.cos2[i];
         }
-        s.h1[i] = (0.4 - g.b()[i]).max(0.0) / g.cos2[i];
+        s.h1[i] = (0.4 - g.line.b_ghost[i]).max(0.0) / g.cos2[i];
     }
     let v2 = s.volume(2, g.line.dx);
     let mut solver = TwoLayerSolver::new(TwoLayerParams::isotropic(0.2, delta0), 0.8, g.line.nx);

@@ -123,12 +123,6 @@ impl CurvedLine {
     pub fn x(&self, i: usize) -> f64 {
         self.line.x[i - 1]
     }
-
-    /// Bed elevation b with ghosts (nx + 2).
-    #[inline(always)]
-    pub fn b(&self) -> &[f64] {
-        &self.line.b_ghost
-    }
 }
 
 impl Grid for CurvedLine {

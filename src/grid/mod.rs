@@ -7,7 +7,7 @@
 //! point, and the length of the CFL condition. The loops over faces are the stages',
 //! written for one concrete grid type each:
 //!
-//! - [`Line`] ([`line`]): the uniform 1-D grid of the layered and dilatant models, with
+//! - [`Line`] ([`mod@line`]): the uniform 1-D grid of the layered and dilatant models, with
 //!   its potential z, ghost beds and boundary kinds;
 //! - [`CurvedLine`] ([`curved`]): a line whose bed angle θ(x) enters the equations (the
 //!   two-layer submarine model, seed 004 §4), with the angle terms of each face.

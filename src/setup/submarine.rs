@@ -26,7 +26,7 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
     let nx = grid.line.nx;
     let mut state = TwoLayerState::zeros(nx);
     for i in 1..=nx {
-        let (x, b, c2) = (grid.x(i), grid.b()[i], grid.cos2[i]);
+        let (x, b, c2) = (grid.x(i), grid.line.b_ghost[i], grid.cos2[i]);
         let d2 = scn.initial.h.eval(x, b);
         state.h2[i] = d2 / c2;
         state.q2[i] = state.h2[i] * scn.initial.u.eval(x, b);

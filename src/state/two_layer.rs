@@ -68,11 +68,11 @@ impl TwoLayerState {
 
     /// Water free surface η = b + (H₁ + H₂) cos²θ at physical cell i (1-based).
     pub fn eta(&self, geom: &CurvedLine, i: usize) -> f64 {
-        geom.b()[i] + (self.h1[i] + self.h2[i]) * geom.cos2[i]
+        geom.line.b_ghost[i] + (self.h1[i] + self.h2[i]) * geom.cos2[i]
     }
 
     /// Interface ζ = b + H₂ cos²θ at physical cell i (1-based).
     pub fn interface(&self, geom: &CurvedLine, i: usize) -> f64 {
-        geom.b()[i] + self.h2[i] * geom.cos2[i]
+        geom.line.b_ghost[i] + self.h2[i] * geom.cos2[i]
     }
 }

@@ -85,7 +85,7 @@ impl<'a> Cells<'a> {
             q1: &s.q1[..n],
             h2: &s.h2[..n],
             q2: &s.q2[..n],
-            b: &geom.b()[..n],
+            b: &geom.line.b_ghost[..n],
             cos: &geom.cos[..n],
             cos2: &geom.cos2[..n],
         }

@@ -21,8 +21,8 @@ fn from_levels(
     let mut s = TwoLayerState::zeros(geom.line.nx);
     for i in 1..=geom.line.nx {
         let x = geom.x(i);
-        let z = zeta(x).max(geom.b()[i]);
-        s.h2[i] = (z - geom.b()[i]) / geom.cos2[i];
+        let z = zeta(x).max(geom.line.b_ghost[i]);
+        s.h2[i] = (z - geom.line.b_ghost[i]) / geom.cos2[i];
         s.h1[i] = (eta(x) - z).max(0.0) / geom.cos2[i];
     }
     s.fill_ghosts(geom);
@@ -428,7 +428,7 @@ fn fused_sweeps_give_the_separate_passes_results_to_the_bit() {
                 s.q1[i],
                 s.h2[i],
                 s.q2[i],
-                g.b()[i],
+                g.line.b_ghost[i],
                 g.cos[i],
                 g.cos2[i],
             )
