@@ -6,7 +6,6 @@ use std::path::Path;
 
 use assert_cmd::Command;
 
-
 use crate::common::read_h5;
 
 use crate::common::MINIMAL;

@@ -4,7 +4,6 @@
 //! shapes, bad keys are refused with exit code 2, and a lake at rest reads a constant
 //! surface at every gauge.
 
-
 use std::path::Path;
 
 use assert_cmd::Command;

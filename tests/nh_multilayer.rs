@@ -2,7 +2,6 @@
 //! constraint after every step, conservation and positivity, the well-balanced test
 //! of Table 6, the hydrostatic path left untouched, and determinism.
 
-
 use std::path::Path;
 
 use granflow::model::granular::Granular;

@@ -2,7 +2,6 @@
 //! well-balancing, the hydrostatic path left untouched, conservation, and the paper's
 //! qualitative results (§4.1 wedge, §4.3 collapse).
 
-
 use std::path::Path;
 
 use granflow::model::granular::Granular;

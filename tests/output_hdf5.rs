@@ -7,7 +7,6 @@
 //! a Python with h5py and numpy is found (`common::python_with_h5py`; SKIPPED otherwise).
 //! `GRANFLOW_KEEP_H5=path` keeps the file of `full_run_round_trips` for other checks.
 
-
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

@@ -11,7 +11,6 @@ use std::time::{Duration, Instant};
 
 use assert_cmd::Command;
 
-
 use crate::common::MINIMAL;
 
 fn bin() -> PathBuf {

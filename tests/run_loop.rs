@@ -1,7 +1,6 @@
 //! The generic run loop: stop rules decide how a run ends, and the sink is finished
 //! whatever ends it (also an output error).
 
-
 use crate::common::Case;
 use granflow::model::granular::Granular;
 use granflow::output::{

@@ -6,7 +6,6 @@ use std::path::Path;
 use assert_cmd::Command;
 use rust_hdf5::H5File;
 
-
 use crate::common::read_h5 as read;
 
 fn shape(f: &H5File, name: &str) -> Vec<usize> {

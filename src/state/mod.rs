@@ -15,3 +15,54 @@ pub mod two_layer;
 pub use dilatant::DilatantState;
 pub use layered::LayeredState;
 pub use two_layer::TwoLayerState;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{BoundaryKind, Line};
+
+    fn line() -> Line {
+        let wall = BoundaryKind::Wall;
+        Line::cartesian(0.0, 0.1, &[0.0; 8], wall, wall)
+    }
+
+    /// `clone_from` copies into the buffers it has (the run loop's backup is allocated
+    /// once), where the derived `Clone` would allocate new ones.
+    #[test]
+    fn clone_from_copies_into_the_existing_buffers() {
+        let line = line();
+        let h: Vec<f64> = (0..8).map(|i| 0.1 + 0.01 * i as f64).collect();
+        let mut layered = LayeredState::from_profiles(&line, &[0.5, 0.5], &h, &[0.3; 8]);
+        layered.add_nonhydrostatic(&[0.01; 8]);
+        let mut backup = layered.clone();
+        let ptrs = |s: &LayeredState| {
+            let nh = s.nh.as_ref().map(|nh| nh.p.as_ptr());
+            (s.h.as_ptr(), s.hu.as_ptr(), s.tracers[0].q.as_ptr(), nh)
+        };
+        let before = ptrs(&backup);
+        layered.h[3] = 7.0;
+        layered.hw_mut()[5] = -1.0;
+        backup.clone_from(&layered);
+        assert_eq!(backup, layered);
+        assert_eq!(ptrs(&backup), before);
+
+        let mut two = TwoLayerState::zeros(8);
+        let mut backup = two.clone();
+        let before = (backup.h1.as_ptr(), backup.q2.as_ptr());
+        two.h2[4] = 1.5;
+        backup.clone_from(&two);
+        assert_eq!(backup, two);
+        assert_eq!((backup.h1.as_ptr(), backup.q2.as_ptr()), before);
+
+        let mut dil = DilatantState::from_profiles(&line, 2.0, &h, &[0.2; 8], &[0.6; 8]);
+        let mut backup = dil.clone();
+        let before = (backup.m.as_ptr(), backup.phi.as_ptr(), backup.hu.as_ptr());
+        dil.phi[2] = 0.55;
+        backup.clone_from(&dil);
+        assert_eq!(backup, dil);
+        assert_eq!(
+            (backup.m.as_ptr(), backup.phi.as_ptr(), backup.hu.as_ptr()),
+            before
+        );
+    }
+}
