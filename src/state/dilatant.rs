@@ -61,8 +61,8 @@ impl Clone for DilatantState {
 
 impl DilatantState {
     /// A state from thickness, velocity and volume fraction at the physical cells.
-    pub fn from_profiles(mesh: &Line, alpha: f64, h: &[f64], v: &[f64], phi: &[f64]) -> Self {
-        let nx = mesh.nx;
+    pub fn from_profiles(line: &Line, alpha: f64, h: &[f64], v: &[f64], phi: &[f64]) -> Self {
+        let nx = line.nx;
         assert!(h.len() == nx && v.len() == nx && phi.len() == nx);
         let mut s = DilatantState {
             nx,
@@ -87,13 +87,13 @@ impl DilatantState {
             s.w[i + 1] = u.w;
             s.phi[i + 1] = phi[i];
         }
-        s.update_primitives(mesh);
+        s.update_primitives(line);
         // h and hv exactly as given (as the monolayer's state has them), not m/φ.
         for i in 0..nx {
             s.h[i + 1] = h[i];
             s.hu[i + 1] = h[i] * v[i];
         }
-        s.fill_thickness_ghosts(mesh);
+        s.fill_thickness_ghosts(line);
         s.phi[0] = s.phi[1];
         s.phi[nx + 1] = s.phi[nx];
         s
@@ -101,12 +101,12 @@ impl DilatantState {
 
     /// Ghosts of (h, hv) as the monolayer's: h copied, hv copied (outflow) or
     /// reversed (wall).
-    pub fn fill_thickness_ghosts(&mut self, mesh: &Line) {
+    pub fn fill_thickness_ghosts(&mut self, line: &Line) {
         let nx = self.nx;
         self.h[0] = self.h[1];
         self.h[nx + 1] = self.h[nx];
-        self.hu[0] = mesh.left.discharge_sign() * self.hu[1];
-        self.hu[nx + 1] = mesh.right.discharge_sign() * self.hu[nx];
+        self.hu[0] = line.left.discharge_sign() * self.hu[1];
+        self.hu[nx + 1] = line.right.discharge_sign() * self.hu[nx];
     }
 
     /// Conservative variables of cell j.
@@ -121,9 +121,9 @@ impl DilatantState {
 
     /// Ghost cells: a wall mirrors the edge cell with the discharge reversed, an
     /// outflow copies it (as the other models, seed 003 Remark 6).
-    pub fn fill_ghosts(&mut self, mesh: &Line) {
+    pub fn fill_ghosts(&mut self, line: &Line) {
         let nx = self.nx;
-        for (ghost, edge, kind) in [(0, 1, mesh.left), (nx + 1, nx, mesh.right)] {
+        for (ghost, edge, kind) in [(0, 1, line.left), (nx + 1, nx, line.right)] {
             self.m[ghost] = self.m[edge];
             self.q[ghost] = kind.discharge_sign() * self.q[edge];
             self.w[ghost] = self.w[edge];
@@ -132,8 +132,8 @@ impl DilatantState {
 
     /// Fills the ghosts and recomputes (h, v, φ) everywhere; dry cells take φ from
     /// eq. (3.14).
-    pub fn update_primitives(&mut self, mesh: &Line) {
-        self.fill_ghosts(mesh);
+    pub fn update_primitives(&mut self, line: &Line) {
+        self.fill_ghosts(line);
         for j in 0..self.nx + 2 {
             self.update_cell(j);
         }
@@ -190,12 +190,12 @@ impl DilatantState {
     }
 
     /// Mass of grains ∫φh dx over the physical cells (per unit width, per ρ_s).
-    pub fn grain_volume(&self, mesh: &Line) -> f64 {
-        (1..=self.nx).map(|j| self.phi[j] * self.h[j]).sum::<f64>() * mesh.dx
+    pub fn grain_volume(&self, line: &Line) -> f64 {
+        (1..=self.nx).map(|j| self.phi[j] * self.h[j]).sum::<f64>() * line.dx
     }
 
     /// Total energy ∫(φh v²/2 + g_c φh²/2 + g_c φh b̂) dx (seed 002 eq. 2.7, per ρ_s).
-    pub fn energy(&self, mesh: &Line) -> f64 {
+    pub fn energy(&self, line: &Line) -> f64 {
         (1..=self.nx)
             .map(|j| {
                 Primitive {
@@ -203,9 +203,9 @@ impl DilatantState {
                     v: velocity(self.h[j], self.hu[j]),
                     phi: self.phi[j],
                 }
-                .energy(mesh.g_n, mesh.z[j])
+                .energy(line.g_n, line.z[j])
             })
             .sum::<f64>()
-            * mesh.dx
+            * line.dx
     }
 }

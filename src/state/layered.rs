@@ -90,8 +90,8 @@ pub const HW: &str = "hw";
 impl LayeredState {
     /// A state with thickness `h` and depth-averaged velocity `u` (physical cells),
     /// every layer moving with u.
-    pub fn from_profiles(mesh: &Line, l: &[f64], h: &[f64], u: &[f64]) -> LayeredState {
-        let nx = mesh.nx;
+    pub fn from_profiles(line: &Line, l: &[f64], h: &[f64], u: &[f64]) -> LayeredState {
+        let nx = line.nx;
         let layers = l.len();
         assert!(h.len() == nx && u.len() == nx && layers >= 1);
         let mut s = LayeredState {
@@ -109,17 +109,17 @@ impl LayeredState {
                 s.hu[(i + 1) * layers + a] = h[i] * u[i];
             }
         }
-        s.fill_ghosts(mesh);
+        s.fill_ghosts(line);
         s
     }
 
     /// Ghost cells per seed 003 Remark 6: thickness copied (homogeneous Neumann);
     /// discharge copied (outflow) or reversed (wall).
-    pub fn fill_ghosts(&mut self, mesh: &Line) {
+    pub fn fill_ghosts(&mut self, line: &Line) {
         let (nx, n) = (self.nx, self.layers);
         self.h[0] = self.h[1];
         self.h[nx + 1] = self.h[nx];
-        let (sl, sr) = (mesh.left.discharge_sign(), mesh.right.discharge_sign());
+        let (sl, sr) = (line.left.discharge_sign(), line.right.discharge_sign());
         for a in 0..n {
             self.hu[a] = sl * self.hu[n + a];
             self.hu[(nx + 1) * n + a] = sr * self.hu[nx * n + a];
