@@ -13,6 +13,8 @@
 use super::{BoundaryKind, Coordinates, Grid, Point, Stencil};
 use crate::physics::GRAVITY;
 
+/// A uniform 1-D grid of nx cells with its bed, potential and boundary kinds: the grid
+/// of the layered and dilatant models, and the base of [`super::CurvedLine`].
 #[derive(Debug, Clone)]
 pub struct Line {
     pub nx: usize,
