@@ -11,6 +11,7 @@ pub mod catalog;
 pub mod cli;
 pub mod discover;
 pub mod gauges;
+pub mod gis;
 pub mod grid;
 pub mod interrupt;
 pub mod lock;

@@ -1,0 +1,306 @@
+//! ESRI ASCII grid (`.asc`, "AAIGrid"), with its optional `.prj`.
+//!
+//! The header is key/value lines, keys in any case, separated by any whitespace:
+//!
+//! ```text
+//! ncols         4
+//! nrows         3
+//! xllcorner     1000.0      (or xllcenter: x of the centre of the lower-left cell)
+//! yllcorner     2000.0      (or yllcenter)
+//! cellsize      5.0         (or dx and dy, which must be equal)
+//! NODATA_value  -9999       (optional)
+//! ```
+//!
+//! then `ncols × nrows` numbers, the top row first, in any line layout. A `.prj`
+//! beside the file (same stem) holds WKT text, carried in [`Crs::wkt`](super::Crs).
+//!
+//! The writer writes `xllcorner`/`yllcorner`, `cellsize`, `NODATA_value` when the raster
+//! has a finite nodata value (NaN cells are written as that value), every number in
+//! Rust's shortest round-trip form (reading the file back gives the same `f64`s), and
+//! the `.prj` when the CRS has WKT text. A CRS known only by its EPSG code is not
+//! written (no WKT database here). The written `yllcorner` is the shortest decimal that
+//! maps back to the same top edge, so a file read and written again is unchanged.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::{io_err, nearly_equal, Crs, GisError, Raster, Result};
+
+/// The `.prj` beside an `.asc` (same path, extension `prj`).
+pub fn prj_path(path: &Path) -> PathBuf {
+    path.with_extension("prj")
+}
+
+/// Reads an ESRI ASCII grid and the `.prj` beside it, if any.
+pub fn read(path: &Path) -> Result<Raster> {
+    let bytes = std::fs::read(path).map_err(io_err(path))?;
+    let mut raster = parse(&bytes, path)?;
+    let prj = prj_path(path);
+    match std::fs::read_to_string(&prj) {
+        Ok(text) => raster.crs = Crs::from_wkt(&text),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(io_err(&prj)(e)),
+    }
+    Ok(raster)
+}
+
+#[derive(Default)]
+struct Header {
+    ncols: Option<usize>,
+    nrows: Option<usize>,
+    xll: Option<(f64, bool)>,
+    yll: Option<(f64, bool)>,
+    cellsize: Option<f64>,
+    dx: Option<f64>,
+    dy: Option<f64>,
+    nodata: Option<f64>,
+}
+
+/// Parses the text of an ESRI ASCII grid; `path` only names the file in errors.
+pub fn parse(bytes: &[u8], path: &Path) -> Result<Raster> {
+    if bytes.is_empty() {
+        return Err(GisError::EmptyFile {
+            path: path.to_path_buf(),
+        });
+    }
+    let text = std::str::from_utf8(bytes).map_err(|e| GisError::BadHeader {
+        path: path.to_path_buf(),
+        line: 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count(),
+        reason: "not text (invalid UTF-8)".into(),
+    })?;
+    let bad = |line: usize, reason: String| GisError::BadHeader {
+        path: path.to_path_buf(),
+        line,
+        reason,
+    };
+    let mut h = Header::default();
+    let mut lines = text.lines().enumerate().peekable();
+    // Header: lines whose first token is a word (not a number such as `nan`).
+    while let Some(&(i, line)) = lines.peek() {
+        let lineno = i + 1;
+        let mut tokens = line.split_ascii_whitespace();
+        let Some(key) = tokens.next() else {
+            lines.next();
+            continue;
+        };
+        if !key.starts_with(|c: char| c.is_ascii_alphabetic()) || key.parse::<f64>().is_ok() {
+            break;
+        }
+        lines.next();
+        let value = tokens
+            .next()
+            .ok_or_else(|| bad(lineno, format!("`{key}` has no value")))?;
+        if let Some(extra) = tokens.next() {
+            return Err(bad(lineno, format!("`{key}` has a second value `{extra}`")));
+        }
+        let number = || -> Result<f64> {
+            value
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(lineno, format!("`{key}` = `{value}` is not a finite number")))
+        };
+        let count = || -> Result<usize> {
+            value
+                .parse::<usize>()
+                .ok()
+                .filter(|&n| n > 0)
+                .ok_or_else(|| bad(lineno, format!("`{key}` = `{value}` is not a positive integer")))
+        };
+        let lower = key.to_ascii_lowercase();
+        let duplicate = match lower.as_str() {
+            "ncols" => h.ncols.replace(count()?).is_some(),
+            "nrows" => h.nrows.replace(count()?).is_some(),
+            "xllcorner" => h.xll.replace((number()?, false)).is_some(),
+            "xllcenter" | "xllcentre" => h.xll.replace((number()?, true)).is_some(),
+            "yllcorner" => h.yll.replace((number()?, false)).is_some(),
+            "yllcenter" | "yllcentre" => h.yll.replace((number()?, true)).is_some(),
+            "cellsize" => h.cellsize.replace(number()?).is_some(),
+            "dx" => h.dx.replace(number()?).is_some(),
+            "dy" => h.dy.replace(number()?).is_some(),
+            "nodata_value" | "nodata" => {
+                let v = value.parse::<f64>().map_err(|_| {
+                    bad(lineno, format!("`{key}` = `{value}` is not a number"))
+                })?;
+                h.nodata.replace(v).is_some()
+            }
+            _ => return Err(bad(lineno, format!("unknown key `{key}`"))),
+        };
+        if duplicate {
+            return Err(bad(
+                lineno,
+                format!("`{key}` given twice (or both corner and centre forms)"),
+            ));
+        }
+    }
+    let missing = |key| GisError::MissingKey {
+        path: path.to_path_buf(),
+        key,
+    };
+    let nx = h.ncols.ok_or_else(|| missing("ncols"))?;
+    let ny = h.nrows.ok_or_else(|| missing("nrows"))?;
+    let (xll, x_centre) = h.xll.ok_or_else(|| missing("xllcorner"))?;
+    let (yll, y_centre) = h.yll.ok_or_else(|| missing("yllcorner"))?;
+    let d = match (h.cellsize, h.dx, h.dy) {
+        (Some(d), None, None) => d,
+        (None, Some(dx), Some(dy)) => {
+            if dx > 0.0 && dy > 0.0 && !nearly_equal(dx, dy) {
+                return Err(GisError::NonSquareCells {
+                    path: path.to_path_buf(),
+                    dx,
+                    dy,
+                });
+            }
+            dx.min(dy)
+        }
+        (None, None, None) => return Err(missing("cellsize")),
+        _ => {
+            return Err(bad(
+                1,
+                "give either `cellsize` or both `dx` and `dy`".to_string(),
+            ))
+        }
+    };
+    if d <= 0.0 {
+        return Err(GisError::NonPositiveCellSize {
+            path: path.to_path_buf(),
+            value: d,
+        });
+    }
+    let expected = nx.checked_mul(ny).ok_or_else(|| {
+        bad(1, format!("{nx} x {ny} cells is too many"))
+    })?;
+    let mut values = Vec::with_capacity(expected.min(bytes.len() / 2 + 1));
+    for (i, line) in lines {
+        for token in line.split_ascii_whitespace() {
+            if values.len() == expected {
+                return Err(GisError::TooManyValues {
+                    path: path.to_path_buf(),
+                    expected,
+                    found: expected + 1,
+                    line: i + 1,
+                });
+            }
+            let v = token.parse::<f64>().map_err(|_| GisError::NonNumeric {
+                path: path.to_path_buf(),
+                line: i + 1,
+                token: token.chars().take(40).collect(),
+            })?;
+            values.push(v);
+        }
+    }
+    if values.len() < expected {
+        return Err(GisError::TooFewValues {
+            path: path.to_path_buf(),
+            expected,
+            found: values.len(),
+        });
+    }
+    let x_left = if x_centre { xll - 0.5 * d } else { xll };
+    let y_bottom = if y_centre { yll - 0.5 * d } else { yll };
+    Ok(Raster {
+        nx,
+        ny,
+        x_left,
+        y_top: y_bottom + ny as f64 * d,
+        cell_size: d,
+        values,
+        nodata: h.nodata,
+        crs: Crs::default(),
+    })
+}
+
+/// The `yllcorner` to write for `raster`: among the `f64`s `c` next to
+/// `y_top − ny·d` with `c + ny·d == y_top` (what [`parse`] computes), the one with the
+/// shortest decimal form, so that a value read from a file is written back as it was.
+fn yll_corner(raster: &Raster) -> f64 {
+    let span = raster.ny as f64 * raster.cell_size;
+    let guess = raster.y_top - span;
+    let mut best = guess;
+    let mut best_len = usize::MAX;
+    let mut c = guess;
+    for _ in 0..8 {
+        c = c.next_down();
+    }
+    for _ in 0..17 {
+        if c + span == raster.y_top {
+            let len = format!("{c}").len();
+            if len < best_len || (len == best_len && (c - guess).abs() < (best - guess).abs()) {
+                best = c;
+                best_len = len;
+            }
+        }
+        c = c.next_up();
+    }
+    best
+}
+
+/// Writes `raster` as an ESRI ASCII grid, and its WKT (if any) as the `.prj` beside it;
+/// a stale `.prj` there is removed when the raster has no WKT.
+pub fn write(raster: &Raster, path: &Path) -> Result<()> {
+    raster.check().map_err(|reason| GisError::BadGrid {
+        path: path.to_path_buf(),
+        reason,
+    })?;
+    let nodata = raster.nodata.filter(|v| v.is_finite());
+    if nodata.is_none() && raster.values.iter().any(|v| v.is_nan()) {
+        return Err(GisError::NanWithoutNodata {
+            path: path.to_path_buf(),
+        });
+    }
+    let file = std::fs::File::create(path).map_err(io_err(path))?;
+    let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
+    let mut header = format!(
+        "ncols         {}\nnrows         {}\nxllcorner     {}\nyllcorner     {}\ncellsize      {}\n",
+        raster.nx,
+        raster.ny,
+        raster.x_left,
+        yll_corner(raster),
+        raster.cell_size
+    );
+    if let Some(nd) = nodata {
+        header.push_str(&format!("NODATA_value  {nd}\n"));
+    }
+    let mut line = String::with_capacity(raster.nx * 12);
+    let result = (|| -> std::io::Result<()> {
+        out.write_all(header.as_bytes())?;
+        for row in raster.values.chunks(raster.nx) {
+            line.clear();
+            for (i, &v) in row.iter().enumerate() {
+                if i > 0 {
+                    line.push(' ');
+                }
+                let v = if v.is_nan() { nodata.unwrap_or(v) } else { v };
+                use std::fmt::Write as _;
+                let _ = write!(line, "{v}");
+            }
+            line.push('\n');
+            out.write_all(line.as_bytes())?;
+        }
+        out.flush()
+    })();
+    result.map_err(io_err(path))?;
+    let prj = prj_path(path);
+    match &raster.crs.wkt {
+        Some(wkt) => std::fs::write(&prj, format!("{wkt}\n")).map_err(io_err(&prj))?,
+        None => match std::fs::remove_file(&prj) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&prj)(e)),
+            _ => {}
+        },
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn yll_corner_recovers_the_decimal_that_was_read() {
+        for (yll, ny, d) in [(100.1, 7, 0.3), (5_144_123.37, 1001, 2.5), (-33.3, 3, 0.1)] {
+            let text = format!("ncols 1\nnrows {ny}\nxllcorner 0\nyllcorner {yll}\ncellsize {d}\n{}", "1\n".repeat(ny));
+            let r = parse(text.as_bytes(), Path::new("t.asc")).unwrap();
+            assert_eq!(yll_corner(&r), yll);
+        }
+    }
+}
