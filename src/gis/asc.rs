@@ -224,7 +224,7 @@ fn yll_corner(raster: &Raster) -> f64 {
     }
     for _ in 0..17 {
         if c + span == raster.y_top {
-            let len = format!("{c}").len();
+            let len = number(c).len();
             if len < best_len || (len == best_len && (c - guess).abs() < (best - guess).abs()) {
                 best = c;
                 best_len = len;
@@ -233,6 +233,24 @@ fn yll_corner(raster: &Raster) -> f64 {
         c = c.next_up();
     }
     best
+}
+
+/// Appends `v` in its shortest round-trip form: plain digits for magnitudes in
+/// [10⁻⁵, 10¹⁶) and 0, exponent notation (`1e-300`) otherwise.
+fn push_number(out: &mut String, v: f64) {
+    use std::fmt::Write as _;
+    let a = v.abs();
+    let _ = if a == 0.0 || (1e-5..1e16).contains(&a) || !a.is_finite() {
+        write!(out, "{v}")
+    } else {
+        write!(out, "{v:e}")
+    };
+}
+
+fn number(v: f64) -> String {
+    let mut s = String::new();
+    push_number(&mut s, v);
+    s
 }
 
 /// Writes `raster` as an ESRI ASCII grid, and its WKT (if any) as the `.prj` beside it;
@@ -254,12 +272,12 @@ pub fn write(raster: &Raster, path: &Path) -> Result<()> {
         "ncols         {}\nnrows         {}\nxllcorner     {}\nyllcorner     {}\ncellsize      {}\n",
         raster.nx,
         raster.ny,
-        raster.x_left,
-        yll_corner(raster),
-        raster.cell_size
+        number(raster.x_left),
+        number(yll_corner(raster)),
+        number(raster.cell_size)
     );
     if let Some(nd) = nodata {
-        header.push_str(&format!("NODATA_value  {nd}\n"));
+        header.push_str(&format!("NODATA_value  {}\n", number(nd)));
     }
     let mut line = String::with_capacity(raster.nx * 12);
     let result = (|| -> std::io::Result<()> {
@@ -271,8 +289,7 @@ pub fn write(raster: &Raster, path: &Path) -> Result<()> {
                     line.push(' ');
                 }
                 let v = if v.is_nan() { nodata.unwrap_or(v) } else { v };
-                use std::fmt::Write as _;
-                let _ = write!(line, "{v}");
+                push_number(&mut line, v);
             }
             line.push('\n');
             out.write_all(line.as_bytes())?;
