@@ -291,14 +291,24 @@ mod tests {
         let c = r
             .crop(Bbox {
                 x_min: 102.5,
-                x_max: 107.0,
+                x_max: 106.9,
                 y_min: 44.0,
                 y_max: 48.0,
             })
             .unwrap();
         assert_eq!((c.nx, c.ny), (2, 2));
-        assert_eq!((c.x_left, c.y_top), (104.0, 48.0));
-        assert_eq!(c.values, vec![8.0, 9.0, 14.0, 15.0]);
+        assert_eq!((c.x_left, c.y_top), (102.0, 48.0));
+        assert_eq!(c.values, vec![7.0, 8.0, 13.0, 14.0]);
+        // A centre on the box edge is inside.
+        let c = r
+            .crop(Bbox {
+                x_min: 103.0,
+                x_max: 107.0,
+                y_min: 45.0,
+                y_max: 47.0,
+            })
+            .unwrap();
+        assert_eq!((c.nx, c.ny, c.x_left, c.y_top), (3, 2, 102.0, 48.0));
         assert!(matches!(
             r.crop(Bbox {
                 x_min: 0.0,
