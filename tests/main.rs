@@ -11,6 +11,7 @@ mod conservation;
 mod dilatant;
 mod fuzz_scenario;
 mod gauges;
+mod gis;
 mod multilayer;
 mod newcomer;
 mod nh_multilayer;
