@@ -25,7 +25,8 @@ fn dem() -> Raster {
         for col in 0..NX {
             let (x, y) = (col as f64 / NX as f64, row as f64 / NY as f64);
             let i = r.index(col, row);
-            r.values[i] = 2500.0 - 1200.0 * x - 300.0 * y + 40.0 * (9.0 * x).sin() * (7.0 * y).cos();
+            r.values[i] =
+                2500.0 - 1200.0 * x - 300.0 * y + 40.0 * (9.0 * x).sin() * (7.0 * y).cos();
         }
     }
     r.nodata = Some(-9999.0);
@@ -53,23 +54,39 @@ fn best<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
 }
 
 fn mb(path: &Path) -> f64 {
-    std::fs::metadata(path).map(|m| m.len() as f64 / 1e6).unwrap_or(f64::NAN)
+    std::fs::metadata(path)
+        .map(|m| m.len() as f64 / 1e6)
+        .unwrap_or(f64::NAN)
 }
 
 fn main() {
     let dir = tempfile::tempdir().expect("temporary directory");
     let r = dem();
     println!("GIS I/O, {NX} x {NY} = {} cells, best of 3", NX * NY);
-    println!("{:<28} {:>9} {:>9} {:>9}", "format", "write s", "read s", "MB");
+    println!(
+        "{:<28} {:>9} {:>9} {:>9}",
+        "format", "write s", "read s", "MB"
+    );
     let tiffs = [
-        ("GeoTIFF f32 uncompressed", SampleType::F32, Compression::None),
+        (
+            "GeoTIFF f32 uncompressed",
+            SampleType::F32,
+            Compression::None,
+        ),
         ("GeoTIFF f32 LZW", SampleType::F32, Compression::Lzw),
         ("GeoTIFF f32 Deflate", SampleType::F32, Compression::Deflate),
-        ("GeoTIFF f64 uncompressed", SampleType::F64, Compression::None),
+        (
+            "GeoTIFF f64 uncompressed",
+            SampleType::F64,
+            Compression::None,
+        ),
     ];
     for (i, (name, sample, compression)) in tiffs.into_iter().enumerate() {
         let path = dir.path().join(format!("r{i}.tif"));
-        let opts = WriteOptions { sample, compression };
+        let opts = WriteOptions {
+            sample,
+            compression,
+        };
         let (tw, _) = best(3, || geotiff::write(&r, &path, opts).expect("write"));
         let (tr, back) = best(3, || geotiff::read(&path).expect("read"));
         assert_eq!(back.values.len(), NX * NY);
@@ -78,7 +95,11 @@ fn main() {
     let path = dir.path().join("r.asc");
     let (tw, _) = best(3, || asc::write(&r, &path).expect("write"));
     let (tr, _) = best(3, || asc::read(&path).expect("read"));
-    println!("{:<28} {tw:>9.3} {tr:>9.3} {:>9.1}", "ESRI ASCII grid", mb(&path));
+    println!(
+        "{:<28} {tw:>9.3} {tr:>9.3} {:>9.1}",
+        "ESRI ASCII grid",
+        mb(&path)
+    );
 
     let path = dir.path().join("r.nc");
     let fields = [
@@ -88,10 +109,16 @@ fn main() {
     ];
     let (tw, _) = best(3, || {
         let mut w = NetCdfWriter::create(&path, &r, &fields, "bench").expect("create");
-        w.write_frame(0.0, &[&r.values, &r.values, &r.values]).expect("frame");
+        w.write_frame(0.0, &[&r.values, &r.values, &r.values])
+            .expect("frame");
         w.finish().expect("finish");
     });
-    println!("{:<28} {tw:>9.3} {:>9} {:>9.1}", "NetCDF, 1 frame x 3 fields", "-", mb(&path));
+    println!(
+        "{:<28} {tw:>9.3} {:>9} {:>9.1}",
+        "NetCDF, 1 frame x 3 fields",
+        "-",
+        mb(&path)
+    );
 
     let circle: Vec<[f64; 2]> = (0..2000)
         .map(|k| {

@@ -64,7 +64,14 @@ fn write_all(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
         ("dem_f64_lzw.tif", SampleType::F64, Compression::Lzw),
         ("dem_f32_deflate.tif", SampleType::F32, Compression::Deflate),
     ] {
-        geotiff::write(&r, &dir.join(name), WriteOptions { sample, compression })?;
+        geotiff::write(
+            &r,
+            &dir.join(name),
+            WriteOptions {
+                sample,
+                compression,
+            },
+        )?;
         let mut stored = r.clone();
         if sample == SampleType::F32 {
             stored.values.iter_mut().for_each(|v| *v = *v as f32 as f64);
@@ -91,13 +98,21 @@ fn write_all(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
     let mut frames = Vec::new();
     for k in 0..3 {
         let t = 0.5 * k as f64;
-        let h: Vec<f64> = (0..r.nx * r.ny).map(|i| (i % 17) as f64 * 0.125 + k as f64).collect();
+        let h: Vec<f64> = (0..r.nx * r.ny)
+            .map(|i| (i % 17) as f64 * 0.125 + k as f64)
+            .collect();
         let u: Vec<f64> = (0..r.nx * r.ny).map(|i| -(i as f64) / 3.0).collect();
         w.write_frame(t, &[&h, &u])?;
         let as_stored = |f: &[f64]| -> Vec<Value> {
             f.iter()
                 .zip(&r.values)
-                .map(|(&v, &z)| if r.is_nodata(z) { Value::Null } else { json!(v as f32 as f64) })
+                .map(|(&v, &z)| {
+                    if r.is_nodata(z) {
+                        Value::Null
+                    } else {
+                        json!(v as f32 as f64)
+                    }
+                })
                 .collect()
         };
         frames.push(json!({"time": t, "h": as_stored(&h), "speed": as_stored(&u)}));
@@ -107,7 +122,10 @@ fn write_all(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
         "series.nc".into(),
         json!({"grid": describe(&r), "frames": frames, "wkt": WKT_32632}),
     );
-    std::fs::write(dir.join("expected.json"), serde_json::to_string(&Value::Object(expected))?)?;
+    std::fs::write(
+        dir.join("expected.json"),
+        serde_json::to_string(&Value::Object(expected))?,
+    )?;
     Ok(())
 }
 

@@ -107,17 +107,54 @@ fn asc_every_header_variant() {
     let dir = tmp();
     // (header, expected x_left, expected y_top, expected nodata)
     let cases: &[(&str, f64, f64, Option<f64>)] = &[
-        ("ncols 2\nnrows 3\nxllcorner 10\nyllcorner 20\ncellsize 2\n", 10.0, 26.0, None),
-        ("NCOLS 2\nNROWS 3\nXLLCENTER 11\nYLLCENTER 21\nCELLSIZE 2\nNODATA_VALUE -9999\n", 10.0, 26.0, Some(-9999.0)),
-        ("ncols\t2\r\nnrows \t 3\r\nxllcorner   10\r\nyllcenter\t21\r\ncellsize 2\r\n", 10.0, 26.0, None),
-        ("NCols 2\nNRows 3\nXllCenter 11\nYllCorner 20\nCellSize 2\nNoData_Value nan\n", 10.0, 26.0, Some(f64::NAN)),
-        ("ncols 2\nnrows 3\nxllcorner 10\nyllcorner 20\ndx 2\ndy 2\nnodata_value -1.5\n", 10.0, 26.0, Some(-1.5)),
-        ("  ncols 2\n\nnrows 3\n  xllcorner 10\nyllcorner 20\ncellsize 2\n", 10.0, 26.0, None),
+        (
+            "ncols 2\nnrows 3\nxllcorner 10\nyllcorner 20\ncellsize 2\n",
+            10.0,
+            26.0,
+            None,
+        ),
+        (
+            "NCOLS 2\nNROWS 3\nXLLCENTER 11\nYLLCENTER 21\nCELLSIZE 2\nNODATA_VALUE -9999\n",
+            10.0,
+            26.0,
+            Some(-9999.0),
+        ),
+        (
+            "ncols\t2\r\nnrows \t 3\r\nxllcorner   10\r\nyllcenter\t21\r\ncellsize 2\r\n",
+            10.0,
+            26.0,
+            None,
+        ),
+        (
+            "NCols 2\nNRows 3\nXllCenter 11\nYllCorner 20\nCellSize 2\nNoData_Value nan\n",
+            10.0,
+            26.0,
+            Some(f64::NAN),
+        ),
+        (
+            "ncols 2\nnrows 3\nxllcorner 10\nyllcorner 20\ndx 2\ndy 2\nnodata_value -1.5\n",
+            10.0,
+            26.0,
+            Some(-1.5),
+        ),
+        (
+            "  ncols 2\n\nnrows 3\n  xllcorner 10\nyllcorner 20\ncellsize 2\n",
+            10.0,
+            26.0,
+            None,
+        ),
     ];
     for (i, (header, x, y, nodata)) in cases.iter().enumerate() {
         // Values laid out three ways: one row per line, all on one line, one per line.
-        for (j, body) in ["1 2\n3 4\n5 6\n", "1 2 3 4 5 6", "1\n2\n3\n4\n5\n6\n\n"].iter().enumerate() {
-            let p = write_text(dir.path(), &format!("v{i}_{j}.asc"), &format!("{header}{body}"));
+        for (j, body) in ["1 2\n3 4\n5 6\n", "1 2 3 4 5 6", "1\n2\n3\n4\n5\n6\n\n"]
+            .iter()
+            .enumerate()
+        {
+            let p = write_text(
+                dir.path(),
+                &format!("v{i}_{j}.asc"),
+                &format!("{header}{body}"),
+            );
             let r = asc::read(&p).unwrap_or_else(|e| panic!("case {i}/{j}: {e}"));
             assert_eq!((r.nx, r.ny, r.cell_size), (2, 3, 2.0), "case {i}/{j}");
             assert_eq!((r.x_left, r.y_top), (*x, *y), "case {i}/{j}");
@@ -126,7 +163,11 @@ fn asc_every_header_variant() {
                 (Some(a), Some(b)) if b.is_nan() => assert!(a.is_nan()),
                 (a, b) => assert_eq!(a, *b, "case {i}/{j}"),
             }
-            assert_eq!(r.cell_centre(0, 2), (11.0, 21.0), "lower-left centre, case {i}/{j}");
+            assert_eq!(
+                r.cell_centre(0, 2),
+                (11.0, 21.0),
+                "lower-left centre, case {i}/{j}"
+            );
         }
     }
     // Values may be nan/NaN words and exponents; a nodata cell reads as nodata.
@@ -144,7 +185,10 @@ fn asc_every_header_variant() {
 fn asc_error(dir: &Path, name: &str, text: &str) -> GisError {
     let p = write_text(dir, name, text);
     let e = asc::read(&p).expect_err(name);
-    assert!(e.to_string().contains(name), "the error names the file: {e}");
+    assert!(
+        e.to_string().contains(name),
+        "the error names the file: {e}"
+    );
     e
 }
 
@@ -156,27 +200,102 @@ fn asc_bad_inputs_give_distinct_named_errors() {
     let e = asc_error(d, "empty.asc", "");
     assert!(matches!(e, GisError::EmptyFile { .. }), "{e}");
     let e = asc_error(d, "few.asc", &format!("{head}1 2\n3\n"));
-    assert!(matches!(e, GisError::TooFewValues { expected: 4, found: 3, .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            GisError::TooFewValues {
+                expected: 4,
+                found: 3,
+                ..
+            }
+        ),
+        "{e}"
+    );
     let e = asc_error(d, "many.asc", &format!("{head}1 2\n3 4\n5\n"));
-    assert!(matches!(e, GisError::TooManyValues { expected: 4, line: 8, .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            GisError::TooManyValues {
+                expected: 4,
+                line: 8,
+                ..
+            }
+        ),
+        "{e}"
+    );
     let e = asc_error(d, "word.asc", &format!("{head}1 2\n3 x4\n"));
-    assert!(matches!(e, GisError::NonNumeric { line: 7, ref token, .. } if token == "x4"), "{e}");
-    let e = asc_error(d, "nosize.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\n1 2 3 4\n");
-    assert!(matches!(e, GisError::MissingKey { key: "cellsize", .. }), "{e}");
-    let e = asc_error(d, "noy.asc", "ncols 2\nnrows 2\nxllcorner 0\ncellsize 1\n1 2 3 4\n");
-    assert!(matches!(e, GisError::MissingKey { key: "yllcorner", .. }), "{e}");
-    let e = asc_error(d, "neg.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize -1\n1 2 3 4\n");
-    assert!(matches!(e, GisError::NonPositiveCellSize { value, .. } if value == -1.0), "{e}");
-    let e = asc_error(d, "dxdy.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ndx 1\ndy 2\n1 2 3 4\n");
+    assert!(
+        matches!(e, GisError::NonNumeric { line: 7, ref token, .. } if token == "x4"),
+        "{e}"
+    );
+    let e = asc_error(
+        d,
+        "nosize.asc",
+        "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\n1 2 3 4\n",
+    );
+    assert!(
+        matches!(
+            e,
+            GisError::MissingKey {
+                key: "cellsize",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = asc_error(
+        d,
+        "noy.asc",
+        "ncols 2\nnrows 2\nxllcorner 0\ncellsize 1\n1 2 3 4\n",
+    );
+    assert!(
+        matches!(
+            e,
+            GisError::MissingKey {
+                key: "yllcorner",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = asc_error(
+        d,
+        "neg.asc",
+        "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize -1\n1 2 3 4\n",
+    );
+    assert!(
+        matches!(e, GisError::NonPositiveCellSize { value, .. } if value == -1.0),
+        "{e}"
+    );
+    let e = asc_error(
+        d,
+        "dxdy.asc",
+        "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ndx 1\ndy 2\n1 2 3 4\n",
+    );
     assert!(matches!(e, GisError::NonSquareCells { .. }), "{e}");
-    let e = asc_error(d, "key.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nfoo 3\n1 2 3 4\n");
+    let e = asc_error(
+        d,
+        "key.asc",
+        "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nfoo 3\n1 2 3 4\n",
+    );
     assert!(matches!(e, GisError::BadHeader { line: 6, .. }), "{e}");
-    let e = asc_error(d, "cols.asc", "ncols 2.5\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3 4\n");
+    let e = asc_error(
+        d,
+        "cols.asc",
+        "ncols 2.5\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3 4\n",
+    );
     assert!(matches!(e, GisError::BadHeader { line: 1, .. }), "{e}");
-    let e = asc_error(d, "twice.asc", "ncols 2\nnrows 2\nxllcorner 0\nxllcenter 0\nyllcorner 0\ncellsize 1\n1 2 3 4\n");
+    let e = asc_error(
+        d,
+        "twice.asc",
+        "ncols 2\nnrows 2\nxllcorner 0\nxllcenter 0\nyllcorner 0\ncellsize 1\n1 2 3 4\n",
+    );
     assert!(matches!(e, GisError::BadHeader { line: 4, .. }), "{e}");
     let e = asc::read(&d.join("missing.asc")).unwrap_err();
-    assert!(matches!(e, GisError::Io { .. }) && e.to_string().contains("missing.asc"), "{e}");
+    assert!(
+        matches!(e, GisError::Io { .. }) && e.to_string().contains("missing.asc"),
+        "{e}"
+    );
     // NaN cells cannot be written without a finite nodata value.
     let mut r = Raster::filled(2, 2, 0.0, 2.0, 1.0, 1.0);
     r.values[3] = f64::NAN;
@@ -203,13 +322,20 @@ fn geotiff_round_trip_is_exact() {
         geotiff::write(&r, &p1, opts).unwrap();
         let back = geotiff::read(&p1).unwrap();
         assert_eq!((back.nx, back.ny), (r.nx, r.ny));
-        assert_eq!((back.x_left, back.y_top, back.cell_size), (r.x_left, r.y_top, r.cell_size));
+        assert_eq!(
+            (back.x_left, back.y_top, back.cell_size),
+            (r.x_left, r.y_top, r.cell_size)
+        );
         assert_eq!(back.nodata, r.nodata);
         assert_eq!(back.crs, Crs::from_epsg(32632));
         assert!(same_bits(&back.values, &r.values), "{compression:?}");
         let p2 = dir.path().join(format!("b_{compression:?}.tif"));
         geotiff::write(&back, &p2, opts).unwrap();
-        assert_eq!(std::fs::read(&p1).unwrap(), std::fs::read(&p2).unwrap(), "{compression:?}");
+        assert_eq!(
+            std::fs::read(&p1).unwrap(),
+            std::fs::read(&p2).unwrap(),
+            "{compression:?}"
+        );
     }
     // Float32: exact for f32 values; NaN nodata; a geographic CRS.
     let mut r = Raster::filled(5, 4, 7.25, 46.5, 0.25, 0.0);
@@ -226,7 +352,10 @@ fn geotiff_round_trip_is_exact() {
     assert!(back.get(2, 1).is_none());
     assert!(same_bits(&back.values, &r.values));
     assert_eq!(back.crs.epsg, Some(4326));
-    assert_eq!((back.x_left, back.y_top, back.cell_size), (7.25, 46.5, 0.25));
+    assert_eq!(
+        (back.x_left, back.y_top, back.cell_size),
+        (7.25, 46.5, 0.25)
+    );
     // A CRS known only by WKT without an authority travels in the citation key.
     let esri = r#"PROJCS["CH1903+_LV95",GEOGCS["GCS_CH1903+",DATUM["D_CH1903+",SPHEROID["Bessel_1841",6377397.155,299.1528128]]],PROJECTION["Hotine_Oblique_Mercator_Azimuth_Center"]]"#;
     r.crs = Crs::from_wkt(esri);
@@ -235,17 +364,27 @@ fn geotiff_round_trip_is_exact() {
 }
 
 /// A GeoTIFF written with the `tiff` encoder and the given georeferencing tags.
-fn raw_tiff(path: &Path, tags: &[(u16, Vec<f64>)], keys: &[u16], nodata: Option<&str>, data: &[u16]) {
+fn raw_tiff(
+    path: &Path,
+    tags: &[(u16, Vec<f64>)],
+    keys: &[u16],
+    nodata: Option<&str>,
+    data: &[u16],
+) {
     use tiff::encoder::{colortype::Gray16, TiffEncoder};
     use tiff::tags::Tag;
     let file = std::fs::File::create(path).unwrap();
     let mut enc = TiffEncoder::new(std::io::BufWriter::new(file)).unwrap();
     let mut img = enc.new_image::<Gray16>(3, 2).unwrap();
     for (tag, values) in tags {
-        img.encoder().write_tag(Tag::Unknown(*tag), &values[..]).unwrap();
+        img.encoder()
+            .write_tag(Tag::Unknown(*tag), &values[..])
+            .unwrap();
     }
     if !keys.is_empty() {
-        img.encoder().write_tag(Tag::GeoKeyDirectoryTag, keys).unwrap();
+        img.encoder()
+            .write_tag(Tag::GeoKeyDirectoryTag, keys)
+            .unwrap();
     }
     if let Some(nd) = nodata {
         img.encoder().write_tag(Tag::GdalNodata, nd).unwrap();
@@ -265,9 +404,18 @@ fn geotiff_georeferencing_rules() {
 
     // Integer samples, PixelIsArea: the tiepoint is the corner; nodata from GDAL_NODATA.
     let p = d.join("area.tif");
-    raw_tiff(&p, &[scale.clone(), tie.clone()], &area, Some("65535"), &data);
+    raw_tiff(
+        &p,
+        &[scale.clone(), tie.clone()],
+        &area,
+        Some("65535"),
+        &data,
+    );
     let r = geotiff::read(&p).unwrap();
-    assert_eq!((r.nx, r.ny, r.x_left, r.y_top, r.cell_size), (3, 2, 1000.0, 2000.0, 10.0));
+    assert_eq!(
+        (r.nx, r.ny, r.x_left, r.y_top, r.cell_size),
+        (3, 2, 1000.0, 2000.0, 10.0)
+    );
     assert_eq!(r.values, [1.0, 2.0, 3.0, 4.0, 5.0, 65535.0]);
     assert_eq!(r.get(2, 1), None);
     assert_eq!(r.crs.epsg, Some(2056));
@@ -281,12 +429,23 @@ fn geotiff_georeferencing_rules() {
 
     // A tiepoint at pixel (1, 1) is moved back to the corner of pixel (0, 0).
     let p = d.join("tie11.tif");
-    raw_tiff(&p, &[scale.clone(), (33922, vec![1.0, 1.0, 0.0, 1010.0, 1990.0, 0.0])], &area, None, &data);
+    raw_tiff(
+        &p,
+        &[
+            scale.clone(),
+            (33922, vec![1.0, 1.0, 0.0, 1010.0, 1990.0, 0.0]),
+        ],
+        &area,
+        None,
+        &data,
+    );
     let r = geotiff::read(&p).unwrap();
     assert_eq!((r.x_left, r.y_top), (1000.0, 2000.0));
 
     // A north-up ModelTransformationTag is accepted...
-    let m = vec![10.0, 0.0, 0.0, 1000.0, 0.0, -10.0, 0.0, 2000.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+    let m = vec![
+        10.0, 0.0, 0.0, 1000.0, 0.0, -10.0, 0.0, 2000.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    ];
     let p = d.join("transform.tif");
     raw_tiff(&p, &[(34264, m.clone())], &area, None, &data);
     let r = geotiff::read(&p).unwrap();
@@ -298,28 +457,54 @@ fn geotiff_georeferencing_rules() {
     let p = d.join("rotated.tif");
     raw_tiff(&p, &[(34264, rot)], &area, None, &data);
     let e = geotiff::read(&p).unwrap_err();
-    assert!(matches!(e, GisError::Rotated { .. }) && e.to_string().contains("rotated.tif"), "{e}");
+    assert!(
+        matches!(e, GisError::Rotated { .. }) && e.to_string().contains("rotated.tif"),
+        "{e}"
+    );
     // ... and so is a set of tiepoints (control points).
     let mut ties = tie.1.clone();
-    ties.extend([3.0, 0.0, 0.0, 1029.0, 2003.0, 0.0, 0.0, 2.0, 0.0, 1003.0, 1981.0, 0.0]);
+    ties.extend([
+        3.0, 0.0, 0.0, 1029.0, 2003.0, 0.0, 0.0, 2.0, 0.0, 1003.0, 1981.0, 0.0,
+    ]);
     let p = d.join("gcps.tif");
     raw_tiff(&p, &[scale.clone(), (33922, ties)], &area, None, &data);
-    assert!(matches!(geotiff::read(&p).unwrap_err(), GisError::Rotated { .. }));
+    assert!(matches!(
+        geotiff::read(&p).unwrap_err(),
+        GisError::Rotated { .. }
+    ));
     // Non-square pixels.
     let p = d.join("nonsquare.tif");
-    raw_tiff(&p, &[(33550, vec![10.0, 12.0, 0.0]), tie.clone()], &area, None, &data);
+    raw_tiff(
+        &p,
+        &[(33550, vec![10.0, 12.0, 0.0]), tie.clone()],
+        &area,
+        None,
+        &data,
+    );
     let e = geotiff::read(&p).unwrap_err();
-    assert!(matches!(e, GisError::NonSquareCells { dx, dy, .. } if dx == 10.0 && dy == 12.0), "{e}");
+    assert!(
+        matches!(e, GisError::NonSquareCells { dx, dy, .. } if dx == 10.0 && dy == 12.0),
+        "{e}"
+    );
     // No georeferencing at all.
     let p = d.join("plain.tif");
     raw_tiff(&p, &[], &[], None, &data);
-    assert!(matches!(geotiff::read(&p).unwrap_err(), GisError::NotGeoreferenced { .. }));
+    assert!(matches!(
+        geotiff::read(&p).unwrap_err(),
+        GisError::NotGeoreferenced { .. }
+    ));
     // Empty and garbage files.
     let p = write_text(d, "empty.tif", "");
-    assert!(matches!(geotiff::read(&p).unwrap_err(), GisError::EmptyFile { .. }));
+    assert!(matches!(
+        geotiff::read(&p).unwrap_err(),
+        GisError::EmptyFile { .. }
+    ));
     let p = write_text(d, "text.tif", "ncols 2\n");
     let e = geotiff::read(&p).unwrap_err();
-    assert!(matches!(e, GisError::Tiff { .. }) && e.to_string().contains("text.tif"), "{e}");
+    assert!(
+        matches!(e, GisError::Tiff { .. }) && e.to_string().contains("text.tif"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -330,13 +515,18 @@ fn geotiff_reads_packbits_and_multiband_is_refused() {
     let p = dir.path().join("packbits.tif");
     {
         let file = std::fs::File::create(&p).unwrap();
-        let mut enc = TiffEncoder::new(file).unwrap().with_compression(C::Packbits);
+        let mut enc = TiffEncoder::new(file)
+            .unwrap()
+            .with_compression(C::Packbits);
         let mut img = enc.new_image::<colortype::GrayI16>(4, 3).unwrap();
-        img.encoder().write_tag(Tag::ModelPixelScaleTag, &[1.0, 1.0, 0.0][..]).unwrap();
+        img.encoder()
+            .write_tag(Tag::ModelPixelScaleTag, &[1.0, 1.0, 0.0][..])
+            .unwrap();
         img.encoder()
             .write_tag(Tag::ModelTiepointTag, &[0.0, 0.0, 0.0, 0.0, 3.0, 0.0][..])
             .unwrap();
-        img.write_data(&[-5i16, 0, 0, 0, 0, 0, 0, 7, 7, 7, 7, -32768]).unwrap();
+        img.write_data(&[-5i16, 0, 0, 0, 0, 0, 0, 7, 7, 7, 7, -32768])
+            .unwrap();
     }
     let r = geotiff::read(&p).unwrap();
     assert_eq!(r.values[0], -5.0);
@@ -346,9 +536,13 @@ fn geotiff_reads_packbits_and_multiband_is_refused() {
     {
         let file = std::fs::File::create(&p).unwrap();
         let mut enc = TiffEncoder::new(file).unwrap();
-        enc.write_image::<colortype::RGB8>(2, 1, &[0, 0, 0, 1, 1, 1]).unwrap();
+        enc.write_image::<colortype::RGB8>(2, 1, &[0, 0, 0, 1, 1, 1])
+            .unwrap();
     }
-    assert!(matches!(geotiff::read(&p).unwrap_err(), GisError::UnsupportedTiff { .. }));
+    assert!(matches!(
+        geotiff::read(&p).unwrap_err(),
+        GisError::UnsupportedTiff { .. }
+    ));
 }
 
 // ---------------------------------------------------------------- crop, coarsen
@@ -363,13 +557,21 @@ fn crop_then_coarsen_keeps_the_grid_lines_and_the_mean() {
         }
     }
     let c = r
-        .crop(Bbox { x_min: 551.0, x_max: 649.0, y_min: 801.0, y_max: 880.0 })
+        .crop(Bbox {
+            x_min: 551.0,
+            x_max: 649.0,
+            y_min: 801.0,
+            y_max: 880.0,
+        })
         .unwrap();
     // Centres from 552.5 to 647.5 (20 columns), 877.5 down to 802.5 (16 rows).
     assert_eq!((c.nx, c.ny, c.x_left, c.y_top), (20, 16, 550.0, 880.0));
     assert_eq!(c.values[0], (10 * 100 + 4) as f64);
     let k = c.coarsen(4).unwrap();
-    assert_eq!((k.nx, k.ny, k.cell_size, k.x_left, k.y_top), (5, 4, 20.0, 550.0, 880.0));
+    assert_eq!(
+        (k.nx, k.ny, k.cell_size, k.x_left, k.y_top),
+        (5, 4, 20.0, 550.0, 880.0)
+    );
     // The mean of a linear field over a block is its value at the block centre.
     let mean = |col0: usize, row0: usize| ((col0 as f64 + 1.5) * 100.0) + row0 as f64 + 1.5;
     assert_eq!(k.values[0], mean(10, 4));
@@ -380,7 +582,12 @@ fn crop_then_coarsen_keeps_the_grid_lines_and_the_mean() {
 // ---------------------------------------------------------------- release polygons
 
 fn square(x0: f64, y0: f64, side: f64) -> Vec<[f64; 2]> {
-    vec![[x0, y0], [x0 + side, y0], [x0 + side, y0 + side], [x0, y0 + side]]
+    vec![
+        [x0, y0],
+        [x0 + side, y0],
+        [x0 + side, y0 + side],
+        [x0, y0 + side],
+    ]
 }
 
 fn circle(cx: f64, cy: f64, r: f64, n: usize) -> Vec<[f64; 2]> {
@@ -394,7 +601,10 @@ fn circle(cx: f64, cy: f64, r: f64, n: usize) -> Vec<[f64; 2]> {
 
 fn one(polygon: Polygon, thickness: f64) -> ReleaseAreas {
     ReleaseAreas {
-        features: vec![ReleaseFeature { polygons: vec![polygon], thickness }],
+        features: vec![ReleaseFeature {
+            polygons: vec![polygon],
+            thickness,
+        }],
         crs: Crs::unknown(),
     }
 }
@@ -415,17 +625,27 @@ fn errors(polygon: &Polygon, h: f64) -> Vec<(f64, f64, f64)> {
             let areas = one(polygon.clone(), h);
             let fr = rasterise(&areas, &grid, CoverageRule::AreaFraction).unwrap();
             let cc = rasterise(&areas, &grid, CoverageRule::CellCentre).unwrap();
-            (d, (fr.volume - exact).abs() / exact, (cc.volume - exact).abs() / exact)
+            (
+                d,
+                (fr.volume - exact).abs() / exact,
+                (cc.volume - exact).abs() / exact,
+            )
         })
         .collect()
 }
 
 fn assert_converges(name: &str, errs: &[(f64, f64, f64)], perimeter: f64, area: f64) {
     for &(d, fraction, centre) in errs {
-        assert!(fraction < 1e-12, "{name}: area-fraction error {fraction:e} at d = {d}");
+        assert!(
+            fraction < 1e-12,
+            "{name}: area-fraction error {fraction:e} at d = {d}"
+        );
         // The cell-centre rule misses at most the boundary cells: |ΔA| ≤ perimeter × d.
         let bound = perimeter * d / area;
-        assert!(centre <= bound, "{name}: centre error {centre:e} > {bound:e} at d = {d}");
+        assert!(
+            centre <= bound,
+            "{name}: centre error {centre:e} > {bound:e} at d = {d}"
+        );
     }
     let (coarse, fine) = (errs[0].2, errs[errs.len() - 1].2);
     assert!(
@@ -456,7 +676,12 @@ fn a_hole_subtracts_and_orientation_does_not_matter() {
     let grid = domain(1.0);
     let outer = square(1010.0, 2010.0, 60.0);
     let mut hole = square(1030.5, 2030.5, 20.0);
-    let full = rasterise(&one(Polygon::new(outer.clone()), 2.0), &grid, CoverageRule::AreaFraction).unwrap();
+    let full = rasterise(
+        &one(Polygon::new(outer.clone()), 2.0),
+        &grid,
+        CoverageRule::AreaFraction,
+    )
+    .unwrap();
     assert!((full.volume - 3600.0 * 2.0).abs() < 1e-9);
     for reverse in [false, true] {
         if reverse {
@@ -466,17 +691,36 @@ fn a_hole_subtracts_and_orientation_does_not_matter() {
         if reverse {
             outer.reverse();
         }
-        let p = Polygon { exterior: outer, holes: vec![hole.clone()] };
+        let p = Polygon {
+            exterior: outer,
+            holes: vec![hole.clone()],
+        };
         let fr = rasterise(&one(p.clone(), 2.0), &grid, CoverageRule::AreaFraction).unwrap();
-        assert!((fr.volume - (3600.0 - 400.0) * 2.0).abs() < 1e-9, "{}", fr.volume);
+        assert!(
+            (fr.volume - (3600.0 - 400.0) * 2.0).abs() < 1e-9,
+            "{}",
+            fr.volume
+        );
         // Cells half and a quarter covered by the hole (x 1030..1031; y 2040..2041 and
         // 2030..2031): thickness 2 × ½ and 2 × ¾.
         let t = &fr.thickness;
-        assert!((t.values[grid.index(30, 59)] - 1.0).abs() < 1e-12, "{}", t.values[grid.index(30, 59)]);
-        assert!((t.values[grid.index(30, 69)] - 1.5).abs() < 1e-12, "{}", t.values[grid.index(30, 69)]);
+        assert!(
+            (t.values[grid.index(30, 59)] - 1.0).abs() < 1e-12,
+            "{}",
+            t.values[grid.index(30, 59)]
+        );
+        assert!(
+            (t.values[grid.index(30, 69)] - 1.5).abs() < 1e-12,
+            "{}",
+            t.values[grid.index(30, 69)]
+        );
         let cc = rasterise(&one(p, 2.0), &grid, CoverageRule::CellCentre).unwrap();
         // Centres at .5: the hole [1030.5, 1050.5] takes the 20 centres 1031.5..1050.5.
-        assert!((cc.volume - (3600.0 - 400.0) * 2.0).abs() < 1e-9, "{}", cc.volume);
+        assert!(
+            (cc.volume - (3600.0 - 400.0) * 2.0).abs() < 1e-9,
+            "{}",
+            cc.volume
+        );
     }
 }
 
@@ -485,7 +729,11 @@ fn coverage_fractions_of_a_triangle() {
     // Triangle (0,0) (2,0) (0,2) on a 2 × 2 grid of unit cells: fractions 1, ½, ½, 0.
     let grid = Raster::filled(2, 2, 0.0, 2.0, 1.0, 0.0);
     let tri = Polygon::new(vec![[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]]);
-    let f = coverage(&[tri.clone()], &grid, CoverageRule::AreaFraction);
+    let f = coverage(
+        std::slice::from_ref(&tri),
+        &grid,
+        CoverageRule::AreaFraction,
+    );
     // Row 0 is the top: cells (0,0)=top-left ½, (1,0)=top-right 0, bottom-left 1, bottom-right ½.
     let expect = [0.5, 0.0, 1.0, 0.5];
     for (a, b) in f.iter().zip(expect) {
@@ -493,7 +741,10 @@ fn coverage_fractions_of_a_triangle() {
     }
     // Centres (0.5, 1.5) and (1.5, 0.5) lie outside x/2 + y/1.9 < 1, (0.5, 0.5) inside.
     let tri = Polygon::new(vec![[0.0, 0.0], [2.0, 0.0], [0.0, 1.9]]);
-    assert_eq!(coverage(&[tri], &grid, CoverageRule::CellCentre), [0.0, 0.0, 1.0, 0.0]);
+    assert_eq!(
+        coverage(&[tri], &grid, CoverageRule::CellCentre),
+        [0.0, 0.0, 1.0, 0.0]
+    );
 }
 
 #[test]
@@ -523,9 +774,21 @@ fn slope_normal_thickness_on_a_30_degree_plane() {
     assert!((volume / normal.volume - 1.0 / theta.cos()).abs() < 1e-12);
     // A flat DEM leaves the thickness alone; a mismatched grid is refused.
     let flat = dem.same_grid(3.0);
-    assert_eq!(vertical_thickness(&normal.thickness, &flat).unwrap().values, normal.thickness.values);
+    assert_eq!(
+        vertical_thickness(&normal.thickness, &flat).unwrap().values,
+        normal.thickness.values
+    );
     assert!(matches!(
-        vertical_thickness(&normal.thickness, &dem.crop(Bbox { x_min: 0.0, x_max: 50.0, y_min: 0.0, y_max: 80.0 }).unwrap()),
+        vertical_thickness(
+            &normal.thickness,
+            &dem.crop(Bbox {
+                x_min: 0.0,
+                x_max: 50.0,
+                y_min: 0.0,
+                y_max: 80.0
+            })
+            .unwrap()
+        ),
         Err(GisError::GridMismatch { .. })
     ));
 }
@@ -535,15 +798,31 @@ fn release_errors_outside_partly_outside_crs_and_walls() {
     let mut grid = domain(1.0);
     let far = one(Polygon::new(square(0.0, 0.0, 10.0)), 1.0);
     let e = rasterise(&far, &grid, CoverageRule::AreaFraction).unwrap_err();
-    assert!(matches!(e, GisError::PolygonOutsideRaster { feature: 0, .. }), "{e}");
+    assert!(
+        matches!(e, GisError::PolygonOutsideRaster { feature: 0, .. }),
+        "{e}"
+    );
     let edge = one(Polygon::new(square(1090.0, 2050.0, 20.0)), 1.0);
     let e = rasterise(&edge, &grid, CoverageRule::CellCentre).unwrap_err();
-    assert!(matches!(e, GisError::PolygonPartlyOutside { percent, .. } if (percent - 50.0).abs() < 1e-6), "{e}");
+    assert!(
+        matches!(e, GisError::PolygonPartlyOutside { percent, .. } if (percent - 50.0).abs() < 1e-6),
+        "{e}"
+    );
     let mut inside = one(Polygon::new(square(1010.0, 2010.0, 20.0)), 1.0);
     inside.crs = Crs::from_epsg(2056);
     grid.crs = Crs::from_epsg(32632);
     let e = rasterise(&inside, &grid, CoverageRule::AreaFraction).unwrap_err();
-    assert!(matches!(e, GisError::CrsMismatch { a: 32632, b: 2056, .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            GisError::CrsMismatch {
+                a: 32632,
+                b: 2056,
+                ..
+            }
+        ),
+        "{e}"
+    );
     // Unknown on one side is not compared.
     inside.crs = Crs::unknown();
     rasterise(&inside, &grid, CoverageRule::AreaFraction).unwrap();
@@ -591,18 +870,48 @@ fn geojson_polygons_multipolygons_holes_and_properties() {
     let uniform = release::read(&p, ThicknessSource::Uniform(1.0)).unwrap();
     assert!(uniform.features.iter().all(|f| f.thickness == 1.0));
     let e = release::read(&p, ThicknessSource::Attribute("depth")).unwrap_err();
-    assert!(matches!(e, GisError::MissingAttribute { feature: 0, ref available, .. } if available == "h, name"), "{e}");
-    let p2 = write_text(dir.path(), "neg.geojson", r#"{"type": "Feature", "properties": {"h": -1}, "geometry": {"type": "Polygon", "coordinates": [[[0,0],[1,0],[1,1]]]}}"#);
-    assert!(matches!(release::read(&p2, ThicknessSource::Attribute("h")).unwrap_err(), GisError::BadThickness { .. }));
-    let p3 = write_text(dir.path(), "point.geojson", r#"{"type": "Point", "coordinates": [0, 0]}"#);
-    assert!(matches!(release::read(&p3, ThicknessSource::Uniform(1.0)).unwrap_err(), GisError::GeoJson { .. }));
+    assert!(
+        matches!(e, GisError::MissingAttribute { feature: 0, ref available, .. } if available == "h, name"),
+        "{e}"
+    );
+    let p2 = write_text(
+        dir.path(),
+        "neg.geojson",
+        r#"{"type": "Feature", "properties": {"h": -1}, "geometry": {"type": "Polygon", "coordinates": [[[0,0],[1,0],[1,1]]]}}"#,
+    );
+    assert!(matches!(
+        release::read(&p2, ThicknessSource::Attribute("h")).unwrap_err(),
+        GisError::BadThickness { .. }
+    ));
+    let p3 = write_text(
+        dir.path(),
+        "point.geojson",
+        r#"{"type": "Point", "coordinates": [0, 0]}"#,
+    );
+    assert!(matches!(
+        release::read(&p3, ThicknessSource::Uniform(1.0)).unwrap_err(),
+        GisError::GeoJson { .. }
+    ));
     let p4 = write_text(dir.path(), "broken.geojson", r#"{"type": "Feature", "#);
     let e = release::read(&p4, ThicknessSource::Uniform(1.0)).unwrap_err();
-    assert!(matches!(e, GisError::Json { .. }) && e.to_string().contains("broken.geojson"), "{e}");
-    let p5 = write_text(dir.path(), "none.geojson", r#"{"type": "FeatureCollection", "features": []}"#);
-    assert!(matches!(release::read(&p5, ThicknessSource::Uniform(1.0)).unwrap_err(), GisError::NoPolygons { .. }));
+    assert!(
+        matches!(e, GisError::Json { .. }) && e.to_string().contains("broken.geojson"),
+        "{e}"
+    );
+    let p5 = write_text(
+        dir.path(),
+        "none.geojson",
+        r#"{"type": "FeatureCollection", "features": []}"#,
+    );
+    assert!(matches!(
+        release::read(&p5, ThicknessSource::Uniform(1.0)).unwrap_err(),
+        GisError::NoPolygons { .. }
+    ));
     let p6 = write_text(dir.path(), "empty.geojson", "");
-    assert!(matches!(release::read(&p6, ThicknessSource::Uniform(1.0)).unwrap_err(), GisError::EmptyFile { .. }));
+    assert!(matches!(
+        release::read(&p6, ThicknessSource::Uniform(1.0)).unwrap_err(),
+        GisError::EmptyFile { .. }
+    ));
 }
 
 #[test]
@@ -616,7 +925,11 @@ fn shapefile_with_thickness_attribute_holes_and_prj() {
             .add_numeric_field("thick".try_into().unwrap(), 10, 3)
             .add_character_field("name".try_into().unwrap(), 20);
         let mut w = shapefile::Writer::from_path(&p, table).unwrap();
-        let pts = |v: Vec<[f64; 2]>| v.into_iter().map(|[x, y]| Point::new(x, y)).collect::<Vec<_>>();
+        let pts = |v: Vec<[f64; 2]>| {
+            v.into_iter()
+                .map(|[x, y]| Point::new(x, y))
+                .collect::<Vec<_>>()
+        };
         let with_hole = shapefile::Polygon::with_rings(vec![
             PolygonRing::Outer(pts(square(1010.0, 2010.0, 40.0))),
             PolygonRing::Inner(pts(square(1020.0, 2020.0, 10.0))),
@@ -641,13 +954,28 @@ fn shapefile_with_thickness_attribute_holes_and_prj() {
     let expect = (1600.0 - 100.0) * 1.25 + 400.0 * 0.5;
     assert!((r.volume - expect).abs() < 1e-9, "{} vs {expect}", r.volume);
     let e = release::read(&p, ThicknessSource::Attribute("depth")).unwrap_err();
-    assert!(matches!(e, GisError::MissingAttribute { ref available, .. } if available == "name, thick"), "{e}");
+    assert!(
+        matches!(e, GisError::MissingAttribute { ref available, .. } if available == "name, thick"),
+        "{e}"
+    );
     grid.crs = Crs::from_epsg(2056);
-    assert!(matches!(rasterise(&areas, &grid, CoverageRule::CellCentre), Err(GisError::CrsMismatch { .. })));
+    assert!(matches!(
+        rasterise(&areas, &grid, CoverageRule::CellCentre),
+        Err(GisError::CrsMismatch { .. })
+    ));
     // Without a .dbf a uniform thickness still works.
     std::fs::remove_file(p.with_extension("dbf")).unwrap();
-    assert_eq!(release::read(&p, ThicknessSource::Uniform(3.0)).unwrap().features.len(), 2);
-    assert!(matches!(release::read(&p, ThicknessSource::Attribute("thick")), Err(GisError::Shapefile { .. })));
+    assert_eq!(
+        release::read(&p, ThicknessSource::Uniform(3.0))
+            .unwrap()
+            .features
+            .len(),
+        2
+    );
+    assert!(matches!(
+        release::read(&p, ThicknessSource::Attribute("thick")),
+        Err(GisError::Shapefile { .. })
+    ));
 }
 
 // ---------------------------------------------------------------- NetCDF
@@ -660,7 +988,10 @@ fn netcdf_layout_and_streaming_record_count() {
     grid.nodata = Some(-1.0);
     grid.values[5] = -1.0;
     grid.crs = Crs::from_wkt(WKT_32632);
-    let fields = [FieldSpec::new("h", "m", "flow thickness"), FieldSpec::new("speed", "m s-1", "depth-averaged speed")];
+    let fields = [
+        FieldSpec::new("h", "m", "flow thickness"),
+        FieldSpec::new("speed", "m s-1", "depth-averaged speed"),
+    ];
     let mut w = NetCdfWriter::create(&p, &grid, &fields, "test").unwrap();
     let header_and_fixed = std::fs::metadata(&p).unwrap().len();
     let h: Vec<f64> = (0..12).map(|i| i as f64 * 0.5).collect();
@@ -669,9 +1000,16 @@ fn netcdf_layout_and_streaming_record_count() {
         w.write_frame(k as f64 * 0.25, &[&h, &u]).unwrap();
         let bytes = std::fs::read(&p).unwrap();
         assert_eq!(&bytes[..4], b"CDF\x02");
-        assert_eq!(u32::from_be_bytes(bytes[4..8].try_into().unwrap()), k + 1, "numrecs");
+        assert_eq!(
+            u32::from_be_bytes(bytes[4..8].try_into().unwrap()),
+            k + 1,
+            "numrecs"
+        );
         let record = 8 + 2 * 12 * 4;
-        assert_eq!(bytes.len() as u64, header_and_fixed + (k as u64 + 1) * record);
+        assert_eq!(
+            bytes.len() as u64,
+            header_and_fixed + (k as u64 + 1) * record
+        );
         // The last value of the last frame, big-endian f32.
         let last = f32::from_be_bytes(bytes[bytes.len() - 4..].try_into().unwrap());
         assert_eq!(last, -11.0);
@@ -680,12 +1018,27 @@ fn netcdf_layout_and_streaming_record_count() {
         let wall = f32::from_be_bytes(bytes[start + 20..start + 24].try_into().unwrap());
         assert!(wall.is_nan());
         let text = String::from_utf8_lossy(&bytes);
-        for needle in ["Conventions", "CF-1.8", "projection_x_coordinate", "grid_mapping", "crs_wkt", "spatial_ref", "EPSG:32632", "_FillValue"] {
+        for needle in [
+            "Conventions",
+            "CF-1.8",
+            "projection_x_coordinate",
+            "grid_mapping",
+            "crs_wkt",
+            "spatial_ref",
+            "EPSG:32632",
+            "_FillValue",
+        ] {
             assert!(text.contains(needle), "{needle}");
         }
     }
-    assert!(matches!(w.write_frame(1.0, &[&h]), Err(GisError::NetCdf { .. })));
+    assert!(matches!(
+        w.write_frame(1.0, &[&h]),
+        Err(GisError::NetCdf { .. })
+    ));
     w.finish().unwrap();
     let bad = [FieldSpec::new("2h", "m", "x")];
-    assert!(matches!(NetCdfWriter::create(&p, &grid, &bad, "t"), Err(GisError::NetCdf { .. })));
+    assert!(matches!(
+        NetCdfWriter::create(&p, &grid, &bad, "t"),
+        Err(GisError::NetCdf { .. })
+    ));
 }

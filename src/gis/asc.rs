@@ -65,7 +65,10 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Raster> {
     }
     let text = std::str::from_utf8(bytes).map_err(|e| GisError::BadHeader {
         path: path.to_path_buf(),
-        line: 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count(),
+        line: 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count(),
         reason: "not text (invalid UTF-8)".into(),
     })?;
     let bad = |line: usize, reason: String| GisError::BadHeader {
@@ -98,14 +101,24 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Raster> {
                 .parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| bad(lineno, format!("`{key}` = `{value}` is not a finite number")))
+                .ok_or_else(|| {
+                    bad(
+                        lineno,
+                        format!("`{key}` = `{value}` is not a finite number"),
+                    )
+                })
         };
         let count = || -> Result<usize> {
             value
                 .parse::<usize>()
                 .ok()
                 .filter(|&n| n > 0)
-                .ok_or_else(|| bad(lineno, format!("`{key}` = `{value}` is not a positive integer")))
+                .ok_or_else(|| {
+                    bad(
+                        lineno,
+                        format!("`{key}` = `{value}` is not a positive integer"),
+                    )
+                })
         };
         let lower = key.to_ascii_lowercase();
         let duplicate = match lower.as_str() {
@@ -119,9 +132,9 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Raster> {
             "dx" => h.dx.replace(number()?).is_some(),
             "dy" => h.dy.replace(number()?).is_some(),
             "nodata_value" | "nodata" => {
-                let v = value.parse::<f64>().map_err(|_| {
-                    bad(lineno, format!("`{key}` = `{value}` is not a number"))
-                })?;
+                let v = value
+                    .parse::<f64>()
+                    .map_err(|_| bad(lineno, format!("`{key}` = `{value}` is not a number")))?;
                 h.nodata.replace(v).is_some()
             }
             _ => return Err(bad(lineno, format!("unknown key `{key}`"))),
@@ -167,9 +180,9 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Raster> {
             value: d,
         });
     }
-    let expected = nx.checked_mul(ny).ok_or_else(|| {
-        bad(1, format!("{nx} x {ny} cells is too many"))
-    })?;
+    let expected = nx
+        .checked_mul(ny)
+        .ok_or_else(|| bad(1, format!("{nx} x {ny} cells is too many")))?;
     let mut values = Vec::with_capacity(expected.min(bytes.len() / 2 + 1));
     for (i, line) in lines {
         for token in line.split_ascii_whitespace() {
@@ -315,7 +328,10 @@ mod tests {
     #[test]
     fn yll_corner_recovers_the_decimal_that_was_read() {
         for (yll, ny, d) in [(100.1, 7, 0.3), (5_144_123.37, 1001, 2.5), (-33.3, 3, 0.1)] {
-            let text = format!("ncols 1\nnrows {ny}\nxllcorner 0\nyllcorner {yll}\ncellsize {d}\n{}", "1\n".repeat(ny));
+            let text = format!(
+                "ncols 1\nnrows {ny}\nxllcorner 0\nyllcorner {yll}\ncellsize {d}\n{}",
+                "1\n".repeat(ny)
+            );
             let r = parse(text.as_bytes(), Path::new("t.asc")).unwrap();
             assert_eq!(yll_corner(&r), yll);
         }

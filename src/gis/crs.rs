@@ -32,7 +32,11 @@ impl Crs {
 
     /// A CRS from WKT text; its EPSG code is the root authority, if any.
     pub fn from_wkt(text: &str) -> Crs {
-        let wkt = text.trim().trim_start_matches('\u{feff}').trim().to_string();
+        let wkt = text
+            .trim()
+            .trim_start_matches('\u{feff}')
+            .trim()
+            .to_string();
         if wkt.is_empty() {
             return Crs::default();
         }
@@ -162,7 +166,9 @@ mod tests {
         let a = Crs::from_epsg(32632);
         assert!(a.check_same("a", &Crs::from_epsg(32632), "b").is_ok());
         assert!(a.check_same("a", &Crs::unknown(), "b").is_ok());
-        let err = a.check_same("the DEM", &Crs::from_epsg(2056), "the release").unwrap_err();
+        let err = a
+            .check_same("the DEM", &Crs::from_epsg(2056), "the release")
+            .unwrap_err();
         assert!(err.to_string().contains("EPSG:32632"), "{err}");
         assert!(err.to_string().contains("EPSG:2056"), "{err}");
     }

@@ -35,7 +35,9 @@ use std::path::Path;
 
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::encoder::colortype::{ColorType as EncColor, Gray32Float, Gray64Float};
-use tiff::encoder::{Compression as TiffCompression, DeflateLevel, TiffEncoder, TiffKind, TiffValue};
+use tiff::encoder::{
+    Compression as TiffCompression, DeflateLevel, TiffEncoder, TiffKind, TiffValue,
+};
 use tiff::tags::Tag;
 use tiff::{ColorType, TiffError};
 
@@ -72,7 +74,7 @@ pub enum Compression {
     Deflate,
 }
 
-/// How [`write`] encodes a raster.
+/// How [`write()`] encodes a raster.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct WriteOptions {
     pub sample: SampleType,
@@ -189,9 +191,8 @@ pub fn read(path: &Path) -> Result<Raster> {
         None => None,
         Some(text) => {
             let t = text.trim_matches(|c: char| c == '\0' || c.is_whitespace());
-            let v = parse_nodata(t).ok_or_else(|| {
-                unsupported(format!("GDAL_NODATA `{t}` is not a number"))
-            })?;
+            let v = parse_nodata(t)
+                .ok_or_else(|| unsupported(format!("GDAL_NODATA `{t}` is not a number")))?;
             Some(if is_f32 { v as f32 as f64 } else { v })
         }
     };
@@ -224,9 +225,17 @@ fn parse_nodata(t: &str) -> Option<f64> {
 
 fn looks_like_wkt(text: &str) -> bool {
     let t = text.trim_start().to_ascii_uppercase();
-    ["PROJCS[", "GEOGCS[", "PROJCRS[", "GEOGCRS[", "GEODCRS[", "COMPD_CS[", "COMPOUNDCRS["]
-        .iter()
-        .any(|p| t.starts_with(p))
+    [
+        "PROJCS[",
+        "GEOGCS[",
+        "PROJCRS[",
+        "GEOGCRS[",
+        "GEODCRS[",
+        "COMPD_CS[",
+        "COMPOUNDCRS[",
+    ]
+    .iter()
+    .any(|p| t.starts_with(p))
 }
 
 /// The top-left point (of pixel (0, 0)'s corner, or of its centre for PixelIsPoint)
@@ -256,7 +265,8 @@ fn georeference(
         }
         (m[3], m[7], m[0], -m[5])
     } else {
-        let scale = scale.ok_or_else(|| not_geo("no ModelPixelScaleTag or ModelTransformationTag"))?;
+        let scale =
+            scale.ok_or_else(|| not_geo("no ModelPixelScaleTag or ModelTransformationTag"))?;
         let ties = ties.ok_or_else(|| not_geo("ModelPixelScaleTag without ModelTiepointTag"))?;
         if scale.len() < 2 || ties.len() < 6 {
             return Err(not_geo("truncated ModelPixelScaleTag or ModelTiepointTag"));
@@ -282,7 +292,9 @@ fn georeference(
     if !(sy.is_finite() && sy > 0.0) {
         return Err(GisError::UnsupportedTiff {
             path: path.to_path_buf(),
-            reason: format!("pixel height {sy}: rows run south to north; granflow needs north-up rasters"),
+            reason: format!(
+                "pixel height {sy}: rows run south to north; granflow needs north-up rasters"
+            ),
         });
     }
     if !(x0.is_finite() && y0.is_finite()) {
@@ -321,7 +333,8 @@ impl GeoKeys {
                         let start = value as usize;
                         let end = (start + count as usize).min(a.len());
                         if start < end && a.is_char_boundary(start) && a.is_char_boundary(end) {
-                            out.citation = Some(a[start..end].trim_end_matches(['|', '\0']).to_string());
+                            out.citation =
+                                Some(a[start..end].trim_end_matches(['|', '\0']).to_string());
                         }
                     }
                 }
@@ -361,11 +374,25 @@ pub fn write(raster: &Raster, path: &Path, options: WriteOptions) -> Result<()> 
     };
     let big = (raster.values.len() as u64) * sample_bytes > 3_900_000_000;
     let result = if big {
-        TiffEncoder::new_big(out)
-            .and_then(|e| encode(e.with_compression(compression), raster, nx, ny, options.sample))
+        TiffEncoder::new_big(out).and_then(|e| {
+            encode(
+                e.with_compression(compression),
+                raster,
+                nx,
+                ny,
+                options.sample,
+            )
+        })
     } else {
-        TiffEncoder::new(out)
-            .and_then(|e| encode(e.with_compression(compression), raster, nx, ny, options.sample))
+        TiffEncoder::new(out).and_then(|e| {
+            encode(
+                e.with_compression(compression),
+                raster,
+                nx,
+                ny,
+                options.sample,
+            )
+        })
     };
     result.map_err(tiff_err(path))
 }
@@ -410,7 +437,11 @@ where
         dir.write_tag(Tag::GeoAsciiParamsTag, ascii.as_str())?;
     }
     if let Some(nd) = raster.nodata {
-        let text = if nd.is_nan() { "nan".to_string() } else { format!("{nd}") };
+        let text = if nd.is_nan() {
+            "nan".to_string()
+        } else {
+            format!("{nd}")
+        };
         dir.write_tag(Tag::GdalNodata, text.as_str())?;
     }
     image.write_data(data)

@@ -99,7 +99,9 @@ pub enum GisError {
     Rotated { path: PathBuf, what: String },
     #[error("{path}: no georeferencing: {reason}")]
     NotGeoreferenced { path: PathBuf, reason: String },
-    #[error("{path}: NaN values cannot be written without a finite nodata value (set Raster::nodata)")]
+    #[error(
+        "{path}: NaN values cannot be written without a finite nodata value (set Raster::nodata)"
+    )]
     NanWithoutNodata { path: PathBuf },
     #[error("{path}: {source}")]
     Shapefile {

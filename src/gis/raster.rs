@@ -38,7 +38,14 @@ impl Raster {
     ///
     /// # Panics
     /// When `nx` or `ny` is 0 or `cell_size` is not positive and finite.
-    pub fn filled(nx: usize, ny: usize, x_left: f64, y_top: f64, cell_size: f64, fill: f64) -> Raster {
+    pub fn filled(
+        nx: usize,
+        ny: usize,
+        x_left: f64,
+        y_top: f64,
+        cell_size: f64,
+        fill: f64,
+    ) -> Raster {
         assert!(nx > 0 && ny > 0, "empty raster {nx} x {ny}");
         assert!(
             cell_size.is_finite() && cell_size > 0.0,
@@ -151,7 +158,10 @@ impl Raster {
             return Err(format!("cell size {} is not positive", self.cell_size));
         }
         if !(self.x_left.is_finite() && self.y_top.is_finite()) {
-            return Err(format!("origin ({}, {}) is not finite", self.x_left, self.y_top));
+            return Err(format!(
+                "origin ({}, {}) is not finite",
+                self.x_left, self.y_top
+            ));
         }
         Ok(())
     }
@@ -166,8 +176,12 @@ impl Raster {
                 self.nx, self.ny, other.nx, other.ny
             ))
         } else if !nearly_equal(self.cell_size, other.cell_size) {
-            Some(format!("cell size {} against {}", self.cell_size, other.cell_size))
-        } else if (self.x_left - other.x_left).abs() > tol || (self.y_top - other.y_top).abs() > tol {
+            Some(format!(
+                "cell size {} against {}",
+                self.cell_size, other.cell_size
+            ))
+        } else if (self.x_left - other.x_left).abs() > tol || (self.y_top - other.y_top).abs() > tol
+        {
             Some(format!(
                 "top-left corner ({}, {}) against ({}, {})",
                 self.x_left, self.y_top, other.x_left, other.y_top
@@ -178,7 +192,8 @@ impl Raster {
         if let Some(reason) = reason {
             return Err(GisError::GridMismatch { reason });
         }
-        self.crs.check_same("the first raster", &other.crs, "the second raster")
+        self.crs
+            .check_same("the first raster", &other.crs, "the second raster")
     }
 
     /// The cells whose centres lie in `bbox` (edges included), as a new raster on the
@@ -187,9 +202,13 @@ impl Raster {
         let d = self.cell_size;
         // Column c is kept when x_min <= centre_c <= x_max.
         let c0 = ((bbox.x_min - self.x_left) / d - 0.5).ceil().max(0.0);
-        let c1 = ((bbox.x_max - self.x_left) / d - 0.5).floor().min(self.nx as f64 - 1.0);
+        let c1 = ((bbox.x_max - self.x_left) / d - 0.5)
+            .floor()
+            .min(self.nx as f64 - 1.0);
         let r0 = ((self.y_top - bbox.y_max) / d - 0.5).ceil().max(0.0);
-        let r1 = ((self.y_top - bbox.y_min) / d - 0.5).floor().min(self.ny as f64 - 1.0);
+        let r1 = ((self.y_top - bbox.y_min) / d - 0.5)
+            .floor()
+            .min(self.ny as f64 - 1.0);
         if !(c0 <= c1 && r0 <= r1) {
             return Err(GisError::EmptyCrop {
                 x0: bbox.x_min,

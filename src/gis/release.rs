@@ -225,7 +225,11 @@ pub fn read_shapefile(path: &Path, thickness: ThicknessSource) -> Result<Release
     Ok(ReleaseAreas { features, crs })
 }
 
-fn shape_polygons(path: &Path, feature: usize, shape: shapefile::Shape) -> Result<Option<Vec<Polygon>>> {
+fn shape_polygons(
+    path: &Path,
+    feature: usize,
+    shape: shapefile::Shape,
+) -> Result<Option<Vec<Polygon>>> {
     use shapefile::{PolygonRing, Shape};
     fn rings<P>(rings: Vec<PolygonRing<P>>, xy: impl Fn(&P) -> [f64; 2]) -> Vec<Polygon> {
         let mut out: Vec<Polygon> = Vec::new();
@@ -285,9 +289,17 @@ pub fn read_geojson(path: &Path, thickness: ThicknessSource) -> Result<ReleaseAr
             .and_then(Value::as_array)
             .ok_or_else(|| bad("FeatureCollection without a `features` array".into()))?
             .iter()
-            .map(|f| (f.get("properties"), f.get("geometry").unwrap_or(&Value::Null)))
+            .map(|f| {
+                (
+                    f.get("properties"),
+                    f.get("geometry").unwrap_or(&Value::Null),
+                )
+            })
             .collect(),
-        "Feature" => vec![(root.get("properties"), root.get("geometry").unwrap_or(&Value::Null))],
+        "Feature" => vec![(
+            root.get("properties"),
+            root.get("geometry").unwrap_or(&Value::Null),
+        )],
         "" => return Err(bad("the top-level object has no `type`".into())),
         _ => vec![(None, &root)],
     };
@@ -363,11 +375,17 @@ fn geometry_polygons(g: &Value, out: &mut Vec<Polygon>) -> std::result::Result<(
         return Ok(());
     }
     let kind = g.get("type").and_then(Value::as_str).unwrap_or("");
-    let coords = || g.get("coordinates").ok_or_else(|| format!("{kind} without coordinates"));
+    let coords = || {
+        g.get("coordinates")
+            .ok_or_else(|| format!("{kind} without coordinates"))
+    };
     match kind {
         "Polygon" => out.push(json_polygon(coords()?)?),
         "MultiPolygon" => {
-            for p in coords()?.as_array().ok_or("MultiPolygon coordinates are not an array")? {
+            for p in coords()?
+                .as_array()
+                .ok_or("MultiPolygon coordinates are not an array")?
+            {
                 out.push(json_polygon(p)?);
             }
         }
@@ -381,7 +399,11 @@ fn geometry_polygons(g: &Value, out: &mut Vec<Polygon>) -> std::result::Result<(
             }
         }
         "" => return Err("geometry without `type`".into()),
-        other => return Err(format!("a {other} is not a release area (Polygon or MultiPolygon)")),
+        other => {
+            return Err(format!(
+                "a {other} is not a release area (Polygon or MultiPolygon)"
+            ))
+        }
     }
     Ok(())
 }
@@ -407,7 +429,10 @@ fn json_ring(v: &Value) -> std::result::Result<Ring, String> {
         })
         .collect::<std::result::Result<Ring, String>>()?;
     if ring.len() < 3 {
-        return Err(format!("ring with {} positions (a ring needs 3 or more)", ring.len()));
+        return Err(format!(
+            "ring with {} positions (a ring needs 3 or more)",
+            ring.len()
+        ));
     }
     Ok(ring)
 }
@@ -601,8 +626,16 @@ impl Rings {
 }
 
 fn polygons_bbox(polygons: &[Polygon]) -> Option<[f64; 4]> {
-    let mut b = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
-    for q in polygons.iter().flat_map(|p| p.exterior.iter().chain(p.holes.iter().flatten())) {
+    let mut b = [
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for q in polygons
+        .iter()
+        .flat_map(|p| p.exterior.iter().chain(p.holes.iter().flatten()))
+    {
         b[0] = b[0].min(q[0]);
         b[1] = b[1].max(q[0]);
         b[2] = b[2].min(q[1]);
@@ -618,7 +651,7 @@ fn window(grid: &Raster, b: [f64; 4]) -> Option<Window> {
     let c1 = ((b[1] - grid.x_left) / d).ceil().min(grid.nx as f64);
     let r0 = ((grid.y_top - b[3]) / d).floor().max(0.0);
     let r1 = ((grid.y_top - b[2]) / d).ceil().min(grid.ny as f64);
-    (c0 < c1 && r0 < r1).then(|| Window {
+    (c0 < c1 && r0 < r1).then_some(Window {
         c0: c0 as usize,
         c1: c1 as usize,
         r0: r0 as usize,
@@ -650,7 +683,8 @@ pub fn coverage(polygons: &[Polygon], grid: &Raster, rule: CoverageRule) -> Vec<
 /// used) under `rule`: the thickness field and the released volume. Errors when the CRS
 /// differ or a feature is outside the grid, or partly (see the [module docs](self)).
 pub fn rasterise(areas: &ReleaseAreas, grid: &Raster, rule: CoverageRule) -> Result<Release> {
-    grid.crs.check_same("the raster", &areas.crs, "the release areas")?;
+    grid.crs
+        .check_same("the raster", &areas.crs, "the release areas")?;
     let mut thickness = grid.same_grid(0.0);
     let cell_area = grid.cell_area();
     for (f, feature) in areas.features.iter().enumerate() {
