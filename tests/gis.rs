@@ -635,6 +635,7 @@ fn errors(polygon: &Polygon, h: f64) -> Vec<(f64, f64, f64)> {
 }
 
 fn assert_converges(name: &str, errs: &[(f64, f64, f64)], perimeter: f64, area: f64) {
+    eprintln!("{name}: (cell size, area-fraction error, cell-centre error) {errs:?}");
     for &(d, fraction, centre) in errs {
         assert!(
             fraction < 1e-12,
