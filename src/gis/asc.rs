@@ -16,7 +16,7 @@
 //!
 //! The writer writes `xllcorner`/`yllcorner`, `cellsize`, `NODATA_value` when the raster
 //! has a finite nodata value (NaN cells are written as that value), every number in
-//! Rust's shortest round-trip form (reading the file back gives the same `f64`s), and
+//! its shortest round-trip form (reading the file back gives the same `f64`s), and
 //! the `.prj` when the CRS has WKT text. A CRS known only by its EPSG code is not
 //! written (no WKT database here). The written `yllcorner` is the shortest decimal that
 //! maps back to the same top edge, so a file read and written again is unchanged.
@@ -248,16 +248,12 @@ fn yll_corner(raster: &Raster) -> f64 {
     best
 }
 
-/// Appends `v` in its shortest round-trip form: plain digits for magnitudes in
-/// [10⁻⁵, 10¹⁶) and 0, exponent notation (`1e-300`) otherwise.
+/// Appends `v` in its shortest round-trip form (`zmij`, without a trailing `.0`):
+/// `1500.25`, `-9999`, `1e-300`, `1e+16`.
 fn push_number(out: &mut String, v: f64) {
-    use std::fmt::Write as _;
-    let a = v.abs();
-    let _ = if a == 0.0 || (1e-5..1e16).contains(&a) || !a.is_finite() {
-        write!(out, "{v}")
-    } else {
-        write!(out, "{v:e}")
-    };
+    let mut buffer = zmij::Buffer::new();
+    let s = buffer.format(v);
+    out.push_str(s.strip_suffix(".0").unwrap_or(s));
 }
 
 fn number(v: f64) -> String {
