@@ -493,6 +493,23 @@ fn geotiff_georeferencing_rules() {
         geotiff::read(&p).unwrap_err(),
         GisError::NotGeoreferenced { .. }
     ));
+    // A header that claims 10⁵ × 10⁵ pixels (80 GB) in a tiny file: an error, no abort.
+    let p = d.join("huge.tif");
+    raw_tiff(&p, &[scale.clone(), tie.clone()], &area, None, &data);
+    let mut bytes = std::fs::read(&p).unwrap();
+    assert_eq!(&bytes[..2], b"II");
+    let ifd = u32::from_le_bytes(bytes[4..8].try_into().unwrap()) as usize;
+    let n = u16::from_le_bytes(bytes[ifd..ifd + 2].try_into().unwrap()) as usize;
+    for e in 0..n {
+        let at = ifd + 2 + 12 * e;
+        let tag = u16::from_le_bytes(bytes[at..at + 2].try_into().unwrap());
+        if tag == 256 || tag == 257 {
+            bytes[at + 8..at + 12].copy_from_slice(&100_000u32.to_le_bytes());
+        }
+    }
+    std::fs::write(&p, &bytes).unwrap();
+    let e = geotiff::read(&p).unwrap_err();
+    assert!(matches!(e, GisError::Tiff { .. }), "{e}");
     // Empty and garbage files.
     let p = write_text(d, "empty.tif", "");
     assert!(matches!(

@@ -22,7 +22,8 @@
 //!
 //! # Writing
 //!
-//! Float32 (default) or Float64 samples, uncompressed, LZW or Deflate, strips of about
+//! Float32 (default) or Float64 samples, uncompressed, LZW or Deflate (the default;
+//! LZW is slower to write and compresses floats poorly), strips of about
 //! 1 MB, *PixelIsArea*, `ModelPixelScaleTag` + one tiepoint at the top-left corner, the
 //! EPSG code as `ProjectedCSTypeGeoKey` or `GeographicTypeGeoKey` (by
 //! [`Crs::is_geographic`]), `GDAL_NODATA` when the raster has nodata. A CRS with WKT but
@@ -96,9 +97,11 @@ pub fn read(path: &Path) -> Result<Raster> {
             path: path.to_path_buf(),
         });
     }
+    // Rasters up to 8 GiB decoded (10⁹ Float64 cells); a header that claims more (a
+    // corrupt file, say) is an error, not an allocation that aborts.
     let mut limits = Limits::default();
-    limits.decoding_buffer_size = usize::MAX;
-    limits.intermediate_buffer_size = usize::MAX;
+    limits.decoding_buffer_size = 8 << 30;
+    limits.intermediate_buffer_size = 8 << 30;
     limits.ifd_value_size = 64 << 20;
     let terr = tiff_err(path);
     let mut dec = match Decoder::new(BufReader::with_capacity(1 << 20, file)) {
