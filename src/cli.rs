@@ -29,11 +29,6 @@ Shell completion: granflow completions bash > ~/.local/share/bash-completion/com
 (zsh, fish, elvish and powershell too; see `granflow completions --help`).
 Documentation: README.md and docs/ in the source repository.";
 
-/// Exit code of a solver or output failure (a run, or a sweep or merge with failures).
-pub const EXIT_FAILURE: u8 = 1;
-/// Exit code for bad input: scenario, sweep file, options.
-pub const EXIT_BAD_INPUT: u8 = 2;
-
 #[derive(Debug, Parser)]
 #[command(
     name = "granflow",
@@ -140,23 +135,4 @@ pub struct CompletionsArgs {
     /// The shell to complete for.
     #[arg(value_enum)]
     pub shell: clap_complete::Shell,
-}
-
-/// Writes `text` to stdout. A reader that went away (`granflow run … | head -3`) is not
-/// an error of the run: the output is dropped quietly instead of panicking as `print!`
-/// does. Other write errors are reported on stderr.
-pub fn print_out(text: &str) {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
-        Ok(()) => {}
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
-        Err(e) => print_err(&format!("granflow: cannot write to stdout: {e}\n")),
-    }
-}
-
-/// Writes `text` to stderr, ignoring failures (there is nowhere left to report them).
-pub fn print_err(text: &str) {
-    use std::io::Write;
-    let _ = std::io::stderr().lock().write_all(text.as_bytes());
 }

@@ -6,9 +6,8 @@ use std::io::Write;
 use clap::CommandFactory;
 
 use crate::catalog::{self, InitError};
-use crate::cli::{
-    print_out, Cli, CompletionsArgs, InitArgs, ScenariosArgs, EXIT_BAD_INPUT, EXIT_FAILURE,
-};
+use crate::cli::{Cli, CompletionsArgs, InitArgs, ScenariosArgs};
+use crate::terminal::{print_out, EXIT_BAD_INPUT, EXIT_FAILURE};
 
 /// `granflow scenarios [--show NAME]`.
 pub fn scenarios(args: &ScenariosArgs) -> u8 {

@@ -25,7 +25,7 @@ pub fn install() {
         if REQUESTED.swap(true, Ordering::SeqCst) {
             std::process::exit(i32::from(EXIT_INTERRUPTED));
         }
-        crate::cli::print_err(
+        crate::terminal::print_err(
             "\ninterrupt: stopping after the current step (press Ctrl-C again to quit at once)\n",
         );
     });

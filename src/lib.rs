@@ -29,3 +29,4 @@ pub mod simulation;
 pub mod state;
 pub mod stop;
 pub mod sweep;
+pub mod terminal;

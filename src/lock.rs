@@ -103,7 +103,7 @@ pub fn acquire(
                 file.lock().map_err(io)?;
             }
             Err(TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
-                crate::cli::print_err(&format!(
+                crate::terminal::print_err(&format!(
                     "warning: {} does not support file locks; running without one, so make sure no other granflow process writes {what}\n",
                     path.display()
                 ));

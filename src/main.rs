@@ -5,15 +5,14 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Parser;
-use granflow::cli::{
-    print_err, print_out, Cli, Command, RunArgs, ScenarioArgs, EXIT_BAD_INPUT, EXIT_FAILURE,
-};
+use granflow::cli::{Cli, Command, RunArgs, ScenarioArgs};
 use granflow::discover;
 use granflow::interrupt;
 use granflow::lock::{self, Lock, LockError};
 use granflow::progress::RunProgress;
 use granflow::runner;
 use granflow::scenario::{self, Scenario};
+use granflow::terminal::{print_err, print_out, EXIT_BAD_INPUT, EXIT_FAILURE};
 
 fn load(args: &ScenarioArgs) -> Result<Scenario, ExitCode> {
     let scn = scenario::load_file(&args.scenario, &args.set).map_err(|e| {

@@ -231,19 +231,30 @@ impl StopRule for Settled {
     }
 }
 
+/// The optional rules of a run, as plain values (setup reads them from the scenario's
+/// `[time]`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StopOptions {
+    /// End the run (status `stopped_at_rest`) once the whole mass is at rest.
+    pub at_rest: bool,
+    /// End the run (status `settled`) once the kinetic energy is at or below this
+    /// fraction of its peak.
+    pub settled_fraction: Option<f64>,
+}
+
 /// The rules every run consults, in order.
-pub fn default_rules(time: &crate::scenario::TimeSpec) -> Vec<Box<dyn StopRule>> {
+pub fn default_rules(options: StopOptions) -> Vec<Box<dyn StopRule>> {
     let mut rules: Vec<Box<dyn StopRule>> = vec![
         Box::new(NonFinite),
         Box::new(DtCollapse),
         Box::new(Interrupted),
         Box::new(MassGone),
     ];
-    if time.stop_at_rest {
+    if options.at_rest {
         rules.push(Box::new(AtRest));
     }
-    if time.stop_when_settled {
-        rules.push(Box::new(Settled::new(time.settle_fraction)));
+    if let Some(fraction) = options.settled_fraction {
+        rules.push(Box::new(Settled::new(fraction)));
     }
     rules
 }
@@ -297,15 +308,12 @@ mod tests {
 
     #[test]
     fn settled_rule_is_only_in_the_rules_when_asked_for() {
-        let mut time = crate::scenario::TimeSpec {
-            t_end: 1.0,
-            cfl: 0.5,
-            stop_at_rest: false,
-            settle_fraction: 1e-6,
-            stop_when_settled: false,
+        let mut options = StopOptions {
+            at_rest: false,
+            settled_fraction: None,
         };
-        let n = default_rules(&time).len();
-        time.stop_when_settled = true;
-        assert_eq!(default_rules(&time).len(), n + 1);
+        let n = default_rules(options).len();
+        options.settled_fraction = Some(1e-6);
+        assert_eq!(default_rules(options).len(), n + 1);
     }
 }

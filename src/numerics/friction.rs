@@ -32,18 +32,6 @@ impl<L: BasalFriction> CoulombFrictionStep<L> {
     }
 }
 
-/// Applies a friction impulse `dt_sigma` ≥ 0 against the discharge `q`, stopping it
-/// if the impulse is large enough. A NaN impulse propagates (it must reach the
-/// run's NaN check, not silently stop the flow).
-#[inline(always)]
-pub fn coulomb_update(q: f64, dt_sigma: f64) -> f64 {
-    if dt_sigma >= q.abs() {
-        0.0
-    } else {
-        q - dt_sigma * q.signum()
-    }
-}
-
 impl<L: BasalFriction> Stage<Line, LayeredState> for CoulombFrictionStep<L> {
     fn name(&self) -> &'static str {
         "friction"
@@ -65,19 +53,5 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for CoulombFrictionStep<L> {
         }
         state.fill_ghosts(mesh);
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::coulomb_update;
-
-    #[test]
-    fn friction_stops_but_never_reverses() {
-        assert_eq!(coulomb_update(1.0, 0.25), 0.75);
-        assert_eq!(coulomb_update(-1.0, 0.25), -0.75);
-        assert_eq!(coulomb_update(0.1, 0.25), 0.0);
-        assert_eq!(coulomb_update(-0.1, 0.25), 0.0);
-        assert!(coulomb_update(0.1, f64::NAN).is_nan());
     }
 }

@@ -61,9 +61,9 @@
 //! and every layer moves with it. A cell dry at t^n and wetted by step 1 freezes its
 //! coefficients from the state after step 1.
 
-use super::friction::coulomb_update;
 use super::{Stage, StageError};
 use crate::grid::Line;
+use crate::physics::rheology::coulomb_update;
 use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::{velocity, H_DRY};
 use crate::physics::GRAVITY;

@@ -11,7 +11,7 @@ use crate::grid::{Grid, Line, LineSpec};
 use crate::model::granular::Granular;
 use crate::model::ModelKind;
 use crate::output::{OutputSink, RunInfo, RunSummary};
-use crate::scenario::{Coordinates, Scenario};
+use crate::scenario::{Coordinates, Scenario, TimeSpec};
 use crate::simulation::{Progress, RunConfig, RunError, Simulation};
 
 /// A run of any model, as the command line and the sweeps drive it.
@@ -99,6 +99,14 @@ pub fn scenario_line(scn: &Scenario) -> Line {
 }
 
 /// The time-loop settings of a scenario.
+/// The optional stop rules of `[time]`, as the plain values `stop` takes.
+pub fn stop_options(time: &TimeSpec) -> crate::stop::StopOptions {
+    crate::stop::StopOptions {
+        at_rest: time.stop_at_rest,
+        settled_fraction: time.stop_when_settled.then_some(time.settle_fraction),
+    }
+}
+
 pub fn run_config(scn: &Scenario) -> RunConfig {
     RunConfig {
         t_end: scn.time.t_end,

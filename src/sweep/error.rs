@@ -13,7 +13,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-pub use crate::cli::{EXIT_BAD_INPUT, EXIT_FAILURE};
+pub use crate::terminal::{EXIT_BAD_INPUT, EXIT_FAILURE};
 
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum SweepError {

@@ -206,7 +206,7 @@ impl Ui {
         } else if self.tty {
             let _ = self.multi.println(line);
         } else {
-            crate::cli::print_err(&format!("{line}\n"));
+            crate::terminal::print_err(&format!("{line}\n"));
         }
     }
 

@@ -48,8 +48,8 @@ use record::write_atomic;
 use spec::SweepSpec;
 use summary::{summary_file_name, to_csv, to_table, Row, SUMMARY_FILE};
 
-use crate::cli::{print_err, print_out};
 use crate::scenario::{self, ScenarioError};
+use crate::terminal::{print_err, print_out};
 
 /// What `granflow sweep` was asked to do.
 #[derive(Debug, Clone)]

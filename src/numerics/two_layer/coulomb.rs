@@ -7,7 +7,7 @@
 //!         + H₂,i* (U₂*)² (sin θ_{i+½} − sin θ_{i−½})/Δx,   clamped ≥ 0,
 //!
 //! so the friction can stop a mass but never reverse it (as
-//! [`crate::numerics::friction::coulomb_update`]).
+//! [`crate::physics::rheology::coulomb_update`]).
 //! N_i tan δ₀ is σ*_i/cos θ_i of eq. (85) plus the curvature part T₂* of eq. (84), with
 //! the cell's own H₂ where the paper averages the two face means: step 1 gives each
 //! cell the static force g cos θ̄ H₂,i Δ(…)/2 of each face (own-depth split, [`super::face`]),

@@ -14,6 +14,18 @@ pub use mu_i::{
     STATIC_ROUNDOFF,
 };
 
+/// Applies a friction impulse `dt_sigma` ≥ 0 against the discharge `q`, stopping it
+/// if the impulse is large enough. A NaN impulse propagates (it must reach the
+/// run's NaN check, not silently stop the flow).
+#[inline(always)]
+pub fn coulomb_update(q: f64, dt_sigma: f64) -> f64 {
+    if dt_sigma >= q.abs() {
+        0.0
+    } else {
+        q - dt_sigma * q.signum()
+    }
+}
+
 /// Basal friction law (seed 000 eq. 6).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FrictionLaw {
@@ -38,7 +50,7 @@ pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
     #[inline(always)]
     fn friction_update(&self, q: f64, h: f64, dt: f64, g_n: f64) -> f64 {
         let mu = self.mu(crate::physics::shallow::velocity(h, q).abs(), h, g_n * h);
-        crate::numerics::friction::coulomb_update(q, dt * mu * g_n * h)
+        coulomb_update(q, dt * mu * g_n * h)
     }
 
     /// The same for the non-hydrostatic monolayer (`numerics::nonhydrostatic`): the
@@ -54,7 +66,7 @@ pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
             p_total,
         );
         let sigma = mu * p_total.max(0.0);
-        crate::numerics::friction::coulomb_update(q, dt * sigma)
+        coulomb_update(q, dt * sigma)
     }
 }
 
@@ -78,5 +90,19 @@ pub trait LocalFriction: Copy + Send + Sync + std::fmt::Debug {
     #[inline(always)]
     fn mu_local(&self, shear_rate: f64, p_over_rho: f64) -> f64 {
         self.mu_at(shear_rate * self.inertial_scale(p_over_rho))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::coulomb_update;
+
+    #[test]
+    fn friction_stops_but_never_reverses() {
+        assert_eq!(coulomb_update(1.0, 0.25), 0.75);
+        assert_eq!(coulomb_update(-1.0, 0.25), -0.75);
+        assert_eq!(coulomb_update(0.1, 0.25), 0.0);
+        assert_eq!(coulomb_update(-0.1, 0.25), 0.0);
+        assert!(coulomb_update(0.1, f64::NAN).is_nan());
     }
 }
