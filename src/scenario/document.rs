@@ -176,7 +176,7 @@ pub(crate) fn syntax_error(text: &str, e: &toml_edit::TomlError) -> ScenarioErro
 
 /// Turns a deserialisation error into one naming the dotted key; `index` is the key index
 /// of the text that was deserialised (the error's span points into it).
-pub(crate) fn serde_error(e: &toml::de::Error, index: &KeyIndex) -> ScenarioError {
+pub(crate) fn serde_error(e: &toml_edit::de::Error, index: &KeyIndex) -> ScenarioError {
     let raw = e.message().trim();
     let path = e
         .span()

@@ -89,17 +89,22 @@ fn load(
         file: KeyIndex::build(text, &doc),
         overridden: sets.iter().map(|s| s.key.clone()).collect(),
     };
-    let source = if sets.is_empty() {
-        text.to_owned()
+    // The document parsed above is deserialised as it is: the text is parsed once
+    // (again only to locate an error in a document edited by overrides).
+    let (parsed, source) = if sets.is_empty() {
+        (
+            <RawScenario as serde::Deserialize>::deserialize(toml_edit::de::Deserializer::from(doc)),
+            text.to_owned(),
+        )
     } else {
         let mut edited = doc.into_mut();
         for s in &sets {
             s.apply(&mut edited)?;
         }
-        edited.to_string()
+        let source = edited.to_string();
+        (toml_edit::de::from_document::<RawScenario>(edited), source)
     };
-
-    let raw: RawScenario = match toml::from_str(&source) {
+    let raw = match parsed {
         Ok(raw) => raw,
         Err(e) => {
             let err = if sets.is_empty() {
@@ -112,9 +117,13 @@ fn load(
                     _ => err,
                 }
             } else {
-                match toml_edit::Document::parse(source.as_str()) {
-                    Ok(edited) => serde_error(&e, &KeyIndex::build(&source, &edited)),
-                    Err(_) => ScenarioError::new(e.message().trim().to_owned()),
+                // The edited document has no spans: deserialise its text for them.
+                match (
+                    toml_edit::Document::parse(source.as_str()),
+                    toml_edit::de::from_str::<RawScenario>(&source),
+                ) {
+                    (Ok(edited), Err(e)) => serde_error(&e, &KeyIndex::build(&source, &edited)),
+                    _ => ScenarioError::new(e.message().trim().to_owned()),
                 }
             };
             return Err(locator.locate(err));
