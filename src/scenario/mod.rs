@@ -101,6 +101,62 @@ pub struct OutputSpec {
     pub gauge_every: Option<f64>,
 }
 
+/// The profiles at the cell centres x_i = x_min + (i + ½)Δx, sampled once by
+/// validation (which checks these very values) and used by setup to build the mesh and
+/// the initial state.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Sampled {
+    /// `bed.b`.
+    pub b: Vec<f64>,
+    /// `initial.h` (without `initial.erodible_bed`).
+    pub h: Vec<f64>,
+    /// `initial.u`.
+    pub u: Vec<f64>,
+    /// `initial.w`.
+    pub w: Vec<f64>,
+    /// `initial.eta`, when given.
+    pub eta: Option<Vec<f64>>,
+    /// `initial.phi`, when given.
+    pub phi: Option<Vec<f64>>,
+}
+
+impl Sampled {
+    /// Evaluates the bed, then each initial profile at the bed, at every cell centre of
+    /// `domain` (NaN where an expression fails). Validation does this once; a scenario
+    /// assembled by hand (tests) calls it to fill [`Scenario::sampled`].
+    pub fn of(domain: &Domain, bed: &Profile, initial: &Initial) -> Sampled {
+        use rayon::prelude::*;
+        let n = domain.cells;
+        let dx = (domain.x_max - domain.x_min) / n as f64;
+        let x_min = domain.x_min;
+        let centre = move |i: usize| crate::grid::line::cell_centre(x_min, dx, i);
+        let b: Vec<f64> = match bed.as_constant() {
+            Some(c) => vec![c; n],
+            None => (0..n)
+                .into_par_iter()
+                .map(|i| bed.eval(centre(i), 0.0))
+                .collect(),
+        };
+        let at = |p: &Profile| -> Vec<f64> {
+            match p.as_constant() {
+                Some(c) => vec![c; n],
+                None => (0..n)
+                    .into_par_iter()
+                    .map(|i| p.eval(centre(i), b[i]))
+                    .collect(),
+            }
+        };
+        Sampled {
+            h: at(&initial.h),
+            u: at(&initial.u),
+            w: at(&initial.w),
+            eta: initial.eta.as_ref().map(&at),
+            phi: initial.phi.as_ref().map(&at),
+            b,
+        }
+    }
+}
+
 /// A validated scenario: every value checked, nothing left to interpret.
 #[derive(Debug, Clone)]
 pub struct Scenario {
@@ -127,4 +183,6 @@ pub struct Scenario {
     pub output: OutputSpec,
     /// The two-layer model's keys (`model.kind = "submarine"` only).
     pub submarine: Option<SubmarineSpec>,
+    /// `bed` and `initial` at the cell centres of `domain`.
+    pub sampled: Sampled,
 }

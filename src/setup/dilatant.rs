@@ -18,19 +18,14 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
     let spec = scn
         .dilatancy
         .expect("validation requires [dilatancy] for model.kind = \"dilatant\"");
-    let phi0 = scn
-        .initial
+    let phi = scn
+        .sampled
         .phi
         .as_ref()
         .expect("validation requires initial.phi for model.kind = \"dilatant\"");
     let mesh = scenario_line(scn);
-    let sample = |f: &dyn Fn(f64, f64) -> f64| -> Vec<f64> {
-        mesh.x.iter().zip(&mesh.b).map(|(&x, &b)| f(x, b)).collect()
-    };
-    let h = sample(&|x, b| scn.initial.h.eval(x, b));
-    let u = sample(&|x, b| scn.initial.u.eval(x, b));
-    let phi = sample(&|x, b| phi0.eval(x, b));
-    let state = DilatantState::from_profiles(&mesh, spec.options.flux.alpha, &h, &u, &phi);
+    let (h, u) = (&scn.sampled.h, &scn.sampled.u);
+    let state = DilatantState::from_profiles(&mesh, spec.options.flux.alpha, h, u, phi);
     let (stage, rest_depth, rest_speed): (Box<dyn Stage<Line, DilatantState>>, f64, f64) =
         match spec.options.scheme {
             SchemeKind::Split => {

@@ -15,18 +15,14 @@ use crate::state::layered::LayeredState;
 
 pub fn build(scn: &Scenario) -> Simulation<Granular> {
     let mesh = scenario_line(scn);
-    let x = &mesh.x;
     let h_i = scn.initial.erodible_bed;
-    let sample = |f: &dyn Fn(f64, f64) -> f64| -> Vec<f64> {
-        x.iter().zip(&mesh.b).map(|(&x, &b)| f(x, b)).collect()
-    };
-    let h = sample(&|x, b| scn.initial.h.eval(x, b) + h_i);
-    let u = sample(&|x, b| scn.initial.u.eval(x, b));
-    let mut state = LayeredState::from_profiles(&mesh, &scn.multilayer.layer_fractions, &h, &u);
+    let h: Vec<f64> = scn.sampled.h.iter().map(|&h| h + h_i).collect();
+    let u = &scn.sampled.u;
+    let mut state = LayeredState::from_profiles(&mesh, &scn.multilayer.layer_fractions, &h, u);
     if scn.model.pressure == Pressure::NonHydrostatic {
         // An imposed normal velocity (the gate, seed 000 eq. 30) enters the first step
         // as it is, as in the paper (docs/numerics.md, "Initial normal velocity").
-        state.add_nonhydrostatic(&sample(&|x, b| scn.initial.w.eval(x, b)));
+        state.add_nonhydrostatic(&scn.sampled.w);
     }
     let stages = pipeline::granular(
         &scn.friction,

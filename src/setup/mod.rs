@@ -90,12 +90,12 @@ pub fn scenario_line(scn: &Scenario) -> Line {
         left: scn.boundary.left,
         right: scn.boundary.right,
     };
-    let b = spec
-        .centres()
-        .iter()
-        .map(|&x| scn.bed.eval(x, 0.0))
-        .collect();
-    Line::new(&spec, b)
+    assert_eq!(
+        scn.sampled.b.len(),
+        d.cells,
+        "the scenario's sampled profiles do not match domain.cells (see Sampled::of)"
+    );
+    Line::new(&spec, scn.sampled.b.clone())
 }
 
 /// The time-loop settings of a scenario.

@@ -25,13 +25,14 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
     let params = spec.params(mu);
     let nx = grid.line.nx;
     let mut state = TwoLayerState::zeros(nx);
+    let sampled = &scn.sampled;
     for i in 1..=nx {
-        let (x, b, c2) = (grid.x(i), grid.line.b_ghost[i], grid.cos2[i]);
-        let d2 = scn.initial.h.eval(x, b);
+        let (b, c2) = (grid.line.b_ghost[i], grid.cos2[i]);
+        let d2 = sampled.h[i - 1];
         state.h2[i] = d2 / c2;
-        state.q2[i] = state.h2[i] * scn.initial.u.eval(x, b);
-        if let Some(eta) = &scn.initial.eta {
-            state.h1[i] = (eta.eval(x, b) - b - d2).max(0.0) / c2;
+        state.q2[i] = state.h2[i] * sampled.u[i - 1];
+        if let Some(eta) = &sampled.eta {
+            state.h1[i] = (eta[i - 1] - b - d2).max(0.0) / c2;
         }
     }
     state.fill_ghosts(&grid);

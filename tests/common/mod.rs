@@ -7,8 +7,8 @@ use granflow::output::memory::MemorySink;
 use granflow::output::RunSummary;
 use granflow::scenario::{
     BasalCondition, Boundaries, BoundaryKind, Coordinates, Domain, FrictionLaw, Initial, Material,
-    ModelKind, ModelSpec, MultilayerSpec, OutputSpec, Pressure, Profile, Regularization, Scenario,
-    TimeSpec, ViscosityTime,
+    ModelKind, ModelSpec, MultilayerSpec, OutputSpec, Pressure, Profile, Regularization, Sampled,
+    Scenario, TimeSpec, ViscosityTime,
 };
 use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
@@ -58,7 +58,7 @@ impl Case {
         h: impl Fn(f64, f64) -> f64 + Send + Sync + 'static,
         u: impl Fn(f64) -> f64 + Send + Sync + 'static,
     ) -> Simulation<Granular> {
-        let scn = Scenario {
+        let mut scn = Scenario {
             notes: Vec::new(),
             source_toml: String::new(),
             base_dir: ".".into(),
@@ -114,7 +114,9 @@ impl Case {
                 gauge_every: None,
             },
             submarine: None,
+            sampled: Sampled::default(),
         };
+        scn.sampled = Sampled::of(&scn.domain, &scn.bed, &scn.initial);
         build_granular(&scn)
     }
 }

@@ -207,23 +207,19 @@ pub(super) fn dilatancy(
     Ok(Some(DilatantSpec { law, options }))
 }
 
-/// `initial.phi` at every cell centre: finite and in (0, 1).
-pub(super) fn sample_fraction(domain: &Domain, bed: &Profile, phi: &Profile) -> Res<()> {
+/// `initial.phi` at every cell centre (`values`, at the bed `b`): finite and in (0, 1).
+pub(super) fn check_fraction(domain: &Domain, b: &[f64], phi: &Profile, values: &[f64]) -> Res<()> {
     let n = domain.cells;
     let dx = (domain.x_max - domain.x_min) / n as f64;
-    for i in 0..n {
-        let x = cell_centre(domain.x_min, dx, i);
-        let b = bed.eval(x, 0.0);
-        match phi.try_eval(x, b) {
-            Ok(v) if v > 0.0 && v < 1.0 => {}
-            Ok(v) => {
-                return err(
-                    "initial.phi",
-                    format!("must be in (0, 1), got {v} at x = {x}"),
-                )
-            }
-            Err(m) => return err("initial.phi", format!("{m} at x = {x}")),
-        }
+    let Some(i) = values.iter().position(|&v| !(v > 0.0 && v < 1.0)) else {
+        return Ok(());
+    };
+    let x = cell_centre(domain.x_min, dx, i);
+    match phi.try_eval(x, b[i]) {
+        Ok(v) => err(
+            "initial.phi",
+            format!("must be in (0, 1), got {v} at x = {x}"),
+        ),
+        Err(m) => err("initial.phi", format!("{m} at x = {x}")),
     }
-    Ok(())
 }

@@ -22,10 +22,10 @@ use super::raw::{
 };
 use super::{
     Boundaries, BoundaryKind, Coordinates, Domain, Initial, Material, ModelSpec, OutputSpec,
-    Pressure, Scenario, TimeSpec,
+    Pressure, Sampled, Scenario, TimeSpec,
 };
 use check::*;
-use dilatant::{dilatancy, sample_fraction};
+use dilatant::{check_fraction, dilatancy};
 use granular::{model, multilayer, rheology, ViscousKeys};
 
 /// Largest accepted `domain.cells`.
@@ -93,7 +93,9 @@ fn load(
     // (again only to locate an error in a document edited by overrides).
     let (parsed, source) = if sets.is_empty() {
         (
-            <RawScenario as serde::Deserialize>::deserialize(toml_edit::de::Deserializer::from(doc)),
+            <RawScenario as serde::Deserialize>::deserialize(toml_edit::de::Deserializer::from(
+                doc,
+            )),
             text.to_owned(),
         )
     } else {
@@ -171,6 +173,8 @@ fn validate(
     let raw_initial = section("initial", raw.initial)?;
     let raw_w = raw_initial.w.is_some();
     let initial = initial(raw_initial, base_dir)?;
+    // Sampled once here; the checks below look at these values and setup uses them.
+    let sampled = Sampled::of(&domain, &bed, &initial);
     let submarine = submarine::submarine(
         raw.submarine,
         &model,
@@ -178,7 +182,7 @@ fn validate(
         &friction,
         &initial,
         raw_w,
-        &bed,
+        &sampled,
     )?;
     let boundary = boundary(raw.boundary.unwrap_or_default())?;
     let time = time(section("time", raw.time)?)?;
@@ -206,9 +210,9 @@ fn validate(
         raw_output.static_threshold,
         model.layers,
     )?;
-    sample_profiles(&domain, &bed, &initial, model.pressure)?;
-    if let Some(phi) = &initial.phi {
-        sample_fraction(&domain, &bed, phi)?;
+    check_profiles(&domain, &sampled, &bed, &initial, model.pressure)?;
+    if let (Some(phi), Some(values)) = (&initial.phi, &sampled.phi) {
+        check_fraction(&domain, &sampled.b, phi, values)?;
     }
     Ok(Scenario {
         notes,
@@ -226,6 +230,7 @@ fn validate(
         time,
         output,
         submarine,
+        sampled,
     })
 }
 
@@ -462,11 +467,12 @@ fn gauges(xs: &[f64], domain: &Domain) -> Res<Vec<f64>> {
     Ok(xs.to_vec())
 }
 
-/// Evaluates `bed.b`, then `initial.h`, `initial.u` and `initial.w` at every cell centre:
-/// all must be finite, the thickness non-negative, and w zero unless the pressure is
-/// non-hydrostatic. The first offending centre is reported.
-fn sample_profiles(
+/// Checks `bed.b`, then `initial.h`, `initial.u` and `initial.w` at every cell centre
+/// (`sampled`): all must be finite, the thickness non-negative, and w zero unless the
+/// pressure is non-hydrostatic. The first offending centre is reported.
+fn check_profiles(
     domain: &Domain,
+    sampled: &Sampled,
     bed: &Profile,
     initial: &Initial,
     pressure: Pressure,
@@ -475,8 +481,8 @@ fn sample_profiles(
     let dx = (domain.x_max - domain.x_min) / n as f64;
     let x_min = domain.x_min;
     let centre = move |i: usize| cell_centre(x_min, dx, i);
-    let first_bad = |bad: &(dyn Fn(usize) -> bool + Sync)| -> Option<usize> {
-        (0..n).into_par_iter().position_first(bad)
+    let first_bad = |values: &[f64], bad: &(dyn Fn(f64) -> bool + Sync)| -> Option<usize> {
+        values.par_iter().position_first(|&v| bad(v))
     };
     let not_finite = |key: &str, p: &Profile, x: f64, b: f64| -> ScenarioError {
         let message = match p.try_eval(x, b) {
@@ -485,27 +491,12 @@ fn sample_profiles(
         };
         ScenarioError::at(key, message)
     };
-
-    // The bed is needed by both initial profiles: evaluate it once (unless constant).
-    let bed_values: Option<Vec<f64>> = match bed.as_constant() {
-        Some(_) => None,
-        None => Some(
-            (0..n)
-                .into_par_iter()
-                .map(|i| bed.eval(centre(i), 0.0))
-                .collect(),
-        ),
-    };
-    let bed_const = bed.as_constant().unwrap_or(0.0);
-    let bed_at = |i: usize| bed_values.as_ref().map_or(bed_const, |v| v[i]);
-    if let Some(i) = first_bad(&|i| !bed_at(i).is_finite()) {
+    let b = &sampled.b;
+    if let Some(i) = first_bad(b, &|b| !b.is_finite()) {
         return Err(not_finite("bed.b", bed, centre(i), 0.0));
     }
-    if let Some(i) = first_bad(&|i| {
-        let h = initial.h.eval(centre(i), bed_at(i));
-        !(h.is_finite() && h >= 0.0)
-    }) {
-        let (x, b) = (centre(i), bed_at(i));
+    if let Some(i) = first_bad(&sampled.h, &|h| !(h.is_finite() && h >= 0.0)) {
+        let (x, b) = (centre(i), b[i]);
         return match initial.h.try_eval(x, b) {
             Ok(h) if h.is_finite() => {
                 err("initial.h", format!("negative thickness {h} at x = {x}"))
@@ -513,15 +504,13 @@ fn sample_profiles(
             _ => Err(not_finite("initial.h", &initial.h, x, b)),
         };
     }
-    if let Some(i) = first_bad(&|i| !initial.u.eval(centre(i), bed_at(i)).is_finite()) {
-        return Err(not_finite("initial.u", &initial.u, centre(i), bed_at(i)));
+    if let Some(i) = first_bad(&sampled.u, &|u| !u.is_finite()) {
+        return Err(not_finite("initial.u", &initial.u, centre(i), b[i]));
     }
-    if let Some(i) = first_bad(&|i| !initial.w.eval(centre(i), bed_at(i)).is_finite()) {
-        return Err(not_finite("initial.w", &initial.w, centre(i), bed_at(i)));
+    if let Some(i) = first_bad(&sampled.w, &|w| !w.is_finite()) {
+        return Err(not_finite("initial.w", &initial.w, centre(i), b[i]));
     }
-    if pressure == Pressure::Hydrostatic
-        && first_bad(&|i| initial.w.eval(centre(i), bed_at(i)) != 0.0).is_some()
-    {
+    if pressure == Pressure::Hydrostatic && first_bad(&sampled.w, &|w| w != 0.0).is_some() {
         return err(
             "initial.w",
             "a normal velocity needs model.pressure = \"nonhydrostatic\"",

@@ -7,7 +7,7 @@ use crate::grid::line::cell_centre;
 use crate::model::submarine::SubmarineSpec;
 use crate::physics::two_layer::Buoyancy;
 use crate::scenario::raw::RawSubmarine;
-use crate::scenario::{Coordinates, Domain, FrictionLaw, Initial, ModelSpec, Pressure, Profile};
+use crate::scenario::{Coordinates, Domain, FrictionLaw, Initial, ModelSpec, Pressure, Sampled};
 
 /// Validates the `[submarine]` table and the consistency of the other keys with it.
 /// `raw_w` tells whether `initial.w` was given.
@@ -18,7 +18,7 @@ pub(super) fn submarine(
     friction: &FrictionLaw,
     initial: &Initial,
     raw_w: bool,
-    bed: &Profile,
+    sampled: &Sampled,
 ) -> Res<Option<SubmarineSpec>> {
     if model.kind != crate::model::ModelKind::Submarine {
         if s.is_some() {
@@ -112,14 +112,12 @@ pub(super) fn submarine(
             "A2 = rλ2 + K(1 − rλ2) must be at least r A1 = r(λ1 + K(1 − λ1)) (hyperbolicity bound of the scheme)",
         );
     }
-    if let Some(eta) = &initial.eta {
-        let dx = (domain.x_max - domain.x_min) / domain.cells as f64;
-        for i in 0..domain.cells {
+    if let Some(eta) = &sampled.eta {
+        if let Some(i) = eta.iter().position(|v| !v.is_finite()) {
+            let dx = (domain.x_max - domain.x_min) / domain.cells as f64;
             let x = cell_centre(domain.x_min, dx, i);
-            let v = eta.eval(x, bed.eval(x, 0.0));
-            if !v.is_finite() {
-                return err("initial.eta", format!("evaluates to {v} at x = {x}"));
-            }
+            let v = eta[i];
+            return err("initial.eta", format!("evaluates to {v} at x = {x}"));
         }
     }
     Ok(Some(spec))
