@@ -6,6 +6,7 @@
 mod common;
 
 mod analytic;
+mod architecture;
 mod cli;
 mod conservation;
 mod dilatant;
