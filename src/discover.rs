@@ -14,7 +14,9 @@ pub fn scenarios(args: &ScenariosArgs) -> u8 {
     let mut out = std::io::stdout().lock();
     if let Some(name) = &args.show {
         let Some(b) = catalog::find(name) else {
-            eprintln!("error: no bundled scenario named '{name}' (see `granflow scenarios`)");
+            crate::terminal::print_err(&format!(
+                "error: no bundled scenario named '{name}' (see `granflow scenarios`)\n"
+            ));
             return EXIT_BAD_INPUT;
         };
         let _ = out.write_all(b.toml.as_bytes());
@@ -47,11 +49,11 @@ pub fn init(args: &InitArgs) -> u8 {
             0
         }
         Err(e @ (InitError::Unknown(_) | InitError::Exists(_))) => {
-            eprintln!("error: {e}");
+            crate::terminal::print_err(&format!("error: {e}\n"));
             EXIT_BAD_INPUT
         }
         Err(e) => {
-            eprintln!("error: {e}");
+            crate::terminal::print_err(&format!("error: {e}\n"));
             EXIT_FAILURE
         }
     }

@@ -63,6 +63,56 @@ impl Drop for Lock {
     }
 }
 
+/// The lock files of the output file `output`, in the order to take them: always
+/// `<file>.lock` beside the file `output` resolves to (symbolic links followed, the
+/// directory canonical), so every spelling of the path locks the same file; and when
+/// the file exists with more than one hard link, `granflow-<device>-<inode>.lock` in
+/// the temporary directory, which every link shares.
+pub fn lock_paths(output: &Path) -> Vec<PathBuf> {
+    let resolved = resolve_links(output);
+    let mut name = resolved
+        .file_name()
+        .map_or_else(|| resolved.as_os_str().to_owned(), |n| n.to_owned());
+    name.push(".lock");
+    let dir = resolved
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+    let mut paths = vec![dir.join(name)];
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let Ok(m) = std::fs::metadata(&resolved) {
+            if m.is_file() && m.nlink() > 1 {
+                paths.push(std::env::temp_dir().join(format!(
+                    "granflow-{}-{}.lock",
+                    m.dev(),
+                    m.ino()
+                )));
+            }
+        }
+    }
+    paths
+}
+
+/// `path` with its symbolic links followed (also a dangling last one), at most 40 deep.
+fn resolve_links(path: &Path) -> PathBuf {
+    let mut path = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::read_link(&path) {
+            Ok(target) => {
+                path = match path.parent() {
+                    Some(dir) if target.is_relative() => dir.join(target),
+                    _ => target,
+                };
+            }
+            Err(_) => break,
+        }
+    }
+    path
+}
+
 /// Takes the lock file `path` for `what` (e.g. "output file run.h5"). Without `wait`
 /// a held lock is an immediate [`LockError::Busy`]; with it, `on_wait` is called once
 /// with the holder's description and the call blocks until the lock is free.

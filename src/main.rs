@@ -1,7 +1,7 @@
 //! `granflow` binary: parse the command line, run, map errors to exit codes
 //! (0 success, 1 solver or output failure, 2 bad input).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 
 use clap::Parser;
@@ -9,13 +9,17 @@ use granflow::cli::{Cli, Command, RunArgs, ScenarioArgs};
 use granflow::discover;
 use granflow::interrupt;
 use granflow::lock::{self, Lock, LockError};
+use granflow::output::budget::OUTPUT_LIMIT;
 use granflow::progress::RunProgress;
 use granflow::runner;
 use granflow::scenario::{self, Scenario};
 use granflow::terminal::{print_err, print_out, EXIT_BAD_INPUT, EXIT_FAILURE};
 
-fn load(args: &ScenarioArgs) -> Result<Scenario, ExitCode> {
-    let scn = scenario::load_file(&args.scenario, &args.set).map_err(|e| {
+/// Loads the scenario, refusing one whose run would write more than the output limit
+/// unless `force`.
+fn load(args: &ScenarioArgs, force: bool) -> Result<Scenario, ExitCode> {
+    let limit = (!force).then_some(OUTPUT_LIMIT);
+    let scn = scenario::load_file_within(&args.scenario, &args.set, limit).map_err(|e| {
         print_err(&format!("error: {e}\n"));
         ExitCode::from(EXIT_BAD_INPUT)
     })?;
@@ -26,7 +30,7 @@ fn load(args: &ScenarioArgs) -> Result<Scenario, ExitCode> {
 }
 
 fn check(args: &ScenarioArgs) -> ExitCode {
-    match load(args).map(|s| runner::check(&s)) {
+    match load(args, false).map(|s| runner::check(&s)) {
         Ok(run) => {
             print_out(&format!(
                 "{}: ok ({} model, {} cells, {} layer(s), stages: {})\n",
@@ -48,12 +52,12 @@ fn check(args: &ScenarioArgs) -> ExitCode {
     }
 }
 
-/// Locks `<output>.lock` for the whole run (see `granflow::lock`).
-fn lock_output(output: &Path, wait: bool) -> Result<Lock, ExitCode> {
-    let mut name = output.as_os_str().to_owned();
-    name.push(".lock");
-    let path = PathBuf::from(name);
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+/// Locks the output file for the whole run (see `granflow::lock`): `<file>.lock` next
+/// to the file the output path resolves to (through symbolic links), and, when the file
+/// has other hard links, a lock named by its device and inode, so that two spellings
+/// of one file cannot be written at once.
+fn lock_output(output: &Path, wait: bool) -> Result<Vec<Lock>, ExitCode> {
+    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         // The sink would create it anyway; the lock file needs it first.
         if let Err(e) = std::fs::create_dir_all(dir) {
             print_err(&format!("error: cannot create {}: {e}\n", dir.display()));
@@ -61,20 +65,25 @@ fn lock_output(output: &Path, wait: bool) -> Result<Lock, ExitCode> {
         }
     }
     let what = format!("the output file {}", output.display());
-    lock::acquire(&path, &what, wait, &mut |holder| {
-        print_err(&format!("waiting: {what} is in use ({holder})\n"));
-    })
-    .map_err(|e| {
-        print_err(&format!("error: {e}\n"));
-        match e {
-            LockError::Busy { .. } => ExitCode::from(EXIT_BAD_INPUT),
-            LockError::Io { .. } => ExitCode::from(EXIT_FAILURE),
-        }
-    })
+    let mut locks = Vec::new();
+    for path in lock::lock_paths(output) {
+        let lock = lock::acquire(&path, &what, wait, &mut |holder| {
+            print_err(&format!("waiting: {what} is in use ({holder})\n"));
+        })
+        .map_err(|e| {
+            print_err(&format!("error: {e}\n"));
+            match e {
+                LockError::Busy { .. } => ExitCode::from(EXIT_BAD_INPUT),
+                LockError::Io { .. } => ExitCode::from(EXIT_FAILURE),
+            }
+        })?;
+        locks.push(lock);
+    }
+    Ok(locks)
 }
 
 fn run(args: &RunArgs) -> ExitCode {
-    let scn = match load(&args.scenario) {
+    let scn = match load(&args.scenario, args.force) {
         Ok(s) => s,
         Err(code) => return code,
     };
@@ -82,8 +91,12 @@ fn run(args: &RunArgs) -> ExitCode {
         .output
         .clone()
         .unwrap_or_else(|| scn.output.file.clone());
-    if let Err(e) = granflow::overwrite::check_outputs(&args.scenario.scenario, &output, args.force)
-    {
+    if let Err(e) = granflow::overwrite::check_outputs(
+        &args.scenario.scenario,
+        &output,
+        !scn.output.gauges.is_empty(),
+        args.force,
+    ) {
         print_err(&format!("error: {e}\n"));
         return ExitCode::from(EXIT_BAD_INPUT);
     }
@@ -98,7 +111,8 @@ fn run(args: &RunArgs) -> ExitCode {
         args.progress_every,
         scn.domain.cells,
     );
-    let result = runner::run_to_files(&scn, &output, &mut |p| progress.update(&p));
+    let limit = (!args.force).then_some(OUTPUT_LIMIT);
+    let result = runner::run_to_files_within(&scn, &output, limit, &mut |p| progress.update(&p));
     progress.finish();
     match result {
         Ok(report) if report.summary.status == "interrupted" => {

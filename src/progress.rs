@@ -93,8 +93,10 @@ impl RunProgress {
             self.estimated = true;
             if let Some(w) = long_run_warning(elapsed, &pace, p, self.cells) {
                 match &self.display {
-                    Display::Bar(bar) => bar.suspend(|| eprintln!("{w}")),
-                    _ => eprintln!("{w}"),
+                    Display::Bar(bar) => {
+                        bar.suspend(|| crate::terminal::print_err(&format!("{w}\n")))
+                    }
+                    _ => crate::terminal::print_err(&format!("{w}\n")),
                 }
             }
         }
@@ -114,7 +116,7 @@ impl RunProgress {
                 let now = Instant::now();
                 if now.duration_since(*last) >= *every {
                     *last = now;
-                    eprintln!("{}", progress_line(elapsed, &pace, p));
+                    crate::terminal::print_err(&format!("{}\n", progress_line(elapsed, &pace, p)));
                 }
             }
             Display::Hidden => {}

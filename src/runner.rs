@@ -4,6 +4,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use crate::output::budget::{Budgeted, OUTPUT_LIMIT};
 use crate::output::csv::front_csv_path;
 use crate::output::{create_run_sinks, OutputError, RunSummary};
 use crate::scenario::Scenario;
@@ -35,21 +36,32 @@ pub fn check(scn: &Scenario) -> Box<dyn Run> {
     build(scn)
 }
 
-/// Runs `scn`, writing the HDF5 file `h5` and its `_front.csv` companion.
+/// Runs `scn`, writing the HDF5 file `h5` and its `_front.csv` companion, within the
+/// output limit ([`OUTPUT_LIMIT`]).
 pub fn run_to_files(
     scn: &Scenario,
     h5: &Path,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<RunReport, RunFailure> {
+    run_to_files_within(scn, h5, Some(OUTPUT_LIMIT), progress)
+}
+
+/// [`run_to_files`] with the output limit `limit` in bytes (`None`: no limit).
+pub fn run_to_files_within(
+    scn: &Scenario,
+    h5: &Path,
+    limit: Option<u64>,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<RunReport, RunFailure> {
     let mut sim = build(scn);
     let front_csv = front_csv_path(h5);
-    let mut sink = create_run_sinks(h5)?;
+    let mut sink = Budgeted::new(create_run_sinks(h5)?, limit, h5);
     match sim.run(&mut sink, progress) {
         Ok(summary) => Ok(RunReport {
             summary,
             h5: h5.to_path_buf(),
             front_csv,
-            gauge_csv: sink.b.b.path().map(Path::to_path_buf),
+            gauge_csv: sink.inner.b.b.path().map(Path::to_path_buf),
         }),
         Err(RunError::Output(e)) => Err(RunFailure::Output(e)),
         Err(error) => Err(RunFailure::Run {

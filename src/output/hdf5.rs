@@ -362,7 +362,9 @@ impl Drop for Hdf5Sink {
             appended.and(self.close(file, false))
         });
         if let Err(e) = saved {
-            eprintln!("granflow: the last step records were not saved: {e}");
+            crate::terminal::print_err(&format!(
+                "granflow: the last step records were not saved: {e}\n"
+            ));
         }
     }
 }

@@ -5,6 +5,7 @@
 //! Sinks write progressively: a snapshot handed to [`OutputSink::snapshot`] is on disk
 //! when the call returns, so a run that dies later keeps it.
 
+pub mod budget;
 pub mod csv;
 pub mod gauges;
 pub mod hdf5;

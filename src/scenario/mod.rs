@@ -18,7 +18,7 @@ pub use error::ScenarioError;
 pub(crate) use profile::read_bounded;
 pub use profile::Profile;
 pub(crate) use validate::MAX_SCENARIO_BYTES;
-pub use validate::{load_file, load_str};
+pub use validate::{load_file, load_file_within, load_str, load_str_within};
 
 use std::path::PathBuf;
 
@@ -154,6 +154,29 @@ impl Sampled {
             phi: initial.phi.as_ref().map(&at),
             b,
         }
+    }
+}
+
+impl Scenario {
+    /// What its run will write at least, from its output keys
+    /// (`crate::output::budget`).
+    pub fn output_estimate(&self) -> crate::output::budget::OutputEstimate {
+        let nl = self.model.layers;
+        let nx = self.domain.cells;
+        let nh = self.model.pressure == Pressure::NonHydrostatic;
+        // h, u per layer, w per layer (non-hydrostatic), up to three model fields;
+        // p_nh at the (nl + 1) interfaces of the nx + 1 faces.
+        let per_cell = 1 + nl + if nh { nl } else { 0 } + 3;
+        let p_nh = if nh { (nl + 1) * (nx + 1) } else { 0 };
+        crate::output::budget::OutputEstimate::new(
+            nx,
+            per_cell,
+            p_nh,
+            self.time.t_end,
+            self.output.every,
+            self.output.gauges.len(),
+            self.output.gauge_every,
+        )
     }
 }
 

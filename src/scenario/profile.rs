@@ -295,6 +295,19 @@ pub(crate) const MAX_TABLE_BYTES: u64 = 64 << 20;
 /// Reads a UTF-8 text file of at most `limit` bytes.
 pub(crate) fn read_bounded(path: &Path, limit: u64) -> std::io::Result<String> {
     use std::io::Read;
+    // A FIFO would block the open (or the read) forever, a device may never end: only
+    // regular files are read.
+    let kind = std::fs::metadata(path)?.file_type();
+    if !kind.is_file() {
+        let what = if kind.is_dir() {
+            "a directory"
+        } else {
+            "a FIFO, socket or device"
+        };
+        return Err(std::io::Error::other(format!(
+            "not a regular file (it is {what})"
+        )));
+    }
     let mut text = String::new();
     std::fs::File::open(path)?
         .take(limit + 1)

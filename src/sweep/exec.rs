@@ -14,6 +14,7 @@ use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::expand::RunPoint;
 use super::record::{self, h5_path, RunRecord, RECORD_FORMAT};
+use crate::output::budget::{Budgeted, OUTPUT_LIMIT};
 use crate::output::memory::SummarySink;
 use crate::output::{create_run_sinks, RunSummary, Tee};
 use crate::scenario::Scenario;
@@ -71,7 +72,12 @@ pub fn run_one(
     }
     let outcome = catch_unwind(AssertUnwindSafe(|| -> Result<RunSummary, String> {
         let mut sim = build(&run.scenario);
-        let sinks = create_run_sinks(&h5).map_err(|e| e.to_string())?;
+        let limit = (!force).then_some(OUTPUT_LIMIT);
+        let sinks = Budgeted::new(
+            create_run_sinks(&h5).map_err(|e| e.to_string())?,
+            limit,
+            &h5,
+        );
         let mut sink = Tee::new(sinks, SummarySink::default());
         let result = sim.run(&mut sink, progress);
         // The summary the sink saw (also written for a failed run); else the error.

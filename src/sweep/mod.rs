@@ -48,6 +48,7 @@ use record::write_atomic;
 use spec::SweepSpec;
 use summary::{summary_file_name, to_csv, to_table, Row, SUMMARY_FILE};
 
+use crate::output::budget::{self, OUTPUT_LIMIT};
 use crate::scenario::{self, ScenarioError};
 use crate::terminal::{print_err, print_out};
 
@@ -169,13 +170,63 @@ fn run_error(spec: &SweepSpec, base: &[String], point: &RunPoint, e: &ScenarioEr
     }
 }
 
+/// Most runs a sweep makes without `--force`.
+pub const MAX_RUNS: f64 = 10_000.0;
+/// Most runs a sweep makes at all: beyond, the list of runs alone would not fit in
+/// memory.
+pub const MAX_RUNS_FORCED: f64 = 10_000_000.0;
+
+/// Counts the runs before listing them: refuses more than [`MAX_RUNS`] (without
+/// `force`) or [`MAX_RUNS_FORCED`], saying how much they would write.
+fn check_run_count(spec: &SweepSpec, base: &[String], force: bool) -> Result<(), SweepError> {
+    let count: f64 = spec.dims.iter().map(|d| d.len() as f64).product();
+    let limit = if force { MAX_RUNS_FORCED } else { MAX_RUNS };
+    if count <= limit {
+        return Ok(());
+    }
+    // The size of one run: the base scenario's (without the axes' values).
+    let each = scenario::read_bounded(&spec.scenario, scenario::MAX_SCENARIO_BYTES)
+        .ok()
+        .and_then(|text| {
+            let base_dir = spec.scenario.parent().unwrap_or(Path::new("."));
+            scenario::load_str_within(&text, base_dir, base, None).ok()
+        })
+        .map(|s| s.output_estimate().bytes());
+    let size = match each {
+        Some(b) => format!(
+            ", writing about {} ({} per run of the base scenario)",
+            budget::size(b * count),
+            budget::size(b)
+        ),
+        None => String::new(),
+    };
+    let what = if count >= 1e15 {
+        format!("{count:.3e}")
+    } else {
+        format!("{count}")
+    };
+    let advice = if force {
+        format!("at most {MAX_RUNS_FORCED:e} runs even with --force; split the sweep")
+    } else {
+        format!("more than {MAX_RUNS} runs needs --force; or use fewer values")
+    };
+    Err(SweepError::file(
+        &spec.path,
+        None,
+        Some("axes"),
+        format!("the axes make {what} runs{size}: {advice}"),
+    ))
+}
+
 /// Loads and checks every run's scenario. All errors are collected.
 fn prepare(
     spec: &SweepSpec,
     points: &[RunPoint],
     base: &[String],
     pool: &rayon::ThreadPool,
+    force: bool,
 ) -> Result<Vec<Prepared>, SweepError> {
+    let limit = (!force).then_some(OUTPUT_LIMIT);
     let text =
         scenario::read_bounded(&spec.scenario, scenario::MAX_SCENARIO_BYTES).map_err(|e| {
             SweepError::file(
@@ -198,7 +249,7 @@ fn prepare(
             .map(|point| {
                 let mut overrides = base.to_vec();
                 overrides.extend(point.overrides());
-                let scenario = scenario::load_str(&text, &base_dir, &overrides)
+                let scenario = scenario::load_str_within(&text, &base_dir, &overrides, limit)
                     .map_err(|e| run_error(spec, base, point, &e))?;
                 let hash = format!("{:016x}", naming::fnv1a(scenario.source_toml.as_bytes()));
                 Ok(Prepared {
@@ -382,6 +433,7 @@ pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
     let started = Instant::now();
     let spec = spec::load(&opts.sweep)?;
     let base = base_overrides(&spec, &opts.set)?;
+    check_run_count(&spec, &base, opts.force)?;
     let points = expand::expand_spec(&spec)
         .map_err(|m| SweepError::file(&spec.path, None, Some("axes"), m))?;
     // No more workers than runs (a pool thread per worker, see `run`'s loop below).
@@ -391,7 +443,7 @@ pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
         .thread_name(|i| format!("granflow-sweep-{i}"))
         .build()
         .map_err(|e| SweepError::Io(format!("cannot start {jobs} worker threads: {e}")))?;
-    let prepared = prepare(&spec, &points, &base, &pool)?;
+    let prepared = prepare(&spec, &points, &base, &pool, opts.force)?;
     let axes: Vec<String> = spec.axes().map(|a| a.key.clone()).collect();
 
     let dir = output_dir(&spec, opts.output.as_deref());

@@ -599,7 +599,14 @@ impl SplitScheme {
             }
         }
         let visc = self.opt.viscosity;
-        let n = visc.substeps(largest, dt, dx);
+        let n = visc.substeps(largest, dt, dx).map_err(|ratio| {
+            let k = drive.iter().position(|&d| d == largest).unwrap_or(0);
+            StageError::Inadmissible {
+                cell: k.min(mesh.nx - 1),
+                quantity: "stabilisation sub-steps needed in one step (dilatancy.xi too large)",
+                value: ratio,
+            }
+        })?;
         let r = dt / n as f64 / (dx * dx);
         for _ in 0..n {
             for (c, u) in [&mut *m, &mut *q, &mut *w].into_iter().enumerate() {

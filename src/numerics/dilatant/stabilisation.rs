@@ -44,17 +44,25 @@ impl Viscosity {
         self.xi.iter().all(|&x| x == 0.0)
     }
 
-    /// Number of sub-steps for a step `dt` when the largest max(0, vΔz) is `drive`.
-    pub fn substeps(&self, drive: f64, dt: f64, dx: f64) -> usize {
+    /// Number of sub-steps for a step `dt` when the largest max(0, vΔz) is `drive`;
+    /// `Err(ratio)` when the stability ratio 2Δt ξ drive/Δx² asks for more than
+    /// [`MAX_SUBSTEPS`] (or is infinite): the step would then run for hours without a
+    /// chance to be interrupted.
+    pub fn substeps(&self, drive: f64, dt: f64, dx: f64) -> Result<usize, f64> {
         let xi = self.xi.iter().cloned().fold(0.0, f64::max);
         let ratio = 2.0 * dt * xi * drive / (dx * dx);
-        if ratio.is_finite() && ratio > 1.0 {
-            ratio.ceil() as usize
+        if ratio == f64::INFINITY || ratio > MAX_SUBSTEPS as f64 {
+            Err(ratio)
+        } else if ratio > 1.0 {
+            Ok(ratio.ceil() as usize)
         } else {
-            1
+            Ok(1)
         }
     }
 }
+
+/// Most explicit sub-steps of the stabilisation in one time step.
+pub const MAX_SUBSTEPS: usize = 10_000;
 
 /// One explicit sub-step on `u` (ghost-inclusive, nx + 2) with face coefficients
 /// `r · ι_{k}` given as `rate[k]` (faces k = 0..=nx between cells k and k + 1),
@@ -96,9 +104,10 @@ mod tests {
     fn substeps_keep_the_parabolic_cfl() {
         let v = Viscosity::paper();
         // Δt ξ_max drive/Δx² = 1e-3 · 5 · 0.01 / 1e-4 = 0.5: one step is enough.
-        assert_eq!(v.substeps(0.01, 1e-3, 1e-2), 1);
-        assert_eq!(v.substeps(0.011, 1e-3, 1e-2), 2);
-        assert_eq!(v.substeps(0.0, 1e-3, 1e-2), 1);
+        assert_eq!(v.substeps(0.01, 1e-3, 1e-2), Ok(1));
+        assert_eq!(v.substeps(0.011, 1e-3, 1e-2), Ok(2));
+        assert_eq!(v.substeps(0.0, 1e-3, 1e-2), Ok(1));
+        assert!(v.substeps(1.0, 1e300, 1e-2).is_err());
     }
 
     #[test]

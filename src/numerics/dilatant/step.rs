@@ -36,6 +36,13 @@ pub enum DilatantError {
     },
     #[error("non-finite value in cell {cell} (x = {x} m) at t = {t} s")]
     NonFinite { cell: usize, x: f64, t: f64 },
+    #[error("the stabilisation would need {ratio:e} sub-steps in one step (dilatancy.xi too large) near x = {x} m at t = {t} s")]
+    TooManySubsteps {
+        cell: usize,
+        x: f64,
+        t: f64,
+        ratio: f64,
+    },
 }
 
 /// Which time step the dilatant model takes (`dilatancy.scheme`).
@@ -151,7 +158,20 @@ impl DilatantScheme {
         let t_end = t + dt;
         self.finite_volumes(mesh, s, dt);
         check_and_update(mesh, s, t_end, "finite-volume")?;
-        let substeps = self.stabilise(mesh, s, dt);
+        let substeps = self.stabilise(mesh, s, dt).map_err(|ratio| {
+            let k = self
+                .drive
+                .iter()
+                .cloned()
+                .enumerate()
+                .fold((0, 0.0), |a, (k, d)| if d > a.1 { (k, d) } else { a });
+            DilatantError::TooManySubsteps {
+                cell: k.0.min(mesh.nx - 1),
+                x: mesh.x[k.0.min(mesh.nx - 1)],
+                t: t_end,
+                ratio,
+            }
+        })?;
         if substeps > 0 {
             check_and_update(mesh, s, t_end, "stabilisation")?;
         }
@@ -200,17 +220,18 @@ impl DilatantScheme {
         }
     }
 
-    /// (3.20)–(3.22), sub-cycled; returns the number of sub-steps (0 when off).
-    fn stabilise(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> usize {
+    /// (3.20)–(3.22), sub-cycled; returns the number of sub-steps (0 when off), or the
+    /// stability ratio when it asks for too many.
+    fn stabilise(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<usize, f64> {
         let visc = self.opt.viscosity;
         if visc.is_off() {
-            return 0;
+            return Ok(0);
         }
         let drive = self.drive.iter().cloned().fold(0.0, f64::max);
         if drive == 0.0 {
-            return 0;
+            return Ok(0);
         }
-        let n = visc.substeps(drive, dt, mesh.dx);
+        let n = visc.substeps(drive, dt, mesh.dx)?;
         let r = dt / n as f64 / (mesh.dx * mesh.dx);
         for _ in 0..n {
             for (c, u) in [&mut s.m, &mut s.q, &mut s.w].into_iter().enumerate() {
@@ -225,7 +246,7 @@ impl DilatantScheme {
             }
             s.fill_ghosts(mesh);
         }
-        n
+        Ok(n)
     }
 
     /// (3.15)–(3.19) in every wet cell; φ lands between φ* and φ_eq*, which is 0 only
@@ -350,6 +371,13 @@ impl Stage<Line, DilatantState> for DilatantScheme {
                 quantity: "non-finite value",
                 value: f64::NAN,
             }),
+            Err(DilatantError::TooManySubsteps { cell, ratio, .. }) => {
+                Err(StageError::Inadmissible {
+                    cell,
+                    quantity: "stabilisation sub-steps needed in one step (dilatancy.xi too large)",
+                    value: ratio,
+                })
+            }
         }
     }
 }

@@ -13,6 +13,8 @@ mod dilatant;
 mod granular;
 mod submarine;
 
+use crate::output::budget::{size, OUTPUT_LIMIT};
+
 use super::document::{line_of, serde_error, syntax_error, KeyIndex, Locator};
 use super::error::ScenarioError;
 use super::overrides::Override;
@@ -46,6 +48,16 @@ const MAX_NH_SOLVER_GIB: f64 = 4.0;
 /// Reads and validates a scenario file. Tables are resolved against the file's directory
 /// and the default output file is `<file stem>.h5`.
 pub fn load_file(path: &Path, overrides: &[String]) -> Result<Scenario, ScenarioError> {
+    load_file_within(path, overrides, Some(OUTPUT_LIMIT))
+}
+
+/// [`load_file`] refusing a run that would write more than `output_limit` bytes
+/// (`None`: any size; `--force`), naming the output key responsible.
+pub fn load_file_within(
+    path: &Path,
+    overrides: &[String],
+    output_limit: Option<u64>,
+) -> Result<Scenario, ScenarioError> {
     let text = read_bounded(path, MAX_SCENARIO_BYTES).map_err(|e| {
         ScenarioError::new(format!(
             "cannot read scenario file '{}': {e}",
@@ -61,7 +73,13 @@ pub fn load_file(path: &Path, overrides: &[String]) -> Result<Scenario, Scenario
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty())
         .unwrap_or_else(|| "granflow".to_owned());
-    load(&text, &base_dir, overrides, &format!("{stem}.h5"))
+    load(
+        &text,
+        &base_dir,
+        overrides,
+        &format!("{stem}.h5"),
+        output_limit,
+    )
 }
 
 /// Validates scenario text; tables are resolved against `base_dir` and the default output
@@ -71,7 +89,17 @@ pub fn load_str(
     base_dir: &Path,
     overrides: &[String],
 ) -> Result<Scenario, ScenarioError> {
-    load(text, base_dir, overrides, "granflow.h5")
+    load(text, base_dir, overrides, "granflow.h5", Some(OUTPUT_LIMIT))
+}
+
+/// [`load_str`] with the output limit `output_limit` (see [`load_file_within`]).
+pub fn load_str_within(
+    text: &str,
+    base_dir: &Path,
+    overrides: &[String],
+    output_limit: Option<u64>,
+) -> Result<Scenario, ScenarioError> {
+    load(text, base_dir, overrides, "granflow.h5", output_limit)
 }
 
 fn load(
@@ -79,6 +107,7 @@ fn load(
     base_dir: &Path,
     overrides: &[String],
     default_output: &str,
+    output_limit: Option<u64>,
 ) -> Result<Scenario, ScenarioError> {
     let doc = toml_edit::Document::parse(text).map_err(|e| syntax_error(text, &e))?;
     let sets = overrides
@@ -134,7 +163,9 @@ fn load(
     // Switching the law on the command line (or as a sweep axis) leaves the keys of the
     // file's law behind; they are ignored with a note instead of refused.
     let law_overridden = sets.iter().any(|s| s.key == "rheology.law");
-    validate(raw, source, base_dir, default_output, law_overridden).map_err(|e| locator.locate(e))
+    validate(raw, source, base_dir, default_output, law_overridden)
+        .and_then(|scn| within_output_limit(scn, output_limit))
+        .map_err(|e| locator.locate(e))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -232,6 +263,22 @@ fn validate(
         submarine,
         sampled,
     })
+}
+
+/// Refuses a scenario whose output keys make its run write more than `limit` bytes.
+fn within_output_limit(scn: Scenario, limit: Option<u64>) -> Res<Scenario> {
+    let estimate = scn.output_estimate();
+    match limit {
+        Some(limit) if estimate.bytes() > limit as f64 => err(
+            estimate.key(),
+            format!(
+                "the run would write {}, more than the limit of {}: use a larger interval (or fewer cells), or pass --force to lift the limit",
+                estimate.describe(),
+                size(limit as f64)
+            ),
+        ),
+        _ => Ok(scn),
+    }
 }
 
 /// The multilayer non-hydrostatic model stores the band of its pressure matrix's

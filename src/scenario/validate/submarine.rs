@@ -9,6 +9,10 @@ use crate::physics::two_layer::Buoyancy;
 use crate::scenario::raw::RawSubmarine;
 use crate::scenario::{Coordinates, Domain, FrictionLaw, Initial, ModelSpec, Pressure, Sampled};
 
+/// Fewest cells of the two-layer scheme: the bed angle of a cell is a centred difference
+/// of the bed, one-sided at the ends.
+const MIN_CELLS: usize = 2;
+
 /// Validates the `[submarine]` table and the consistency of the other keys with it.
 /// `raw_w` tells whether `initial.w` was given.
 pub(super) fn submarine(
@@ -36,6 +40,15 @@ pub(super) fn submarine(
         return Ok(None);
     }
     let s = s.unwrap_or_default();
+    if domain.cells < MIN_CELLS {
+        return err(
+            "domain.cells",
+            format!(
+                "the submarine model needs at least {MIN_CELLS} cells (its bed angle is a difference between cells), got {}",
+                domain.cells
+            ),
+        );
+    }
     if domain.coordinates != Coordinates::Cartesian {
         return err(
             "domain.coordinates",
