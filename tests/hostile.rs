@@ -357,3 +357,37 @@ fn a_fifo_is_not_read_as_a_scenario_or_a_table() {
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("not a regular file"), "{stderr}");
 }
+
+#[test]
+fn huge_numbers_are_printed_short_and_arrays_of_tables_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let collapse = scenario("collapse.toml");
+    let (code, stderr) = run_in(
+        dir.path(),
+        &[
+            "check",
+            collapse.to_str().unwrap(),
+            "--set",
+            "material.phi=1e300",
+        ],
+        MINUTE,
+    );
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("got 1e300") && stderr.len() < 200,
+        "{stderr}"
+    );
+    let dense = fs::read_to_string(scenario("dilatancy_dense.toml")).unwrap();
+    assert!(dense.contains("\n[dilatancy]\n"));
+    fs::write(
+        dir.path().join("d.toml"),
+        dense.replace("\n[dilatancy]\n", "\n[[dilatancy]]\n"),
+    )
+    .unwrap();
+    let (code, stderr) = run_in(dir.path(), &["check", "d.toml"], MINUTE);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("key 'dilatancy'") && stderr.contains("not an array of tables"),
+        "{stderr}"
+    );
+}

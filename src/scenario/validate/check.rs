@@ -16,6 +16,17 @@ pub(super) fn required<T>(key: &str, v: Option<T>) -> Res<T> {
     v.ok_or_else(|| ScenarioError::at(key, "missing required key"))
 }
 
+/// A number for a message: as Rust prints it between 1e-5 and 1e16, in exponent form
+/// outside (so 1e300 is not 301 digits long).
+pub(crate) fn num(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && a.is_finite() && !(1e-5..1e16).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 pub(super) fn finite(key: &str, v: f64) -> Res<f64> {
     if v.is_finite() {
         Ok(v)
@@ -29,7 +40,7 @@ pub(super) fn positive(key: &str, v: f64) -> Res<f64> {
     if v > 0.0 {
         Ok(v)
     } else {
-        err(key, format!("must be greater than 0, got {v}"))
+        err(key, format!("must be greater than 0, got {}", num(v)))
     }
 }
 
@@ -38,7 +49,7 @@ pub(super) fn non_negative(key: &str, v: f64) -> Res<f64> {
     if v >= 0.0 {
         Ok(v)
     } else {
-        err(key, format!("must be at least 0, got {v}"))
+        err(key, format!("must be at least 0, got {}", num(v)))
     }
 }
 

@@ -101,7 +101,7 @@ pub(super) fn dilatancy(
     if !(phi_stat > 0.0 && phi_stat < 1.0) {
         return err(
             "dilatancy.phi_stat",
-            format!("must be in (0, 1), got {phi_stat}"),
+            format!("must be in (0, 1), got {}", num(phi_stat)),
         );
     }
     #[derive(Clone, Copy, PartialEq)]
@@ -138,7 +138,7 @@ pub(super) fn dilatancy(
     if alpha <= 1.0 {
         return err(
             "dilatancy.alpha",
-            format!("must be > 1 (seed 002 eq. B.19), got {alpha}"),
+            format!("must be > 1 (seed 002 eq. B.19), got {}", num(alpha)),
         );
     }
     let lambda = non_negative("dilatancy.lambda", d.lambda.unwrap_or(0.0))?;
@@ -218,7 +218,7 @@ pub(super) fn check_fraction(domain: &Domain, b: &[f64], phi: &Profile, values: 
     match phi.try_eval(x, b[i]) {
         Ok(v) => err(
             "initial.phi",
-            format!("must be in (0, 1), got {v} at x = {x}"),
+            format!("must be in (0, 1), got {} at x = {x}", num(v)),
         ),
         Err(m) => err("initial.phi", format!("{m} at x = {x}")),
     }

@@ -32,7 +32,7 @@ pub(super) fn coefficient(
             if !(0.0..90.0).contains(&a) {
                 return err(
                     &key_deg,
-                    format!("must be an angle in [0, 90) degrees, got {a}"),
+                    format!("must be an angle in [0, 90) degrees, got {}", num(a)),
                 );
             }
             Ok(Some((a.to_radians().tan(), key_deg)))

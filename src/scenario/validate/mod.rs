@@ -30,6 +30,21 @@ use check::*;
 use dilatant::{check_fraction, dilatancy};
 use granular::{model, multilayer, rheology, ViscousKeys};
 
+/// The tables of a scenario file.
+const SECTIONS: [&str; 11] = [
+    "domain",
+    "bed",
+    "material",
+    "rheology",
+    "model",
+    "initial",
+    "boundary",
+    "time",
+    "output",
+    "submarine",
+    "dilatancy",
+];
+
 /// Largest accepted `domain.cells`.
 pub(crate) const MAX_CELLS: i64 = 10_000_000;
 /// Largest accepted scenario file (bytes), so that `granflow check /dev/zero` ends.
@@ -118,6 +133,19 @@ fn load(
         file: KeyIndex::build(text, &doc),
         overridden: sets.iter().map(|s| s.key.clone()).collect(),
     };
+    // `[[domain]]` would reach serde as a sequence read field by field ("expected a
+    // number, found a table"): name the mistake instead.
+    if let Some((name, _)) = doc
+        .as_table()
+        .iter()
+        .find(|(name, item)| item.is_array_of_tables() && SECTIONS.contains(name))
+    {
+        let e = ScenarioError::at(
+            name,
+            format!("must be a table [{name}], not an array of tables [[{name}]]"),
+        );
+        return Err(locator.locate(e));
+    }
     // The document parsed above is deserialised as it is: the text is parsed once
     // (again only to locate an error in a document edited by overrides).
     let (parsed, source) = if sets.is_empty() {
@@ -307,7 +335,10 @@ fn domain(d: RawDomain) -> Res<Domain> {
     if x_max <= x_min {
         return err(
             "domain.x_max",
-            format!("must be greater than domain.x_min = {x_min}, got {x_max}"),
+            format!(
+                "must be greater than domain.x_min = {x_min}, got {}",
+                num(x_max)
+            ),
         );
     }
     if !(x_max - x_min).is_finite() {
@@ -345,14 +376,17 @@ fn domain(d: RawDomain) -> Res<Domain> {
     if slope_deg <= -90.0 || slope_deg >= 90.0 {
         return err(
             "domain.slope_deg",
-            format!("must be strictly between -90 and 90 degrees, got {slope_deg}"),
+            format!(
+                "must be strictly between -90 and 90 degrees, got {}",
+                num(slope_deg)
+            ),
         );
     }
     if coordinates == Coordinates::Cartesian && slope_deg != 0.0 {
         return err(
             "domain.slope_deg",
             format!(
-                "must be 0 with domain.coordinates = \"cartesian\" (put the slope in bed.b), got {slope_deg}"
+                "must be 0 with domain.coordinates = \"cartesian\" (put the slope in bed.b), got {}", num(slope_deg)
             ),
         );
     }
@@ -369,7 +403,10 @@ fn material(m: RawMaterial) -> Res<Material> {
     let rho_s = positive("material.rho_s", m.rho_s.unwrap_or(2500.0))?;
     let phi = positive("material.phi", m.phi.unwrap_or(0.62))?;
     if phi > 1.0 {
-        return err("material.phi", format!("must be in (0, 1], got {phi}"));
+        return err(
+            "material.phi",
+            format!("must be in (0, 1], got {}", num(phi)),
+        );
     }
     let d_s = positive("material.d_s", m.d_s.unwrap_or(0.7e-3))?;
     Ok(Material { rho_s, phi, d_s })
@@ -429,14 +466,15 @@ fn time(t: RawTime) -> Res<TimeSpec> {
     let t_end = positive("time.t_end", required("time.t_end", t.t_end)?)?;
     let cfl = positive("time.cfl", t.cfl.unwrap_or(0.5))?;
     if cfl > 1.0 {
-        return err("time.cfl", format!("must be in (0, 1], got {cfl}"));
+        return err("time.cfl", format!("must be in (0, 1], got {}", num(cfl)));
     }
     let settle_fraction = positive("time.settle_fraction", t.settle_fraction.unwrap_or(1e-6))?;
     if settle_fraction >= 1.0 {
         return err(
             "time.settle_fraction",
             format!(
-                "must be in (0, 1) (a fraction of the peak kinetic energy), got {settle_fraction}"
+                "must be in (0, 1) (a fraction of the peak kinetic energy), got {}",
+                num(settle_fraction)
             ),
         );
     }
@@ -493,7 +531,7 @@ fn gauges(xs: &[f64], domain: &Domain) -> Res<Vec<f64>> {
         if !x.is_finite() {
             return err(
                 KEY,
-                format!("gauge {} must be a finite number, got {x}", k + 1),
+                format!("gauge {} must be a finite number, got {}", num(x), k + 1),
             );
         }
         if x < domain.x_min || x > domain.x_max {

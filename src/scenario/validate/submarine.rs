@@ -83,7 +83,10 @@ pub(super) fn submarine(
     if !(0.0..1.0).contains(&r) {
         return err(
             "submarine.r",
-            format!("the density ratio ρ_water/ρ_grains must be in [0, 1), got {r}"),
+            format!(
+                "the density ratio ρ_water/ρ_grains must be in [0, 1), got {}",
+                num(r)
+            ),
         );
     }
     let k = positive("submarine.k", s.k.unwrap_or(1.0))?;
@@ -92,7 +95,7 @@ pub(super) fn submarine(
         if (0.0..=1.0).contains(&v) {
             Ok(v)
         } else {
-            err(key, format!("must be in [0, 1], got {v}"))
+            err(key, format!("must be in [0, 1], got {}", num(v)))
         }
     };
     let lambda1 = unit("submarine.lambda1", s.lambda1)?;
