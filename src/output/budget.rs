@@ -1,10 +1,10 @@
 //! A bound on what one run writes. Every output rate is a scenario key (`output.every`,
 //! `output.gauge_every`, and the time step itself for the step records), so a small
-//! value can fill a disk in seconds. A run states its bound up front: [`estimate`]
-//! counts what the keys force it to write, `granflow run` refuses an estimate above
-//! [`OUTPUT_LIMIT`] (naming the key), and [`Budgeted`] holds the run to the limit while
-//! it goes, for what no estimate foresees (the number of CFL steps). `--force` lifts
-//! both.
+//! value can fill a disk in seconds. A run states its bound up front: an
+//! [`OutputEstimate`] (`Scenario::output_estimate`) counts what the keys force it to
+//! write, validation refuses an estimate above [`OUTPUT_LIMIT`] (naming the key), and
+//! [`Budgeted`] holds the run to the limit while it goes, for what no estimate
+//! foresees (the number of CFL steps). `--force` lifts both.
 
 use super::{
     GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
