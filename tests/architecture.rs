@@ -289,9 +289,8 @@ fn forbidden_imports_between_layers() {
     assert!(bad.is_empty(), "forbidden imports:\n  {}", bad.join("\n  "));
 }
 
-/// Expected to pass once the model states live outside `model` (in `state`) and the
-/// dilatant boundary kinds outside `scenario`; until then it names the files that still
-/// break the rule.
+/// Names every file of `numerics` that imports `model` or `scenario` (the states live
+/// in `state`, the grid in `grid`).
 #[test]
 fn numerics_sees_no_model_nor_scenario() {
     let (_, per_file) = graph();
