@@ -647,8 +647,10 @@ t_end = 2.0
             e.message().contains("GiB") && e.to_string().contains("model.layers"),
             "{e}"
         );
-        // The hydrostatic model stores no such band.
-        assert!(load_set(MINIMAL, &["model.layers=100", "domain.cells=100000"]).is_ok());
+        // The hydrostatic model stores no such band (its 1.7 GB of snapshots are above
+        // the output limit, lifted here).
+        let sets = ["model.layers=100".to_owned(), "domain.cells=100000".to_owned()];
+        assert!(load_str_within(MINIMAL, Path::new("."), &sets, None).is_ok());
     }
 
     /// Loads `text`, expects an error at `key` on `line`, returns it.
