@@ -649,7 +649,10 @@ t_end = 2.0
         );
         // The hydrostatic model stores no such band (its 1.7 GB of snapshots are above
         // the output limit, lifted here).
-        let sets = ["model.layers=100".to_owned(), "domain.cells=100000".to_owned()];
+        let sets = [
+            "model.layers=100".to_owned(),
+            "domain.cells=100000".to_owned(),
+        ];
         assert!(load_str_within(MINIMAL, Path::new("."), &sets, None).is_ok());
     }
 
