@@ -36,6 +36,9 @@ SUMMARY_ATTRS = {
     "steps": "int",
     "wall_time_s": "float",
     "status": "str",
+    "outflowed_fraction": "float",
+    "front_at_end_time": "float",
+    "max_speed_final": "float",
 }
 
 # The statuses a finished run can have (docs/output-format.md, /summary).

@@ -223,6 +223,9 @@ pub(super) fn write_summary(
     set("h_max_final", summary.h_max_final)?;
     set("t_end", summary.t_end)?;
     set("wall_time_s", summary.wall_time_s)?;
+    set("outflowed_fraction", summary.outflowed_fraction)?;
+    set("front_at_end_time", summary.front_at_end_time)?;
+    set("max_speed_final", summary.max_speed_final)?;
     group.set_attr_numeric("steps", &(summary.steps as i64))?;
     group.set_attr_string("status", &summary.status)?;
     if let Some(a) = summary.max_wave_amplitude {
