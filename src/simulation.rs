@@ -392,7 +392,7 @@ impl<M: Model> Simulation<M> {
     /// by erosion or deposition) and for a gain; NaN for a run without mass.
     fn outflowed_fraction(&self, tally: &Tally) -> f64 {
         let open = self.grid.has_outflow();
-        if !(tally.mass0 > 0.0) {
+        if tally.mass0.is_nan() || tally.mass0 <= 0.0 {
             f64::NAN
         } else if open {
             (1.0 - tally.last.mass / tally.mass0).max(0.0)
