@@ -271,3 +271,20 @@ fn collapsing_time_step_fails_instead_of_running_forever() {
         "{stderr}"
     );
 }
+
+#[test]
+fn long_help_names_the_five_model_families_and_the_1d_profile() {
+    let out = granflow().arg("--help").output().unwrap();
+    let help = crate::common::assert_success(&out);
+    for needle in [
+        "five model families",
+        "Savage–Hutter monolayer",
+        "multilayer μ(I)",
+        "non-hydrostatic",
+        "submarine",
+        "dilatancy",
+        "1-D",
+    ] {
+        assert!(help.contains(needle), "'{needle}' not in: {help}");
+    }
+}
