@@ -48,7 +48,13 @@ fn mass_that_left_the_domain_is_reported_and_warned_about() {
     let scn = leaking(dir.path());
     let h5 = dir.path().join("leak.h5");
     let out = granflow()
-        .args(["run", scn.to_str().unwrap(), "--progress", "none", "--output"])
+        .args([
+            "run",
+            scn.to_str().unwrap(),
+            "--progress",
+            "none",
+            "--output",
+        ])
         .arg(&h5)
         .output()
         .unwrap();
@@ -69,7 +75,10 @@ fn mass_that_left_the_domain_is_reported_and_warned_about() {
         stderr.contains("the front reached the end of the domain at t = "),
         "{stderr}"
     );
-    assert!(stdout.contains("(at least: the front reached the end"), "{stdout}");
+    assert!(
+        stdout.contains("(at least: the front reached the end"),
+        "{stdout}"
+    );
     // The report's first line is the only one with a time of the end.
     assert_eq!(stdout.matches(" at t = ").count(), 1, "{stdout}");
 
@@ -84,7 +93,10 @@ fn mass_that_left_the_domain_is_reported_and_warned_about() {
             .output()
             .unwrap();
         let text = crate::common::assert_success(&out);
-        let v: Vec<f64> = text.split_whitespace().map(|w| w.parse().unwrap()).collect();
+        let v: Vec<f64> = text
+            .split_whitespace()
+            .map(|w| w.parse().unwrap())
+            .collect();
         assert!((100.0 * v[0] - pct).abs() < 0.01 * pct, "{text} vs {pct}");
         assert!(v[1] > 0.0 && v[1] < 1.2, "{text}");
     }
@@ -106,7 +118,11 @@ fn the_sweep_summary_has_the_outflowed_fraction() {
         .arg(&out_dir)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let csv = fs::read_to_string(out_dir.join("summary.csv")).unwrap();
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -126,7 +142,13 @@ fn a_lake_at_rest_is_reported_at_rest() {
     let scn = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/lake_at_rest.toml");
     let dir = tempfile::tempdir().unwrap();
     let out = granflow()
-        .args(["run", scn.to_str().unwrap(), "--progress", "none", "--output"])
+        .args([
+            "run",
+            scn.to_str().unwrap(),
+            "--progress",
+            "none",
+            "--output",
+        ])
         .arg(dir.path().join("lake.h5"))
         .output()
         .unwrap();
@@ -153,17 +175,21 @@ fn a_table_whose_columns_do_not_say_which_is_the_bed_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let scn = leaking(dir.path());
     fs::write(dir.path().join("bed.csv"), "x,y,z\n0,0,1\n2,0,1\n").unwrap();
-    let out = granflow().args(["check", scn.to_str().unwrap()]).output().unwrap();
+    let out = granflow()
+        .args(["check", scn.to_str().unwrap()])
+        .output()
+        .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("bed.csv")
-            && stderr.contains("bed.b")
-            && stderr.contains("'x', 'y', 'z'"),
+        stderr.contains("bed.csv") && stderr.contains("bed.b") && stderr.contains("'x', 'y', 'z'"),
         "{stderr}"
     );
     // Named columns are read whatever their order and number.
     fs::write(dir.path().join("bed.csv"), "z,b,x\n9,0,0\n9,0,2\n").unwrap();
-    let out = granflow().args(["check", scn.to_str().unwrap()]).output().unwrap();
+    let out = granflow()
+        .args(["check", scn.to_str().unwrap()])
+        .output()
+        .unwrap();
     crate::common::assert_success(&out);
 }
