@@ -79,8 +79,12 @@ fn mass_that_left_the_domain_is_reported_and_warned_about() {
         stdout.contains("(at least: the front reached the end"),
         "{stdout}"
     );
-    // The report's first line is the only one with a time of the end.
-    assert_eq!(stdout.matches(" at t = ").count(), 1, "{stdout}");
+    // One status line, and no separate stop or settled lines to contradict it.
+    assert_eq!(stdout.matches("granflow: ").count(), 1, "{stdout}");
+    assert!(
+        !stdout.contains("stop time") && !stdout.contains("  settled "),
+        "{stdout}"
+    );
 
     if let Some(python) = crate::common::python_with_h5py() {
         let out = std::process::Command::new(python)

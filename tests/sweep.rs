@@ -168,7 +168,8 @@ fn product_runs_are_named_and_summarised_in_sweep_order() {
             "t_end",
             "steps",
             "wall_time_s",
-            "status"
+            "status",
+            "outflowed_fraction"
         ]
     );
     assert_eq!(
