@@ -8,7 +8,8 @@
 # Each repetition runs, for each binary, --jobs 1 then --jobs 2 back to back, timed by
 # /usr/bin/time (elapsed wall seconds), REPEAT times (default 7). Prints every time, the
 # fastest of each and the ratio jobs1 / jobs2 of the fastest: the least disturbed
-# repetition on a machine that other processes share.
+# repetition on a machine that other processes share. Extra sweep options in SWEEP_ARGS
+# (e.g. SWEEP_ARGS="--set domain.cells=2560" for runs four times finer and longer).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPEAT=${REPEAT:-7}
@@ -22,7 +23,7 @@ for ((r = 1; r <= REPEAT; r++)); do
     for b in "${!bins[@]}"; do
         for j in 1 2; do
             /usr/bin/time -f "%e" -o "$work/t" "${bins[$b]}" sweep scenarios/sweeps/slopes.toml \
-                --output "$work/out-$b-$j" --jobs "$j" --force --quiet >/dev/null
+                --output "$work/out-$b-$j" --jobs "$j" --force --quiet ${SWEEP_ARGS:-} >/dev/null
             times[$b,$j]+="$(cat "$work/t") "
         done
     done
