@@ -67,7 +67,10 @@ pub(super) fn write_layout(
         // The axes of p_nh: the nl + 1 layer interfaces (0 the bed) and the nx + 1
         // cell faces.
         let levels: Vec<f64> = (0..=info.layers).map(|k| k as f64).collect();
-        let level = s.new_dataset::<f64>().shape([levels.len()]).create("level")?;
+        let level = s
+            .new_dataset::<f64>()
+            .shape([levels.len()])
+            .create("level")?;
         level.write_raw(&levels)?;
         units(&level, "1")?;
         dimension_scale(&level, Dim::Level)?;
