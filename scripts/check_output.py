@@ -36,6 +36,9 @@ SUMMARY_ATTRS = {
     "steps": "int",
     "wall_time_s": "float",
     "status": "str",
+    "outflowed_fraction": "float",
+    "front_at_end_time": "float",
+    "max_speed_final": "float",
 }
 
 # The statuses a finished run can have (docs/output-format.md, /summary).
@@ -51,6 +54,10 @@ UNITS = {
     "snapshots/w": "m/s",
     "snapshots/p_nh": "m^2/s^2",
     "snapshots/static_interface": "m",
+    "snapshots/x": "m",
+    "snapshots/layer": "1",
+    "snapshots/level": "1",
+    "snapshots/x_face": "m",
     "front/t": "s",
     "front/x": "m",
     "diagnostics/t": "s",
@@ -59,7 +66,8 @@ UNITS = {
     "diagnostics/kinetic_energy": "m^4/s^2",
     "diagnostics/max_speed": "m/s",
 }
-OPTIONAL = ("snapshots/w", "snapshots/p_nh", "snapshots/static_interface")
+OPTIONAL = ("snapshots/w", "snapshots/p_nh", "snapshots/static_interface", "snapshots/level",
+            "snapshots/x_face")
 REQUIRED = [name for name in UNITS if name not in OPTIONAL]
 DIAGNOSTICS = ["t", "dt", "mass", "kinetic_energy", "max_speed"]
 
@@ -131,6 +139,11 @@ class Checker:
             "snapshots/w": (nt, nl, nx),
             "snapshots/p_nh": (nt, nl + 1, nx + 1),
             "snapshots/static_interface": (nt, nx),
+            # Coordinates (dimension scales) of the snapshot axes.
+            "snapshots/x": (nx,),
+            "snapshots/layer": (nl,),
+            "snapshots/level": (nl + 1,),
+            "snapshots/x_face": (nx + 1,),
         }
         for name, shape in expected.items():
             if name in f and f[name].shape != shape:

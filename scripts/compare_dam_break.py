@@ -102,9 +102,17 @@ def main():
         a1.loglog(ref, ref * 2, "k--", label="order 1")
         a1.set_xlabel("Δx (m)"); a1.set_ylabel("L1 error of h (m²)"); a1.legend()
         a2.set_xlabel("wall time (s)"); a2.set_ylabel("L1 error of h (m²)"); a2.legend()
+        import plot_common
+        for a in (a1, a2):
+            plot_common.readable_log_axis(a.xaxis)
+            plot_common.readable_log_axis(a.yaxis)
+            a.grid(True, which="major", alpha=0.3)
         fig.tight_layout()
         png = out / "dam_break_convergence.png"
-        fig.savefig(png, dpi=120)
+        try:
+            plot_common.save(fig, png, 150)
+        except plot_common.EmptyPlot as e:
+            return plot_common.fail_empty(e)
         print(f"\nplot: {png}")
     return 0 if ok else 1
 

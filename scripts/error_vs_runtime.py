@@ -177,9 +177,15 @@ def main():
         ax.set_xlabel("wall time (s)")
         ax.set_ylabel("relative l2 error of h against NH-20 l. (%)")
         ax.legend()
-        ax.grid(True, which="both", alpha=0.3)
+        import plot_common
+        plot_common.readable_log_axis(ax.xaxis)
+        plot_common.readable_log_axis(ax.yaxis)
+        ax.grid(True, which="major", alpha=0.3)
         fig.tight_layout()
-        fig.savefig(out / "error_vs_runtime.png", dpi=120)
+        try:
+            plot_common.save(fig, out / "error_vs_runtime.png", 150)
+        except plot_common.EmptyPlot as e:
+            return plot_common.fail_empty(e)
     except ImportError:
         print("matplotlib not installed: no plot", file=sys.stderr)
     print(f"\nwrote {out / 'error_vs_runtime.csv'} and {out / 'error_vs_runtime.png'}")

@@ -33,6 +33,15 @@ class Run:
                                      if "static_interface" in snaps else None)
             # Volume fraction of the dilatant model (Bouchut et al. 2021), None for the others.
             self.phi = f["snapshots/phi"][:] if "snapshots/phi" in f else None
+            # The submarine model's water layer, None for the others.
+            for name in ("h_water", "u_water", "eta", "interface"):
+                setattr(self, name, snaps[name][:] if name in snaps else None)
+            # Gauge series (runs with output.gauges), None without.
+            if "gauges" in f:
+                g = f["gauges"]
+                self.gauges = {k: g[k][:] for k in ("x", "t", "eta", "h_grains")}
+            else:
+                self.gauges = None
             self.front_t = f["front/t"][:]
             self.front_x = f["front/x"][:]
             self.front_threshold = float(f["front"].attrs.get("threshold", 1e-3))

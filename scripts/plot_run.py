@@ -1,12 +1,18 @@
 #!/usr/bin/env python3
 """Plot one granflow run: free surface and thickness, front, x–t diagram, and for
 multilayer or non-hydrostatic runs the velocity profiles u(z), the static/flowing
-interface and the non-hydrostatic pressure; optionally an animation.
+interface and the non-hydrostatic pressure; the water surface and layer of submarine
+runs, the volume fraction φ of dilatant runs, the gauge series of runs with gauges;
+optionally an animation.
 
     python scripts/plot_run.py RUN.h5 [--out PREFIX] [--every K]
                                [--x X ...] [--times T ...] [--gif] [--fps N]
+                               [--format png|pdf|svg] [--dpi N] [--whole]
 
-Writes PREFIX.png (default: RUN.png next to RUN.h5):
+Spatial panels show where the material went (where h, or for submarine runs also the
+water's motion, exceeds the front threshold at some time, plus a margin); --whole
+shows the whole domain. Writes PREFIX.png (default: RUN.png next to RUN.h5; .pdf or
+.svg with --format):
   - bed and free surface b + h at every K-th snapshot (one colour per time from a
     sequential colour map, with a colour bar, so no two curves share a colour);
   - the thickness h alone, so thin deposits stay visible over high relief;
@@ -18,6 +24,13 @@ For multilayer runs (layers > 1) or non-hydrostatic runs, also PREFIX_layers.png
     bed (normal to the reference plane in local coordinates) at each layer's middle;
   - the static/flowing interface (multilayer runs) under the free surface;
   - the basal non-hydrostatic pressure p_nh (non-hydrostatic runs).
+For submarine runs, PREFIX_water.png: bed, grain/water interface and water surface η
+at every K-th snapshot, the water thickness, and the wave η − η₀ as an x–t diagram.
+For dilatant runs, PREFIX_phi.png: φ(x) where there is material at every K-th
+snapshot, and φ over (x, t). For runs with gauges (output.gauges), PREFIX_gauges.png:
+η(t) − η(0) and the grain depth h(t) at each gauge (compare_gauges.py compares them
+with measurements). A figure with a panel that holds no data is not written: the
+script fails naming it (scripts/plot_common.py).
 With --gif, PREFIX.gif: the flow over the bed, one frame per snapshot (matplotlib's
 PillowWriter; needs pillow). Prints the summary attributes.
 Needs h5py, numpy and matplotlib.
@@ -25,6 +38,7 @@ Needs h5py, numpy and matplotlib.
 
 import argparse
 import pathlib
+import sys
 
 import matplotlib
 import numpy as np
@@ -33,6 +47,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib import cm, colors  # noqa: E402
 
+import plot_common  # noqa: E402
 from granflow_io import Run  # noqa: E402
 
 CMAP = "viridis"
@@ -54,7 +69,17 @@ def time_colours(r):
     return norm, cm.ScalarMappable(norm=norm, cmap=CMAP)
 
 
-def plot_main(r, path, every, out):
+def zoom(r, whole):
+    """x range of the spatial panels: where the material (and the water's motion) went."""
+    if whole:
+        return r.x[0], r.x[-1]
+    fields = [r.h - (r.h_bed if r.h_bed is not None else 0.0)]
+    if r.eta is not None:
+        fields.append(np.abs(r.eta - r.eta[0]))
+    return plot_common.extent(r.x, fields, r.front_threshold)
+
+
+def plot_main(r, path, every, out, xlim, dpi):
     ks = chosen_snapshots(r, every)
     norm, sm = time_colours(r)
     fig, ax = plt.subplots(2, 2, figsize=(13, 8))
@@ -88,9 +113,15 @@ def plot_main(r, path, every, out):
         a_front.legend(fontsize=8)
 
     plot_xt(a_xt, r, fig)
+    for a in (a_surf, a_h, a_xt):
+        a.set_xlim(*xlim)
+    inside = (r.x >= xlim[0]) & (r.x <= xlim[1])
+    top = (r.b + r.h)[:, inside]
+    lo, hi = min(r.b[inside].min(), top.min()), top.max()
+    a_surf.set_ylim(lo - 0.03 * (hi - lo + 1e-12), hi + 0.05 * (hi - lo + 1e-12))
     fig.suptitle(title(r, path))
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    plot_common.save(fig, out, dpi)
     plt.close(fig)
 
 
@@ -123,7 +154,7 @@ def layer_heights(r, k, i):
     return r.h[k, i] * (np.cumsum(f) - 0.5 * f)
 
 
-def plot_layers(r, path, xs, times, out):
+def plot_layers(r, path, xs, times, out, xlim, dpi):
     multilayer = r.layers > 1
     nh = r.p_nh is not None
     panels = [p for p, on in (("u", multilayer), ("interface", r.static_interface is not None),
@@ -174,9 +205,103 @@ def plot_layers(r, path, xs, times, out):
             a.set_ylabel("basal p_nh / ρ (m²/s²)")
             a.set_title("non-hydrostatic pressure at the bed", fontsize=10)
             fig.colorbar(sm, ax=a, label="t (s)")
+        if panel != "u":
+            a.set_xlim(*xlim)
     fig.suptitle(title(r, path))
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    plot_common.save(fig, out, dpi)
+    plt.close(fig)
+    return out
+
+
+def plot_water(r, path, every, out, xlim, dpi):
+    """Submarine runs: the water surface over the grains, the water layer, the wave."""
+    ks = chosen_snapshots(r, every)
+    norm, sm = time_colours(r)
+    fig, (a_s, a_w, a_xt) = plt.subplots(1, 3, figsize=(16, 4.4))
+    a_s.fill_between(r.x, r.b.min() - 1e-9, r.b, color="0.85", lw=0)
+    a_s.plot(r.x, r.b, "k-", lw=1, label="bed b")
+    for k in ks:
+        c = sm.to_rgba(r.t[k])
+        a_s.plot(r.x, r.eta[k], "-", color=c, lw=1.2)
+        a_s.plot(r.x, r.interface[k], "--", color=c, lw=1.2)
+        a_w.plot(r.x, r.h_water[k], "-", color=c, lw=1.2)
+    a_s.plot([], [], "k-", label="water surface η")
+    a_s.plot([], [], "k--", label="top of the grains")
+    a_s.set_ylabel("elevation (m)")
+    a_s.set_title("water surface and grains", fontsize=10)
+    a_s.legend(fontsize=8, loc="lower left")
+    a_w.set_ylabel("water thickness H₁ (m)")
+    a_w.set_title("water layer", fontsize=10)
+    for a in (a_s, a_w):
+        a.set_xlabel("x (m)")
+        a.set_xlim(*xlim)
+        fig.colorbar(sm, ax=a, label="t (s)")
+    wave = r.eta - r.eta[0]
+    wave = np.where(r.h_water > r.front_threshold, wave, np.nan)
+    lim = np.nanmax(np.abs(wave)) if np.isfinite(wave).any() else 1.0
+    if len(r.t) > 1:
+        mesh = a_xt.pcolormesh(r.x, r.t, wave, shading="nearest", cmap="RdBu_r",
+                               vmin=-lim, vmax=lim)
+        fig.colorbar(mesh, ax=a_xt, label="η − η₀ (m)")
+    a_xt.set_xlabel("x (m)")
+    a_xt.set_ylabel("t (s)")
+    a_xt.set_title("wave η − η₀ (where there is water)", fontsize=10)
+    fig.suptitle(title(r, path))
+    fig.tight_layout()
+    plot_common.save(fig, out, dpi)
+    plt.close(fig)
+    return out
+
+
+def plot_phi(r, path, every, out, xlim, dpi):
+    """Dilatant runs: the solid volume fraction φ where there is material."""
+    ks = chosen_snapshots(r, every)
+    norm, sm = time_colours(r)
+    wet = r.h > r.front_threshold
+    phi = np.where(wet, r.phi, np.nan)
+    fig, (a_p, a_xt) = plt.subplots(1, 2, figsize=(13, 4.4))
+    for k in ks:
+        a_p.plot(r.x, phi[k], "-", color=sm.to_rgba(r.t[k]), lw=1.2)
+    a_p.set_xlabel("x (m)")
+    a_p.set_ylabel("solid volume fraction φ")
+    a_p.set_title(f"φ where h > {r.front_threshold:g} m", fontsize=10)
+    fig.colorbar(sm, ax=a_p, label="t (s)")
+    if len(r.t) > 1:
+        mesh = a_xt.pcolormesh(r.x, r.t, phi, shading="nearest", cmap="cividis")
+        fig.colorbar(mesh, ax=a_xt, label="φ")
+    a_xt.set_xlabel("x (m)")
+    a_xt.set_ylabel("t (s)")
+    a_xt.set_title("φ over (x, t)", fontsize=10)
+    for a in (a_p, a_xt):
+        a.set_xlim(*xlim)
+    fig.suptitle(title(r, path))
+    fig.tight_layout()
+    plot_common.save(fig, out, dpi)
+    plt.close(fig)
+    return out
+
+
+def plot_gauges(r, path, out, dpi):
+    """Gauge series: η(t) − η(0) and the grain depth at each gauge."""
+    g = r.gauges
+    fig, (a_e, a_h) = plt.subplots(2, 1, figsize=(10, 6.4), sharex=True)
+    cmap = plt.get_cmap("tab10")
+    for j, x in enumerate(g["x"]):
+        c = cmap(j % 10)
+        a_e.plot(g["t"], g["eta"][:, j] - g["eta"][0, j], color=c, lw=1.2, label=f"x = {x:g} m")
+        a_h.plot(g["t"], g["h_grains"][:, j], color=c, lw=1.2)
+    a_e.set_ylabel("η − η(t = 0) (m)")
+    a_e.set_title("free surface at the gauges", fontsize=10)
+    a_e.legend(fontsize=8, ncol=min(4, len(g["x"])))
+    a_h.set_ylabel("grain depth (m)")
+    a_h.set_xlabel("t (s)")
+    a_h.set_title("grain depth at the gauges", fontsize=10)
+    for a in (a_e, a_h):
+        a.grid(alpha=0.3)
+    fig.suptitle(title(r, path))
+    fig.tight_layout()
+    plot_common.save(fig, out, dpi)
     plt.close(fig)
     return out
 
@@ -222,22 +347,37 @@ def main():
                    help="times of the profiles (s; the nearest snapshots)")
     p.add_argument("--gif", action="store_true", help="also write an animation PREFIX.gif")
     p.add_argument("--fps", type=int, default=8)
+    p.add_argument("--whole", action="store_true",
+                   help="spatial panels over the whole domain (default: where the material went)")
+    plot_common.add_output_options(p)
     args = p.parse_args()
     r = Run(args.run)
     prefix = pathlib.Path(args.out) if args.out else pathlib.Path(args.run).with_suffix("")
     prefix.parent.mkdir(parents=True, exist_ok=True)
-    written = [f"{prefix}.png"]
-    plot_main(r, args.run, args.every, written[0])
-    layers = plot_layers(r, args.run, args.x, args.times, f"{prefix}_layers.png")
-    if layers:
-        written.append(layers)
+    ext, dpi = args.format, args.dpi
+    xlim = zoom(r, args.whole)
+    written = [f"{prefix}.{ext}"]
+    try:
+        plot_main(r, args.run, args.every, written[0], xlim, dpi)
+        layers = plot_layers(r, args.run, args.x, args.times, f"{prefix}_layers.{ext}", xlim, dpi)
+        if layers:
+            written.append(layers)
+        if r.eta is not None and r.h_water is not None:
+            written.append(plot_water(r, args.run, args.every, f"{prefix}_water.{ext}", xlim, dpi))
+        if r.phi is not None:
+            written.append(plot_phi(r, args.run, args.every, f"{prefix}_phi.{ext}", xlim, dpi))
+        if r.gauges is not None:
+            written.append(plot_gauges(r, args.run, f"{prefix}_gauges.{ext}", dpi))
+    except plot_common.EmptyPlot as e:
+        return plot_common.fail_empty(e)
     if args.gif:
         written.append(f"{prefix}.gif")
         animate(r, args.run, written[-1], args.fps)
     for k, v in sorted(r.summary.items()):
         print(f"{k:>22}: {v}")
     print("plot: " + ", ".join(written))
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

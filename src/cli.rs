@@ -7,9 +7,12 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 /// Shown by `granflow --help` (not `-h`): the first hour of a new user.
 const LONG_ABOUT: &str = "\
-Shallow-layer simulator for dry granular flows (Savage–Hutter μ(I) family): column
-collapses, avalanches and landslides on rigid or erodible beds, with the monolayer,
-multilayer and weakly non-hydrostatic models. One TOML file per scenario; results in
+Shallow-layer simulator for dry granular flows (Savage–Hutter μ(I) family) along a 1-D
+slope profile: column collapses, avalanches and landslides on rigid or erodible beds,
+with five model families: the Savage–Hutter monolayer (Coulomb or μ(I) friction), the
+multilayer μ(I) model, the weakly non-hydrostatic model (monolayer or multilayer), the
+two-layer submarine-avalanche model (water over grains, and the waves it raises) and
+the compressible μ(I)–φ model with dilatancy. One TOML file per scenario; results in
 HDF5 (plus a CSV of the front position).";
 
 const AFTER_LONG_HELP: &str = "\

@@ -114,6 +114,11 @@ fn run(args: &RunArgs) -> ExitCode {
     let limit = (!args.force).then_some(OUTPUT_LIMIT);
     let result = runner::run_to_files_within(&scn, &output, limit, &mut |p| progress.update(&p));
     progress.finish();
+    if let Ok(report) = &result {
+        for w in report.warnings() {
+            print_err(&format!("{w}\n"));
+        }
+    }
     match result {
         Ok(report) if report.summary.status == "interrupted" => {
             // Said even with --quiet: the user asked for the stop and needs to know

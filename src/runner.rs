@@ -71,14 +71,100 @@ pub fn run_to_files_within(
     }
 }
 
+/// Outflow above this fraction of the initial mass is warned about.
+pub const OUTFLOW_WARNING_FRACTION: f64 = 0.01;
+
+/// Outflow below this fraction of the initial mass is round-off (or a film of 1e-10 m
+/// at the boundary) and is not reported.
+const ROUND_OFF_FRACTION: f64 = 1e-9;
+
+/// A speed at or below this (m/s) is rest to round-off in the report: a lake at rest
+/// keeps speeds of order 1e-15 m/s from the rounding of its fluxes.
+const ROUND_OFF_SPEED: f64 = 1e-10;
+
+impl RunReport {
+    /// The report's first line: the status, its one time and why the run ended there,
+    /// with the state of motion at the end when the status does not say it.
+    pub fn status_line(&self) -> String {
+        let s = &self.summary;
+        let t = sig(s.t_end);
+        let motion = || -> String {
+            if !s.stop_time.is_nan() {
+                format!("at rest since t = {} s", sig(s.stop_time))
+            } else if s.max_speed_final <= ROUND_OFF_SPEED {
+                format!(
+                    "at rest to round-off (largest speed {} m/s)",
+                    sig(s.max_speed_final)
+                )
+            } else if !s.settled_time.is_nan() {
+                format!(
+                    "settled since t = {} s (kinetic energy at most time.settle_fraction × its peak), largest speed {} m/s",
+                    sig(s.settled_time),
+                    sig(s.max_speed_final)
+                )
+            } else {
+                format!(
+                    "still moving (largest speed {} m/s)",
+                    sig(s.max_speed_final)
+                )
+            }
+        };
+        let why = match s.status.as_str() {
+            "completed" => format!("reached time.t_end; {}", motion()),
+            "stopped_at_rest" => {
+                "every speed is zero (time.stop_at_rest ends the run at rest)".to_owned()
+            }
+            "settled" => format!(
+                "the kinetic energy fell to time.settle_fraction × its peak (time.stop_when_settled); largest speed {} m/s",
+                sig(s.max_speed_final)
+            ),
+            "outflowed" => "all the mass left through an outflow boundary".to_owned(),
+            "no_mass" => "the initial state holds no mass".to_owned(),
+            "interrupted" => format!("stopped by Ctrl-C or SIGTERM; {}", motion()),
+            _ => String::new(),
+        };
+        let sep = if why.is_empty() { "" } else { ": " };
+        format!("granflow: {} at t = {t} s{sep}{why}", s.status)
+    }
+
+    /// Warnings on the result: mass lost through outflow boundaries, a front that
+    /// reached the end of the domain (its runout is then the domain's). One per line.
+    pub fn warnings(&self) -> Vec<String> {
+        let s = &self.summary;
+        let mut out = Vec::new();
+        if s.outflowed_fraction > OUTFLOW_WARNING_FRACTION && s.status != "outflowed" {
+            out.push(format!(
+                "warning: {} % of the initial mass left the domain through an outflow boundary; the deposit and the runout are those of what stayed",
+                pct(s.outflowed_fraction)
+            ));
+        }
+        if !s.front_at_end_time.is_nan() && s.status != "outflowed" {
+            out.push(format!(
+                "warning: the front reached the end of the domain at t = {} s: the runout is bounded by the domain, extend domain.x_max",
+                sig(s.front_at_end_time)
+            ));
+        }
+        out
+    }
+}
+
+/// A fraction as a percentage with at most 3 significant digits (`76.7`, `0.0123`).
+fn pct(f: f64) -> String {
+    let p = 100.0 * f;
+    if p == 0.0 || !p.is_finite() {
+        return format!("{p}");
+    }
+    let decimals = (2 - p.abs().log10().floor() as i32).max(0) as usize;
+    format!("{p:.decimals$}")
+}
+
 impl fmt::Display for RunReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let s = &self.summary;
+        writeln!(f, "{}", self.status_line())?;
         writeln!(
             f,
-            "granflow: {} at t = {} s after {} steps ({} s wall)",
-            s.status,
-            sig(s.t_end),
+            "  steps         {} ({} s wall)",
             s.steps,
             sig(s.wall_time_s)
         )?;
@@ -92,19 +178,22 @@ impl fmt::Display for RunReport {
             // Wet or periodic domains have no front that moves: say so rather than
             // print a runout of "0.0000 m" as if it were measured.
             _ if s.runout == 0.0 => writeln!(f, "  runout        0 m (the front did not move)")?,
+            _ if !s.front_at_end_time.is_nan() => writeln!(
+                f,
+                "  runout        {} m (at least: the front reached the end of the domain at t = {} s)",
+                sig(s.runout),
+                sig(s.front_at_end_time)
+            )?,
             _ => writeln!(f, "  runout        {} m", sig(s.runout))?,
         }
-        if s.stop_time.is_nan() {
-            writeln!(f, "  stop time     not at rest")?;
-        } else {
-            writeln!(f, "  stop time     {} s", sig(s.stop_time))?;
-        }
-        if s.settled_time.is_nan() {
-            writeln!(f, "  settled       not settled")?;
-        } else {
-            writeln!(f, "  settled       {} s", sig(s.settled_time))?;
-        }
         writeln!(f, "  h_max final   {} m", sig(s.h_max_final))?;
+        if s.outflowed_fraction > ROUND_OFF_FRACTION {
+            writeln!(
+                f,
+                "  outflowed     {} % of the initial mass",
+                pct(s.outflowed_fraction)
+            )?;
+        }
         if let Some(a) = s.max_wave_amplitude {
             writeln!(f, "  max wave      {} m", sig(a))?;
         }
@@ -152,7 +241,88 @@ pub fn sig(v: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::sig;
+    use super::*;
+
+    fn report(status: &str, stop: f64, settled: f64, speed: f64) -> RunReport {
+        let mut summary = RunSummary::not_run(status.to_owned(), 0.5);
+        summary.t_end = 2.0;
+        summary.steps = 196;
+        summary.runout = 0.0;
+        summary.h_max_final = 0.6;
+        summary.stop_time = stop;
+        summary.settled_time = settled;
+        summary.max_speed_final = speed;
+        summary.outflowed_fraction = 0.0;
+        RunReport {
+            summary,
+            h5: "run.h5".into(),
+            front_csv: "run_front.csv".into(),
+            gauge_csv: None,
+        }
+    }
+
+    /// One status line with one time and the reason; no line contradicting it.
+    #[test]
+    fn the_report_says_one_status_with_its_time_and_reason() {
+        let lake = report("completed", f64::NAN, f64::NAN, 3.2e-15).to_string();
+        let first = lake.lines().next().unwrap();
+        assert!(
+            first.starts_with("granflow: completed at t = 2.000 s: reached time.t_end")
+                && first.contains("at rest to round-off"),
+            "{lake}"
+        );
+        let settled = report("settled", f64::NAN, 1.949, 0.016).to_string();
+        assert!(
+            settled.starts_with("granflow: settled at t = 2.000 s: the kinetic energy fell"),
+            "{settled}"
+        );
+        let moving = report("completed", f64::NAN, f64::NAN, 0.3).to_string();
+        assert!(
+            moving.contains("still moving (largest speed 0.3000 m/s)"),
+            "{moving}"
+        );
+        let rest = report("completed", 1.25, 1.0, 0.0).to_string();
+        assert!(rest.contains("at rest since t = 1.250 s"), "{rest}");
+        for text in [lake, settled, moving, rest] {
+            assert!(
+                !text.contains("not at rest") && !text.contains("not settled"),
+                "{text}"
+            );
+            assert_eq!(text.matches(" at t = ").count(), 1, "{text}");
+        }
+    }
+
+    #[test]
+    fn outflow_and_a_front_at_the_domain_end_are_reported() {
+        let mut r = report("stopped_at_rest", 1.5, 1.0, 0.0);
+        r.summary.runout = 1700.0;
+        r.summary.outflowed_fraction = 0.767;
+        r.summary.front_at_end_time = 41.0;
+        let text = r.to_string();
+        assert!(
+            text.contains("outflowed     76.7 % of the initial mass"),
+            "{text}"
+        );
+        assert!(
+            text.contains(
+                "1700 m (at least: the front reached the end of the domain at t = 41.00 s)"
+            ),
+            "{text}"
+        );
+        let w = r.warnings();
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(
+            w[0].contains("76.7 % of the initial mass left the domain"),
+            "{w:?}"
+        );
+        // Below 1 %: reported, not warned about; round-off: neither.
+        r.summary.outflowed_fraction = 0.005;
+        r.summary.front_at_end_time = f64::NAN;
+        assert!(r.warnings().is_empty());
+        assert!(r.to_string().contains("outflowed     0.500 %"));
+        r.summary.outflowed_fraction = 1e-16;
+        assert!(!r.to_string().contains("outflowed"));
+    }
 
     #[test]
     fn four_significant_digits() {

@@ -90,6 +90,8 @@ struct Tally {
     ke_peak: f64,
     /// First time of the current period with kinetic energy ≤ settle_fraction × peak.
     settled_since: Option<f64>,
+    /// First time the front stood in the last cell (the domain's downstream end).
+    front_at_end: Option<f64>,
 }
 
 impl Tally {
@@ -102,6 +104,14 @@ impl Tally {
         } else {
             None
         };
+    }
+
+    /// Records the first time the front stands in the last cell, centred at `x_last`,
+    /// when it did not at t = 0 (a domain wet to its end has no front that moves).
+    fn front_end(&mut self, d: &Diagnostics, t: f64, x_last: f64) {
+        if self.front_at_end.is_none() && self.front0 < x_last && d.front_x >= x_last {
+            self.front_at_end = Some(t);
+        }
     }
 }
 
@@ -249,8 +259,10 @@ impl<M: Model> Simulation<M> {
             mass0: d0.mass,
             ke_peak: d0.kinetic_energy,
             settled_since: None,
+            front_at_end: None,
         };
         tally.settle(&d0, 0.0, self.config.settle_fraction);
+        tally.front_end(&d0, 0.0, self.x_last());
         let result = self.run_loop(sink, progress, &mut tally, d0);
         let status = match &result {
             Ok(status) => status.to_string(),
@@ -344,6 +356,7 @@ impl<M: Model> Simulation<M> {
                 None
             };
             tally.settle(&d, self.t, cfg.settle_fraction);
+            tally.front_end(&d, self.t, self.x_last());
             tally.last = d;
             if at_output || stop.is_some() {
                 self.snapshot(sink)?;
@@ -364,8 +377,35 @@ impl<M: Model> Simulation<M> {
         Ok("completed")
     }
 
+    /// Centre of the last cell.
+    fn x_last(&self) -> f64 {
+        let n = self.grid.cells();
+        if n == 0 {
+            f64::NAN
+        } else {
+            self.grid.centre(n - 1).x
+        }
+    }
+
+    /// Fraction of the initial mass that has left through outflow boundaries: 1 −
+    /// mass / initial mass, 0 for a domain closed by walls (whose mass can only change
+    /// by erosion or deposition) and for a gain; NaN for a run without mass.
+    fn outflowed_fraction(&self, tally: &Tally) -> f64 {
+        let open = self.grid.has_outflow();
+        if tally.mass0.is_nan() || tally.mass0 <= 0.0 {
+            f64::NAN
+        } else if open {
+            (1.0 - tally.last.mass / tally.mass0).max(0.0)
+        } else {
+            0.0
+        }
+    }
+
     fn summary(&self, tally: &Tally, status: String) -> RunSummary {
         RunSummary {
+            outflowed_fraction: self.outflowed_fraction(tally),
+            front_at_end_time: tally.front_at_end.unwrap_or(f64::NAN),
+            max_speed_final: tally.last.max_speed,
             runout: tally.last.front_x - tally.front0,
             stop_time: tally.rest_since.unwrap_or(f64::NAN),
             settled_time: tally.settled_since.unwrap_or(f64::NAN),

@@ -271,3 +271,36 @@ fn collapsing_time_step_fails_instead_of_running_forever() {
         "{stderr}"
     );
 }
+
+#[test]
+fn long_help_names_the_five_model_families_and_the_1d_profile() {
+    let out = granflow().arg("--help").output().unwrap();
+    let help = crate::common::assert_success(&out);
+    for needle in [
+        "five model families",
+        "Savage–Hutter monolayer",
+        "multilayer μ(I)",
+        "non-hydrostatic",
+        "submarine",
+        "dilatancy",
+        "1-D",
+    ] {
+        assert!(help.contains(needle), "'{needle}' not in: {help}");
+    }
+}
+
+/// `cargo install` ignores Cargo.lock unless told: the README's install command must
+/// build the versions the tests ran with.
+#[test]
+fn readme_installs_with_the_lock_file() {
+    let readme =
+        fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    let installs: Vec<&str> = readme
+        .lines()
+        .filter(|l| l.trim_start().starts_with("cargo install"))
+        .collect();
+    assert!(!installs.is_empty());
+    for line in installs {
+        assert!(line.contains("--locked"), "{line}");
+    }
+}

@@ -23,6 +23,7 @@ mod properties;
 mod robustness;
 mod run_loop;
 mod run_output;
+mod run_report;
 mod scenarios;
 mod submarine;
 mod submarine_paper;

@@ -101,6 +101,9 @@ impl Synth {
             wall_time_s: 0.75,
             status: status.into(),
             max_wave_amplitude: None,
+            outflowed_fraction: 0.0,
+            front_at_end_time: f64::NAN,
+            max_speed_final: 0.0,
             stage_times: vec![("hyperbolic".into(), 0.5), ("friction".into(), 0.25)],
         }
     }
@@ -291,7 +294,10 @@ fn check_summary(f: &H5File, status: &str) {
     let mut names = g.attr_names().unwrap();
     names.sort();
     let mut want = vec![
+        "front_at_end_time",
         "h_max_final",
+        "max_speed_final",
+        "outflowed_fraction",
         "runout",
         "settled_time",
         "status",
@@ -337,10 +343,14 @@ fn full_run_round_trips() {
         "grid/h_bed",
         "grid/x",
         "snapshots/h",
+        "snapshots/layer",
+        "snapshots/level",
         "snapshots/p_nh",
         "snapshots/t",
         "snapshots/u",
         "snapshots/w",
+        "snapshots/x",
+        "snapshots/x_face",
     ];
     assert_eq!(datasets, want);
 

@@ -168,7 +168,8 @@ fn product_runs_are_named_and_summarised_in_sweep_order() {
             "t_end",
             "steps",
             "wall_time_s",
-            "status"
+            "status",
+            "outflowed_fraction"
         ]
     );
     assert_eq!(
@@ -523,4 +524,52 @@ fn shipped_sweeps_expand_and_run() {
         "domain.slope_deg",
     );
     assert_eq!(slopes, ["0", "9.78", "16", "19", "22"]);
+}
+
+/// Runs are handed out the expected-longest first (the steepest slope here), while the
+/// summary keeps the sweep order and the names.
+#[test]
+fn the_expected_longest_run_starts_first_and_the_summary_keeps_its_order() {
+    let dir = TempDir::new().unwrap();
+    let file = sweep_file(
+        dir.path(),
+        "slopes.toml",
+        "[axes]\ndomain.slope_deg = [0, 9.78, 16, 19, 22]\n",
+    );
+    let out = dir.path().join("out");
+    let (code, _, stderr) = sweep(&file, &out, &["--jobs", "1"]);
+    assert_eq!(code, 0, "{stderr}");
+    // One job: runs finish in the order they started.
+    let finished: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with('['))
+        .map(|l| l.split_whitespace().nth(1).unwrap().trim_end_matches(':'))
+        .collect();
+    assert_eq!(
+        finished,
+        [
+            "slope_deg=22",
+            "slope_deg=19",
+            "slope_deg=16",
+            "slope_deg=9.78",
+            "slope_deg=0"
+        ],
+        "{stderr}"
+    );
+    let summary = fs::read_to_string(out.join("summary.csv")).unwrap();
+    let runs: Vec<&str> = summary
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap())
+        .collect();
+    assert_eq!(
+        runs,
+        [
+            "slope_deg=0",
+            "slope_deg=9.78",
+            "slope_deg=16",
+            "slope_deg=19",
+            "slope_deg=22"
+        ]
+    );
 }

@@ -147,6 +147,9 @@ impl Grid for CurvedLine {
     fn cfl_length(&self) -> f64 {
         self.line.cfl_length()
     }
+    fn has_outflow(&self) -> bool {
+        self.line.has_outflow()
+    }
 }
 
 #[cfg(test)]

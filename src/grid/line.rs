@@ -175,6 +175,10 @@ impl Grid for Line {
         &self.b
     }
 
+    fn has_outflow(&self) -> bool {
+        self.left == BoundaryKind::Outflow || self.right == BoundaryKind::Outflow
+    }
+
     /// Linear interpolation between the two centres around `p.x`
     /// ([`interpolate`]); the boundary cell's value outside them.
     fn locate(&self, p: Point) -> Stencil {

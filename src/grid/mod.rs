@@ -143,4 +143,9 @@ pub trait Grid: Send + 'static {
     fn locate(&self, p: Point) -> Stencil;
     /// Length in the CFL condition Δt ≤ CFL · length / speed (Δx on a line).
     fn cfl_length(&self) -> f64;
+    /// Whether material can leave through a boundary (an `outflow` end of a line): the
+    /// run then reports the fraction of the initial mass that left.
+    fn has_outflow(&self) -> bool {
+        false
+    }
 }

@@ -137,6 +137,17 @@ pub struct RunSummary {
     /// |η − η₀| (m), η₀ the initial surface. `None` for the others.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_wave_amplitude: Option<f64>,
+    /// Fraction of the initial mass that left through outflow boundaries by the end
+    /// (0 for a domain closed by walls; NaN without mass or without a run).
+    #[serde(default = "nan")]
+    pub outflowed_fraction: f64,
+    /// First time the front stood in the domain's last cell (the runout is then the
+    /// domain's, not the flow's), NaN if never.
+    #[serde(default = "nan")]
+    pub front_at_end_time: f64,
+    /// Largest speed of the material at the end (m/s).
+    #[serde(default = "nan")]
+    pub max_speed_final: f64,
     /// (stage name, wall seconds), written as `time_<stage>_s`.
     #[serde(skip)]
     pub stage_times: Vec<(String, f64)>,
@@ -159,6 +170,9 @@ impl RunSummary {
             wall_time_s,
             status,
             max_wave_amplitude: None,
+            outflowed_fraction: f64::NAN,
+            front_at_end_time: f64::NAN,
+            max_speed_final: f64::NAN,
             stage_times: Vec::new(),
         }
     }

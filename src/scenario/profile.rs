@@ -152,7 +152,7 @@ impl Profile {
                     ));
                 }
                 match t.get("table") {
-                    Some(toml::Value::String(file)) => Table::load(Path::new(file), base_dir)
+                    Some(toml::Value::String(file)) => Table::load(Path::new(file), base_dir, key)
                         .map(|t| Profile {
                             kind: Kind::Table(Arc::new(t)),
                         })
@@ -572,15 +572,22 @@ struct Table {
 }
 
 impl Table {
-    /// Reads a CSV table; errors are messages naming the file (the caller adds the key).
-    fn load(path: &Path, base_dir: &Path) -> Result<Table, String> {
+    /// Reads a CSV table for the profile `key` (e.g. `bed.b`); errors are messages naming
+    /// the file (the caller adds the key).
+    fn load(path: &Path, base_dir: &Path, key: &str) -> Result<Table, String> {
         let full = base_dir.join(path);
         let text = read_bounded(&full, MAX_TABLE_BYTES)
             .map_err(|e| format!("cannot read table file '{}': {e}", full.display()))?;
-        Table::parse(&text, path).map_err(|m| format!("table file '{}': {m}", full.display()))
+        Table::parse(&text, path, key).map_err(|m| format!("table file '{}': {m}", full.display()))
     }
 
-    fn parse(text: &str, path: &Path) -> Result<Table, String> {
+    /// Parses a table for the profile `key`. Its columns are found by name: `x`, and
+    /// the values in the column named `value` or after the key's last part (`b` for
+    /// `bed.b`, `h` for `initial.h`), or in the one other column of a two-column
+    /// header. A file without a header (its first line is numbers) must have exactly
+    /// two columns, x and the value. Anything else is refused, naming the columns
+    /// found: a guess would read the wrong column without a word.
+    fn parse(text: &str, path: &Path, key: &str) -> Result<Table, String> {
         let mut lines = text
             .lines()
             .enumerate()
@@ -591,27 +598,66 @@ impl Table {
                 .map(|f| f.trim().trim_matches('"').trim().to_owned())
                 .collect()
         };
+        let leaf = key.rsplit('.').next().unwrap_or(key);
+        let wanted = if leaf.eq_ignore_ascii_case("value") {
+            "`x,value`".to_owned()
+        } else {
+            format!("`x,{leaf}` or `x,value`")
+        };
         let Some((header_line, header)) = lines.next() else {
-            return Err(
-                "empty file (expected a header line `x,value` and at least one row)".into(),
-            );
+            return Err(format!(
+                "empty file (expected a header line {wanted} and at least one row)"
+            ));
         };
         let names = split(header);
         let numeric = |s: &String| s.parse::<f64>().is_ok();
-        let (ix, iv, first_row) = if names.len() >= 2 && numeric(&names[0]) && numeric(&names[1]) {
-            // No header: the first line is already data.
-            (0, 1, Some((header_line, header)))
-        } else {
-            if names.len() < 2 {
+        // Column names are quoted only when they look like names: errors never echo
+        // other content of the file (it may not be a table at all).
+        let found = || {
+            let list: Vec<String> = names
+                .iter()
+                .enumerate()
+                .map(|(k, n)| {
+                    let plain = !n.is_empty()
+                        && n.len() <= 32
+                        && n.chars()
+                            .all(|c| c.is_alphanumeric() || "_- ().".contains(c));
+                    if plain {
+                        format!("'{n}'")
+                    } else {
+                        format!("column {} (not a plain name)", k + 1)
+                    }
+                })
+                .collect();
+            list.join(", ")
+        };
+        let (ix, iv, first_row) = if names.iter().any(numeric) {
+            // No header: the first line is already data, x and the value.
+            if names.len() != 2 || !names.iter().all(numeric) {
                 return Err(format!(
-                    "line {header_line}: the header needs two columns (x,value), found only one"
+                    "line {header_line}: no header line and {} columns: name the columns in a first line {wanted}",
+                    names.len()
                 ));
             }
+            (0, 1, Some((header_line, header)))
+        } else {
             let find = |want: &str| names.iter().position(|n| n.eq_ignore_ascii_case(want));
-            match (find("x"), find("value")) {
-                (Some(ix), Some(iv)) => (ix, iv, None),
-                _ => (0, 1, None),
-            }
+            let Some(ix) = find("x") else {
+                return Err(format!(
+                    "line {header_line}: no column named 'x' (columns found: {}); the header must be {wanted}",
+                    found()
+                ));
+            };
+            let iv = find("value")
+                .or_else(|| find(leaf))
+                .or_else(|| (names.len() == 2).then_some(1 - ix));
+            let Some(iv) = iv else {
+                return Err(format!(
+                    "line {header_line}: cannot tell which column holds {key} (columns found: {}); name it '{leaf}' or 'value'",
+                    found()
+                ));
+            };
+            (ix, iv, None)
         };
         let mut xs = Vec::new();
         let mut vs = Vec::new();
@@ -808,7 +854,7 @@ mod tests {
     fn describe_forms() {
         assert_eq!(Profile::constant(0.14).describe(), "0.14");
         assert_eq!(expr("1 - x").describe(), "expression \"1 - x\"");
-        let t = Table::parse("x,value\n0,1\n1,2\n", Path::new("h.csv")).unwrap();
+        let t = Table::parse("x,value\n0,1\n1,2\n", Path::new("h.csv"), "initial.h").unwrap();
         let p = Profile {
             kind: Kind::Table(Arc::new(t)),
         };
@@ -820,6 +866,7 @@ mod tests {
         let t = Table::parse(
             "x,value\n0.0, 1.0\n1.0, 3.0\n# comment\n\n3.0, -1.0\n",
             Path::new("t.csv"),
+            "initial.h",
         )
         .unwrap();
         assert_eq!(t.eval(-5.0), 1.0);
@@ -833,37 +880,73 @@ mod tests {
 
     #[test]
     fn table_columns_by_name_or_position() {
-        let t = Table::parse("value,x\n5,0\n7,1\n", Path::new("t.csv")).unwrap();
+        let t = Table::parse("value,x\n5,0\n7,1\n", Path::new("t.csv"), "initial.h").unwrap();
         assert_eq!(t.eval(0.5), 6.0);
-        let t = Table::parse("pos,h,comment\n0,1,a\n2,3,b\n", Path::new("t.csv")).unwrap();
+        // The column named after the key, among others.
+        let t = Table::parse(
+            "x,h,comment\n0,1,a\n2,3,b\n",
+            Path::new("t.csv"),
+            "initial.h",
+        )
+        .unwrap();
+        assert_eq!(t.eval(1.0), 2.0);
+        // Two columns, one of them x: the other holds the values, whatever its name.
+        let t = Table::parse("x,b\n0,1\n2,3\n", Path::new("t.csv"), "initial.h").unwrap();
         assert_eq!(t.eval(1.0), 2.0);
         // A single row is a constant.
-        let t = Table::parse("x,value\n0.3,0.1\n", Path::new("t.csv")).unwrap();
+        let t = Table::parse("x,value\n0.3,0.1\n", Path::new("t.csv"), "initial.h").unwrap();
         assert_eq!(t.eval(-1.0), 0.1);
         assert_eq!(t.eval(1.0), 0.1);
         // Without a header line, the first line is data.
-        let t = Table::parse("0,1\n1,2\n", Path::new("t.csv")).unwrap();
+        let t = Table::parse("0,1\n1,2\n", Path::new("t.csv"), "initial.h").unwrap();
         assert_eq!(t.eval(0.5), 1.5);
     }
 
     #[test]
+    fn table_columns_must_be_named() {
+        // Three columns and none named after the key: no guess.
+        let e = Table::parse("x,y,z\n0,1,2\n1,2,3\n", Path::new("t.csv"), "bed.b").unwrap_err();
+        assert!(
+            e.contains("cannot tell which column holds bed.b")
+                && e.contains("'x', 'y', 'z'")
+                && e.contains("'b' or 'value'"),
+            "{e}"
+        );
+        let t = Table::parse("x,y,b\n0,1,2\n1,2,3\n", Path::new("t.csv"), "bed.b").unwrap();
+        assert_eq!(t.eval(0.5), 2.5);
+        // No x column.
+        let e = Table::parse("pos,h\n0,1\n", Path::new("t.csv"), "initial.h").unwrap_err();
+        assert!(
+            e.contains("no column named 'x'") && e.contains("'pos', 'h'"),
+            "{e}"
+        );
+        // No header and three columns.
+        let e = Table::parse("0,1,2\n1,2,3\n", Path::new("t.csv"), "bed.b").unwrap_err();
+        assert!(e.contains("no header line and 3 columns"), "{e}");
+        // A header with a number in it is not a header either.
+        let e = Table::parse("x,1\n0,1\n", Path::new("t.csv"), "bed.b").unwrap_err();
+        assert!(e.contains("no header line"), "{e}");
+    }
+
+    #[test]
     fn table_errors_name_the_line() {
-        let e = Table::parse("x,value\n0,1\n1,oops\n", Path::new("t.csv")).unwrap_err();
+        let e =
+            Table::parse("x,value\n0,1\n1,oops\n", Path::new("t.csv"), "initial.h").unwrap_err();
         assert!(
             e.contains("line 3") && e.contains("value (column 2)"),
             "{e}"
         );
         assert!(!e.contains("oops"), "file content quoted: {e}");
-        let e = Table::parse("x,value\n0,1\n0,2\n", Path::new("t.csv")).unwrap_err();
+        let e = Table::parse("x,value\n0,1\n0,2\n", Path::new("t.csv"), "initial.h").unwrap_err();
         assert!(
             e.contains("line 3") && e.contains("strictly increasing"),
             "{e}"
         );
-        let e = Table::parse("x,value\n", Path::new("t.csv")).unwrap_err();
+        let e = Table::parse("x,value\n", Path::new("t.csv"), "initial.h").unwrap_err();
         assert!(e.contains("no data rows"), "{e}");
-        let e = Table::parse("x,value\n0\n", Path::new("t.csv")).unwrap_err();
+        let e = Table::parse("x,value\n0\n", Path::new("t.csv"), "initial.h").unwrap_err();
         assert!(e.contains("line 2") && e.contains("value column"), "{e}");
-        let e = Table::parse("x,value\n0,nan\n", Path::new("t.csv")).unwrap_err();
+        let e = Table::parse("x,value\n0,nan\n", Path::new("t.csv"), "initial.h").unwrap_err();
         assert!(e.contains("finite"), "{e}");
     }
 

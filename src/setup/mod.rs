@@ -30,6 +30,8 @@ pub trait Run: Send {
     fn info(&self) -> &RunInfo;
     /// Mass of the current (before a run: the initial) state.
     fn mass(&self) -> f64;
+    /// Diagnostics of the current (before a run: the initial) state.
+    fn diagnostics(&self) -> crate::model::Diagnostics;
 }
 
 impl<M: crate::model::Model> Run for Simulation<M> {
@@ -48,6 +50,9 @@ impl<M: crate::model::Model> Run for Simulation<M> {
     }
     fn mass(&self) -> f64 {
         self.diagnostics().mass
+    }
+    fn diagnostics(&self) -> crate::model::Diagnostics {
+        Simulation::diagnostics(self)
     }
     fn info(&self) -> &RunInfo {
         &self.info

@@ -11,7 +11,7 @@
 //! 4. The run list goes to `DIR/sweep-plan.toml` ([`plan`]), identical for every shard.
 //! 5. Runs already done (their result file and HDF5 file say so, for the same scenario)
 //!    are skipped unless `--force` ([`record`]).
-//! 6. The others execute on a local rayon pool of `--jobs` threads, one run per worker,
+//! 6. The others execute, the expected-longest first ([`order`]), on a local rayon pool of `--jobs` threads, one run per worker,
 //!    each run single-threaded ([`exec`]); each writes its HDF5 file, front CSV and,
 //!    when it ends, its result file (atomically).
 //! 7. The summary ([`summary`]) is written to `DIR/summary.csv` (a shard writes
@@ -26,6 +26,7 @@ pub mod error;
 pub mod exec;
 pub mod expand;
 pub mod naming;
+pub mod order;
 pub mod plan;
 pub mod record;
 pub mod spec;
@@ -345,7 +346,7 @@ fn plan_of(spec: &SweepSpec, base: &[String], axes: &[String], prepared: &[Prepa
 }
 
 /// Runs `mine[slot]` for every slot in `todo` on `jobs` workers of `pool`, each taking
-/// the next run in sweep order. `records` holds the results known so far (one per run of
+/// the next run in the order of `todo` (the expected-longest first, [`order`]). `records` holds the results known so far (one per run of
 /// `mine`) and is completed in place; the summary at `summary_path` is rewritten at most
 /// once a second on the way.
 #[allow(clippy::too_many_arguments)]
@@ -475,6 +476,9 @@ pub fn run(opts: &SweepOptions) -> Result<SweepReport, SweepError> {
         .collect();
     let todo: Vec<usize> = (0..mine.len()).filter(|&i| done[i].is_none()).collect();
     let skipped = mine.len() - todo.len();
+    // The expected-longest first; results keep their slots, so the summary's order and
+    // the names do not depend on it.
+    let todo = order::longest_first(&mine, &todo);
     let summary_path = dir.join(summary_file_name(opts.shard));
 
     let ui = Ui::new(todo.len() as u64, opts.quiet);

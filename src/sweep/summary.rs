@@ -2,8 +2,9 @@
 //!
 //! One row per run in sweep order. Columns: `index`, `run` (the file stem), one column
 //! per axis (named by its dotted key, canonical values), then `runout`, `stop_time`,
-//! `h_max_final`, `t_end`, `steps`, `wall_time_s`, `status`, and `max_wave_amplitude`
-//! when a run has one (submarine sweeps; empty for runs without). Floats are written in their
+//! `h_max_final`, `t_end`, `steps`, `wall_time_s`, `status`, `outflowed_fraction` (of
+//! the initial mass, through outflow boundaries), and `max_wave_amplitude` when a run
+//! has one (submarine sweeps; empty for runs without). Floats are written in their
 //! shortest exact form (`nan` when not at rest); a run without a result has empty
 //! numbers and a status that says why (`pending`, `missing`, `stale: …`). Fields are
 //! quoted as in RFC 4180 when they hold a comma, a quote or a line break.
@@ -83,6 +84,7 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
         .map(|s| s.to_string())
         .chain(axes.iter().map(|a| csv_field(a)))
         .chain(METRICS.iter().map(|s| s.to_string()))
+        .chain(["outflowed_fraction".to_string()])
         .chain(waves.then(|| "max_wave_amplitude".to_string()))
         .collect();
     out.push_str(&header.join(","));
@@ -109,6 +111,11 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
             None => fields.extend(std::iter::repeat_n(String::new(), 7)),
         }
         fields.push(csv_field(row.status()));
+        fields.push(
+            row.record
+                .as_ref()
+                .map_or_else(String::new, |r| format_float(r.summary.outflowed_fraction)),
+        );
         if waves {
             fields.push(wave(row).map_or_else(String::new, format_float));
         }
@@ -130,6 +137,7 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
             "h_max_final_m",
             "steps",
             "wall_s",
+            "outflow_%",
             "status",
         ]
         .iter()
@@ -155,8 +163,9 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
                 num(r.summary.h_max_final),
                 r.summary.steps.to_string(),
                 format!("{:.2}", r.summary.wall_time_s),
+                num(100.0 * r.summary.outflowed_fraction),
             ]),
-            None => line.extend(std::iter::repeat_n(String::new(), 6)),
+            None => line.extend(std::iter::repeat_n(String::new(), 7)),
         }
         let status: String = row.status().chars().take(70).collect();
         line.push(status.replace('\n', " "));
@@ -210,6 +219,9 @@ mod tests {
                 steps: 125,
                 wall_time_s: 0.019,
                 max_wave_amplitude: None,
+                outflowed_fraction: 0.25,
+                front_at_end_time: f64::NAN,
+                max_speed_final: 0.0,
                 stage_times: Vec::new(),
             },
             h5: "slope_deg=16.h5".into(),
@@ -248,15 +260,15 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(
             lines[0],
-            "index,run,domain.slope_deg,runout,stop_time,settled_time,h_max_final,t_end,steps,wall_time_s,status"
+            "index,run,domain.slope_deg,runout,stop_time,settled_time,h_max_final,t_end,steps,wall_time_s,status,outflowed_fraction"
         );
         assert_eq!(
             lines[1],
-            "0,slope_deg=16,16,0.832,nan,0.8125,0.0417,1.4258,125,0.019,stopped_at_rest"
+            "0,slope_deg=16,16,0.832,nan,0.8125,0.0417,1.4258,125,0.019,stopped_at_rest,0.25"
         );
-        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,,missing");
+        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,,missing,");
         assert!(
-            lines[3].ends_with(",\"failed: a, \"\"b\"\"\""),
+            lines[3].ends_with(",\"failed: a, \"\"b\"\"\",0.25"),
             "{}",
             lines[3]
         );
@@ -271,16 +283,16 @@ mod tests {
         let csv = to_csv(&["rheology.mu_deg".into()], &rows);
         let lines: Vec<&str> = csv.lines().collect();
         assert!(
-            lines[0].ends_with(",status,max_wave_amplitude"),
+            lines[0].ends_with(",status,outflowed_fraction,max_wave_amplitude"),
             "{}",
             lines[0]
         );
         assert!(
-            lines[1].ends_with(",stopped_at_rest,0.03125"),
+            lines[1].ends_with(",stopped_at_rest,0.25,0.03125"),
             "{}",
             lines[1]
         );
-        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,,missing,");
+        assert_eq!(lines[2], "1,slope_deg=19,19,,,,,,,,missing,,");
     }
 
     #[test]

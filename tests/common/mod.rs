@@ -172,10 +172,34 @@ fn has_h5py(python: &str) -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
+/// What a test that needs h5py does without it: under CI (the variable `CI` set, as
+/// on every CI service) it fails, since a skipped check would count as passed; on a
+/// developer's machine it is skipped with a message.
+pub fn without_h5py(ci: Option<std::ffi::OsString>) -> Result<(), String> {
+    match ci {
+        Some(v) if !v.is_empty() && v != "0" && v != "false" => Err(format!(
+            "CI={} is set but no Python with h5py and numpy was found: set GRANFLOW_PYTHON \
+             to one (a skipped check would count as passed)",
+            v.to_string_lossy()
+        )),
+        _ => Ok(()),
+    }
+}
+
+#[test]
+fn tests_needing_h5py_fail_under_ci_without_it() {
+    assert!(without_h5py(Some("true".into())).is_err());
+    assert!(without_h5py(Some("1".into())).is_err());
+    assert!(without_h5py(None).is_ok());
+    assert!(without_h5py(Some("".into())).is_ok());
+    assert!(without_h5py(Some("false".into())).is_ok());
+}
+
 /// A Python with h5py and numpy: the one `GRANFLOW_PYTHON` names (CI sets it; one that
 /// cannot import them fails the test), else `python3` or `python` on PATH if it can.
-/// Without one, `None` after printing `SKIPPED: …` on the terminal: written to stderr
-/// directly, because the test harness hides `eprintln!` of passing tests.
+/// Without one, the test fails when `CI` is set ([`without_h5py`]); otherwise `None`
+/// after printing `SKIPPED: …` on the terminal: written to stderr directly, because
+/// the test harness hides `eprintln!` of passing tests.
 pub fn python_with_h5py() -> Option<String> {
     use std::io::Write;
     if let Ok(python) = std::env::var("GRANFLOW_PYTHON") {
@@ -187,6 +211,9 @@ pub fn python_with_h5py() -> Option<String> {
     }
     if let Some(found) = ["python3", "python"].into_iter().find(|p| has_h5py(p)) {
         return Some(found.to_owned());
+    }
+    if let Err(message) = without_h5py(std::env::var_os("CI")) {
+        panic!("{message}");
     }
     let _ = writeln!(
         std::io::stderr(),

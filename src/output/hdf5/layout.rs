@@ -2,7 +2,7 @@
 //! units and chunking. Each function works on an open file; [`super::Hdf5Sink`] opens
 //! and closes it and turns errors into [`crate::output::OutputError`].
 
-use rust_hdf5::{H5Dataset, H5File, H5Group, VarLenUnicode};
+use rust_hdf5::{DatatypeMessage, H5Dataset, H5File, H5Group, VarLenUnicode};
 
 use crate::output::{
     CellField, GaugeRecord, GridData, RunInfo, RunSummary, SnapshotView, StepRecord, FORMAT_VERSION,
@@ -50,8 +50,40 @@ pub(super) fn write_layout(
     let s = file.create_group("snapshots")?;
     let t = series(&s, "t", SNAP_T_CHUNK)?;
     units(&t, "s")?;
-    frames(&s, "h", &[nx], "m")?;
-    frames(&s, "u", &[info.layers, nx], "m/s")?;
+    dimension_scale(&t, Dim::T)?;
+    let x = s.new_dataset::<f64>().shape([nx]).create("x")?;
+    x.write_raw(grid.x)?;
+    units(&x, "m")?;
+    dimension_scale(&x, Dim::X)?;
+    let layers: Vec<f64> = (0..info.layers).map(|k| k as f64).collect();
+    let layer = s
+        .new_dataset::<f64>()
+        .shape([info.layers])
+        .create("layer")?;
+    layer.write_raw(&layers)?;
+    units(&layer, "1")?;
+    dimension_scale(&layer, Dim::Layer)?;
+    if info.pressure == "nonhydrostatic" {
+        // The axes of p_nh: the nl + 1 layer interfaces (0 the bed) and the nx + 1
+        // cell faces.
+        let levels: Vec<f64> = (0..=info.layers).map(|k| k as f64).collect();
+        let level = s
+            .new_dataset::<f64>()
+            .shape([levels.len()])
+            .create("level")?;
+        level.write_raw(&levels)?;
+        units(&level, "1")?;
+        dimension_scale(&level, Dim::Level)?;
+        let dx = if nx > 1 { grid.x[1] - grid.x[0] } else { 0.0 };
+        let x0 = grid.x.first().copied().unwrap_or(0.0) - 0.5 * dx;
+        let faces: Vec<f64> = (0..=nx).map(|i| x0 + i as f64 * dx).collect();
+        let x_face = s.new_dataset::<f64>().shape([nx + 1]).create("x_face")?;
+        x_face.write_raw(&faces)?;
+        units(&x_face, "m")?;
+        dimension_scale(&x_face, Dim::XFace)?;
+    }
+    frames(&s, "h", &[nx], "m", &[Dim::X])?;
+    frames(&s, "u", &[info.layers, nx], "m/s", &[Dim::Layer, Dim::X])?;
 
     let front = file.create_group("front")?;
     front.set_attr_numeric("threshold", &info.front_threshold)?;
@@ -83,10 +115,16 @@ pub(super) fn create_optional(
 ) -> rust_hdf5::Result<()> {
     let group = file.root_group().group("snapshots")?;
     if w {
-        frames(&group, "w", &[nl, nx], "m/s")?;
+        frames(&group, "w", &[nl, nx], "m/s", &[Dim::Layer, Dim::X])?;
     }
     if p_nh {
-        frames(&group, "p_nh", &[nl + 1, nx + 1], "m^2/s^2")?;
+        frames(
+            &group,
+            "p_nh",
+            &[nl + 1, nx + 1],
+            "m^2/s^2",
+            &[Dim::Level, Dim::XFace],
+        )?;
     }
     Ok(())
 }
@@ -103,7 +141,7 @@ pub(super) fn create_cell_fields(
     }
     let group = file.root_group().group("snapshots")?;
     for field in fields {
-        frames(&group, field.name, &[nx], field.units)?;
+        frames(&group, field.name, &[nx], field.units, &[Dim::X])?;
     }
     Ok(())
 }
@@ -223,6 +261,9 @@ pub(super) fn write_summary(
     set("h_max_final", summary.h_max_final)?;
     set("t_end", summary.t_end)?;
     set("wall_time_s", summary.wall_time_s)?;
+    set("outflowed_fraction", summary.outflowed_fraction)?;
+    set("front_at_end_time", summary.front_at_end_time)?;
+    set("max_speed_final", summary.max_speed_final)?;
     group.set_attr_numeric("steps", &(summary.steps as i64))?;
     group.set_attr_string("status", &summary.status)?;
     if let Some(a) = summary.max_wave_amplitude {
@@ -262,7 +303,96 @@ fn series(group: &H5Group, name: &str, chunk: usize) -> rust_hdf5::Result<H5Data
 
 /// An empty dataset of frames of shape `frame`, one chunk per frame, growing along
 /// an unlimited first axis.
-fn frames(group: &H5Group, name: &str, frame: &[usize], unit: &str) -> rust_hdf5::Result<()> {
+/// The dimensions of `/snapshots`, each with a coordinate dataset there that is an
+/// HDF5 dimension scale. rust-hdf5 cannot write the `DIMENSION_LIST` attribute (a
+/// variable-length array of object references) that attaches scales to a dataset, so
+/// the data are labelled the way netCDF-4 labels multidimensional coordinate
+/// variables, which h5netcdf (xarray's `engine="h5netcdf"`) reads without references:
+/// every scale carries `CLASS = "DIMENSION_SCALE"` (a fixed-length string), `NAME`
+/// and `_Netcdf4Dimid`, and every field `CLASS = "DIMENSION_SCALE"` and
+/// `_Netcdf4Coordinates`, the dimension ids of its axes (docs/output-format.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Dim {
+    T = 0,
+    X = 1,
+    Layer = 2,
+    Level = 3,
+    XFace = 4,
+}
+
+impl Dim {
+    fn name(self) -> &'static str {
+        match self {
+            Dim::T => "t",
+            Dim::X => "x",
+            Dim::Layer => "layer",
+            Dim::Level => "level",
+            Dim::XFace => "x_face",
+        }
+    }
+}
+
+/// A fixed-length ASCII string attribute (h5py reads it as bytes, as the dimension
+/// scale API writes `CLASS` and `NAME`).
+fn fixed_string(ds: &H5Dataset, name: &str, value: &str) -> rust_hdf5::Result<()> {
+    let mut bytes = value.as_bytes().to_vec();
+    bytes.push(0);
+    let datatype = DatatypeMessage::FixedString {
+        size: bytes.len() as u32,
+        padding: 0,
+        charset: 0,
+    };
+    ds.set_attr_typed(name, datatype, bytes)
+}
+
+/// Makes `ds` the dimension scale of `dim`.
+fn dimension_scale(ds: &H5Dataset, dim: Dim) -> rust_hdf5::Result<()> {
+    fixed_string(ds, "CLASS", "DIMENSION_SCALE")?;
+    fixed_string(ds, "NAME", dim.name())?;
+    ds.new_attr::<i32>()
+        .shape(())
+        .create("_Netcdf4Dimid")?
+        .write_numeric(&(dim as i32))
+}
+
+/// The `_Netcdf4Dimid` of the field `name`. h5netcdf registers every dataset with
+/// `CLASS = "DIMENSION_SCALE"` as a dimension too, and without an id of its own it
+/// would take one by position that may be an axis's (which then gets the field's name):
+/// ids from 16 up, distinct for distinct names, are never an axis's.
+fn field_dimid(name: &str) -> i32 {
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    for b in name.bytes() {
+        hash ^= b as u64;
+        hash = hash.wrapping_mul(0x100_0000_01b3);
+    }
+    16 + (hash % 1_000_000_000) as i32
+}
+
+/// Labels the axes of the field `ds`: t, then `axes`.
+fn label_axes(ds: &H5Dataset, name: &str, axes: &[Dim]) -> rust_hdf5::Result<()> {
+    let dims: Vec<i32> = std::iter::once(Dim::T)
+        .chain(axes.iter().copied())
+        .map(|d| d as i32)
+        .collect();
+    fixed_string(ds, "CLASS", "DIMENSION_SCALE")?;
+    ds.new_attr::<i32>()
+        .shape(())
+        .create("_Netcdf4Dimid")?
+        .write_numeric(&field_dimid(name))?;
+    ds.new_attr::<i32>()
+        .shape([dims.len()])
+        .create("_Netcdf4Coordinates")?
+        .write_array(&dims)
+}
+
+/// Creates the field `name` of shape (nt, frame…), its axes after t being `axes`.
+fn frames(
+    group: &H5Group,
+    name: &str,
+    frame: &[usize],
+    unit: &str,
+    axes: &[Dim],
+) -> rust_hdf5::Result<()> {
     let dims: Vec<usize> = std::iter::once(0).chain(frame.iter().copied()).collect();
     let chunk: Vec<usize> = std::iter::once(1).chain(frame.iter().copied()).collect();
     let max: Vec<Option<usize>> = std::iter::once(None)
@@ -274,7 +404,8 @@ fn frames(group: &H5Group, name: &str, frame: &[usize], unit: &str) -> rust_hdf5
         .chunk(&chunk)
         .max_shape(&max)
         .create(name)?;
-    units(&ds, unit)
+    units(&ds, unit)?;
+    label_axes(&ds, name, axes)
 }
 
 fn units(ds: &H5Dataset, unit: &str) -> rust_hdf5::Result<()> {

@@ -1,0 +1,199 @@
+//! What a run tells of its outcome: one status line, the mass that left through an
+//! outflow boundary (report, `/summary`, sweep CSV), a front that reached the end of
+//! the domain, and profile tables whose columns are named.
+
+use std::fs;
+use std::path::Path;
+
+use assert_cmd::Command;
+
+fn granflow() -> Command {
+    Command::cargo_bin("granflow").unwrap()
+}
+
+/// A slope whose mass slides off its open end: the bed is a user's table `x,b`.
+const LEAKING: &str = r#"[domain]
+x_min = 0.0
+x_max = 2.0
+cells = 100
+slope_deg = 30
+
+[boundary]
+right = "outflow"
+
+[bed]
+b = { table = "bed.csv" }
+
+[rheology]
+law = "coulomb"
+mu_deg = 20
+
+[initial]
+h = "if(x < 0.5, 0.1, 0)"
+
+[time]
+t_end = 1.2
+"#;
+
+fn leaking(dir: &Path) -> std::path::PathBuf {
+    fs::write(dir.join("bed.csv"), "x,b\n0,0\n2,0\n").unwrap();
+    let scn = dir.join("leak.toml");
+    fs::write(&scn, LEAKING).unwrap();
+    scn
+}
+
+#[test]
+fn mass_that_left_the_domain_is_reported_and_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let scn = leaking(dir.path());
+    let h5 = dir.path().join("leak.h5");
+    let out = granflow()
+        .args([
+            "run",
+            scn.to_str().unwrap(),
+            "--progress",
+            "none",
+            "--output",
+        ])
+        .arg(&h5)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("  outflowed"))
+        .unwrap_or_else(|| panic!("no outflow line: {stdout}"));
+    let pct: f64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(pct > 1.0 && pct < 100.0, "{line}");
+    assert!(
+        stderr.contains("% of the initial mass left the domain through an outflow boundary"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("the front reached the end of the domain at t = "),
+        "{stderr}"
+    );
+    assert!(
+        stdout.contains("(at least: the front reached the end"),
+        "{stdout}"
+    );
+    // One status line, and no separate stop or settled lines to contradict it.
+    assert_eq!(stdout.matches("granflow: ").count(), 1, "{stdout}");
+    assert!(
+        !stdout.contains("stop time") && !stdout.contains("  settled "),
+        "{stdout}"
+    );
+
+    if let Some(python) = crate::common::python_with_h5py() {
+        let out = std::process::Command::new(python)
+            .args([
+                "-c",
+                "import sys, h5py; s = h5py.File(sys.argv[1])['summary'].attrs; \
+                 print(s['outflowed_fraction'], s['front_at_end_time'])",
+            ])
+            .arg(&h5)
+            .output()
+            .unwrap();
+        let text = crate::common::assert_success(&out);
+        let v: Vec<f64> = text
+            .split_whitespace()
+            .map(|w| w.parse().unwrap())
+            .collect();
+        assert!((100.0 * v[0] - pct).abs() < 0.01 * pct, "{text} vs {pct}");
+        assert!(v[1] > 0.0 && v[1] < 1.2, "{text}");
+    }
+}
+
+#[test]
+fn the_sweep_summary_has_the_outflowed_fraction() {
+    let dir = tempfile::tempdir().unwrap();
+    leaking(dir.path());
+    let sweep = dir.path().join("sweep.toml");
+    fs::write(
+        &sweep,
+        "scenario = \"leak.toml\"\n\n[axes]\nrheology.mu_deg = [20, 40]\n",
+    )
+    .unwrap();
+    let out_dir = dir.path().join("out");
+    let out = granflow()
+        .args(["sweep", sweep.to_str().unwrap(), "--quiet", "--output"])
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = fs::read_to_string(out_dir.join("summary.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header
+        .iter()
+        .position(|&c| c == "outflowed_fraction")
+        .unwrap_or_else(|| panic!("{csv}"));
+    let f: Vec<f64> = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    // 20°: most of the mass has slid off; 40° (above the 30° slope): none of it.
+    assert!(f[0] > 0.01 && f[1] < 1e-9, "{csv}");
+}
+
+#[test]
+fn a_lake_at_rest_is_reported_at_rest() {
+    let scn = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/lake_at_rest.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = granflow()
+        .args([
+            "run",
+            scn.to_str().unwrap(),
+            "--progress",
+            "none",
+            "--output",
+        ])
+        .arg(dir.path().join("lake.h5"))
+        .output()
+        .unwrap();
+    let stdout = crate::common::assert_success(&out);
+    let first = stdout.lines().next().unwrap();
+    assert!(
+        first.starts_with("granflow: completed at t = 2.000 s: reached time.t_end; at rest"),
+        "{stdout}"
+    );
+    assert!(
+        !stdout.contains("not at rest") && !stdout.contains("not settled"),
+        "{stdout}"
+    );
+    // A domain wet to its end has no front reaching it.
+    assert!(
+        !String::from_utf8_lossy(&out.stderr).contains("warning"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn a_table_whose_columns_do_not_say_which_is_the_bed_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scn = leaking(dir.path());
+    fs::write(dir.path().join("bed.csv"), "x,y,z\n0,0,1\n2,0,1\n").unwrap();
+    let out = granflow()
+        .args(["check", scn.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("bed.csv") && stderr.contains("bed.b") && stderr.contains("'x', 'y', 'z'"),
+        "{stderr}"
+    );
+    // Named columns are read whatever their order and number.
+    fs::write(dir.path().join("bed.csv"), "z,b,x\n9,0,0\n9,0,2\n").unwrap();
+    let out = granflow()
+        .args(["check", scn.to_str().unwrap()])
+        .output()
+        .unwrap();
+    crate::common::assert_success(&out);
+}
