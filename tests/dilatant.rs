@@ -1,4 +1,4 @@
-//! The dilatant μ(I)–φ model of seed 002 (issue 11), driven through its stepper
+//! The dilatant μ(I)–φ model of seed 002, driven through its stepper
 //! (`granflow::numerics::dilatant`): well-balance at rest, conservation of grains,
 //! energy, stiff dilatancy, the uniform steady flow on an incline, and the collapse
 //! results of seed 002 §4.3.
@@ -344,8 +344,8 @@ fn dense_and_loose_collapses_follow_section_4_3() {
         }
         // Dilation where the dense mass starts to flow.
         assert!(dense[0].2 < 0.62 - 1e-3, "{}", dense[0].2);
-        // Early on the loose front is not behind the dense one (issue 11: "the dense
-        // front is slower early on and the loose one faster").
+        // Early on the loose front is not behind the dense one ("the dense front is
+        // slower early on and the loose one faster" would contradict it).
         assert!(
             dense[0].0 <= loose[0].0,
             "θ {slope}: fronts {} {}",

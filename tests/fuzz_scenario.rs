@@ -1,4 +1,4 @@
-//! Fuzzing the scenario loader and the run setup (issue 13): any byte string, any edit
+//! Fuzzing the scenario loader and the run setup: any byte string, any edit
 //! of a real scenario and any combination of schema keys with hostile values must give
 //! a scenario or a `ScenarioError` (exit 0 or 2), never a panic, an abort (stack
 //! overflow, out of memory) or a hang.

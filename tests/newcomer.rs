@@ -113,7 +113,7 @@ fn the_starter_scenario_runs_as_is() {
     let text = std::fs::read_to_string(tmp.path().join("first.toml")).unwrap();
     assert!(text.contains("granflow run first.toml"));
     let (out, _) = ok(granflow(tmp.path()).args(["run", "first.toml"]));
-    // The μ(I) column settles (issue 13 item 1: it would creep on to t_end).
+    // The μ(I) column settles (it would creep on to t_end).
     assert!(out.contains("granflow: settled at"), "{out}");
     assert!(tmp.path().join("first.h5").is_file());
     assert!(tmp.path().join("first_front.csv").is_file());

@@ -238,10 +238,9 @@ fn mass_at_repose_stays_at_rest_to_order_delta() {
 use crate::common::fingerprint;
 
 /// (h, hu) fingerprint of the §5.1 collapse with 4 layers switched to the hydrostatic
-/// pressure, recorded with the code of main at ecc2685 (before this model): the
-/// hydrostatic multilayer path is untouched by the non-hydrostatic one. Re-recorded
-/// once, deliberately, when step 1's gravity source of a draining cell moved to the
-/// mass that stays in it (issue 13 item 3; was 0x388f_a4ca_e881_ba7f).
+/// pressure: the hydrostatic multilayer path is untouched by the non-hydrostatic one.
+/// Re-recorded only deliberately, when the hydrostatic numerics change (earlier values
+/// are in the history of this file).
 const HYDROSTATIC_FINGERPRINT: u64 = 0x171c_610c_748c_59e7;
 
 #[test]
@@ -566,10 +565,9 @@ fn implicit_viscosity_makes_the_in_depth_profile_first_order_in_time_at_the_scen
     assert!(u1[0] - u1[4] < 0.005, "{u1:?}");
 }
 
-/// (h, hu, hw) fingerprint of the §5.2 run at (400, 8), recorded with the code before
-/// `rheology.viscosity` existed (deea950; the fingerprints example gives identical
-/// hashes for every bundled scenario before and after): the scenario's "frozen" is
-/// that step, bit for bit; "lagged" (the default) and "implicit" are other schemes.
+/// (h, hu, hw) fingerprint of the §5.2 run at (400, 8): the scenario's "frozen" is the
+/// paper's step 2, bit for bit; "lagged" (the default) and "implicit" are other
+/// schemes.
 const CONVERGENCE_FINGERPRINT: u64 = 0x2ab8_421d_a468_127f;
 
 #[test]

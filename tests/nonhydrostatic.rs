@@ -119,21 +119,10 @@ fn granular_mass_at_rest_keeps_q_exactly_zero() {
 // ---------------------------------------------------------------------------------
 // The hydrostatic path
 
-/// Fingerprints of two hydrostatic runs, first made with the code just before the
-/// non-hydrostatic model was merged: adding non-hydrostatic stages must not change the
-/// hydrostatic numbers. Re-recorded once, deliberately, when step 1 moved to the
-/// own-depth split of the pressure source (docs/numerics.md), and once more when the
-/// CFL step moved to the per-cell signal speed (issue 9: same scheme, larger Δt; was
-/// [0x5557abb381e6e51f, 0x2d04cd9bc92a65bd, 0x65031aecc88d73bf] and
-/// [0x9bdff5447baf3c4d, 0x1a7e609655d584c3, 0xed47d875d2e9bfe7]), and once more when
-/// the gravity source of a draining cell moved to the mass that stays in it and thin
-/// layers on steep beds kept the full slope force (issue 13 items 2–3; was
-/// [0x4dc79ac88a90f46f, 0xde5509ebe0f91886, 0xdc8397765a2f2c34] and
-/// [0x88096342af8e6dc6, 0x2d7a4a447fc6fa22, 0xb2f6b4677d2f1901]), and once more when
-/// the μ(I) friction step became backward Euler in the speed (issue 13 item 1: μ at
-/// the pre-friction speed overstated the friction; was
-/// [0x1c39a627bf281095, 0x3751453d193b449d, 0x02f53c7b8799b719] and
-/// [0xcd18605187334e11, 0xde3a94e3e24e7c08, 0x0c72fbffbe37a104]).
+/// Fingerprints of two hydrostatic runs: adding non-hydrostatic stages must not change
+/// the hydrostatic numbers. Re-recorded only deliberately, when the hydrostatic
+/// numerics change (the commit says why; earlier values are in the history of this
+/// file).
 const GOLDEN_COLLAPSE: [u64; 3] = [
     0x16d8_2230_b402_7c0d,
     0xba6c_de95_a81b_17f2,
@@ -373,8 +362,7 @@ fn collapse_front_velocity_nh_accelerates_then_decays_h_starts_fastest() {
     println!("front velocity, hydrostatic: {h0:.2} m/s at 0.02 s, peak {ph:.2} m/s at {th:.3} s, {:.2} m/s at 0.9 s", at(&vh, 0.9));
     println!("front velocity, non-hydrostatic: {nh0:.2} m/s at 0.02 s, peak {pnh:.2} m/s at {tnh:.3} s, {:.2} m/s at 0.9 s", at(&vnh, 0.9));
     // Hydrostatic: near its maximum from the start (the discrete front needs a few
-    // cells to form; with the per-cell CFL step of issue 9 its peak moved from 35 to
-    // 65 ms, 6 % above the speed at 20 ms), peaking well before the non-hydrostatic
+    // cells to form; its peak, at 65 ms, is 6 % above the speed at 20 ms), peaking well before the non-hydrostatic
     // front, then decreasing.
     assert!(
         th < 0.5 * tnh,

@@ -1,4 +1,4 @@
-//! The binary against a hostile or careless user (issue 13): closed pipes, absurd or huge
+//! The binary against a hostile or careless user: closed pipes, absurd or huge
 //! input, outputs that would overwrite the wrong file, two processes on one output, and
 //! processes killed half-way. Every case must end with exit code 0, 1 or 2 and a message,
 //! never a panic (101), an abort or a corrupt file.
@@ -834,8 +834,8 @@ fn ctrl_c_stops_a_sweep_which_then_resumes() {
 }
 
 // ---------------------------------------------------------------------------------
-// Numerics that users notice (issue 13 items 1–4; items 2 and 3 are in
-// tests/well_balanced.rs and tests/properties.rs)
+// Numerics that users notice (thin layers on steep beds and near-dry cells are
+// tested in tests/well_balanced.rs and tests/properties.rs)
 
 /// One run of `scenarios/collapse.toml` (t_end = 3 s) with `sets`: its summary.
 fn collapse_run(cells: usize, sets: &[&str]) -> granflow::output::RunSummary {

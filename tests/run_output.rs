@@ -38,7 +38,7 @@ fn collapse_output_honours_the_contract() {
     let toml = std::fs::read_to_string(&scenario).unwrap();
     assert_eq!(f.attr_string("scenario_toml").unwrap(), toml);
     let summary = f.root_group().group("summary").unwrap();
-    // μ(I) creeps: collapse.toml ends when the mass has settled (issue 13 item 1).
+    // μ(I) creeps: collapse.toml ends when the mass has settled.
     assert_eq!(summary.attr_string("status").unwrap(), "settled");
 
     // Grid.
@@ -65,7 +65,7 @@ fn collapse_output_honours_the_contract() {
     let u = read(&f, "snapshots/u");
     assert!(h.iter().all(|&v| v >= 0.0 && v.is_finite()));
     // Settled (kinetic energy, below), not at exact rest: the μ(I) front creeps
-    // (issue 13 item 1; up to 1.6 cm/s in the thinnest front cells here).
+    // (up to 1.6 cm/s in the thinnest front cells here).
     let u_last = u[(nt - 1) * nx..]
         .iter()
         .fold(0.0f64, |m, v| m.max(v.abs()));
@@ -114,7 +114,7 @@ fn collapse_output_honours_the_contract() {
     let front = read(&f, "front/x");
     assert_eq!(front[0], x[39], "last cell of the column (x ≤ 0)");
     // Runout 1.090 m until the μ(I) friction became backward Euler and the run ends
-    // when settled (issue 13 item 1; tests/scenarios.rs collapse_regression_norms).
+    // when settled (tests/scenarios.rs collapse_regression_norms).
     assert!((front.last().unwrap() - front[0] - 1.105).abs() < 1e-9);
     let csv = std::fs::read_to_string(dir.path().join("collapse_front.csv")).unwrap();
     assert_eq!(csv.lines().count(), n + 1);

@@ -46,7 +46,7 @@ fn every_scenario_loads_and_runs_a_few_steps() {
 
 #[test]
 fn collapse_runs_until_settled_with_finite_runout() {
-    // The μ(I) deposit creeps on after it has settled (issue 13 item 1, seed 002 §4), so
+    // The μ(I) deposit creeps on after it has settled (seed 002 §4), so
     // the scenario ends at `time.stop_when_settled` (kinetic energy ≤ 1e-6 of its peak),
     // not at exact rest (it ended "stopped_at_rest" at 1.874 s before the friction step
     // became backward Euler in the speed).
@@ -82,24 +82,9 @@ fn collapse_runs_until_settled_with_finite_runout() {
 
 #[test]
 fn collapse_regression_norms() {
-    // Pinned from the validated run (Δx = 0.5 cm, CFL 0.5; re-pinned when the
-    // reconstruction moved to the bed b only: thin front layers then feel full
-    // gravity, runout 1.090 → 1.095 m, stop 1.99 → 1.90 s; and when step 1 moved to
-    // the own-depth split of the pressure source: the films ahead of the front no
-    // longer take half the push of the thick cell behind them, runout 1.095 → 1.090 m,
-    // stop 1.899 → 1.895 s; and when the CFL step moved to the per-cell signal speed
-    // (issue 9: 968 → 778 steps, stop 1.894675 → 1.890729 s, L2 0.026312119 →
-    // 0.026312236, h_max 0.041398636 → 0.041422228); and when the gravity source of a
-    // draining cell moved to the mass that stays in it (issue 13 item 3: 778 → 774
-    // steps, stop 1.890729 → 1.874388 s, L2 0.026312236 → 0.026354618, h_max
-    // 0.041422228 → 0.041592109; runout unchanged); and when the μ(I) friction step
-    // became backward Euler in the speed and the scenario ends when the mass has
-    // settled (issue 13 item 1: μ at the pre-friction speed overstated the friction and
-    // stopped the creep early; no exact rest any more, so the pinned time is the
-    // settled time: stop 1.874388 s → settled 1.948899 s, 774 → 793 steps, runout
-    // 1.090 → 1.105 m, L2 0.026354618 → 0.026279916, h_max 0.041592109 →
-    // 0.041381679). A change in any of these is a change in the numerics and must be
-    // explained.
+    // Pinned from the validated run (Δx = 0.5 cm, CFL 0.5). A change in any of these is
+    // a change in the numerics and must be explained in the commit that re-pins it
+    // (earlier values and their reasons are in the history of this file).
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/collapse.toml");
     let scn = load_file(&path, &[]).unwrap();
     let mut sim = build_granular(&scn);

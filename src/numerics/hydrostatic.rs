@@ -45,7 +45,7 @@
 //! g_n h_i × (a surface slope), the friction step can weigh h_i itself (no ĥ of seed 003
 //! eq. 25), and a mass at rest with |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s is held exactly.
 //!
-//! Thin layers on steep beds (issue 13 item 2). Where the lower side of a face is
+//! Thin layers on steep beds. Where the lower side of a face is
 //! thinner than the bed step (h_L < Δb, or h_R < −Δb), h^± is clipped at 0 and 𝓢 sees
 //! the lower side's surface raised to the higher side's bed: a layer of depth h on a
 //! bed sampled with steps Δb = b' Δx > h felt g_n h²/(2Δx) per face instead of
@@ -62,7 +62,7 @@
 //!
 //! Unclipped faces keep 𝓢 as printed.
 //!
-//! Near-dry cells (issue 13 item 3). The gravity part of a cell's source (bed and plane,
+//! Near-dry cells. The gravity part of a cell's source (bed and plane,
 //! i.e. 𝓢 minus the flat-bed pressure g_n h̄ (h_R − h_L), which stays as it is so
 //! that the shares of a face still sum to the jump of g_n h²/2 and shocks keep their
 //! speed) is weighted by min(h^{n+1}, h^n)/h^n (the share of the mass that left is
@@ -278,7 +278,7 @@ fn interface<M: Fn(f64, f64) -> f64>(
     let u_roe = (sl * l.u + sr * r.u) / (sl + sr);
     let h_roe = 0.5 * (l.h + r.h);
     let c_roe = sheared_celerity(g_n, h_roe, 0.5 * (l.shear + r.shear));
-    // √g √h reuses the √h of the Roe average (the monolayer's form since issue 2).
+    // √g √h reuses the √h of the Roe average (the monolayer's form).
     let side_celerity = |side: &Side, sqrt_h: f64| {
         if side.shear == 0.0 {
             g_n.sqrt() * sqrt_h

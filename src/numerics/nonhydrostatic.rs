@@ -8,7 +8,7 @@
 //!
 //!   (hu)* = (hu) − Δt (∂_X(h q̄) + 2q̄ ∂_X b)_i   (the discrete operator of step 3),
 //!   σ_i = μ(I) (g_n h_i + 2q̄_i),  I from p_b/ρ = g_n h + 2q̄ (seed 000 eq. 15e),
-//!   (μ(I) at the new speed, backward Euler, for the μ(I) law: issue 13 item 1 and
+//!   (μ(I) at the new speed, backward Euler, for the μ(I) law:
 //!   [`BasalFriction::nh_friction_update`]; a constant for Coulomb),
 //!   if Δt σ_i < |(hu)*|:  hu ← (hu)* − Δt σ_i sgn((hu)*),  hw ← hw + 2Δt q̄_i,
 //!   otherwise:            hu ← 0,  hw ← 0,

@@ -304,8 +304,8 @@ mod tests {
     /// layer velocities s_α sin(2πx), a w_α uniform in x changes only through the layer
     /// fluxes and the exchange, ∂_t(H w_α) = −H w_α ∂_X u_α + (w_{α+1/2} G_{α+1/2} −
     /// w_{α−1/2} G_{α−1/2})/l_α, G_{α+1/2} = Σ_{β≤α} l_β H ∂_X u_β (upwind w_{α+1/2}).
-    /// One step matches it to O(Δx²); transporting hw with the mean flux alone (the
-    /// transport before issue 10's fix) leaves every w_α unchanged and fails.
+    /// One step matches it to O(Δx²); transporting hw with the mean flux alone (without
+    /// the exchange terms) leaves every w_α unchanged and fails.
     #[test]
     fn layered_tracer_follows_the_layer_fluxes_and_the_exchange() {
         let mesh = mesh();

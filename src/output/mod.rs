@@ -124,7 +124,7 @@ pub struct RunSummary {
     /// Time after which the kinetic energy stays at or below `time.settle_fraction` ×
     /// its peak (the time of the first step of that final period), NaN if it does not
     /// end the run there. Unlike `stop_time` it converges under refinement for μ(I),
-    /// whose mass creeps long after it has practically stopped (issue 13 item 1).
+    /// whose mass creeps long after it has practically stopped.
     #[serde(default = "nan")]
     pub settled_time: f64,
     pub h_max_final: f64,

@@ -68,7 +68,7 @@ pub struct DilatantLaw {
 
 impl DilatantLaw {
     /// Seed 002 Table 1 (glass beads): μ_1 0.48, μ_2 0.73, I_0 0.279, d 0.7 mm, K 4.09,
-    /// K̃ 0.2, φ_stat 0.582 (§4.1's text prints 0.585; Table 1 and issue 11 use 0.582),
+    /// K̃ 0.2, φ_stat 0.582 (§4.1's text prints 0.585; Table 1 has 0.582, used here),
     /// regularisation (f2) with N = 1 (§3.2), no walls.
     pub fn table1() -> DilatantLaw {
         DilatantLaw {

@@ -16,9 +16,9 @@
 //!   √(x + y) ≤ √x + √y for the averaged shear of a face) and the column-blind bound
 //!   max_i |ū_i| + √(g_n max_i h_i + max_i σ_i); both bound every face speed.
 //!
-//! Before issue 9 the monolayer used max_i |u_i| + √(g_n max_i h_i), maxima taken over
-//! different cells: never smaller, often much larger (a fast thin front and a slow
-//! thick column), so more steps than the flux needs.
+//! The global bound max_i |u_i| + √(g_n max_i h_i), maxima taken over different cells,
+//! is never smaller and often much larger (a fast thin front and a slow thick column):
+//! it would take more steps than the flux needs.
 
 use crate::grid::Line;
 use crate::model::Diagnostics;

@@ -41,12 +41,12 @@
 //!    cut at 0) for K > 0 with μ(I) and φ_eq(I) both at the new speed
 //!    ([`backward_euler_speed`], I of 2.10–2.11 with the cell's φ); the mass stops iff
 //!    its discharge is within the static impulse Δt g_c h (μ_1 + μ_w h/W + K(φ − φ_stat))
-//!    of (2.16). Until issue 11's follow-up μ_eff was taken at the speed after the
-//!    gravity push (explicit in I): a uniform 28° flow then settled at I = 0.0160,
-//!    φ = 0.5789 (dense start) or nearly stopped (loose, I = 2.0e-4) instead of
+//!    of (2.16). Were μ_eff taken at the speed after the gravity push (explicit
+//!    in I), a uniform 28° flow would settle at I = 0.0160, φ = 0.5789 (dense start)
+//!    or nearly stop (loose, I = 2.0e-4) instead of
 //!    I* = 0.0728, φ_eq(I*) = 0.5678, because the dilatancy step below relaxed φ
 //!    towards φ_eq at the slower speed after friction while the friction used the
-//!    faster one, so tan ψ stayed > 0 at the fixed point. Now the fixed point is
+//!    faster one, so tan ψ would stay > 0 at the fixed point. Here the fixed point is
 //!    exactly tan ψ = 0, μ(I) = tan θ (`tests/dilatant.rs`,
 //!    `split_scheme::uniform_flow_on_an_incline_reaches_the_critical_state_split_scheme`);
 //!    then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the state after
@@ -265,8 +265,8 @@ const MAX_NEWTON: usize = 100;
 pub fn cell_friction(law: &DilatantLaw, g_c: f64, dt: f64, h: f64, q: f64, phi: f64) -> (f64, f64) {
     let wall = wall(law, h);
     if law.k == 0.0 {
-        // Without dilatancy: the monolayer's own backward-Euler μ(I) step (issue 13 item
-        // 1, `MuI::friction_update`), the walls' μ_w h/W a constant added to μ_1 and μ_2,
+        // Without dilatancy: the monolayer's own backward-Euler μ(I) step
+        // (`MuI::friction_update`), the walls' μ_w h/W a constant added to μ_1 and μ_2,
         // so that K = 0 stays the Savage–Hutter μ(I) run bit for bit.
         let savage_hutter = MuI {
             mu_s: law.mu_1 + wall,
@@ -524,8 +524,8 @@ impl SplitScheme {
     /// the diffusion runs over each run of consecutive active faces (a face with no
     /// drive carries no flux): its cost follows the moving cells, not the extent of
     /// the deposit (a collapse keeps a few cells moving at both ends of a long deposit
-    /// at rest). Cells next to no active face are left as they are (until issue 11's
-    /// follow-up they went through (φh, φ^α h) → φ, h, a change at round-off).
+    /// at rest). Cells next to no active face are left as they are (sending them
+    /// through (φh, φ^α h) → φ, h would change them at round-off).
     #[inline(never)]
     fn stabilise(
         &mut self,

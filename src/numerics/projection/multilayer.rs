@@ -1198,7 +1198,7 @@ mod tests {
         }
     }
 
-    /// The assembly as it was before the face-by-face one (778d9cc): the band zeroed,
+    /// The cell-by-cell assembly the face-by-face one must reproduce bit for bit: the band zeroed,
     /// then each (cell, layer) adding its outer product to its four unknowns, cells
     /// and layers in increasing order.
     fn assemble_cell_by_cell(rows: &MultilayerRows, band: &mut [f64], rhs: &mut [f64], w: usize) {
@@ -1284,7 +1284,7 @@ mod tests {
         }
     }
 
-    /// `apply_impulses` gives the bits of its plain form (778d9cc: every layer's
+    /// `apply_impulses` gives the bits of its plain form (every layer's
     /// four coefficients read, Σ of the four products in order, times 1/l_α), near
     /// dry faces and at every boundary too.
     #[test]

@@ -52,7 +52,7 @@ impl MuI {
     }
 }
 
-/// Backward Euler in the speed for μ(I) friction (issue 13 item 1): the speed u ≥ 0
+/// Backward Euler in the speed for μ(I) friction: the speed u ≥ 0
 /// after a friction step that solves
 ///
 ///   u + c μ(k u) = u*,   μ(I) = μ_s + (μ_2 − μ_s) I / (I_0 + I),

@@ -1166,7 +1166,7 @@ front_threshold = 2e-3
             "law = \"coulomb\"\nmu = 0.5",
             "law = \"mu_i\"\nmu_s = 0.4\nmu_2 = 0.6\ni0 = 0.3",
         );
-        // Leftover μ(I) keys in the file are ignored, with a note naming them (issue 13).
+        // Leftover μ(I) keys in the file are ignored, with a note naming them.
         let s = load_set(&mu_i, &["rheology.law=coulomb", "rheology.mu=0.5"]).unwrap();
         assert_eq!(s.friction, FrictionLaw::Coulomb { mu: 0.5 });
         assert_eq!(s.notes.len(), 1);
