@@ -3,8 +3,8 @@
 //! Architecture (see `docs/architecture.md`): a validated [`scenario::Scenario`] names
 //! a [`model::Model`]; [`setup`] builds its grid (the [`grid`] floor: a
 //! [`grid::Line`] or a [`grid::CurvedLine`]), its state ([`state`]) and its
-//! [`pipeline`] of sub-steps (hyperbolic → friction/viscous → projection, seed 000 §3
-//! and seed 003 §4), which the generic [`simulation::Simulation`] advances in time,
+//! [`pipeline`] of sub-steps (hyperbolic → friction/viscous → projection, Garres-Díaz et al. 2021, §3
+//! and Escalante et al. 2023, §4), which the generic [`simulation::Simulation`] advances in time,
 //! consulting its [`stop`] rules and reporting to an [`output::OutputSink`].
 
 pub mod catalog;

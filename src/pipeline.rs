@@ -1,4 +1,4 @@
-//! The time step as a pipeline of named sub-steps (seed 000 §3, seed 003 §4:
+//! The time step as a pipeline of named sub-steps (Garres-Díaz et al. 2021, §3, Escalante et al. 2023, §4:
 //! hyperbolic → friction or viscous → projection), each timed. A model builds its
 //! pipeline from the scenario with only the stages the scene needs (a hydrostatic run
 //! has no projection stage); the run loop applies it without knowing what is inside.

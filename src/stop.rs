@@ -200,7 +200,7 @@ pub fn settled(ke: f64, peak: f64, fraction: f64) -> bool {
 /// Ends the run with status `settled` once the kinetic energy has fallen to
 /// `time.settle_fraction` × its peak (`time.stop_when_settled`). For μ(I), whose
 /// friction tends to μ_s as the speed vanishes, a released mass creeps long after it
-/// has practically stopped (seed 002 §4: 40 s to stop fully at 22°, under 1 mm/s from
+/// has practically stopped (Bouchut et al. 2021, §4: 40 s to stop fully at 22°, under 1 mm/s from
 /// 19 s), and the exact-rest time grows without bound under refinement
 /// (docs/validation.md "Stop time and runout under refinement"); the settled time
 /// converges. Consulted after [`AtRest`], whose status wins on the same step.

@@ -183,7 +183,7 @@ fn coulomb_friction_below_slope_accelerates_as_the_ode() {
 
 #[test]
 fn cartesian_layer_on_a_sloped_bed_accelerates_at_g_tan_theta_minus_mu() {
-    // Cartesian form (seed 000 §4.1): vertical thickness, gravity g, slope inside b.
+    // Cartesian form (Garres-Díaz et al. 2021, §4.1): vertical thickness, gravity g, slope inside b.
     let (theta, mu): (f64, f64) = (25.0, 0.2);
     let mut case = Case::new(0.0, 4.0, 80);
     case.mesh.coordinates = granflow::scenario::Coordinates::Cartesian;

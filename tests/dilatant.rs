@@ -1,7 +1,7 @@
-//! The dilatant μ(I)–φ model of seed 002, driven through its stepper
+//! The dilatant μ(I)–φ model of Bouchut et al. 2021, driven through its stepper
 //! (`granflow::numerics::dilatant`): well-balance at rest, conservation of grains,
 //! energy, stiff dilatancy, the uniform steady flow on an incline, and the collapse
-//! results of seed 002 §4.3.
+//! results of Bouchut et al. 2021, §4.3.
 
 use granflow::grid::{Line, LineSpec};
 use granflow::numerics::dilatant::stabilisation::Viscosity;
@@ -78,7 +78,7 @@ fn assert_admissible(s: &DilatantState) {
 
 #[test]
 fn masses_at_rest_below_repose_stay_at_rest() {
-    // Both families of seed 002 eq. (3.13), with |X| below μ_eff at rest
+    // Both families of Bouchut et al. 2021, eq. (3.13), with |X| below μ_eff at rest
     // (μ_1 + K(φ − φ_stat) ≥ 0.349 for φ ≥ 0.55):
     // (a) φ = 0.6 uniform on a 10° plane, free surface sloping at +0.2 − tan 10°;
     // (b) φ ∝ h (h φ^{−1} constant, α = 2) on a horizontal bed.
@@ -131,7 +131,7 @@ fn mass_above_repose_moves() {
     assert!(vmax > 1e-3, "{vmax}");
 }
 
-/// Column collapse of seed 002 §4: 14 cm × 20 cm behind a wall at x = −0.2 m.
+/// Column collapse of Bouchut et al. 2021, §4: 14 cm × 20 cm behind a wall at x = −0.2 m.
 fn collapse(slope: f64, x_max: f64, cells: usize) -> Line {
     mesh(-0.2, x_max, cells, slope, (true, false))
 }
@@ -148,7 +148,7 @@ fn column(mesh: &Line, phi0: f64) -> DilatantState {
 #[test]
 fn grains_are_conserved_and_energy_decays() {
     // Walls on both sides: ∫φh is conserved to round-off. Without dilatancy (K = 0)
-    // and on a flat bed the total energy must not increase (seed 002 eq. 2.7, B.5);
+    // and on a flat bed the total energy must not increase (Bouchut et al. 2021, eq. 2.7, B.5);
     // with K > 0 dilation may raise it by ∫ g_c φh²/2 γ̇ tan ψ (eq. 2.7's source).
     for (k, phi0) in [(0.0, 0.6), (4.09, 0.62), (4.09, 0.55)] {
         let law = DilatantLaw {
@@ -285,7 +285,7 @@ fn front_and_max(mesh: &Line, s: &DilatantState) -> (f64, f64) {
 
 #[test]
 fn dense_and_loose_collapses_follow_section_4_3() {
-    // Seed 002 §4.3: the maximum thickness (at the rear) is larger for the dense
+    // Bouchut et al. 2021, §4.3: the maximum thickness (at the rear) is larger for the dense
     // column than for K = 0, and smaller for the loose one; the dense mass dilates
     // where it starts to flow. Δx = 1 cm (the paper's figures use finer grids).
     for (slope, x_max, cells, times) in [
@@ -357,7 +357,7 @@ fn dense_and_loose_collapses_follow_section_4_3() {
 
 #[test]
 fn paper_viscosity_breaks_the_fraction_bound_at_the_front() {
-    // ξ = (2, 2, 5) of seed 002 §3.3 diffuses φ^α h 2.5 times faster than φh, which has
+    // ξ = (2, 2, 5) of Bouchut et al. 2021, §3.3 diffuses φ^α h 2.5 times faster than φh, which has
     // no maximum principle for φ (`stabilisation.rs`): on the dense collapse at 0° the
     // film at the front reaches φ > 1 within the first 0.02 s and the stepper refuses
     // it, naming the stage, cell and time. Our default ξ = (2, 2, 2) runs.
@@ -429,7 +429,7 @@ fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (
 fn appendix_b_without_dilatancy_converges_to_savage_hutter() {
     // K = 0 with uniform φ is the incompressible μ(I) model. Its Appendix B scheme
     // (hydrostatic reconstruction + HLL + apparent-topography friction) is not the
-    // seed 000 scheme of the Savage–Hutter model (PVM + Coulomb-aware ΔC + friction
+    // Garres-Díaz et al. 2021 scheme of the Savage–Hutter model (PVM + Coulomb-aware ΔC + friction
     // step), so the two agree to the discretisation error, not to round-off: the L1
     // distance of the thickness at 22°, t = 0.48 s must fall with Δx.
     let law = DilatantLaw {
@@ -760,7 +760,7 @@ fn scenario_series(file: &str, sets: &[String]) -> (Vec<Row>, f64) {
 
 #[test]
 fn section_4_3_with_the_default_scheme() {
-    // Seed 002 §4.3 with the shipped scenarios (Δx = 5 mm, split scheme), K = 0, dense
+    // Bouchut et al. 2021, §4.3 with the shipped scenarios (Δx = 5 mm, split scheme), K = 0, dense
     // and loose, at 0° (to rest) and 22° (to 1.8 s). Asserted, as in the paper:
     // - max thickness dense > K = 0 > loose at every snapshot from 0.24 s (Fig. 5–6),
     //   dense = K = 0 = 0.14 m while neither rear has dropped;
@@ -942,7 +942,7 @@ mod split_scheme {
 
     #[test]
     fn static_thresholds_follow_the_dilatant_friction() {
-        // Seed 002 (2.16): a uniform layer at rest on a plane of slope tan θ starts to
+        // Bouchut et al. 2021, eq. (2.16): a uniform layer at rest on a plane of slope tan θ starts to
         // flow iff tan θ > μ_1 + K(φ − φ_stat): 0.349 for φ = 0.55, 0.635 for φ = 0.62.
         // The hyperbolic step's reconstruction takes that threshold per face
         // (split.rs, `DilatantFaces`), so below it the layer stays at rest to round-off
@@ -1082,7 +1082,7 @@ mod split_scheme {
     #[test]
     fn energy_without_dilatancy_does_not_increase() {
         // K = 0 (the Savage–Hutter step) and K = 4.09 on a flat bed between walls:
-        // report the largest one-step rise of the total energy (seed 002 eq. 2.7); for
+        // report the largest one-step rise of the total energy (Bouchut et al. 2021, eq. 2.7); for
         // K = 0 there is no source and it must not rise beyond round-off.
         for (k, phi0) in [(0.0, 0.62), (4.09, 0.62), (4.09, 0.55)] {
             let law = DilatantLaw {

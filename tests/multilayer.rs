@@ -1,8 +1,8 @@
-//! The hydrostatic multilayer μ(I) model (seed 001 eq. 27–28, seed 003 §4 with
+//! The hydrostatic multilayer μ(I) model (Fernández-Nieto et al. 2016, eq. 27–28, Escalante et al. 2023, §4 with
 //! p_nh = 0): N = 1 is the monolayer bit for bit, steady profiles against the exact
-//! solutions of seed 001 (Bagnold eq. 29, Table 1; sidewalls eq. 30, Table 2),
-//! well-balancing with N layers (seed 003 Table 6), mass and positivity, and the
-//! erodible-bed effect of seed 001 §4.2.4 (Figs. 11–12).
+//! solutions of Fernández-Nieto et al. 2016 (Bagnold eq. 29, Table 1; sidewalls eq. 30, Table 2),
+//! well-balancing with N layers (Escalante et al. 2023, Table 6), mass and positivity, and the
+//! erodible-bed effect of Fernández-Nieto et al. 2016, §4.2.4 (Figs. 11–12).
 //!
 //! The numbers each test measures are printed (`cargo test --test main multilayer:: --
 //! --nocapture`) and recorded in docs/numerics.md.
@@ -152,7 +152,7 @@ fn midpoints(l: &[f64], h: f64) -> Vec<f64> {
         .collect()
 }
 
-/// Seed 001 §4.1.1 and Table 1: the Bagnold flow (eq. 29) with N = 4 … 128 layers.
+/// Fernández-Nieto et al. 2016, §4.1.1 and Table 1: the Bagnold flow (eq. 29) with N = 4 … 128 layers.
 /// The flow is uniform along the slope, so one column (one cell between outflow
 /// boundaries) stands for the paper's 30 cells; it starts at rest and is steady to
 /// 1e-9 by t = 200 s (the paper stops at 50 s, where the surface velocity still
@@ -187,7 +187,7 @@ fn bagnold_profile_converges_at_second_order_in_the_layers() {
         errors.push(relative_errors(&layer_velocities(&sim, 0), &exact));
     }
     let (o1, o2, oinf) = (orders(&errors, 0), orders(&errors, 1), orders(&errors, 2));
-    println!("Bagnold (seed 001 Table 1): N, L1 error, order, L2 error, order, Linf error, order");
+    println!("Bagnold (Fernández-Nieto et al. 2016, Table 1): N, L1 error, order, L2 error, order, Linf error, order");
     for (k, n) in layers.iter().enumerate() {
         let o = |v: &[f64]| {
             k.checked_sub(1)
@@ -214,7 +214,7 @@ fn bagnold_profile_converges_at_second_order_in_the_layers() {
 
 /// The Bagnold flow on the paper's 30 cells stays uniform along the slope: the wave
 /// speeds include the shear of the column (ū ± √(g_n h + 3 Σ l_α (u_α − ū)²)). With
-/// seed 003's ū ± √(g_n h) the flow (ū ≈ 3.2 m/s, √(g_n h) ≈ 3.0 m/s) counts as
+/// Escalante et al. 2023's ū ± √(g_n h) the flow (ū ≈ 3.2 m/s, √(g_n h) ≈ 3.0 m/s) counts as
 /// supercritical, is fully upwinded, and round-off grows into waves by t ≈ 15 s.
 #[test]
 fn bagnold_flow_stays_uniform_on_thirty_cells() {
@@ -234,7 +234,7 @@ fn bagnold_flow_stays_uniform_on_thirty_cells() {
     assert!(u_top[0] > 4.5 && spread < 1e-9, "{u_top:?}");
 }
 
-/// Material of seed 001 §4.1.2 (Jop et al.'s glass beads in a narrow channel).
+/// Material of Fernández-Nieto et al. 2016, §4.1.2 (Jop et al.'s glass beads in a narrow channel).
 struct Channel {
     d_s: f64,
     phi: f64,
@@ -259,7 +259,7 @@ impl Channel {
         }
     }
 
-    /// Seed 001 eq. (30): u at height z of a channel of width `w` on slope `theta`,
+    /// Fernández-Nieto et al. 2016, eq. (30): u at height z of a channel of width `w` on slope `theta`,
     /// zero below the static interface h*.
     fn u(&self, z: f64, theta: f64, w: f64) -> f64 {
         let a = (self.mu_2 - self.mu_s) / self.mu_w * w;
@@ -332,12 +332,12 @@ fn sidewall_errors(w_ds: f64, n: usize, form: &str) -> [f64; 3] {
     relative_errors(&layer_velocities(&sim, 0), &exact)
 }
 
-/// Seed 001 §4.1.2, Fig. 5 and Table 2: steady profiles with sidewall friction for
+/// Fernández-Nieto et al. 2016, §4.1.2, Fig. 5 and Table 2: steady profiles with sidewall friction for
 /// W = 19, 57, 283 d_s with 50 layers, and the convergence in N for W = 283 d_s.
 #[test]
 fn sidewall_profiles_match_jop_solution() {
     let ch = Channel::jop();
-    println!("Sidewalls (seed 001 eq. 30), Q* = 31.5, N = 50: W/d_s, θ, h*/d_s, L1, L2, L∞ errors");
+    println!("Sidewalls (Fernández-Nieto et al. 2016, eq. 30), Q* = 31.5, N = 50: W/d_s, θ, h*/d_s, L1, L2, L∞ errors");
     for (w_ds, bound) in [(19.0, 3e-3), (57.0, 1e-3), (283.0, 5e-4)] {
         let w = w_ds * ch.d_s;
         let theta = ch.slope_for(31.5, w);
@@ -354,10 +354,10 @@ fn sidewall_profiles_match_jop_solution() {
         assert!(h_star > 0.0, "a static layer under the flow");
         assert!(e[0] < bound && e[1] < 2.0 * bound, "W = {w_ds} d_s: {e:?}");
     }
-    // The layer form of seed 003 eq. (36) has the same steady state.
+    // The layer form of Escalante et al. 2023, eq. (36) has the same steady state.
     let e = sidewall_errors(57.0, 50, "layer");
     println!(
-        "  layer form (seed 003 eq. 36), W = 57 d_s: {:.3e} {:.3e} {:.3e}",
+        "  layer form (Escalante et al. 2023, eq. 36), W = 57 d_s: {:.3e} {:.3e} {:.3e}",
         e[0], e[1], e[2]
     );
     assert!(e[0] < 2e-3, "{e:?}");
@@ -381,7 +381,7 @@ fn sidewall_profiles_match_jop_solution() {
     assert!(errors[4][0] < 2e-4, "{:?}", errors[4]);
 }
 
-/// The errors of seed 003 eq. (35) against the initial state, maximal over the
+/// The errors of Escalante et al. 2023, eq. (35) against the initial state, maximal over the
 /// snapshots: Δx Σ|h − h⁰| and Δx Σ h/N Σ_α |u_α|.
 fn departures_from_rest(sink: &MemorySink, dx: f64, layers: usize) -> (f64, f64) {
     let h0 = &sink.snapshots[0].h;
@@ -407,7 +407,7 @@ fn departures_from_rest(sink: &MemorySink, dx: f64, layers: usize) -> (f64, f64)
     worst
 }
 
-/// The at-rest random bed of seed 003 §5.3 with 10 layers, regularisation `delta` and
+/// The at-rest random bed of Escalante et al. 2023, §5.3 with 10 layers, regularisation `delta` and
 /// surface slope `surface_deg`.
 fn at_rest_run(delta: f64, surface_deg: f64) -> (f64, f64) {
     let (_, mut sim) = scenario(
@@ -422,16 +422,16 @@ fn at_rest_run(delta: f64, surface_deg: f64) -> (f64, f64) {
     departures_from_rest(&sink, sim.grid.dx, sim.state.layers)
 }
 
-/// Seed 003 §5.3, Table 6: a mass at rest exactly at the repose slope stays at rest
+/// Escalante et al. 2023, §5.3, Table 6: a mass at rest exactly at the repose slope stays at rest
 /// up to the creep the δ regularisation allows (errors proportional to δ); a surface
-/// 0.01° steeper moves. (Seed 003 needs its ĥ of eq. 25 for this; with the own-depth
+/// 0.01° steeper moves. (Escalante et al. 2023 needs its ĥ of eq. 25 for this; with the own-depth
 /// split of the pressure source in step 1 the weight h_i suffices, docs/numerics.md.)
 /// Measured h 6.30e-4, 7.03e-9, 5.42e-14 and u 1.48e-3, 1.78e-8, 1.79e-13: tens of δ,
 /// the frozen-viscosity creep 2δ√n of the next test (paper about 5 δ).
 #[test]
 fn multilayer_mass_at_repose_stays_at_rest_to_order_delta() {
     println!(
-        "Well-balanced test (seed 003 Table 6), 10 layers, t = 1 s: δ, L1 error h, L1 error u"
+        "Well-balanced test (Escalante et al. 2023, Table 6), 10 layers, t = 1 s: δ, L1 error h, L1 error u"
     );
     for delta in [1e-5, 1e-10, 1e-15] {
         let (eh, eu) = at_rest_run(delta, 20.0);
@@ -598,7 +598,7 @@ fn multilayer_collapse_conserves_mass_and_stays_positive() {
 }
 
 /// The erodible-bed scenario with the constant friction μ = μ_s = tan 25.5° instead of
-/// μ(I) (seed 001's "μ_s-MSM").
+/// μ(I) (Fernández-Nieto et al. 2016's "μ_s-MSM").
 fn constant_friction_text() -> String {
     let text = std::fs::read_to_string(scenario_path("erodible_bed.toml")).unwrap();
     let start = text.find("law = \"mu_i\"").expect("μ(I) law");
@@ -610,7 +610,7 @@ fn constant_friction_text() -> String {
     )
 }
 
-/// Runout (m) of the seed 001 §4.2 collapse at θ = 22° on an erodible bed `h_i`, run
+/// Runout (m) of the Fernández-Nieto et al. 2016, §4.2 collapse at θ = 22° on an erodible bed `h_i`, run
 /// until every layer is slower than 1 mm/s.
 fn erodible_runout(h_i: f64, constant_friction: bool, extra: &[&str]) -> f64 {
     let mut all = vec![format!("initial.erodible_bed={h_i:e}")];
@@ -629,7 +629,7 @@ fn erodible_runout(h_i: f64, constant_friction: bool, extra: &[&str]) -> f64 {
     summary.runout
 }
 
-/// Seed 001 §4.2.4 (Figs. 10–12): at θ = 22° with 20 layers, the runout increases with
+/// Fernández-Nieto et al. 2016, §4.2.4 (Figs. 10–12): at θ = 22° with 20 layers, the runout increases with
 /// the erodible-bed thickness (h_i = 1.82 → 4.6 mm) with the μ(I) rheology (paper
 /// +4.4 %), and decreases with a constant friction coefficient μ_s (μ_s-MSM).
 #[test]
@@ -666,11 +666,11 @@ fn erodible_bed_lengthens_runout_with_mu_i_but_not_with_constant_friction() {
     );
     assert!(
         mu_s.0 > mu_i.0,
-        "constant friction runs further (seed 001 §4.2.3)"
+        "constant friction runs further (Fernández-Nieto et al. 2016, §4.2.3)"
     );
 }
 
-/// C-MSM (seed 001 eq. 32) at θ = 22°: the runout increases too (paper +8.6 %).
+/// C-MSM (Fernández-Nieto et al. 2016, eq. 32) at θ = 22°: the runout increases too (paper +8.6 %).
 #[test]
 fn erodible_bed_lengthens_runout_with_c_msm() {
     let r = (
@@ -744,7 +744,7 @@ fn multilayer_output_has_w_and_static_interface() {
     assert_eq!(&si[..160], &h[..160]);
     assert!(w[..6 * 160].iter().all(|&w| w == 0.0));
     // When the flow slows down, the lower layers stop first: upper layers flow over
-    // static ones (seed 001 §4.2.5). The collapsing column moves down (w < 0).
+    // static ones (Fernández-Nieto et al. 2016, §4.2.5). The collapsing column moves down (w < 0).
     let last = &si[3 * 160..];
     let h_last = &h[3 * 160..];
     assert!(last.iter().zip(h_last).any(|(s, h)| *s > 0.0 && *s < *h));

@@ -1,4 +1,4 @@
-//! The multilayer weakly non-hydrostatic model (seed 003): the exact projection's
+//! The multilayer weakly non-hydrostatic model (Escalante et al. 2023): the exact projection's
 //! constraint after every step, conservation and positivity, the well-balanced test
 //! of Table 6, the hydrostatic path left untouched, and determinism.
 
@@ -116,7 +116,7 @@ fn collapse_conserves_mass_and_keeps_h_nonnegative() {
     assert!(p[5 * 161..].iter().all(|&p| p == 0.0), "surface row is 0");
 }
 
-/// L1 departures from the initial state (seed 003 eq. 35), maximal over the snapshots:
+/// L1 departures from the initial state (Escalante et al. 2023, eq. 35), maximal over the snapshots:
 /// Δx Σ|h − h⁰|, Δx Σ h/N Σ_α |u_α|, and the same for w.
 fn departures_from_rest(sink: &MemorySink, dx: f64, layers: usize) -> [f64; 3] {
     departures_inside(sink, dx, layers, 0)
@@ -162,7 +162,7 @@ fn departures_per_snapshot(sink: &MemorySink, dx: f64, layers: usize, cut: usize
         .collect()
 }
 
-/// Seed 003 §5.3, Table 6 away from the outflows: without the 3 cells next to each
+/// Escalante et al. 2023, §5.3, Table 6 away from the outflows: without the 3 cells next to each
 /// outflow boundary (measured with the default "lagged" viscosities h: 5.15e-4,
 /// 4.01e-9, 1.84e-14; u: 1.49e-3, 1.84e-8, 1.70e-13; w: 8.88e-4, 9.67e-9, 8.47e-14 for
 /// δ = 1e-5, 1e-10, 1e-15; "frozen": h 4.70e-4, 1.90e-9, 1.15e-14). The edge cells
@@ -187,7 +187,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
     }
 }
 
-/// Seed 003 §5.3, Table 6 (a): errors proportional to δ (paper: h 5.34e-5, 5.34e-10,
+/// Escalante et al. 2023, §5.3, Table 6 (a): errors proportional to δ (paper: h 5.34e-5, 5.34e-10,
 /// 2.99e-16; u 5.38e-5, 5.39e-10, 5.39e-15; w 4.21e-5, 4.21e-10, 4.21e-15). Measured
 /// with the default "lagged" viscosities: h 6.21e-4, 7.38e-9, 5.19e-14; u 1.49e-3,
 /// 1.86e-8, 1.71e-13; w 9.11e-4, 1.13e-8, 1.01e-13 (52–74 δ for h, 149–186 δ for u;
@@ -206,7 +206,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta_away_from_the_outflows() {
 #[test]
 fn mass_at_repose_stays_at_rest_to_order_delta() {
     println!(
-        "seed 003 Table 6 with the NH multilayer model (10 layers, t = 1 s): δ, errors h, u, w"
+        "Escalante et al. 2023, Table 6 with the NH multilayer model (10 layers, t = 1 s): δ, errors h, u, w"
     );
     for delta in [1e-5, 1e-10, 1e-15] {
         let mut sim = build(
@@ -222,7 +222,7 @@ fn mass_at_repose_stays_at_rest_to_order_delta() {
             "δ = {delta}: {eh:e} {eu:e} {ew:e}"
         );
     }
-    // 0.01° beyond the repose slope the mass moves (seed 003 §5.3).
+    // 0.01° beyond the repose slope the mass moves (Escalante et al. 2023, §5.3).
     let mut sim = build(
         "nh_multilayer_at_rest.toml",
         &[
@@ -328,7 +328,7 @@ fn convergence_run_with(
     (h, u, w, sim.grid.dx)
 }
 
-/// The layered L1 norm of seed 003 eq. (35): Δx Σ_i (h_i/N) Σ_α |v_{α,i} − r_{α,i}|,
+/// The layered L1 norm of Escalante et al. 2023, eq. (35): Δx Σ_i (h_i/N) Σ_α |v_{α,i} − r_{α,i}|,
 /// for fields stored layer-major (`v[α·nx + i]`).
 fn layered_l1(h: &[f64], v: &[f64], r: &[f64], nx: usize, n: usize, dx: f64) -> f64 {
     (0..nx)
@@ -343,7 +343,7 @@ fn layered_l1(h: &[f64], v: &[f64], r: &[f64], nx: usize, n: usize, dx: f64) -> 
 }
 
 /// The reference averaged onto the coarse cells and layers ("projections of the
-/// reference solutions onto the spaces of the local solutions", seed 003 eq. 35).
+/// reference solutions onto the spaces of the local solutions", Escalante et al. 2023, eq. 35).
 fn project(v: &[f64], nx_f: usize, n_f: usize, nx: usize, n: usize) -> Vec<f64> {
     let (rx, rz) = (nx_f / nx, n_f / n);
     let mut out = vec![0.0; n * nx];
@@ -361,7 +361,7 @@ fn project(v: &[f64], nx_f: usize, n_f: usize, nx: usize, n: usize) -> Vec<f64> 
     out
 }
 
-/// Seed 003 §5.2, Table 5: L1 errors (eq. 35) of h, u(z), w(z) at t = 0.15 s refining
+/// Escalante et al. 2023, §5.2, Table 5: L1 errors (eq. 35) of h, u(z), w(z) at t = 0.15 s refining
 /// (Nx, N) together, against (1600, 32) (the paper's reference is (6400, 128)). Paper:
 /// errors of h 1.59e-2, 1.22e-2, 6.40e-3 on (100, 2), (200, 4), (400, 8), orders 0.39,
 /// 0.93 (then 1.06, 1.18). Measured: h 2.245e-3, 1.269e-3, 7.201e-4; u 7.372e-3,
@@ -378,7 +378,9 @@ fn convergence_at_first_order_table_5() {
     let (nx_f, n_f) = (1600, 32);
     let (h_r, u_r, w_r, _) = convergence_run(nx_f, n_f);
     let mut errors = Vec::new();
-    println!("seed 003 Table 5 against (1600, 32): (Nx, N), L1 errors of h, u(z), w(z)");
+    println!(
+        "Escalante et al. 2023, Table 5 against (1600, 32): (Nx, N), L1 errors of h, u(z), w(z)"
+    );
     for (nx, n) in [(100, 2), (200, 4), (400, 8)] {
         let (h, u, w, dx) = convergence_run(nx, n);
         let (hr, ur, wr) = (
@@ -404,7 +406,7 @@ fn convergence_at_first_order_table_5() {
     // reference is only 4 times finer than the finest run, which biases the last orders
     // upwards, not downwards. The errors are in the moving core (not at the outflows
     // or in the 2 cm film), and come from two parts (docs/validation.md): in z, the
-    // basal inertial number uses the shear rate u_1/h_1 (seed 001 eq. 26), so the basal
+    // basal inertial number uses the shear rate u_1/h_1 (Fernández-Nieto et al. 2016, eq. 26), so the basal
     // μ changes with N (the test below); in x, the in-depth profile is pre-asymptotic
     // (at N = 8 against (6400, 8): u orders 0.43, 0.53, 0.68 up to 1600 cells, ū 0.83,
     // 0.90, 0.96).
@@ -425,7 +427,7 @@ fn convergence_at_first_order_table_5() {
 /// 2.63e-4, 6.17e-5: orders 1.89, 2.09). With μ(I) the same refinement gives 4.03e-3,
 /// 3.12e-3, 2.47e-3 (orders 0.37, 0.34), all of it in the depth-averaged velocity: the
 /// basal inertial number I_{1/2} uses the shear rate u_1/h_1 of the bottom layer
-/// (seed 001 eq. 26, seed 003 eq. 11), which grows with N wherever the column slides,
+/// (Fernández-Nieto et al. 2016, eq. 26, Escalante et al. 2023, eq. 11), which grows with N wherever the column slides,
 /// so the basal friction μ(I_{1/2}) moves towards μ_2 as N grows. That is the slow
 /// part of Table 5's u(z), w(z) orders (the model as printed, not a solver error).
 #[test]

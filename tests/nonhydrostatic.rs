@@ -1,4 +1,4 @@
-//! The weakly non-hydrostatic monolayer model (seed 000): the projection's constraint,
+//! The weakly non-hydrostatic monolayer model (Garres-Díaz et al. 2021): the projection's constraint,
 //! well-balancing, the hydrostatic path left untouched, conservation, and the paper's
 //! qualitative results (§4.1 wedge, §4.3 collapse).
 
@@ -90,7 +90,7 @@ fn discrete_constraint_holds_after_every_projection() {
 
 #[test]
 fn granular_mass_at_rest_keeps_q_exactly_zero() {
-    // The well-balanced case of seed 003 §5.3 (free surface at the repose slope on a
+    // The well-balanced case of Escalante et al. 2023, §5.3 (free surface at the repose slope on a
     // random bed), now with the non-hydrostatic pressure.
     let (sim, sink, _) = run(
         "at_rest_random_bed.toml",
@@ -292,7 +292,7 @@ fn front_velocity(sink: &MemorySink, threshold: f64) -> Vec<(f64, f64)> {
 
 #[test]
 fn wedge_hydrostatic_local_runout_exceeds_nonhydrostatic() {
-    // Seed 000 §4.1, Fig. 3: in local coordinates the hydrostatic model runs out
+    // Garres-Díaz et al. 2021, §4.1, Fig. 3: in local coordinates the hydrostatic model runs out
     // further (by 12.7 % in the paper).
     // Runout: displacement of the front (h = 1 mm, interpolated) at t = 3 s. By then
     // the bulk of both masses is at rest; the thin edge of the front still creeps by
@@ -332,7 +332,7 @@ fn wedge_hydrostatic_local_runout_exceeds_nonhydrostatic() {
 
 #[test]
 fn collapse_front_velocity_nh_accelerates_then_decays_h_starts_fastest() {
-    // Seed 000 §4.3, Fig. 16, on the 22° slope: the hydrostatic front is fastest at
+    // Garres-Díaz et al. 2021, §4.3, Fig. 16, on the 22° slope: the hydrostatic front is fastest at
     // the start; the non-hydrostatic one starts slower, peaks later and decays.
     let sets = [
         "time.t_end=1.0",
@@ -382,7 +382,7 @@ fn collapse_front_velocity_nh_accelerates_then_decays_h_starts_fastest() {
 
 #[test]
 fn gate_slows_the_start_and_raises_the_peak_of_the_front_velocity() {
-    // Seed 000 §4.3, Fig. 16: with the gate's normal velocity the front is slower in
+    // Garres-Díaz et al. 2021, §4.3, Fig. 16: with the gate's normal velocity the front is slower in
     // the first instants, then accelerates more; at 22° the deposit hardly changes.
     let sets = ["time.t_end=3.0", "output.every=0.005"];
     let (_, plain, s_plain) = run("collapse_nh.toml", &sets);
@@ -431,7 +431,7 @@ fn cartesian_to_local(h: &[f64], x_loc: &[f64], theta: f64) -> Vec<f64> {
 
 #[test]
 fn nh_cartesian_and_h_local_deposits_are_close_while_dynamics_differ() {
-    // Seed 000 §4.1 (Figs. 4–6): L1 distance between thickness profiles, in the local
+    // Garres-Díaz et al. 2021, §4.1 (Figs. 4–6): L1 distance between thickness profiles, in the local
     // frame, relative to the mass. The NH-Cartesian deposit is close to the H-local one
     // (much closer than the H-Cartesian one), while during the flow the two differ more.
     let theta = 22f64.to_radians();

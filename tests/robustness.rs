@@ -852,7 +852,7 @@ fn collapse_run(cells: usize, sets: &[&str]) -> granflow::output::RunSummary {
 /// while the runout did. Two causes. (i) The μ(I) law: its excess over μ_s vanishes
 /// with the speed (μ(I) − μ_s ≈ (μ_2 − μ_s) I/I_0, I ∝ u/h^{3/2}), so a deposit whose
 /// front is a little steeper than repose creeps at a speed that decays only
-/// asymptotically (seed 002 §4 reports the same for its μ(I) model at 22°: velocities
+/// asymptotically (Bouchut et al. 2021, §4 reports the same for its μ(I) model at 22°: velocities
 /// below 1e-3 m/s from 19 s, full stop at 40 s, deposit as at 1.8 s); a finer grid
 /// resolves the creeping front longer. (ii) The friction step took μ at the pre-friction
 /// speed, which stopped the creep early, and more so on coarse grids (fixed:
@@ -936,7 +936,7 @@ fn collapse_settled_time_and_runout_converge_and_the_mu_i_creep_is_the_late_stop
     }
 }
 
-/// A uniform μ(I) layer (glass beads of seed 000 Table 1, μ_s = tan 25.5°, μ_2 = tan 36°,
+/// A uniform μ(I) layer (glass beads of Garres-Díaz et al. 2021, Table 1, μ_s = tan 25.5°, μ_2 = tan 36°,
 /// I_0 = 0.279, d_s = 0.7 mm, φ = 0.62) 1.2 mm thick on a 30° plane, released from rest:
 /// the speed at the middle of a 10 m plane at t = 4 s (`cells` cells).
 fn uniform_mu_i_layer_speed(cells: usize) -> f64 {

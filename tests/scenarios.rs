@@ -1,5 +1,5 @@
 //! Every scenario shipped in `scenarios/` loads and runs a few steps, and the
-//! collapse of seed 000 §4.3 runs to rest with a finite runout.
+//! collapse of Garres-Díaz et al. 2021, §4.3 runs to rest with a finite runout.
 
 use std::path::{Path, PathBuf};
 
@@ -31,7 +31,7 @@ fn every_scenario_loads_and_runs_a_few_steps() {
         }
         let d = sim.diagnostics();
         assert!(d.non_finite_at.is_none(), "{}", path.display());
-        // Seed 003 §5.2 has free outflow at both ends of a mass that touches them: the
+        // Escalante et al. 2023, §5.2 has free outflow at both ends of a mass that touches them: the
         // ghost copy (homogeneous Neumann) lets a little mass in upstream (1e-10 of it
         // in 5 steps, hydrostatic or not).
         let inflow = path.ends_with("nh_multilayer_convergence.toml");
@@ -46,7 +46,7 @@ fn every_scenario_loads_and_runs_a_few_steps() {
 
 #[test]
 fn collapse_runs_until_settled_with_finite_runout() {
-    // The μ(I) deposit creeps on after it has settled (seed 002 §4), so
+    // The μ(I) deposit creeps on after it has settled (Bouchut et al. 2021, §4), so
     // the scenario ends at `time.stop_when_settled` (kinetic energy ≤ 1e-6 of its peak),
     // not at exact rest (it ended "stopped_at_rest" at 1.874 s before the friction step
     // became backward Euler in the speed).
@@ -69,7 +69,7 @@ fn collapse_runs_until_settled_with_finite_runout() {
         .map(|r| r.kinetic_energy)
         .fold(0.0, f64::max);
     assert!(sink.steps.last().unwrap().kinetic_energy <= 1e-6 * peak);
-    // Runout of the hydrostatic μ(I) model at 22°: of the order of a metre (seed 000
+    // Runout of the hydrostatic μ(I) model at 22°: of the order of a metre (Garres-Díaz et al. 2021,
     // Fig. 14a); pinned loosely here, exactly in the regression test below.
     assert!(
         summary.runout > 0.5 && summary.runout < 2.0,

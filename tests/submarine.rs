@@ -1,4 +1,4 @@
-//! The submarine model (`model.kind = "submarine"`, seed 004) end to end: its keys are
+//! The submarine model (`model.kind = "submarine"`, Fernández-Nieto et al. 2008) end to end: its keys are
 //! checked and named, it reduces to the granular Savage–Hutter model without water, a
 //! run writes the two layers' fields, and the CLI rejects inconsistent scenarios with
 //! exit code 2.

@@ -1,4 +1,4 @@
-//! Seed 004 §5's qualitative results, asserted on the two-layer kernels (K = 1,
+//! Fernández-Nieto et al. 2008, §5's qualitative results, asserted on the two-layer kernels (K = 1,
 //! K_in = 0, r = 0.2, CFL 0.8, Δx = 0.05, free boundaries):
 //! §5.1 the slide stops on the slope and the waves leave the domain; §5.2 with
 //! δ₀ = 10° the grains reach the lake floor, with 25° they stop partly submerged and

@@ -1,10 +1,10 @@
-//! Well-balancing: states at rest stay at rest to round-off (seed 000 eq. 16,
-//! seed 003 §5.3), and a state just beyond the repose angle moves.
+//! Well-balancing: states at rest stay at rest to round-off (Garres-Díaz et al. 2021, eq. 16,
+//! Escalante et al. 2023, §5.3), and a state just beyond the repose angle moves.
 
 use crate::common::{run, tan_deg, Case};
 use granflow::scenario::{BoundaryKind, FrictionLaw};
 
-/// Deterministic stand-in for RAND(X) ∈ [0, 1) (the seeds draw it at run time).
+/// Deterministic stand-in for RAND(X) ∈ [0, 1) (the papers draw it at run time).
 fn rand01(x: f64) -> f64 {
     let mut z = x.to_bits().wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -13,7 +13,7 @@ fn rand01(x: f64) -> f64 {
     (z >> 11) as f64 / (1u64 << 53) as f64
 }
 
-/// Seed 003 §5.3: random bed, free surface of slope `surface_deg`, μ_s = tan 20°.
+/// Escalante et al. 2023, §5.3: random bed, free surface of slope `surface_deg`, μ_s = tan 20°.
 fn random_bed_case(
     surface_deg: f64,
 ) -> (

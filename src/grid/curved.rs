@@ -1,6 +1,6 @@
-//! A curved line: the grid of the two-layer model in Cartesian coordinates (seed 004
+//! A curved line: the grid of the two-layer model in Cartesian coordinates (Fernández-Nieto et al. 2008,
 //! §4), a [`Line`] whose bed angle θ_i with tan θ_i = b'(x_i) enters the equations, from the
-//! midpoint (centred) difference of b (seed 004 Remark 11 and §5.2: at a slope break
+//! midpoint (centred) difference of b (Fernández-Nieto et al. 2008, Remark 11 and §5.2: at a slope break
 //! the bed is seen as a parabola, so the curvature ∂_x(cos²θ), ∂_x(sin θ) stays
 //! finite: one cell on each side of the break carries the mean slope).
 //!

@@ -1,12 +1,12 @@
-//! The line: the 1-D finite-volume grid and its geometry (seed 000 §2.1 and §4.1).
+//! The line: the 1-D finite-volume grid and its geometry (Garres-Díaz et al. 2021, §2.1 and §4.1).
 //!
 //! Cells V_i = [x_{i−1/2}, x_{i+1/2}] of uniform width Δx along the reference plane
 //! (local coordinates) or the horizontal (Cartesian). The gravity potential that
 //! drives the flow is g_n (h + z) with
 //!
 //! - local coordinates: z = b(X) + b̃(X), b̃ = −X tan θ (the plane, up to a constant)
-//!   and g_n = g cos θ (seed 000 eq. 15b);
-//! - Cartesian coordinates: z = b(x), g_n = g (seed 000 §4.1).
+//!   and g_n = g cos θ (Garres-Díaz et al. 2021, eq. 15b);
+//! - Cartesian coordinates: z = b(x), g_n = g (Garres-Díaz et al. 2021, §4.1).
 //!
 //! Arrays carry one ghost cell on each side: index 0 and nx + 1.
 
@@ -25,7 +25,7 @@ pub struct Line {
     /// Bed elevation over the reference plane at the centres (nx).
     pub b: Vec<f64>,
     /// Bed over the reference plane with ghosts (nx + 2): the jumps that the
-    /// hydrostatic reconstruction sees (seed 003 eq. 20).
+    /// hydrostatic reconstruction sees (Escalante et al. 2023, eq. 20).
     pub b_ghost: Vec<f64>,
     /// Potential elevation z = b + b̃ with ghosts (nx + 2).
     pub z: Vec<f64>,

@@ -10,7 +10,7 @@
 //! - [`Line`] ([`mod@line`]): the uniform 1-D grid of the layered and dilatant models, with
 //!   its potential z, ghost beds and boundary kinds;
 //! - [`CurvedLine`] ([`curved`]): a line whose bed angle θ(x) enters the equations (the
-//!   two-layer submarine model, seed 004 §4), with the angle terms of each face.
+//!   two-layer submarine model, Fernández-Nieto et al. 2008, §4), with the angle terms of each face.
 //!
 //! A 2-D grid would implement [`Grid`] with its own cell list and face list; see
 //! `docs/architecture.md`, "How to add a grid".
@@ -21,7 +21,7 @@ pub mod line;
 pub use curved::CurvedLine;
 pub use line::{Line, LineSpec};
 
-/// Frame in which the shallow model is written (seed 000 §4.1).
+/// Frame in which the shallow model is written (Garres-Díaz et al. 2021, §4.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Coordinates {
     /// Along and normal to a reference plane of slope θ; gravity g cos θ normal to it.
@@ -33,7 +33,7 @@ pub enum Coordinates {
 /// What happens at an edge of the domain.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BoundaryKind {
-    /// Reflecting wall: ghost discharge opposite, thickness mirrored (seed 003 Remark 6).
+    /// Reflecting wall: ghost discharge opposite, thickness mirrored (Escalante et al. 2023, Remark 6).
     Wall,
     /// Free outflow: ghost state copied (homogeneous Neumann).
     Outflow,

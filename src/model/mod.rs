@@ -10,12 +10,12 @@
 //! is generic over the model: adding a model is adding a module here (see
 //! `docs/architecture.md`, "How to add a model").
 //!
-//! - [`granular`]: the layered family of seeds 000, 001 and 003 (Savage–Hutter with
+//! - [`granular`]: the layered family of Garres-Díaz et al. 2021, Fernández-Nieto et al. 2016 and Escalante et al. 2023 (Savage–Hutter with
 //!   Coulomb or μ(I) friction, the multilayer μ(I) model, the weakly non-hydrostatic
 //!   monolayer model).
-//! - [`submarine`]: the two-layer water-over-grains model of seed 004, on a
+//! - [`submarine`]: the two-layer water-over-grains model of Fernández-Nieto et al. 2008, on a
 //!   [`CurvedLine`](crate::grid::CurvedLine).
-//! - [`dilatant`]: the compressible μ(I)–φ model of seed 002 (volume fraction φ).
+//! - [`dilatant`]: the compressible μ(I)–φ model of Bouchut et al. 2021 (volume fraction φ).
 
 pub mod dilatant;
 pub mod granular;
@@ -28,9 +28,9 @@ use crate::output::{OutputError, OutputSink};
 pub enum ModelKind {
     /// The layered family: Savage–Hutter, multilayer, non-hydrostatic.
     Granular,
-    /// Seed 004's two-layer water-over-grains model.
+    /// Fernández-Nieto et al. 2008's two-layer water-over-grains model.
     Submarine,
-    /// The compressible μ(I)–φ model with dilatancy (seed 002).
+    /// The compressible μ(I)–φ model with dilatancy (Bouchut et al. 2021).
     Dilatant,
 }
 

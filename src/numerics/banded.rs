@@ -1,5 +1,5 @@
 //! Exact solver for the pressure system of the N-layer non-hydrostatic model
-//! (seed 003 eq. 31–32, Appendix A), in the symmetric positive definite form built by
+//! (Escalante et al. 2023, eq. 31–32, Appendix A), in the symmetric positive definite form built by
 //! [`super::projection::multilayer`].
 //!
 //! Unknowns are ordered face by face, N interfaces per face (`k = f·N + j`, the
@@ -8,7 +8,7 @@
 //! interfaces, a cell two faces), so a row is a 3×3 stencil ([`StencilRow`]) and the
 //! matrix is banded with half-bandwidth p = N + 1. Its Cholesky factor fills the band
 //! and nothing outside it, so the factorisation costs ≈ n p²/2 multiply-adds for
-//! n = (nx + 1) N unknowns: O(nx N³) with no iteration, against seed 003's block
+//! n = (nx + 1) N unknowns: O(nx N³) with no iteration, against Escalante et al. 2023's block
 //! Gauss–Seidel with a tolerance.
 //!
 //! [`BandedCholesky`] assembles the lower band by columns (the operator writes it face

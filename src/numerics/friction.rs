@@ -1,18 +1,18 @@
 //! Step 2 of the splitting for a monolayer: semi-implicit Coulomb friction with its
-//! stopping criterion (seed 000 §3 step 2):
+//! stopping criterion (Garres-Díaz et al. 2021, §3 step 2):
 //!
 //!   σ_i = μ_i g_n ĥ_i,
 //!   (hu)_i ← (hu)*_i − Δt σ_i sgn((hu)*_i)   if Δt σ_i < |(hu)*_i|,
 //!   (hu)_i ← 0                                 otherwise,
 //!
 //! so friction can stop a mass but never reverse it. μ_i is the law at the post-
-//! advection state (a constant for Coulomb; μ(I) with I from seed 000 eq. 15e).
+//! advection state (a constant for Coulomb; μ(I) with I from Garres-Díaz et al. 2021, eq. 15e).
 //!
 //! The friction acts on the cell's own depth h_i: step 1 gives each cell the share
 //! g_n h_i Δη/2 of the pressure source of each of its faces (`hydrostatic.rs`), so a
 //! cell at rest feels g_n h_i (η_{i+1} − η_{i−1})/(2Δx) and a mass whose free surface
 //! satisfies |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s has |(hu)*| ≤ Δt σ exactly and stays at rest,
-//! for any profile. Seed 003's well-balancing thickness ĥ of eq. (25) compensates the
+//! for any profile. Escalante et al. 2023's well-balancing thickness ĥ of eq. (25) compensates the
 //! centred split ½ g_n h̄ Δη of the printed scheme and is not needed (docs/numerics.md).
 
 use super::{Stage, StageError};

@@ -1,14 +1,14 @@
-//! Step 1 of the splitting: the hyperbolic (hydrostatic) problem (seed 000 eq. 17–24,
-//! seed 003 eq. 19–21), for the total mass and the discharge of each of the N layers
-//! (N = 1: the monolayer; seed 003 §4 step 1 with p_nh = 0):
+//! Step 1 of the splitting: the hyperbolic (hydrostatic) problem (Garres-Díaz et al. 2021, eq. 17–24,
+//! Escalante et al. 2023, eq. 19–21), for the total mass and the discharge of each of the N layers
+//! (N = 1: the monolayer; Escalante et al. 2023, §4 step 1 with p_nh = 0):
 //!
 //!   ∂_t h + ∂_X(hū) = 0,
 //!   ∂_t(hu_α) + ∂_X(hu_α²) + g_n h ∂_X(h + z) = (u_{α+1/2} G_{α+1/2} − u_{α−1/2} G_{α−1/2})/l_α,
 //!
 //! with ū = Σ l_α u_α, the mass exchange G_{α+1/2} = Σ_{β≤α} l_β ∂_X(h(u_β − ū))
-//! (seed 003 eq. 5, seed 001 eq. 19), G_{1/2} = G_{N+1/2} = 0, and the centred interface
+//! (Escalante et al. 2023, eq. 5, Fernández-Nieto et al. 2016, eq. 19), G_{1/2} = G_{N+1/2} = 0, and the centred interface
 //! velocity u_{α+1/2} = ½(u_α + u_{α+1}). The right-hand side is the non-conservative
-//! product −𝓑(U)∂_X U of seed 003 eq. (18); it vanishes for N = 1.
+//! product −𝓑(U)∂_X U of Escalante et al. 2023, eq. (18); it vanishes for N = 1.
 //!
 //! Path-conservative finite volumes with the HLL-type PVM diffusion:
 //!
@@ -21,18 +21,18 @@
 //!
 //! where ΔG_{α+1/2} = Σ_{β≤α} l_β (Δq_β − Δq̄) is the jump of the exchange across the
 //! interface (q_β = h u_β) and ũ_{α+1/2} the mean of u_{α+1/2} on both sides, i.e.
-//! 𝓑 = ½(B(U_L) + B(U_R))(U_R − U_L) (seed 003 eq. 19). Each layer's momentum is
+//! 𝓑 = ½(B(U_L) + B(U_R))(U_R − U_L) (Escalante et al. 2023, eq. 19). Each layer's momentum is
 //! upwinded with its own velocity through Ũ^± = (ĥ^±, ĥ^± u_α). The wave speeds are
-//! those of seed 003 (after eq. 21) with √(g_n h) replaced, for N > 1, by
+//! those of Escalante et al. 2023 (after eq. 21) with √(g_n h) replaced, for N > 1, by
 //! √(g_n h + 3 Σ l_α (u_α − ū)²), which bounds the outer eigenvalues of a sheared
 //! column: with ū ± √(g_n h) alone a Bagnold profile at Froude number ≈ 1 looks
 //! supercritical, the flux is fully upwinded and the uniform flow is unstable
 //! (`docs/numerics.md`, Multilayer).
 //!
 //! with the hydrostatic reconstruction h⁻ = max(0, h_L − (Δb)_+), h⁺ = max(0, h_R − (−Δb)_+)
-//! over the bed b relative to the reference plane (seed 003 eq. 20), the plane's own
+//! over the bed b relative to the reference plane (Escalante et al. 2023, eq. 20), the plane's own
 //! slope entering 𝓢 = g_n h̄ (h⁺ − h⁻ + Δb̃) as the jump Δb̃ of the potential (zero
-//! across a wall). The source enters with a minus sign: seed 000 eq. (20) prints "+",
+//! across a wall). The source enters with a minus sign: Garres-Díaz et al. 2021, eq. (20) prints "+",
 //! which contradicts ∂_t(hu) = −g_n h ∂_X(h + z).
 //!
 //! The pressure source of a face goes to its two cells in proportion to their own
@@ -42,7 +42,7 @@
 //! cell half of g_n h̄ Δη, h̄ ≈ h_thick/2, i.e. an acceleration ∝ h_thick/h_film: films at
 //! fronts and bed steps reached 10²–10⁴ m/s and the time step collapsed
 //! (`tests/properties.rs`). With the own-depth split every cell's pressure force is
-//! g_n h_i × (a surface slope), the friction step can weigh h_i itself (no ĥ of seed 003
+//! g_n h_i × (a surface slope), the friction step can weigh h_i itself (no ĥ of Escalante et al. 2023,
 //! eq. 25), and a mass at rest with |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s is held exactly.
 //!
 //! Thin layers on steep beds. Where the lower side of a face is
@@ -82,7 +82,7 @@
 //!   wet cell moving away from a dry step drains the dry cell, for any Δt.
 //! - Reconstructing over b only (not b + b̃) keeps thin layers on steep planes
 //!   visible: over b + b̃ every layer thinner than tan θ Δx (2 mm at 22° with
-//!   Δx = 5 mm, thicker than the erodible beds of seed 001 §4.2) would be clipped
+//!   Δx = 5 mm, thicker than the erodible beds of Fernández-Nieto et al. 2016, §4.2) would be clipped
 //!   to h⁺ = 0 and feel a reduced gravity.
 //!
 //! Positivity: if a step would empty a cell (possible at wet/dry fronts, where the
@@ -93,25 +93,25 @@
 //! are untouched.
 //!
 //! Granular masses at rest with |∂_X(h + z)| ≤ μ_s are kept exactly at rest by the
-//! Coulomb-aware reconstruction Ũ^± (seed 000 eq. 22–24, seed 003 §4 step 1): the
+//! Coulomb-aware reconstruction Ũ^± (Garres-Díaz et al. 2021, eq. 22–24, Escalante et al. 2023, §4 step 1): the
 //! jump Δz is replaced by Δz + ΔC, ΔC = −f Δx / g_n,
 //!
 //!   f = −proj_{g_n μ}( u_{1/2}/Δt − g_n (η_R − η_L)/Δx ),   η = h + z,
 //!
 //! so that at rest ĥ⁻ = ĥ⁺ and the mass diffusion vanishes; 𝓢̃ uses ĥ^± too
-//! (seed 003 eq. 21). We follow seed 003's sign of u/Δt (seed 000 eq. 23 has the
+//! (Escalante et al. 2023, eq. 21). We follow Escalante et al. 2023's sign of u/Δt (Garres-Díaz et al. 2021, eq. 23 has the
 //! opposite sign, which would make friction accelerate a moving mass) and its
 //! division by g_n (without it ΔC is not a length).
 //!
-//! Wave speeds S_L, S_R: Einfeldt-type bounds with Roe averages (seed 000 after eq. 21).
+//! Wave speeds S_L, S_R: Einfeldt-type bounds with Roe averages (Garres-Díaz et al. 2021, after eq. 21).
 //! Wet/dry fronts: an emerging bed (h_L > 0, h_R dry, h_L + b_L < b_R, and its mirror)
-//! is seen with the wet state's velocities set to zero (seed 003 Remark 2).
+//! is seen with the wet state's velocities set to zero (Escalante et al. 2023, Remark 2).
 //!
 //! Per-face friction: the threshold μ of ΔC comes from a [`FaceFriction`], by default
 //! the step's own law (which ignores the face, so the default step is unchanged to the
-//! bit). The dilatant model (seed 002) passes μ_eff = μ(I) + tan ψ with the volume
+//! bit). The dilatant model (Bouchut et al. 2021) passes μ_eff = μ(I) + tan ψ with the volume
 //! fraction of each face ([`HydrostaticStep::apply_with_friction`]): its static
-//! threshold μ_1 + K(φ − φ_stat) (seed 002 eq. 2.16) depends on φ, which a
+//! threshold μ_1 + K(φ − φ_stat) (Bouchut et al. 2021, eq. 2.16) depends on φ, which a
 //! `BasalFriction` of (|u|, h, p) cannot see.
 //!
 //! A state at rest has u_α = 0, so ΔG = 0 and 𝓑 = 0: the exchange terms keep granular
@@ -128,7 +128,7 @@ use crate::state::layered::LayeredState;
 /// `face` k lies between the ghost-inclusive cells k and k + 1 (k = 0..=nx), `speed` is
 /// the Roe-averaged |ū| there, `h` the mean depth and `p_over_rho` = g_n h. Every basal
 /// friction law is one (it ignores the face); a model whose threshold depends on more
-/// than (|u|, h, p), such as the dilatant μ(I) + tan ψ (seed 002 eq. 2.13–2.14), supplies
+/// than (|u|, h, p), such as the dilatant μ(I) + tan ψ (Bouchut et al. 2021, eq. 2.13–2.14), supplies
 /// its own through [`HydrostaticStep::apply_with_friction`].
 pub trait FaceFriction {
     fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64;
@@ -298,8 +298,8 @@ fn interface<M: Fn(f64, f64) -> f64>(
     // Coulomb-aware reconstruction (ΔC): friction up to its threshold acts as bed.
     let mu = mu_of(u_roe.abs(), h_roe);
     let threshold = g_n * mu;
-    // The friction acts on the bottom layer (seed 001 eq. 28): its velocity u_1 enters
-    // the drive (seed 003 prints ū). Over a bottom layer that the viscous step has
+    // The friction acts on the bottom layer (Fernández-Nieto et al. 2016, eq. 28): its velocity u_1 enters
+    // the drive (Escalante et al. 2023 prints ū). Over a bottom layer that the viscous step has
     // stopped, the regularised creep of the upper layers divided by Δt would exceed the
     // friction margin, the reconstruction would let mass through, and a deposit would
     // never come to rest (the C-MSM collapse of tests/multilayer.rs). For N = 1, u_1 = ū.

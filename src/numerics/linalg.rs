@@ -1,6 +1,6 @@
 //! Banded linear algebra for the implicit sub-steps.
 //!
-//! The pressure systems of the projection (seed 000 §3 step 3, seed 003 eq. 31–32) are
+//! The pressure systems of the projection (Garres-Díaz et al. 2021, §3 step 3, Escalante et al. 2023, eq. 31–32) are
 //! (block-)tridiagonal: row k couples the unknowns of faces k − 1, k and k + 1. A
 //! system is seen through [`PressureRows`], which hands out one row at a time, so a
 //! solver can eliminate each row as soon as it is formed ("matrix-free" assembly: the
@@ -8,7 +8,7 @@
 //! previous one). [`BlockTridiagonal`] is the stored form, for systems assembled ahead
 //! (and for tests). The monolayer system has scalar rows ([`ScalarRow`]) and is solved
 //! exactly in O(n) by [`thomas_rows`]; an N-layer system has N×N blocks per row
-//! (seed 003 eq. 32, ordered face-major) and its own row type.
+//! (Escalante et al. 2023, eq. 32, ordered face-major) and its own row type.
 
 use std::ops::Range;
 

@@ -1,5 +1,5 @@
 //! Numerics: loops over the grid. The time step is a pipeline of [`Stage`]s built
-//! from the scenario (seed 000 §3, seed 003 §4): hyperbolic → friction or viscous
+//! from the scenario (Garres-Díaz et al. 2021, §3, Escalante et al. 2023, §4): hyperbolic → friction or viscous
 //! (→ projection).
 //!
 //! A stage is written for one grid type and one state type (`Stage<Line,

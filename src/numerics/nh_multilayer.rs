@@ -1,4 +1,4 @@
-//! Step 2 of the splitting for the multilayer weakly non-hydrostatic model (seed 003
+//! Step 2 of the splitting for the multilayer weakly non-hydrostatic model (Escalante et al. 2023,
 //! §4 "Step 2", eq. 23–25 and 36 with the explicit non-hydrostatic terms of eq. 17–19).
 //! Step 3 is [`super::projection::multilayer`].
 //!
@@ -16,8 +16,8 @@
 //! are the correction operator of step 3 applied to pⁿ. Normal discharges of dry cells
 //! are set to 0.
 //!
-//! **Which velocities the viscosities are frozen from** (`rheology.viscosity`). Seed
-//! 003 takes U^n, the state after the previous projection (`"frozen"`). The projection
+//! **Which velocities the viscosities are frozen from** (`rheology.viscosity`).
+//! Escalante et al. 2023 takes U^n, the state after the previous projection (`"frozen"`). The projection
 //! and the pⁿ terms move the layers of a column independently (the mass matrix M =
 //! diag(l_α h) of eq. 31 knows nothing of the viscous coupling), so they shear a column
 //! that the viscous step holds below its threshold; ν = μ p/√(s² + 4δ²) frozen from that
@@ -158,7 +158,7 @@ mod tests {
     use crate::physics::rheology::MuI;
 
     fn law() -> MuI {
-        // seed 003 Table 1
+        // Escalante et al. 2023, Table 1
         MuI {
             mu_s: 25.5f64.to_radians().tan(),
             mu_2: 36f64.to_radians().tan(),

@@ -1,13 +1,13 @@
-//! Step 2 of the splitting for the weakly non-hydrostatic monolayer model (seed 000
+//! Step 2 of the splitting for the weakly non-hydrostatic monolayer model (Garres-Díaz et al. 2021,
 //! §3). Step 1 is the hydrostatic step, whose mass fluxes carry the normal discharge
-//! hw as a tracer (seed 000 after eq. 24, `super::tracer`); step 3, the projection, is
+//! hw as a tracer (Garres-Díaz et al. 2021, after eq. 24, `super::tracer`); step 3, the projection, is
 //! in [`super::projection`]. Only non-hydrostatic pipelines build these stages.
 //!
 //! **Step 2** ([`NhFrictionStep`]): the explicit pressure terms of p^n, then Coulomb
-//! friction with the total basal pressure (seed 000 step 2, its two key points):
+//! friction with the total basal pressure (Garres-Díaz et al. 2021, step 2, its two key points):
 //!
 //!   (hu)* = (hu) − Δt (∂_X(h q̄) + 2q̄ ∂_X b)_i   (the discrete operator of step 3),
-//!   σ_i = μ(I) (g_n h_i + 2q̄_i),  I from p_b/ρ = g_n h + 2q̄ (seed 000 eq. 15e),
+//!   σ_i = μ(I) (g_n h_i + 2q̄_i),  I from p_b/ρ = g_n h + 2q̄ (Garres-Díaz et al. 2021, eq. 15e),
 //!   (μ(I) at the new speed, backward Euler, for the μ(I) law:
 //!   [`BasalFriction::nh_friction_update`]; a constant for Coulomb),
 //!   if Δt σ_i < |(hu)*|:  hu ← (hu)* − Δt σ_i sgn((hu)*),  hw ← hw + 2Δt q̄_i,

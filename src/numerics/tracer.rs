@@ -1,4 +1,4 @@
-//! Passive tracers carried by the hyperbolic step (seed 000 after eq. 24 for hw; the
+//! Passive tracers carried by the hyperbolic step (Garres-Díaz et al. 2021, after eq. 24 for hw; the
 //! same upwind transport serves any quantity that moves with the grains).
 //!
 //! A tracer q = h c (per cell and layer) follows the mass flux 𝓕^h of step 1 with the
@@ -10,7 +10,7 @@
 //! nothing here.
 //!
 //! With N > 1 layers a tracer of layer α (h w_α for the non-hydrostatic model) obeys
-//! seed 003 eq. (9c) without its pressure terms,
+//! Escalante et al. 2023, eq. (9c) without its pressure terms,
 //!
 //!   ∂_t(h c_α) + ∂_X(h u_α c_α) = (c_{α+1/2} G_{α+1/2} − c_{α−1/2} G_{α−1/2})/l_α,
 //!
@@ -300,7 +300,7 @@ mod tests {
         }
     }
 
-    /// Seed 003 eq. (9c) without pressure: over a uniform depth H with ū = 0 and
+    /// Escalante et al. 2023, eq. (9c) without pressure: over a uniform depth H with ū = 0 and
     /// layer velocities s_α sin(2πx), a w_α uniform in x changes only through the layer
     /// fluxes and the exchange, ∂_t(H w_α) = −H w_α ∂_X u_α + (w_{α+1/2} G_{α+1/2} −
     /// w_{α−1/2} G_{α−1/2})/l_α, G_{α+1/2} = Σ_{β≤α} l_β H ∂_X u_β (upwind w_{α+1/2}).

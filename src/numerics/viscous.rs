@@ -1,5 +1,5 @@
 //! Step 2 of the splitting for N > 1 layers: the implicit viscous step of the
-//! multilayer μ(I) model (seed 003 eq. 23–25, seed 001 eq. 25–28), with the total
+//! multilayer μ(I) model (Escalante et al. 2023, eq. 23–25, Fernández-Nieto et al. 2016, eq. 25–28), with the total
 //! thickness h fixed:
 //!
 //!   l_α (h u_α − (hu)*_α) = Δt (K_{α−1/2} − K_{α+1/2}) / ρ,     α = 1 … N,
@@ -7,37 +7,37 @@
 //!   K_{N+1/2} = 0,
 //!
 //! where the new velocities u_α are implicit and the viscosities ν = η/ρ are frozen at
-//! t^n (seed 003 "Step 2"), so each cell solves one N×N symmetric tridiagonal system
+//! t^n (Escalante et al. 2023, "Step 2"), so each cell solves one N×N symmetric tridiagonal system
 //! (Thomas algorithm). The shear stress is τ = ν ∂_z u with
 //!
 //!   ν = μ(I) p / R(s),   I = d_s s / √(p/ρ_s),   p/ρ = g_n h Σ_{β>α} l_β,
 //!
-//! s the strain rate: |∂_z u| = |u_{α+1} − u_α| / h_{α+1/2} (seed 001 eq. 24–26), or with
-//! the C-MSM correction √((∂_z u)² + (∂_X(u_α + u_{α+1}))²) (seed 001 eq. 32). R is the
-//! regularisation: R = √(s² + 4δ²) (seed 003 eq. 10, where ‖D‖ = s/2), or
-//! R = max(s, μ p/ν_M), ν_M = 250 √(g h³) (seed 001 eq. 6 and 25, η_M = ρ ν_M).
+//! s the strain rate: |∂_z u| = |u_{α+1} − u_α| / h_{α+1/2} (Fernández-Nieto et al. 2016, eq. 24–26), or with
+//! the C-MSM correction √((∂_z u)² + (∂_X(u_α + u_{α+1}))²) (Fernández-Nieto et al. 2016, eq. 32). R is the
+//! regularisation: R = √(s² + 4δ²) (Escalante et al. 2023, eq. 10, where ‖D‖ = s/2), or
+//! R = max(s, μ p/ν_M), ν_M = 250 √(g h³) (Fernández-Nieto et al. 2016, eq. 6 and 25, η_M = ρ ν_M).
 //!
 //! At the bed, either
 //! - Coulomb friction K_{1/2}/ρ = −μ(I_{1/2}) g_n ĥ sgn(u_1) with the basal shear rate
-//!   u_1/h_1 (seed 001 eq. 26 and 28). The solve eliminates the layers from the top down
+//!   u_1/h_1 (Fernández-Nieto et al. 2016, eq. 26 and 28). The solve eliminates the layers from the top down
 //!   to one equation d u_1 = r − Δt σ s, s ∈ Sgn(u_1), which is solved exactly: u_1 = 0 if
 //!   |r| ≤ Δt σ (friction stops the bottom layer but never reverses it), as in the
 //!   monolayer friction step; or
-//! - no slip: K_{1/2}/ρ = −ν_{1/2} 2u_1/h_1 (seed 001 end of §3.3).
+//! - no slip: K_{1/2}/ρ = −ν_{1/2} 2u_1/h_1 (Fernández-Nieto et al. 2016, end of §3.3).
 //!
 //! The column's weight — the pressures p in ν and the basal friction — is that of its
 //! own depth h_i: step 1 gives each cell the pressure source g_n h_i Δη/2 of each face
 //! (`hydrostatic.rs`), so a column at rest below the repose slope is held by its basal
-//! friction and its layers by their strength μ p without seed 003's ĥ of eq. (25)
+//! friction and its layers by their strength μ p without Escalante et al. 2023's ĥ of eq. (25)
 //! (see `friction.rs` and docs/numerics.md).
 //!
 //! Sidewall friction in a channel of width W (optional): Jop's term μ_w (H − z)/W added
-//! to μ at every interface and at the bed (seed 001 eq. 30), or the layer force
+//! to μ at every interface and at the bed (Fernández-Nieto et al. 2016, eq. 30), or the layer force
 //! −l_α h (2/W) μ_w p_α u_α / √(u_α² + δ_u²) with u_α^n in the denominator, which only
-//! adds to the diagonal (seed 003 eq. 36).
+//! adds to the diagonal (Escalante et al. 2023, eq. 36).
 //!
-//! With the non-hydrostatic pressure of seed 003 (a state carrying `nh`), the pressures
-//! are the total ones, p_{α+1/2}/ρ = g_n h Σ_{β>α} l_β + p^nh_{α+1/2} (seed 003 after
+//! With the non-hydrostatic pressure of Escalante et al. 2023 (a state carrying `nh`), the pressures
+//! are the total ones, p_{α+1/2}/ρ = g_n h Σ_{β>α} l_β + p^nh_{α+1/2} (Escalante et al. 2023, after
 //! eq. 10), in the viscosities, the inertial numbers, the basal friction (eq. 11) and
 //! the sidewall force (eq. 36), with p^nh at t^n averaged from the two faces of the
 //! cell; a negative total pressure (grains lifted) gives no stress. Hydrostatic states
@@ -57,7 +57,7 @@
 //! not get there within the iteration limit fails the step (docs/numerics.md).
 //!
 //! Cells thinner than [`THIN_LAYER`] are treated as one layer with Coulomb friction
-//! (seed 003 Remark 2): the depth-averaged discharge gets the monolayer friction update
+//! (Escalante et al. 2023, Remark 2): the depth-averaged discharge gets the monolayer friction update
 //! and every layer moves with it. A cell dry at t^n and wetted by step 1 freezes its
 //! coefficients from the state after step 1.
 
@@ -69,7 +69,7 @@ use crate::physics::shallow::{velocity, H_DRY};
 use crate::physics::GRAVITY;
 use crate::state::layered::LayeredState;
 
-/// Thickness (m) below which a cell is solved as a monolayer (seed 003 Remark 2).
+/// Thickness (m) below which a cell is solved as a monolayer (Escalante et al. 2023, Remark 2).
 pub const THIN_LAYER: f64 = 1e-6;
 
 /// Velocity regularisation (m/s) of the layer sidewall force when the viscosity is
@@ -79,7 +79,7 @@ pub const SIDEWALL_DELTA_U: f64 = 1e-5;
 /// Columns solved together (see `solve_columns`).
 const LANES: usize = 4;
 
-/// Condition at the bed of the multilayer model (seed 001 eq. 28 and end of §3.3).
+/// Condition at the bed of the multilayer model (Fernández-Nieto et al. 2016, eq. 28 and end of §3.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BasalCondition {
     /// Coulomb friction μ(I_{1/2}) p_b u_1/|u_1| (`rheology.basal = "coulomb"`).
@@ -91,18 +91,18 @@ pub enum BasalCondition {
 /// How the μ(I) viscosity η = μ(I) p / |∂_z u| is kept finite where the shear vanishes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Regularization {
-    /// η = μ p / √(‖D‖² + δ²) (seed 003 eq. 10), `rheology.delta` = δ in 1/s.
+    /// η = μ p / √(‖D‖² + δ²) (Escalante et al. 2023, eq. 10), `rheology.delta` = δ in 1/s.
     Delta { delta: f64 },
-    /// η = μ p / max(‖D‖, μ p/η_M), η_M = 250 ρ √(g h³) (seed 001 eq. 6 and 25).
+    /// η = μ p / max(‖D‖, μ p/η_M), η_M = 250 ρ √(g h³) (Fernández-Nieto et al. 2016, eq. 6 and 25).
     Bound,
 }
 
 /// Where the sidewall friction of a channel of width W enters the multilayer model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SidewallForm {
-    /// Jop's term μ_w (H − z)/W added to μ(I) (seed 001 eq. 30).
+    /// Jop's term μ_w (H − z)/W added to μ(I) (Fernández-Nieto et al. 2016, eq. 30).
     Jop,
-    /// A friction force −l_α h (2/W) μ_w p_α u_α/|u_α| on each layer (seed 003 eq. 36).
+    /// A friction force −l_α h (2/W) μ_w p_α u_α/|u_α| on each layer (Escalante et al. 2023, eq. 36).
     Layer,
 }
 
@@ -121,7 +121,7 @@ pub struct ViscousOptions {
     pub basal: BasalCondition,
     pub regularization: Regularization,
     pub sidewall: Option<Sidewall>,
-    /// Second-order strain rate of seed 001 eq. (32).
+    /// Second-order strain rate of Fernández-Nieto et al. 2016, eq. (32).
     pub c_msm: bool,
     /// Where the viscosities are taken: at t^n (the paper's scheme) or at the new speed.
     pub viscosity: ViscosityTime,
@@ -131,7 +131,7 @@ pub struct ViscousOptions {
 /// (`rheology.viscosity`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ViscosityTime {
-    /// Frozen at t^n: one linear solve per column (seed 003 §4 "Step 2").
+    /// Frozen at t^n: one linear solve per column (Escalante et al. 2023, §4 "Step 2").
     Frozen,
     /// As `Frozen`, but with the non-hydrostatic pressure the velocities they are
     /// frozen from are those of the previous viscous solve, before its projection
@@ -1320,7 +1320,7 @@ mod tests {
         u: &[f64],
     ) -> Vec<(f64, f64)> {
         let n = l.len();
-        // μ p / R(s): seed 003 eq. 10 or the bound of seed 001 eq. 6.
+        // μ p / R(s): Escalante et al. 2023, eq. 10 or the bound of Fernández-Nieto et al. 2016, eq. 6.
         let nu = |mu: f64, p: f64, s: f64| match regularization {
             Regularization::Delta { delta } => mu * p / (s * s + 4.0 * delta * delta).sqrt(),
             Regularization::Bound => {

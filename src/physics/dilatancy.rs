@@ -1,8 +1,8 @@
-//! Pointwise physics of the compressible (dilatant) μ(I)–φ model of seed 002 §2
-//! (`shared/seeds/002_fef7766374789465.txt`, Bouchut et al. 2021).
+//! Pointwise physics of the compressible (dilatant) μ(I)–φ model of Bouchut et al. 2021, §2
+//! (docs/references.md).
 //!
 //! Unknowns: thickness h, slope-parallel velocity v, solid volume fraction φ. The
-//! system is written in the conservative variables of seed 002 eq. (3.1)–(3.3), (B.10):
+//! system is written in the conservative variables of Bouchut et al. 2021, eq. (3.1)–(3.3), (B.10):
 //!
 //!   U = (m, q, w) = (φh, φhv, φ^α h),   α > 1 (the paper uses α = 2),
 //!
@@ -12,10 +12,10 @@
 //!
 //! with the physical flux F(U) = (φhv, φhv² + ½ g_c φh², φ^α h v) (B.12) and the wave
 //! speeds v ± √(g_c h): the system is gas dynamics with γ = 2, density ρ = φh and
-//! pressure g_c ρ²/(2φ), so c² = ∂p/∂ρ at fixed φ = g_c h (seed 002 Appendix B).
+//! pressure g_c ρ²/(2φ), so c² = ∂p/∂ρ at fixed φ = g_c h (Bouchut et al. 2021, Appendix B).
 //! From U: φ^{α−1} = w/m, h = m/φ, v = q/m.
 //!
-//! Closure (seed 002 §2):
+//! Closure (Bouchut et al. 2021, §2):
 //!
 //!   γ̇ = (5/2)|v|/h                                   (2.15)
 //!   I = γ̇ d / √(p_{s|b}/ρ_s),  p_{s|b}/ρ_s = φ g_c h  (2.10), (2.11)
@@ -33,7 +33,7 @@
 
 use super::shallow::H_DRY;
 
-/// Regularisation of the critical-state volume fraction φ_eq(I) (seed 002 §2).
+/// Regularisation of the critical-state volume fraction φ_eq(I) (Bouchut et al. 2021, §2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PhiEq {
     /// φ_stat − K̃ I, eq. (2.9) as printed: negative for large I (tests only).
@@ -46,7 +46,7 @@ pub enum PhiEq {
     F2 { n: f64 },
 }
 
-/// Parameters of the dilatant μ(I)–φ law (seed 002 Table 1 and eq. 2.8–2.14, 4.1).
+/// Parameters of the dilatant μ(I)–φ law (Bouchut et al. 2021, Table 1 and eq. 2.8–2.14, 4.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DilatantLaw {
     pub mu_1: f64,
@@ -67,7 +67,7 @@ pub struct DilatantLaw {
 }
 
 impl DilatantLaw {
-    /// Seed 002 Table 1 (glass beads): μ_1 0.48, μ_2 0.73, I_0 0.279, d 0.7 mm, K 4.09,
+    /// Bouchut et al. 2021, Table 1 (glass beads): μ_1 0.48, μ_2 0.73, I_0 0.279, d 0.7 mm, K 4.09,
     /// K̃ 0.2, φ_stat 0.582 (§4.1's text prints 0.585; Table 1 has 0.582, used here),
     /// regularisation (f2) with N = 1 (§3.2), no walls.
     pub fn table1() -> DilatantLaw {
@@ -227,7 +227,7 @@ impl Primitive {
         }
     }
 
-    /// The wave speeds v ∓ √(g_c h) (seed 002 Appendix B: gas dynamics with γ = 2).
+    /// The wave speeds v ∓ √(g_c h) (Bouchut et al. 2021, Appendix B: gas dynamics with γ = 2).
     #[inline(always)]
     pub fn wave_speeds(&self, g_c: f64) -> (f64, f64) {
         let c = (g_c * self.h.max(0.0)).sqrt();
@@ -244,7 +244,7 @@ impl Primitive {
 
 impl Conserved {
     /// (h, v, φ) from U with φ^{α−1} = w/m; `None` where m ≤ 0 (φ undetermined: the
-    /// caller supplies it, seed 002 eq. 3.14).
+    /// caller supplies it, Bouchut et al. 2021, eq. 3.14).
     #[inline(always)]
     pub fn primitive(&self, alpha: f64) -> Option<Primitive> {
         if self.m <= 0.0 {
@@ -342,7 +342,7 @@ mod tests {
         assert!(law.phi_eq(10.0) < 0.0, "(2.9) leaves [0, 1] at large I");
         law.phi_eq = PhiEq::F0;
         assert_eq!(law.phi_eq(10.0), 0.0);
-        // (f2) tends to (f1) as N grows (seed 002 Fig. 2 discussion).
+        // (f2) tends to (f1) as N grows (Bouchut et al. 2021, Fig. 2 discussion).
         let f1 = DilatantLaw {
             phi_eq: PhiEq::F1,
             ..law

@@ -1,4 +1,4 @@
-//! Shallow-layer pointwise quantities (seed 000 eq. 15a–b with q = 0).
+//! Shallow-layer pointwise quantities (Garres-Díaz et al. 2021, eq. 15a–b with q = 0).
 //!
 //! Below [`H_DRY`] a cell is dry: its velocity is taken as zero. This threshold only
 //! desingularises u = hu/h; mass is never removed, so conservation stays exact.
@@ -23,7 +23,7 @@ pub fn celerity(g_n: f64, h: f64) -> f64 {
 }
 
 /// Gravity wave speed of a sheared column, √(g_n h + s) with s = 3 Σ l_α (u_α − ū)²:
-/// an estimate of the outer eigenvalues ū ± c of the multilayer system (seed 003 §4;
+/// an estimate of the outer eigenvalues ū ± c of the multilayer system (Escalante et al. 2023, §4;
 /// √(g_n h) for N = 1 or a uniform profile, s = 0).
 #[inline(always)]
 pub fn sheared_celerity(g_n: f64, h: f64, shear: f64) -> f64 {

@@ -1,16 +1,16 @@
-//! Pointwise physics of the two-layer submarine-avalanche model (seed 004): an inviscid
+//! Pointwise physics of the two-layer submarine-avalanche model (Fernández-Nieto et al. 2008): an inviscid
 //! water layer (index 1) over a fluidised granular layer (index 2) with Coulomb
-//! friction, in the Cartesian form of seed 004 eq. (62)/(65).
+//! friction, in the Cartesian form of Fernández-Nieto et al. 2008, eq. (62)/(65).
 //!
 //! Unknowns per cell W = (H₁, Q₁, H₂, Q₂), H_k = h_k / cos θ (h_k the thickness normal
 //! to the bed), Q_k = H_k U_k (U_k the velocity along the bed). θ(x) is the bed angle,
 //! tan θ = b'(x) (counter-clockwise, so that the curvature term h₂ U₂² ∂_X θ of eq. 44
 //! raises the normal stress where the bed is concave, e.g. at the foot of a slope).
-//! The water free surface and the interface are (seed 004 §5, Remark 9)
+//! The water free surface and the interface are (Fernández-Nieto et al. 2008, §5, Remark 9)
 //!
 //!   η = b + (H₁ + H₂) cos²θ,   ζ = b + H₂ cos²θ.
 //!
-//! Flux (seed 004 after eq. 72, with α = cos θ, β = cos²θ):
+//! Flux (Fernández-Nieto et al. 2008, after eq. 72, with α = cos θ, β = cos²θ):
 //!
 //!   𝓕(α, β, W) = (Q₁ α, Q₁²/H₁ α + g H₁²/2 αβ, Q₂ α, Q₂²/H₂ α + g A₂ H₂²/2 αβ),
 //!
@@ -28,7 +28,7 @@
 //! accelerate it. [`Buoyancy::Submerged`] applies the reduction 1 − r only where water
 //! covers the grains (a granular mass in air has no pore water); the paper's printed
 //! eq. (46) applies it everywhere ([`Buoyancy::Everywhere`], the default, needed to
-//! reproduce seed 004 §5.2: with δ₀ = 12° > θ = 11.31° a dry mass would not move at
+//! reproduce Fernández-Nieto et al. 2008, §5.2: with δ₀ = 12° > θ = 11.31° a dry mass would not move at
 //! all, yet the paper's deposit is fully submerged).
 //!
 //! Characteristic speeds: the characteristic polynomial of 𝒜 (eq. 66) is
@@ -58,7 +58,7 @@ pub const H_DRY_TWO_LAYER: f64 = 1e-8;
 /// Where the buoyancy reduction (1 − r) of the Coulomb normal stress applies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Buoyancy {
-    /// Everywhere (seed 004 eq. 46 as printed; the paper's §5 results).
+    /// Everywhere (Fernández-Nieto et al. 2008, eq. 46 as printed; the paper's §5 results).
     Everywhere,
     /// Only where water covers the grains (H₁ > dry): a mass in air feels g h₂ cos θ.
     Submerged,
@@ -80,7 +80,7 @@ pub struct TwoLayerParams {
 }
 
 impl TwoLayerParams {
-    /// Parameters from r, K, λ₁, λ₂ and δ₀ in degrees (seed 004 eq. 50).
+    /// Parameters from r, K, λ₁, λ₂ and δ₀ in degrees (Fernández-Nieto et al. 2008, eq. 50).
     pub fn new(r: f64, k: f64, lambda1: f64, lambda2: f64, delta0_deg: f64) -> Self {
         TwoLayerParams {
             g: GRAVITY,
@@ -150,7 +150,7 @@ pub fn layer_velocity(h: f64, q: f64) -> f64 {
     }
 }
 
-/// 𝓕(α, β, W) of seed 004 (after eq. 72) for one state; `u1`, `u2` the velocities.
+/// 𝓕(α, β, W) of Fernández-Nieto et al. 2008 (after eq. 72) for one state; `u1`, `u2` the velocities.
 #[inline(always)]
 pub fn flux(p: &TwoLayerParams, alpha: f64, beta: f64, w: [f64; 4], u1: f64, u2: f64) -> [f64; 4] {
     let half_g_ab = 0.5 * p.g * alpha * beta;
@@ -180,7 +180,7 @@ pub fn speed_bounds(
     (lo * cos - c, hi * cos + c)
 }
 
-/// The transport matrix 𝒜(θ, W) of seed 004 eq. (66), row-major (tests and docs).
+/// The transport matrix 𝒜(θ, W) of Fernández-Nieto et al. 2008, eq. (66), row-major (tests and docs).
 pub fn transport_matrix(
     p: &TwoLayerParams,
     cos: f64,

@@ -56,14 +56,14 @@ pub struct Initial {
     pub h: Profile,
     /// Depth-averaged downslope velocity u(x).
     pub u: Profile,
-    /// Normal velocity w(x) (non-hydrostatic model only; seed 000 eq. 30).
+    /// Normal velocity w(x) (non-hydrostatic model only; Garres-Díaz et al. 2021, eq. 30).
     pub w: Profile,
-    /// Uniform erodible-bed thickness h_i ≥ 0 (seed 001 §4.2).
+    /// Uniform erodible-bed thickness h_i ≥ 0 (Fernández-Nieto et al. 2016, §4.2).
     pub erodible_bed: f64,
     /// Water free-surface elevation η(x) of the submarine model (no water if absent);
     /// its `initial.h` is then the grains' vertical thickness H₂cos²θ.
     pub eta: Option<Profile>,
-    /// Solid volume fraction φ(x) of the dilatant model (seed 002), in (0, 1).
+    /// Solid volume fraction φ(x) of the dilatant model (Bouchut et al. 2021), in (0, 1).
     pub phi: Option<Profile>,
 }
 

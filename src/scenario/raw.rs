@@ -26,7 +26,7 @@ pub(crate) struct RawScenario {
     pub dilatancy: Option<RawDilatancy>,
 }
 
-/// `[dilatancy]`: the dilatant model's law and numerics (seed 002).
+/// `[dilatancy]`: the dilatant model's law and numerics (Bouchut et al. 2021).
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDilatancy {

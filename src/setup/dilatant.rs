@@ -1,5 +1,5 @@
 //! From a validated [`Scenario`] with `model.kind = "dilatant"` to a ready
-//! [`Simulation`] of the dilatant model (seed 002): samples h, u and φ at the cell
+//! [`Simulation`] of the dilatant model (Bouchut et al. 2021): samples h, u and φ at the cell
 //! centres and builds the one-stage pipeline. Everything that can be wrong with the
 //! scenario was refused by its validation.
 

@@ -1,5 +1,5 @@
 //! From a validated [`Scenario`] to a ready granular [`Simulation`]: samples the
-//! profiles on the mesh, adds the erodible bed (seed 001 §4.2, seed 003 eq. 34: the
+//! profiles on the mesh, adds the erodible bed (Fernández-Nieto et al. 2016, §4.2, Escalante et al. 2023, eq. 34: the
 //! column sits on a uniform layer h_i of the same material, so h = initial.h + h_i),
 //! and builds the pipeline of the chosen model (every layer starts with the velocity
 //! `initial.u`; a non-hydrostatic run also with the normal velocity `initial.w`).
@@ -20,7 +20,7 @@ pub fn build(scn: &Scenario) -> Simulation<Granular> {
     let u = &scn.sampled.u;
     let mut state = LayeredState::from_profiles(&mesh, &scn.multilayer.layer_fractions, &h, u);
     if scn.model.pressure == Pressure::NonHydrostatic {
-        // An imposed normal velocity (the gate, seed 000 eq. 30) enters the first step
+        // An imposed normal velocity (the gate, Garres-Díaz et al. 2021, eq. 30) enters the first step
         // as it is, as in the paper (docs/numerics.md, "Initial normal velocity").
         state.add_nonhydrostatic(&scn.sampled.w);
     }

@@ -68,7 +68,7 @@ pub fn build(scn: &Scenario) -> Box<dyn Run> {
     }
 }
 
-/// The run of a dilatant scenario (`model.kind = "dilatant"`, seed 002).
+/// The run of a dilatant scenario (`model.kind = "dilatant"`, Bouchut et al. 2021).
 pub fn build_dilatant(scn: &Scenario) -> Simulation<crate::model::dilatant::Dilatant> {
     dilatant::build(scn)
 }

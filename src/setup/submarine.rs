@@ -1,4 +1,4 @@
-//! Builds the submarine model (seed 004) from a validated scenario: the bed angle from
+//! Builds the submarine model (Fernández-Nieto et al. 2008) from a validated scenario: the bed angle from
 //! b(x), the grains' vertical thickness `initial.h` = H₂cos²θ and velocity `initial.u`,
 //! the water up to the surface `initial.eta` (H₁cos²θ = max(0, η − b − H₂cos²θ)), at rest.
 

@@ -1,8 +1,8 @@
 //! State of the dilatant model: the conservative variables U = (φh, φhv, φ^α h) of
-//! seed 002 eq. (B.10) per cell, with one ghost cell on each side (index 0 and nx + 1),
+//! Bouchut et al. 2021, eq. (B.10) per cell, with one ghost cell on each side (index 0 and nx + 1),
 //! and the primitive (h, v, φ) derived from them.
 //!
-//! A dry cell (φh = 0) does not determine φ; the fluxes still need it (seed 002 §3.1
+//! A dry cell (φh = 0) does not determine φ; the fluxes still need it (Bouchut et al. 2021, §3.1
 //! after eq. 3.13), so φ of a dry cell is max(φ_{i−1}, φ_{i+1}) over its wet
 //! neighbours (eq. 3.14), or its last value when both are dry.
 
@@ -13,7 +13,7 @@ use crate::physics::shallow::{velocity, H_DRY};
 #[derive(Debug, PartialEq)]
 pub struct DilatantState {
     pub nx: usize,
-    /// α of the third variable (seed 002 uses 2).
+    /// α of the third variable (Bouchut et al. 2021 uses 2).
     pub alpha: f64,
     /// φh, φhv, φ^α h with ghosts (nx + 2).
     pub m: Vec<f64>,
@@ -120,7 +120,7 @@ impl DilatantState {
     }
 
     /// Ghost cells: a wall mirrors the edge cell with the discharge reversed, an
-    /// outflow copies it (as the other models, seed 003 Remark 6).
+    /// outflow copies it (as the other models, Escalante et al. 2023, Remark 6).
     pub fn fill_ghosts(&mut self, line: &Line) {
         let nx = self.nx;
         for (ghost, edge, kind) in [(0, 1, line.left), (nx + 1, nx, line.right)] {
@@ -194,7 +194,7 @@ impl DilatantState {
         (1..=self.nx).map(|j| self.phi[j] * self.h[j]).sum::<f64>() * line.dx
     }
 
-    /// Total energy ∫(φh v²/2 + g_c φh²/2 + g_c φh b̂) dx (seed 002 eq. 2.7, per ρ_s).
+    /// Total energy ∫(φh v²/2 + g_c φh²/2 + g_c φh b̂) dx (Bouchut et al. 2021, eq. 2.7, per ρ_s).
     pub fn energy(&self, line: &Line) -> f64 {
         (1..=self.nx)
             .map(|j| {

@@ -2,7 +2,7 @@
 //! non-hydrostatic): one material split into N layers of fixed fractions.
 //!
 //! Cell averages of the total thickness h and of the layer discharges (hu)_α = h u_α,
-//! α = 1..N (seed 003 notation: layer α has thickness l_α h), with one ghost cell on
+//! α = 1..N (Escalante et al. 2023 notation: layer α has thickness l_α h), with one ghost cell on
 //! each side (index 0 and nx + 1). The depth-averaged discharge is Σ_α l_α (hu)_α.
 //! Discharges are stored cell-major, `hu[j * N + α]`, so the per-column work of the
 //! multilayer viscous step reads contiguous memory. N = 1 is the Savage–Hutter model.
@@ -113,7 +113,7 @@ impl LayeredState {
         s
     }
 
-    /// Ghost cells per seed 003 Remark 6: thickness copied (homogeneous Neumann);
+    /// Ghost cells per Escalante et al. 2023, Remark 6: thickness copied (homogeneous Neumann);
     /// discharge copied (outflow) or reversed (wall).
     pub fn fill_ghosts(&mut self, line: &Line) {
         let (nx, n) = (self.nx, self.layers);
@@ -197,7 +197,7 @@ pub fn fill_tracer_ghosts(q: &mut [f64], nx: usize, n: usize) {
     }
 }
 
-/// The non-hydrostatic pressure (seed 000 eq. 15, seed 003 §3–4), present only when
+/// The non-hydrostatic pressure (Garres-Díaz et al. 2021, eq. 15, Escalante et al. 2023, §3–4), present only when
 /// `model.pressure = "nonhydrostatic"` (its normal discharges h w_α are the tracer
 /// [`HW`]).
 ///
@@ -205,7 +205,7 @@ pub fn fill_tracer_ghosts(q: &mut [f64], nx: usize, n: usize) {
 /// lies between the ghost-inclusive cells k and k + 1, at x_min + kΔx) and at the
 /// layer interfaces Z_{α−1/2}, α = 1..N (the bed is α = 1), face-major:
 /// `p[k * N + α − 1]`. The free-surface value p_{N+1/2} is 0 and is not stored. For
-/// the monolayer, p_{1/2} is the basal value 2q̄ of seed 000 (a linear profile
+/// the monolayer, p_{1/2} is the basal value 2q̄ of Garres-Díaz et al. 2021 (a linear profile
 /// vanishing at the surface; q̄ = p_{1/2}/2 is the depth average).
 #[derive(Debug, Clone, PartialEq)]
 pub struct NonHydrostatic {

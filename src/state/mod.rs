@@ -5,8 +5,8 @@
 //!
 //! - [`LayeredState`] ([`layered`]): the granular family, N layers of fixed fractions,
 //!   with tracers and the non-hydrostatic pressure;
-//! - [`TwoLayerState`] ([`two_layer`]): water over grains (seed 004);
-//! - [`DilatantState`] ([`dilatant`]): the compressible μ(I)–φ model (seed 002).
+//! - [`TwoLayerState`] ([`two_layer`]): water over grains (Fernández-Nieto et al. 2008);
+//! - [`DilatantState`] ([`dilatant`]): the compressible μ(I)–φ model (Bouchut et al. 2021).
 
 pub mod dilatant;
 pub mod layered;

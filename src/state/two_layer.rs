@@ -1,4 +1,4 @@
-//! The state of the two-layer submarine model (seed 004): water (layer 1) over a
+//! The state of the two-layer submarine model (Fernández-Nieto et al. 2008): water (layer 1) over a
 //! fluidised granular layer (layer 2), thicknesses H_k and discharges Q_k = H_k U_k
 //! measured normal to and along the bed of a [`CurvedLine`].
 

@@ -1,9 +1,9 @@
-//! The dilatant μ(I)–φ model of seed 002 (`model.kind = "dilatant"`): one granular
+//! The dilatant μ(I)–φ model of Bouchut et al. 2021 (`model.kind = "dilatant"`): one granular
 //! layer whose solid volume fraction φ evolves with the dilatancy law (eq. 2.2–2.15).
 //! Its state is [`DilatantState`] ((h, hv, φ), and (φh, φhv, φ^α h) for the Appendix B
 //! scheme), its time step a single stage: `numerics/dilatant/split.rs` by default (the
 //! Savage–Hutter μ(I) step with φ carried by its mass fluxes, then the dilatant terms),
-//! or [`DilatantScheme`] (seed 002 §3: Appendix B fluxes → stabilisation → dilatancy)
+//! or [`DilatantScheme`] (Bouchut et al. 2021, §3: Appendix B fluxes → stabilisation → dilatancy)
 //! with `dilatancy.scheme = "appendix_b"`; its set-up `setup/dilatant.rs`.
 //!
 //! Diagnostics: `mass` is the grain volume ∫φh dx (conserved), the kinetic energy
@@ -39,9 +39,9 @@ pub struct Dilatant {
     pub front_threshold: f64,
     /// Thickness (m) below which a cell's speed does not count for the rest test: 0 for
     /// the split scheme with K = 0 (every cell counts, as in the monolayer), the grain
-    /// diameter d for the Appendix B scheme, whose stabilisation viscosity (seed 002
+    /// diameter d for the Appendix B scheme, whose stabilisation viscosity (Bouchut et al. 2021,
     /// eq. 3.20) spreads films of ~1e-10 m ahead of a deposit that keep a speed of
-    /// order 0.1 m/s (seed 002 §3.3 calls layers thinner than a few grains physically
+    /// order 0.1 m/s (Bouchut et al. 2021, §3.3 calls layers thinner than a few grains physically
     /// meaningless), and for the split scheme with K > 0, whose front films (tens of µm,
     /// φ ≈ 0.5) compact while they creep and slow down only exponentially.
     pub rest_depth: f64,
@@ -102,7 +102,7 @@ impl Model for Dilatant {
 
     /// 0 for the split scheme with K = 0, whose friction step stops a mass exactly (as
     /// the monolayer's); [`REST_SPEED`] for the Appendix B scheme, whose
-    /// apparent-topography friction (seed 002 eq. 3.10) stops it to round-off, and for
+    /// apparent-topography friction (Bouchut et al. 2021, eq. 3.10) stops it to round-off, and for
     /// the split scheme with K > 0, where a mass that creeps near its static threshold
     /// compacts and stops only asymptotically (backward-Euler friction, `split.rs`).
     fn rest_speed(&self) -> f64 {

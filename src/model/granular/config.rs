@@ -18,7 +18,7 @@ pub struct MultilayerSpec {
     pub basal: BasalCondition,
     pub regularization: Regularization,
     pub sidewall: Option<Sidewall>,
-    /// Second-order strain-rate correction of seed 001 eq. (32) ("C-MSM").
+    /// Second-order strain-rate correction of Fernández-Nieto et al. 2016, eq. (32) ("C-MSM").
     pub c_msm: bool,
     /// Viscosities of the viscous step at t^n or at the new speed (`rheology.viscosity`).
     pub viscosity: ViscosityTime,

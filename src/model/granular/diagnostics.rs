@@ -4,7 +4,7 @@
 //! `/front`). The pass also detects non-finite values, so a NaN stops the run at the
 //! step that produced it.
 //!
-//! Signal speed of the CFL step (seed 003 eq. 14), a bound on every wave speed the HLL
+//! Signal speed of the CFL step (Escalante et al. 2023, eq. 14), a bound on every wave speed the HLL
 //! flux of step 1 uses, taken per cell:
 //!
 //! - N = 1: s = max_i (|u_i| + √(g_n h_i)). It bounds the Einfeldt–Roe speeds
@@ -119,8 +119,8 @@ mod tests {
     use crate::physics::shallow::sheared_celerity;
     use proptest::prelude::*;
 
-    /// The Einfeldt bounds S_L, S_R of every face, from their definition (seed 000 after
-    /// eq. 21, with the sheared celerity of seed 003 for N > 1): the speeds the HLL
+    /// The Einfeldt bounds S_L, S_R of every face, from their definition (Garres-Díaz et al. 2021, after
+    /// eq. 21, with the sheared celerity of Escalante et al. 2023 for N > 1): the speeds the HLL
     /// flux of step 1 uses. The CFL signal speed must bound them all.
     fn largest_face_speed(mesh: &Line, s: &LayeredState) -> f64 {
         let n = s.layers;

@@ -1,11 +1,11 @@
-//! The granular family of seeds 000, 001 and 003: one material in N layers of fixed
+//! The granular family of Garres-Díaz et al. 2021, Fernández-Nieto et al. 2016 and Escalante et al. 2023: one material in N layers of fixed
 //! fractions ([`LayeredState`]).
 //!
 //! - `layers = 1`, hydrostatic: the Savage–Hutter model with Coulomb or μ(I) friction
-//!   (seed 000 Remark 1): hyperbolic → friction.
-//! - `layers = N > 1`, hydrostatic: the multilayer μ(I) model (seed 001 eq. 27–28,
-//!   seed 003 eq. 9 with p_nh = 0): hyperbolic → viscous.
-//! - `layers = 1`, non-hydrostatic: the weakly non-hydrostatic model (seed 000
+//!   (Garres-Díaz et al. 2021, Remark 1): hyperbolic → friction.
+//! - `layers = N > 1`, hydrostatic: the multilayer μ(I) model (Fernández-Nieto et al. 2016, eq. 27–28,
+//!   Escalante et al. 2023, eq. 9 with p_nh = 0): hyperbolic → viscous.
+//! - `layers = 1`, non-hydrostatic: the weakly non-hydrostatic model (Garres-Díaz et al. 2021,
 //!   eq. 15): hyperbolic (hw as a tracer) → friction with the total pressure →
 //!   projection.
 //!
@@ -29,16 +29,16 @@ use profiles::{normal_velocities, static_interface};
 /// pipeline).
 #[derive(Debug, Clone)]
 pub struct Granular {
-    /// Initial erodible-bed thickness per cell (seed 001 §4.2), zeros without one.
+    /// Initial erodible-bed thickness per cell (Fernández-Nieto et al. 2016, §4.2), zeros without one.
     pub h_bed: Vec<f64>,
     /// Thickness above the erodible bed from which a cell counts for the front (m).
     pub front_threshold: f64,
     /// Layer speed (m/s) above which a layer counts as flowing, for the multilayer
-    /// output `/snapshots/static_interface` (default 1e-3 m/s, seed 001 §4.2.5).
+    /// output `/snapshots/static_interface` (default 1e-3 m/s, Fernández-Nieto et al. 2016, §4.2.5).
     pub static_threshold: f64,
     /// Largest speed (m/s) of a mass at rest, for the stop time and `stop_at_rest`: 0
     /// for the monolayer, which stops exactly; the multilayer model keeps regularised
-    /// creep velocities (seed 003 Remark 2) and uses its static threshold.
+    /// creep velocities (Escalante et al. 2023, Remark 2) and uses its static threshold.
     pub rest_speed: f64,
 }
 
@@ -84,7 +84,7 @@ impl Model for Granular {
             }
         }
         let nh = state.nh.as_ref().map(|nh| nh.snapshot_fields(state));
-        // The multilayer model also reports its normal velocities (seed 001 eq. 20)
+        // The multilayer model also reports its normal velocities (Fernández-Nieto et al. 2016, eq. 20)
         // and the flow/no-flow interface.
         let (w_ml, interface) = if n > 1 {
             let mut w = vec![0.0; n * nx];

@@ -79,7 +79,7 @@ impl WithLaw for Stages<'_> {
                 )));
             }
             (Pressure::NonHydrostatic, n) => {
-                // Seed 003 §4: explicit p^n and the μ(I) viscous step with the total
+                // Escalante et al. 2023, §4: explicit p^n and the μ(I) viscous step with the total
                 // pressures, then the exact N-layer projection.
                 let opts = ViscousOptions {
                     basal: spec.basal,

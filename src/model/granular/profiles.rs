@@ -1,7 +1,7 @@
 //! The vertical structure a multilayer state carries beyond h and u_α, computed for
-//! output (seed 001 §3.2 and §4.2.5).
+//! output (Fernández-Nieto et al. 2016, §3.2 and §4.2.5).
 //!
-//! Normal velocities follow from the incompressibility condition (seed 001 eq. 20),
+//! Normal velocities follow from the incompressibility condition (Fernández-Nieto et al. 2016, eq. 20),
 //! with no mass crossing the bed (G_{1/2} = 0) and a fixed bed:
 //!
 //!   w_{1/2}^+ = u_1 ∂_X b,
@@ -16,7 +16,7 @@
 //!
 //! The flow/no-flow interface is the height above the bed of the base of the first
 //! layer, from the bottom, whose speed exceeds a threshold (the whole thickness h when
-//! no layer does; seed 001 §4.2.5 uses 1e-3 m/s).
+//! no layer does; Fernández-Nieto et al. 2016, §4.2.5 uses 1e-3 m/s).
 
 use crate::grid::Coordinates;
 use crate::grid::Line;
@@ -100,7 +100,7 @@ mod tests {
     }
 
     /// Uniform thickness, flat bed, every layer with u = a x: incompressibility gives
-    /// w = −a z at height z (seed 001 eq. 20).
+    /// w = −a z at height z (Fernández-Nieto et al. 2016, eq. 20).
     #[test]
     fn stretching_flow_has_linear_normal_velocity() {
         let m = mesh(10.0, Coordinates::Local, |_| 0.0);

@@ -1,4 +1,4 @@
-//! The two-layer submarine-avalanche model of seed 004 (`model.kind = "submarine"`):
+//! The two-layer submarine-avalanche model of Fernández-Nieto et al. 2008 (`model.kind = "submarine"`):
 //! water (layer 1) over a fluidised granular layer (layer 2) with Coulomb friction,
 //! in the Cartesian form eq. (62), solved by [`crate::numerics::two_layer`].
 //!
@@ -169,7 +169,7 @@ impl Model for Submarine {
     }
 }
 
-/// The validated `[submarine]` keys (seed 004 eq. 50).
+/// The validated `[submarine]` keys (Fernández-Nieto et al. 2008, eq. 50).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SubmarineSpec {
     /// Density ratio r = ρ₁/ρ₂ (water over the grain layer's bulk density).

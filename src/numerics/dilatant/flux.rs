@@ -1,5 +1,5 @@
 //! Well-balanced left/right numerical fluxes for the shallow-water system with volume
-//! fraction (seed 002 §3.1 and Appendix B, eq. B.11–B.13, B.31–B.32), and the apparent
+//! fraction (Bouchut et al. 2021, §3.1 and Appendix B, eq. B.11–B.13, B.31–B.32), and the apparent
 //! topography that carries the basal friction (eq. 3.6–3.12).
 //!
 //! Homogeneous solver 𝓕 (B.11): HLL for the first two components of
@@ -7,7 +7,7 @@
 //! S_L = min(v_l − c_l, v_r − c_r), S_R = max(v_l + c_l, v_r + c_r), c = √(g_c h)
 //! (v ∓ 2c on the side facing a dry state), and the upwind passive transport (B.13) for
 //! the third: 𝓕² = 𝓕⁰ φ_{l/r}^{α−1}. HLL keeps φh ≥ 0 and satisfies the entropy
-//! inequalities of the first two components with these bounds; seed 002 uses the
+//! inequalities of the first two components with these bounds; Bouchut et al. 2021 uses the
 //! Suliciu relaxation solver instead (a three-wave solver, less diffusive on contacts).
 //! Theorem B.1 holds for any homogeneous solver with (B.13).
 //!
@@ -28,7 +28,7 @@
 //!   proj_μ(X) = X if |X| ≤ μ, μ X/|X| otherwise                                 (3.11)
 //!
 //! μ = μ_eff^interf is evaluated at the interface state (h̄, v_interf, φ̄) with
-//! h̄ = ½(h_l + h_r) and φ̄ = (φ_l h_l + φ_r h_r)/(h_l + h_r) (seed 002 does not say which
+//! h̄ = ½(h_l + h_r) and φ̄ = (φ_l h_l + φ_r h_r)/(h_l + h_r) (Bouchut et al. 2021 does not say which
 //! state; this one is symmetric and reduces to the cell state for equal sides).
 
 use super::reconstruction::{reconstruct, Side};
@@ -37,7 +37,7 @@ use crate::physics::dilatancy::{phi_power, pressure, Conserved, DilatantLaw, Pri
 /// Numerical options of the finite-volume step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FluxOptions {
-    /// α of the third conservative variable φ^α h (α > 1; seed 002 uses 2).
+    /// α of the third conservative variable φ^α h (α > 1; Bouchut et al. 2021 uses 2).
     pub alpha: f64,
     /// λ of (B.16): 0 (classical) or 1.
     pub lambda: f64,

@@ -1,5 +1,5 @@
 //! Hydrostatic reconstruction for the shallow-water system with volume fraction
-//! (seed 002 Appendix B, eq. B.16–B.30), for α > 1 (B.19).
+//! (Bouchut et al. 2021, Appendix B, eq. B.16–B.30), for α > 1 (B.19).
 //!
 //! Given the two sides (h, v, φ) of an interface and the jump Δz = z_r − z_l of the
 //! total topography, λ ≥ 0:

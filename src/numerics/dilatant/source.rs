@@ -1,4 +1,4 @@
-//! Semi-implicit dilatancy step (seed 002 §3.2, eq. 3.15–3.19): with (φ*, h*, v*) the
+//! Semi-implicit dilatancy step (Bouchut et al. 2021, §3.2, eq. 3.15–3.19): with (φ*, h*, v*) the
 //! state after the transport steps, γ̇* = (5/2)|v*|/h*, I* = γ̇* d/√(φ* g_c h*) and
 //! φ_eq* = φ_eq(I*) (f2 with N = 1 in the paper),
 //!

@@ -1,8 +1,8 @@
 //! The default time step of the dilatant model (`dilatancy.scheme = "split"`): the
 //! Savage–Hutter μ(I) step of the monolayer model with the volume fraction carried by
-//! its mass fluxes, then the terms of seed 002 that vanish for K = 0 and uniform φ.
+//! its mass fluxes, then the terms of Bouchut et al. 2021 that vanish for K = 0 and uniform φ.
 //!
-//! In the variables (h, hv, φ) the system (2.2)–(2.5) of seed 002 reads
+//! In the variables (h, hv, φ) the system (2.2)–(2.5) of Bouchut et al. 2021 reads
 //!
 //!   ∂_t h + ∂_x(hv) = h γ̇ tan ψ                                              (2.5)
 //!   ∂_t(hv) + ∂_x(hv² + ½ g_c h²) = −g_c h ∂_x b̂ − g_c h²/(2φ) ∂_x φ − μ_eff g_c h sgn(v)
@@ -12,7 +12,7 @@
 //! i.e. shallow water in (h, hv) with three extra terms: the φ-gradient pressure, the
 //! dilatant friction μ_eff = μ(I) + tan ψ (2.13–2.14) and the dilatancy source. One step:
 //!
-//! 1. **hyperbolic**: the monolayer's [`HydrostaticStep`] (seed 000 §3 step 1: HLL/PVM,
+//! 1. **hyperbolic**: the monolayer's [`HydrostaticStep`] (Garres-Díaz et al. 2021, §3 step 1: HLL/PVM,
 //!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. For
 //!    K = 0 its ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`). For K > 0 it
 //!    takes the threshold per face ([`HydrostaticStep::apply_with_friction`]):
@@ -31,7 +31,7 @@
 //!    𝓕_{i−1/2})) rearranged: ∫φh is conserved to round-off, φ_i^{n+1} is a convex
 //!    combination of φ_{i−1}, φ_i, φ_{i+1} while the outflow of a cell does not exceed
 //!    its content, and a uniform φ stays uniform bit for bit (every difference is 0).
-//!    Cells left with h = 0 keep their φ (seed 002 eq. 3.14 is not needed: the
+//!    Cells left with h = 0 keep their φ (Bouchut et al. 2021, eq. 3.14 is not needed: the
 //!    hyperbolic step never asks a dry cell for φ).
 //! 3. **cell pass**: the φ-gradient pressure −g_c h²/(2φ) (φ_{i+1} − φ_{i−1})/(2Δx)
 //!    (a neighbour with h ≤ 10⁻¹⁰ m counts with the cell's own φ); the friction step of
@@ -53,7 +53,7 @@
 //!    friction (I* = the I at which μ_eff was taken): φ from (3.17) or (3.18), φh and v
 //!    kept, so h ← φh/φ and hv ← h v.
 //! 4. **stabilisation** (K > 0 and ξ ≠ 0 only; off in the scenarios, the split scheme
-//!    needs none; seed 002 §3.3 introduces it for its own scheme): (φh, φhv, φ^α h)
+//!    needs none; Bouchut et al. 2021, §3.3 introduces it for its own scheme): (φh, φhv, φ^α h)
 //!    diffuse with ι = max(0, ξ v Δz) (3.20–3.21), Δz = Δb̂ + Δx Proj_μ(X, v/(g_c Δt))
 //!    (3.6–3.12), μ the mean of the two cells' μ_eff, on faces whose two cells are wet
 //!    (h > 10⁻¹⁰ m): the viscosity never wets a dry cell, so it cannot spread films
@@ -117,10 +117,10 @@ pub fn reconstruction_law(law: &DilatantLaw, phi_ref: f64) -> MuI {
     }
 }
 
-/// The dilatant friction coefficient μ_eff = μ(I) + μ_w h/W + tan ψ (seed 002 eq.
+/// The dilatant friction coefficient μ_eff = μ(I) + μ_w h/W + tan ψ (Bouchut et al. 2021, eq.
 /// 2.13–2.14 and 4.1; tan ψ = K(φ − φ_eq(I)) cut so that μ_eff ≥ 0) of a layer of
 /// depth h > 0, speed |v| and fraction φ under p/ρ = g_c h. At rest (I = 0) it is the
-/// static threshold μ_1 + K(φ − φ_stat) (+ walls) of seed 002 §2.4 (2.16).
+/// static threshold μ_1 + K(φ − φ_stat) (+ walls) of Bouchut et al. 2021, §2.4 (2.16).
 #[inline(always)]
 pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) -> (f64, f64) {
     let i = inertial_number(law.d, phi, speed, h, p_over_rho);
@@ -171,7 +171,7 @@ fn moving_face(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64)
     mu_eff(law, speed, h, p_over_rho, phi).0
 }
 
-/// G(I) = μ(I) + μ_w h/W + K(φ − φ_eq(I)) (seed 002 eq. 2.8, 2.13–2.14, 4.1; `wall`
+/// G(I) = μ(I) + μ_w h/W + K(φ − φ_eq(I)) (Bouchut et al. 2021, eq. 2.8, 2.13–2.14, 4.1; `wall`
 /// = μ_w h/W) before the cut at 0, and dG/dI ≥ 0. G is increasing and concave in I:
 /// μ(I) is, and every φ_eq of §2 (2.9, f0–f2) is convex and non-increasing
 /// ([`DilatantLaw::phi_eq_and_slope`]). Needs I_0 > 0 (validated).

@@ -1,4 +1,4 @@
-//! Stabilisation viscosity (seed 002 §3.3, eq. 3.20–3.22): each conservative variable
+//! Stabilisation viscosity (Bouchut et al. 2021, §3.3, eq. 3.20–3.22): each conservative variable
 //! U_c ∈ {φh, φhv, φ^α h} diffuses with the face coefficient
 //!
 //!   ι_c = max(0, ξ_c v Δz)                                                 (3.21)
@@ -33,7 +33,7 @@ impl Default for Viscosity {
 }
 
 impl Viscosity {
-    /// The paper's values ξ = (2, 2, 5) (seed 002 §3.3).
+    /// The paper's values ξ = (2, 2, 5) (Bouchut et al. 2021, §3.3).
     pub fn paper() -> Self {
         Viscosity {
             xi: [2.0, 2.0, 5.0],

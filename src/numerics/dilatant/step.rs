@@ -1,4 +1,4 @@
-//! One time step of the dilatant model (seed 002 §3): finite volumes (3.5) with the
+//! One time step of the dilatant model (Bouchut et al. 2021, §3): finite volumes (3.5) with the
 //! Appendix B fluxes and the apparent-topography friction, the stabilisation
 //! viscosity (3.20) sub-cycled, then the semi-implicit dilatancy step (3.17)/(3.18).
 //!
@@ -52,7 +52,7 @@ pub enum SchemeKind {
     /// φ-gradient, dilatant friction, dilatancy and stabilisation terms (`split.rs`).
     #[default]
     Split,
-    /// Seed 002 §3 as printed: Appendix B fluxes with apparent-topography friction (this
+    /// Bouchut et al. 2021, §3 as printed: Appendix B fluxes with apparent-topography friction (this
     /// file).
     AppendixB,
 }

@@ -1,5 +1,5 @@
-//! Step 3 of the splitting: the non-hydrostatic pressure correction (seed 000 §3
-//! step 3, eq. 25–28; seed 003 §4 step 3, eq. 26–33).
+//! Step 3 of the splitting: the non-hydrostatic pressure correction (Garres-Díaz et al. 2021, §3
+//! step 3, eq. 25–28; Escalante et al. 2023, §4 step 3, eq. 26–33).
 //!
 //! An incremental projection: with the pressure increment p̃ = p^{n+1} − p^n at the
 //! staggered faces, the discharges are corrected by the implicit pressure force and p̃
@@ -8,15 +8,15 @@
 //!   U^{n+1} = U^{n+2/3} + Δt 𝒯(p̃),   𝒞(U^{n+1}) = 0   at every face.
 //!
 //! The unknown is the impulse Π = Δt p̃, so the matrix does not depend on Δt. The stage
-//! is generic over two parts, so the multilayer model (seed 003) reuses it:
+//! is generic over two parts, so the multilayer model (Escalante et al. 2023) reuses it:
 //!
 //! - a [`ProjectionOperator`]: the discrete constraint and the discrete correction of
 //!   one model. It forms A Π = −𝒞(U^{n+2/3}), one block of unknowns per face (m = 1 for
-//!   the monolayer of seed 000, m = N for the N-layer model, whose matrix (32) is
+//!   the monolayer of Garres-Díaz et al. 2021, m = N for the N-layer model, whose matrix (32) is
 //!   block-tridiagonal when ordered face-major), hands it row by row
 //!   ([`PressureRows`]) to the solver, and applies the correction of the solution;
 //! - a [`PressureSolver`] for that row type: [`ThomasSolver`] for scalar rows (exact,
-//!   O(nx)); a block-Thomas or the block Gauss–Seidel solver of seed 003 §4 implements
+//!   O(nx)); a block-Thomas or the block Gauss–Seidel solver of Escalante et al. 2023, §4 implements
 //!   the same trait for N×N blocks (it may store the rows first, e.g. in a
 //!   [`BlockTridiagonal`](super::linalg::BlockTridiagonal), to sweep them repeatedly).
 //!

@@ -1,14 +1,14 @@
-//! The projection of the weakly non-hydrostatic monolayer model (seed 000 eq. 15,
+//! The projection of the weakly non-hydrostatic monolayer model (Garres-Díaz et al. 2021, eq. 15,
 //! §3 step 3).
 //!
-//! Unknown: the basal non-hydrostatic pressure p = p_{1/2} = 2q̄ at the faces (seed 000
+//! Unknown: the basal non-hydrostatic pressure p = p_{1/2} = 2q̄ at the faces (Garres-Díaz et al. 2021
 //! writes the depth average q̄; the profile is linear and vanishes at the surface). The
 //! model's pressure terms (eq. 15b–c, 25–26) and constraint (eq. 15d, 27) are
 //!
 //!   ∂_t(hu) = −(∂_X(h q̄) + 2q̄ ∂_X b),   ∂_t(hw) = 2q̄,   w = u ∂_X b − (h/2) ∂_X u,
 //!
 //! b the bed over the reference plane (0 on a plane in local coordinates, the whole
-//! topography in Cartesian ones, seed 000 §4.1).
+//! topography in Cartesian ones, Garres-Díaz et al. 2021, §4.1).
 //!
 //! Discretisation. The correction 𝒯 of a face impulse Π = Δt p̃ (Π̄ = Π/2 the
 //! depth-mean impulse) is eq. (25)–(26) in conservative form:
@@ -28,10 +28,10 @@
 //! M = diag(h): symmetric positive definite, solved exactly (Thomas), after which (27)
 //! holds to round-off. Its continuous limit is eq. (28) divided by h.
 //!
-//! Why not the printed stencil (docs/numerics.md): seed 000 splits the pressure force
+//! Why not the printed stencil (docs/numerics.md): Garres-Díaz et al. 2021 splits the pressure force
 //! as h ∂_X q̄ + q̄ ∂_X(2b + h) with a centred ∂_X h, and averages hu, hw and h
 //! arithmetically at the face. At a front (a thick cell beside a film) both scale with
-//! the thick side, so a film took impulses ∝ 1/h: the gate case of seed 000 eq. (30)
+//! the thick side, so a film took impulses ∝ 1/h: the gate case of Garres-Díaz et al. 2021, eq. (30)
 //! put |u| ≈ 43 m/s into a 0.2 mm cell. Here the projection is orthogonal in the
 //! kinetic-energy norm: it removes KE(𝒯Π) and never adds energy, and a film's face
 //! depth (and so its share of the force) is proportional to its own depth.
@@ -42,8 +42,8 @@
 //!   a free surface) p = 0: identity row Π = 0, and p is reset to 0 there after the
 //!   correction;
 //! - a wall face carries the constraint, with the ghost cell the mirror image of the
-//!   edge cell (the pressure extended evenly: homogeneous Neumann, seed 003 Remark 6);
-//! - an outflow face carries the Neumann row Π_{1/2} − Π_{3/2} = 0 (seed 003 eq. 37)
+//!   edge cell (the pressure extended evenly: homogeneous Neumann, Escalante et al. 2023, Remark 6);
+//! - an outflow face carries the Neumann row Π_{1/2} − Π_{3/2} = 0 (Escalante et al. 2023, eq. 37)
 //!   instead of a constraint.
 
 use std::ops::Range;
@@ -120,7 +120,7 @@ pub fn cell_coefficients(two_b: &[f64], h: &[f64], j: usize, nx: usize, inv_dx: 
     }
 }
 
-/// The seed 000 projection operator (m = 1).
+/// The Garres-Díaz et al. 2021 projection operator (m = 1).
 #[derive(Debug)]
 pub struct MonolayerOperator {
     two_b: Vec<f64>,
@@ -343,7 +343,7 @@ impl ConstraintResidual {
     }
 }
 
-/// Evaluates the discrete constraint 𝒞 = 𝒯ᵀ(u, w) (seed 000 eq. 27 divided by h,
+/// Evaluates the discrete constraint 𝒞 = 𝒯ᵀ(u, w) (Garres-Díaz et al. 2021, eq. 27 divided by h,
 /// discretised at the faces as in the projection, module documentation) on the
 /// current state.
 pub fn constraint_residual(mesh: &Line, state: &LayeredState) -> ConstraintResidual {
@@ -471,7 +471,7 @@ mod tests {
         }
     }
 
-    /// The stencil printed after seed 000 eq. (28): eq. (28) discretised directly at
+    /// The stencil printed after Garres-Díaz et al. 2021, eq. (28): eq. (28) discretised directly at
     /// the faces (centred ∂_X q̃ over 2Δx, minmod ∂_XX G, 4q̃ at the face), then the
     /// corrections of the paper. Returns the relative residual of (27) afterwards.
     fn printed_stencil_residual(mesh: &Line, state: &mut LayeredState) -> f64 {

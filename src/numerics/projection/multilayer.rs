@@ -1,4 +1,4 @@
-//! The projection of the multilayer weakly non-hydrostatic model (seed 003 eq. 9,
+//! The projection of the multilayer weakly non-hydrostatic model (Escalante et al. 2023, eq. 9,
 //! §4 step 3, eq. 26–33, Appendix A), for N ≥ 1 layers of thickness l_α h.
 //!
 //! Unknowns: the non-hydrostatic pressure (over density) p_{α−1/2} at the base of each
@@ -12,7 +12,7 @@
 //!   𝒩_α = 𝓔_α − 𝓔_{α−1} = (w_α − w_{α−1}) − (u_α − u_{α−1}) ∂_X Z_{α−1/2}
 //!         + ½ (h_α ∂_X u_α + h_{α−1} ∂_X u_{α−1}) = 0,
 //!
-//! the differenced constraints of seed 003 after eq. (26) (for α = 1 the terms of
+//! the differenced constraints of Escalante et al. 2023, after eq. (26) (for α = 1 the terms of
 //! layer 0 are absent). 𝒩_α is exactly minus the adjoint of the pressure force of
 //! p_{α−1/2} (integrate ∂_X(h_α p_α) u_α by parts): the continuous projection is
 //! orthogonal in the kinetic energy Σ_α h_α (u_α² + w_α²)/2, which is why the model
@@ -33,15 +33,15 @@
 //! depth part of ∂_X Z_{α±1/2} = ∂_X b + L_{α±1/2} ∂_X h is taken on the two half cells
 //! (h_{i+1/2} − h_i, h_i − h_{i−1/2}), each with the pressure of its face: with the
 //! harmonic face depth a film beside a thick cell sees a slope of the order of its own
-//! depth, never h_thick/Δx (the centred (h_{i+1} − h_{i−1})/(2Δx) of seed 003 eq. 22
-//! gave a film impulses ∝ h_thick, as seed 000's stencil did for N = 1). For N = 1 the
+//! depth, never h_thick/Δx (the centred (h_{i+1} − h_{i−1})/(2Δx) of Escalante et al. 2023, eq. 22
+//! gave a film impulses ∝ h_thick, as Garres-Díaz et al. 2021's stencil did for N = 1). For N = 1 the
 //! depth part vanishes (L_{1/2} = 0, p_{3/2} = 0) and 𝒯 is the monolayer's.
 //!
 //! **Constraint** at face f and interface α − 1/2: the transpose, 𝒞 = 𝒯ᵀ (u, w), a
-//! consistent discretisation of 𝒩_α (seed 003 eq. 27 without the factor 2hN).
+//! consistent discretisation of 𝒩_α (Escalante et al. 2023, eq. 27 without the factor 2hN).
 //! Requiring 𝒞(U + M⁻¹𝒯Π) = 0, M = diag(l_α h_i), gives
 //!
-//!   A Π = −𝒞(U),   A = 𝒯ᵀ M⁻¹ 𝒯   (seed 003 eq. 31–32),
+//!   A Π = −𝒞(U),   A = 𝒯ᵀ M⁻¹ 𝒯   (Escalante et al. 2023, eq. 31–32),
 //!
 //! symmetric positive definite, with the 3×3 stencil (faces f ± 1, interfaces α ± 1)
 //! of [`crate::numerics::banded`]: ordered face by face it is banded with half-bandwidth
@@ -55,15 +55,15 @@
 //! the mirror image of the edge cell's, and dropping it halves the wall row of the
 //! monolayer's system (which counts both) without changing the solution. At an outflow
 //! boundary the pressure is extended evenly, Π_{1/2} = Π_{3/2} (the Neumann condition
-//! of seed 003 Remark 6): the edge cell's left-face coefficients are added to its
+//! of Escalante et al. 2023, Remark 6): the edge cell's left-face coefficients are added to its
 //! right-face ones, so the constraint of the merged unknown is the sum of the two
 //! faces' constraints and the system stays symmetric. The ghost column beyond the face
 //! copies the edge column, so it moves with it: its coefficients of the boundary face
 //! are added to the edge cell's first. Then the ∂_X(h_α p_α) terms of that face cancel
 //! and the constraint sees the mass leaving through it (without the ghost, a flow
 //! leaving the domain read as a divergence at the edge, and the projection answered
-//! with pressure: the outflow creep of seed 003 Table 6, 130 δ instead of 78 δ for h
-//! at δ = 1e-10). Seed 003 eq. (37) instead drops the constraints of the two outermost
+//! with pressure: the outflow creep of Escalante et al. 2023, Table 6, 130 δ instead of 78 δ for h
+//! at δ = 1e-10). Escalante et al. 2023, eq. (37) instead drops the constraints of the two outermost
 //! faces and copies p̃ from the third (not symmetric); the monolayer drops the edge
 //! face's constraint (same for N = 1 with a dry edge, 3 % apart on a wet one).
 
@@ -91,7 +91,7 @@ pub struct LayerCoefficients {
 const LEFT: usize = 0;
 const RIGHT: usize = 2;
 
-/// The seed 003 projection operator (block N).
+/// The Escalante et al. 2023 projection operator (block N).
 #[derive(Debug)]
 pub struct MultilayerOperator {
     layers: usize,
@@ -277,7 +277,7 @@ impl MultilayerOperator {
                 coef[a] = k;
             }
         }
-        // Outflow: the edge face's pressure is its inner neighbour's (seed 003 eq. 37):
+        // Outflow: the edge face's pressure is its inner neighbour's (Escalante et al. 2023, eq. 37):
         // the edge cell's coefficients of that face are moved to its other face (or
         // dropped when that face is dry, where both pressures are 0).
         let fold = |k: &mut LayerCoefficients, from: usize, to: usize, keep: bool| {
@@ -1121,7 +1121,7 @@ mod tests {
     /// satisfies the constraints everywhere, through outflow boundaries too: the
     /// projection must leave it alone. (With the ghost column left out of 𝒯 the edge
     /// cell saw the flow leaving through the boundary face as a divergence and got a
-    /// pressure of order h u/Δt: the outflow creep of seed 003 Table 6.)
+    /// pressure of order h u/Δt: the outflow creep of Escalante et al. 2023, Table 6.)
     #[test]
     fn a_uniform_flow_leaves_through_an_outflow_without_pressure() {
         for layers in [1, 3, 10] {
@@ -1578,7 +1578,7 @@ mod tests {
         assert!(state.hu[20 * 3..30 * 3].iter().all(|&v| v == 0.0));
     }
 
-    /// 𝒯 is consistent with the pressure force of seed 003 eq. (9b–c): for smooth h, b
+    /// 𝒯 is consistent with the pressure force of Escalante et al. 2023, eq. (9b–c): for smooth h, b
     /// and p_{α−1/2}(x), δ(h_α u_α) → −∂_X(h_α p_α) + p_{α+1/2} ∂_X Z_{α+1/2} −
     /// p_{α−1/2} ∂_X Z_{α−1/2} at second order in Δx, δ(h_α w_α) = p_{α−1/2} − p_{α+1/2}
     /// of the cell means. (The projection tests above hold for any 𝒯; this one pins it.)

@@ -1,4 +1,4 @@
-//! Second step of seed 004 §4.1: the Coulomb stopping rule (eq. 84–85, after
+//! Second step of Fernández-Nieto et al. 2008, §4.1: the Coulomb stopping rule (eq. 84–85, after
 //! Mangeney et al.), on the grain discharge only:
 //!
 //!   Q₂ⁿ⁺¹ = Q₂* − Δt N_i tan δ₀ sgn(Q₂*)   if |Q₂*| > Δt N_i tan δ₀,   0 otherwise,

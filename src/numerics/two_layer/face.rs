@@ -1,4 +1,4 @@
-//! The flux differences 𝒟𝓕^±_{i+1/2} of one face (seed 004 eq. 73, written as in the
+//! The flux differences 𝒟𝓕^±_{i+1/2} of one face (Fernández-Nieto et al. 2008, eq. 73, written as in the
 //! proof of Theorem 2):
 //!
 //!   𝒟𝓕^± = ½ (R₁ ± V),   V = P R₂,   R₂ = R₁ − T_{i+1/2} Δx,
@@ -38,13 +38,13 @@
 //! P ≈ α₀ 𝒜⁻¹ + α₁ I with the HLL coefficients of the speed bounds S_L, S_R, and
 //! 𝒜⁻¹R₂ = ΔW − 𝒜⁻¹S approximated by the jump J of hydrostatically reconstructed
 //! states (Audusse et al.) — water over the interface ζ = b + H₂cos²θ, grains over the
-//! bed with the Coulomb-aware correction ΔC of seed 000 eq. (22–24) (seed 003's sign).
+//! bed with the Coulomb-aware correction ΔC of Garres-Díaz et al. 2021, eq. (22–24) (Escalante et al. 2023's sign).
 //! No eigenvectors are needed (𝒜 has no explicit ones, §4.1), nothing breaks where an
 //! internal eigenvalue crosses zero (𝒜⁻¹ singular) or a layer is absent, and V = 0 for
 //! a lake at rest over a deposit held by friction, so Theorem 2's well-balancing holds
 //! for this P as for Roe's.
 //!
-//! Wet/dry faces (Castro et al., seed 004 §5): where a layer's wet cell faces a dry cell
+//! Wet/dry faces (Castro et al., Fernández-Nieto et al. 2008, §5): where a layer's wet cell faces a dry cell
 //! whose bottom (for water: the interface ζ; for grains: the bed b) lies above the wet
 //! cell's surface, that bottom is lowered locally to the wet surface and the wet
 //! velocity is seen as zero: the face is a wall for that layer, with no spurious
@@ -427,7 +427,7 @@ fn grain_rows(
     let (j3, j4) = if k.alpha0 == 0.0 {
         (0.0, 0.0)
     } else {
-        // Coulomb-aware bed correction (seed 000 eq. 22–24 with seed 003's sign) on a
+        // Coulomb-aware bed correction (Garres-Díaz et al. 2021, eq. 22–24 with Escalante et al. 2023's sign) on a
         // moving face: the reconstruction sees the bed tilted by the friction that
         // the face can still exert, at most f_b tan δ₀ Δx/A₂ (in interface-level
         // units), towards stopping ū₂ within Δt. A stuck face (the τ_crit branch)

@@ -1,4 +1,4 @@
-//! The two-layer submarine-avalanche scheme of seed 004 §4.1, one time step:
+//! The two-layer submarine-avalanche scheme of Fernández-Nieto et al. 2008, §4.1, one time step:
 //!
 //! 1. W*_i = W_i − Δt/Δx (𝒟𝓕⁺_{i−1/2} + 𝒟𝓕⁻_{i+1/2})  (eq. 72–83, [`face`]);
 //! 2. Q₂ⁿ⁺¹_i from Q₂*_i by the Coulomb stopping rule (eq. 84–85, [`coulomb`]).

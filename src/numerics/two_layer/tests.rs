@@ -1,5 +1,5 @@
 //! Unit tests of the two-layer scheme: well-balancing, conservation, positivity, the
-//! Coulomb rule, exact solutions (seed 004 §3–4).
+//! Coulomb rule, exact solutions (Fernández-Nieto et al. 2008, §3–4).
 
 use super::*;
 use crate::grid::line::cell_centre;
@@ -73,7 +73,7 @@ fn assert_sane(s: &TwoLayerState) {
     );
 }
 
-/// Bed of seed 004 §5.2: 1 − x/5 on [0, 5], 0 beyond (a slope break at x = 5).
+/// Bed of Fernández-Nieto et al. 2008, §5.2: 1 − x/5 on [0, 5], 0 beyond (a slope break at x = 5).
 fn lake_bed(x: f64) -> f64 {
     if x <= 5.0 {
         1.0 - x / 5.0
@@ -82,7 +82,7 @@ fn lake_bed(x: f64) -> f64 {
     }
 }
 
-/// Lake at rest over a deposit at rest (seed 004 Theorem 2 (i)): water surface 0.4, an
+/// Lake at rest over a deposit at rest (Fernández-Nieto et al. 2008, Theorem 2 (i)): water surface 0.4, an
 /// interface of slope 0.05 (< tan δ₀) that crosses the bed at x ≈ 2.67 (upper edge of
 /// the deposit, in air) and the water surface at x = 4 (shoreline on the grains),
 /// over the slope break at x = 5.

@@ -1,7 +1,7 @@
 //! Basal friction laws, as pointwise functions of the local flow state.
 //!
 //! The friction force per unit area is μ p_b u/|u| with p_b the basal pressure
-//! (seed 000 eq. 5 and 15b). Each law implements [`BasalFriction`]; stages are generic
+//! (Garres-Díaz et al. 2021, eq. 5 and 15b). Each law implements [`BasalFriction`]; stages are generic
 //! over it, so a constant-Coulomb run is compiled without any μ(I) evaluation
 //! ("leave out what a scene does not need").
 
@@ -26,7 +26,7 @@ pub fn coulomb_update(q: f64, dt_sigma: f64) -> f64 {
     }
 }
 
-/// Basal friction law (seed 000 eq. 6).
+/// Basal friction law (Garres-Díaz et al. 2021, eq. 6).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FrictionLaw {
     /// Constant Coulomb coefficient μ (classical Savage–Hutter).
@@ -41,7 +41,7 @@ pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
     /// basal pressure over density p_b/ρ (m²/s², g_n h for a hydrostatic layer).
     fn mu(&self, speed: f64, h: f64, p_over_rho: f64) -> f64;
 
-    /// The discharge after the friction step of a hydrostatic monolayer (seed 000 §3
+    /// The discharge after the friction step of a hydrostatic monolayer (Garres-Díaz et al. 2021, §3
     /// step 2, `numerics::friction`) from the discharge `q` the other steps left, for
     /// thickness `h` > H_DRY, time step `dt` and normal gravity `g_n`: friction stops
     /// the mass or slows it, never reverses it. By default μ is taken at the speed of
@@ -71,9 +71,9 @@ pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
 }
 
 /// The friction coefficient of the bulk rheology at a point of the flow, used by the
-/// multilayer model between layers and at the bed (seed 001 eq. 25–26, seed 003
+/// multilayer model between layers and at the bed (Fernández-Nieto et al. 2016, eq. 25–26, Escalante et al. 2023,
 /// eq. 10): μ(I) with the local inertial number I = d_s |∂_z u| / √(p/ρ_s), or a
-/// constant μ (seed 001's "μ_s-MSM").
+/// constant μ (Fernández-Nieto et al. 2016's "μ_s-MSM").
 pub trait LocalFriction: Copy + Send + Sync + std::fmt::Debug {
     /// d_s / √(p/ρ_s) for the pressure over density p/ρ (m²/s²): times a shear rate it
     /// gives I (0 for a law that does not use I).

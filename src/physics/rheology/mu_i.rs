@@ -1,13 +1,13 @@
-//! μ(I) friction of Jop, Forterre & Pouliquen (seed 000 eq. 6):
+//! μ(I) friction of Jop, Forterre & Pouliquen (Garres-Díaz et al. 2021, eq. 6):
 //!
 //!   μ(I) = μ_s + (μ_2 − μ_s) I / (I_0 + I),
 //!
-//! with the basal inertial number of seed 000 eq. (15e),
+//! with the basal inertial number of Garres-Díaz et al. 2021, eq. (15e),
 //!
 //!   I = d_s γ̇ / √(p_b / ρ_s),   p_b/ρ_s = φ_s p_b/ρ   (ρ = φ_s ρ_s),
 //!
 //! and, for the monolayer model, the shear rate of the Bagnold profile
-//! γ̇ = 5|ū| / (2h) (seed 002 eq. 2.15).
+//! γ̇ = 5|ū| / (2h) (Bouchut et al. 2021, eq. 2.15).
 
 use super::{BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
@@ -23,7 +23,7 @@ pub struct MuI {
     pub phi: f64,
 }
 
-/// Basal inertial number of a monolayer flow (seed 000 eq. 15e, seed 002 eq. 2.15).
+/// Basal inertial number of a monolayer flow (Garres-Díaz et al. 2021, eq. 15e, Bouchut et al. 2021, eq. 2.15).
 #[inline(always)]
 pub fn inertial_number(d_s: f64, phi: f64, speed: f64, h: f64, p_over_rho: f64) -> f64 {
     if h <= H_DRY || p_over_rho <= 0.0 {
@@ -33,8 +33,8 @@ pub fn inertial_number(d_s: f64, phi: f64, speed: f64, h: f64, p_over_rho: f64) 
     d_s * shear_rate / (phi * p_over_rho).sqrt()
 }
 
-/// Local inertial number I = d_s |∂_z u| / √(p/ρ_s), p/ρ_s = φ_s p/ρ (seed 003 eq. 10;
-/// with it the steady Bagnold profile is seed 001 eq. 29). Zero where p ≤ 0.
+/// Local inertial number I = d_s |∂_z u| / √(p/ρ_s), p/ρ_s = φ_s p/ρ (Escalante et al. 2023, eq. 10;
+/// with it the steady Bagnold profile is Fernández-Nieto et al. 2016, eq. 29). Zero where p ≤ 0.
 #[inline(always)]
 pub fn local_inertial_number(d_s: f64, phi: f64, shear_rate: f64, p_over_rho: f64) -> f64 {
     if p_over_rho <= 0.0 {
@@ -59,10 +59,10 @@ impl MuI {
 ///
 /// for the speed u* ≥ 0 before it, the impulse per unit μ c = Δt W/h (W the weight
 /// g_n h, or the total basal pressure of the non-hydrostatic model) and I = k u
-/// (k = 2.5 d_s / (h √(φ p_b/ρ)), seed 000 eq. 15e with γ̇ = 5u/2h). If u* ≤ c μ_s
+/// (k = 2.5 d_s / (h √(φ p_b/ρ)), Garres-Díaz et al. 2021, eq. 15e with γ̇ = 5u/2h). If u* ≤ c μ_s
 /// the mass stops (μ ≥ μ_s at any speed). Otherwise, with A = u* − c μ_s and
 /// D = c (μ_2 − μ_s), u is the positive root of k u² + (I_0 + k (D − A)) u − I_0 A = 0,
-/// which lies in (0, A]. Taking μ at u* instead (the semi-implicit update of seed 000
+/// which lies in (0, A]. Taking μ at u* instead (the semi-implicit update of Garres-Díaz et al. 2021,
 /// §3 step 2) overstates the friction whenever u* exceeds the equilibrium speed: a
 /// 1.2 mm layer on a 30° plane (μ_s = tan 25.5°, steady speed 1.03 cm/s) stayed
 /// exactly at rest at Δx = 5 cm and 5 mm (tests/robustness.rs). A NaN u* gives NaN.
@@ -95,7 +95,7 @@ pub fn backward_euler_speed(mu_s: f64, mu_2: f64, i0: f64, u_star: f64, c: f64, 
 }
 
 /// Relative round-off allowed in the static test of [`backward_euler_discharge`]. A
-/// free surface at exactly the repose slope (seed 003 §5.3, scenarios/at_rest_random_bed
+/// free surface at exactly the repose slope (Escalante et al. 2023, §5.3, scenarios/at_rest_random_bed
 /// .toml: η ≈ 1.7 m, |η_{i+1} − η_{i−1}| ≈ 9 mm on 300 cells) gives |(hu)*| = Δt μ_s g_n h
 /// only to within the round-off of Δη amplified by the cancellation: measured up to
 /// 1900 ε = 4.2e-13 above it. The semi-implicit step hid this behind μ(I(u*)) > μ_s;

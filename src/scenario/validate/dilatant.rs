@@ -1,4 +1,4 @@
-//! The keys of the dilatant model (seed 002): `[dilatancy]`, `initial.phi`, and the
+//! The keys of the dilatant model (Bouchut et al. 2021): `[dilatancy]`, `initial.phi`, and the
 //! μ(I) law and wall keys of `[rheology]` read as μ_1, μ_2, I_0 (eq. 2.14) and
 //! μ_w, W (eq. 4.1).
 
@@ -17,7 +17,7 @@ use crate::numerics::dilatant::step::{DilatantOptions, SchemeKind};
 use crate::physics::dilatancy::{DilatantLaw, PhiEq};
 
 /// The dilatant model's keys (`[dilatancy]`, `initial.phi`, the μ(I) law of
-/// `[rheology]` as μ_1, μ_2, I_0 of seed 002 eq. 2.14, its optional walls eq. 4.1), or
+/// `[rheology]` as μ_1, μ_2, I_0 of Bouchut et al. 2021, eq. 2.14, its optional walls eq. 4.1), or
 /// None for the other models, which refuse them.
 pub(super) fn dilatancy(
     raw_dilatancy: Option<&RawDilatancy>,
@@ -46,7 +46,7 @@ pub(super) fn dilatancy(
     let FrictionLaw::MuI { mu_s, mu_2, i0 } = *friction else {
         return err(
             "rheology.law",
-            "the dilatant model needs law = \"mu_i\" (seed 002 eq. 2.14)",
+            "the dilatant model needs law = \"mu_i\" (Bouchut et al. 2021, eq. 2.14)",
         );
     };
     if initial.phi.is_none() {
@@ -138,7 +138,10 @@ pub(super) fn dilatancy(
     if alpha <= 1.0 {
         return err(
             "dilatancy.alpha",
-            format!("must be > 1 (seed 002 eq. B.19), got {}", num(alpha)),
+            format!(
+                "must be > 1 (Bouchut et al. 2021, eq. B.19), got {}",
+                num(alpha)
+            ),
         );
     }
     let lambda = non_negative("dilatancy.lambda", d.lambda.unwrap_or(0.0))?;

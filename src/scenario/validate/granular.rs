@@ -1,6 +1,6 @@
 //! The keys of the granular model and of its friction laws: `[rheology]` (the basal
-//! law, seed 000 eq. 6, and the multilayer model's viscous options, seed 001 eq. 6,
-//! 25–32, seed 003 eq. 10 and 36), `[model]` and `output.static_threshold`. A new model
+//! law, Garres-Díaz et al. 2021, eq. 6, and the multilayer model's viscous options, Fernández-Nieto et al. 2016, eq. 6,
+//! 25–32, Escalante et al. 2023, eq. 10 and 36), `[model]` and `output.static_threshold`. A new model
 //! adds its own file beside this one (docs/architecture.md, "How to add a model").
 
 use super::super::error::ScenarioError;
@@ -192,7 +192,7 @@ impl ViscousKeys {
     }
 }
 
-/// Default regularisation parameter δ (1/s) of seed 003 §5.
+/// Default regularisation parameter δ (1/s) of Escalante et al. 2023, §5.
 pub(crate) const DEFAULT_DELTA: f64 = 1e-5;
 
 /// Default residual tolerance (m/s) of `rheology.viscosity = "implicit"`.

@@ -258,7 +258,7 @@ fn validate(
     )?;
     let mut viscous_keys = ViscousKeys::of(&raw_rheology);
     if dilatancy.is_some() {
-        // The wall keys belong to the dilatant law (seed 002 eq. 4.1).
+        // The wall keys belong to the dilatant law (Bouchut et al. 2021, eq. 4.1).
         viscous_keys.mu_w = None;
         viscous_keys.mu_w_deg = None;
         viscous_keys.channel_width = None;

@@ -1,4 +1,4 @@
-//! The submarine model's keys (`model.kind = "submarine"`, seed 004): `[submarine]`,
+//! The submarine model's keys (`model.kind = "submarine"`, Fernández-Nieto et al. 2008): `[submarine]`,
 //! `initial.eta`, and the shared keys it constrains (Cartesian domain, Coulomb
 //! friction, one hydrostatic layer, no erodible bed, no w).
 
@@ -52,7 +52,7 @@ pub(super) fn submarine(
     if domain.coordinates != Coordinates::Cartesian {
         return err(
             "domain.coordinates",
-            "the submarine model is written in Cartesian coordinates (seed 004 eq. 62): set domain.coordinates = \"cartesian\" and the slope in bed.b",
+            "the submarine model is written in Cartesian coordinates (Fernández-Nieto et al. 2008, eq. 62): set domain.coordinates = \"cartesian\" and the slope in bed.b",
         );
     }
     if !matches!(friction, FrictionLaw::Coulomb { .. }) {
@@ -103,7 +103,7 @@ pub(super) fn submarine(
     if non_negative("submarine.k_in", s.k_in.unwrap_or(0.0))? != 0.0 {
         return err(
             "submarine.k_in",
-            "friction between the layers (K_in > 0) is not implemented; seed 004 §5 uses K_in = 0",
+            "friction between the layers (K_in > 0) is not implemented; Fernández-Nieto et al. 2008, §5 uses K_in = 0",
         );
     }
     let buoyancy = choice(
