@@ -180,9 +180,9 @@ class Checker:
         h = f["snapshots/h"][:]
         u = f["snapshots/u"][:]
         for name, a in (("h", h), ("u", u)):
-            if np.isnan(a).any():
-                k = int(np.argwhere(np.isnan(a))[0][0])
-                self.fail(f"/snapshots/{name} has NaN (first in snapshot {k})")
+            if not np.isfinite(a).all():
+                k = int(np.argwhere(~np.isfinite(a))[0][0])
+                self.fail(f"/snapshots/{name} has non-finite values (first in snapshot {k})")
         if (h < 0).any():
             self.fail(f"/snapshots/h has negative values (min {np.nanmin(h):.3g})")
         if "snapshots/static_interface" in f:
@@ -268,10 +268,12 @@ class Checker:
         status = f["summary"].attrs.get("status")
         if isinstance(status, bytes):
             status = status.decode()
-        if status is None and self.unfinished:
+        # The writer marks a file "unfinished" until finish(); a killed run keeps that
+        # mark (older files have no status at all).
+        if status in (None, "unfinished") and self.unfinished:
             return "unfinished"
-        if status is None:
-            self.fail("/summary has no attributes: the run did not reach finish() "
+        if status in (None, "unfinished"):
+            self.fail("/summary: the run did not reach finish() "
                       "(pass --unfinished to check such a file)")
             return None
         self.attrs("/summary", f["summary"], SUMMARY_ATTRS)

@@ -641,6 +641,25 @@ fn kill_9_leaves_a_readable_unfinished_file() {
         assert_eq!(status, "unfinished");
         assert!(nt >= 1 && steps >= 1);
     }
+    // The checker accepts the killed run's file with --unfinished, and only with it.
+    if let Some(python) = crate::common::python_with_h5py() {
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/check_output.py");
+        let check = |extra: &[&str]| {
+            std::process::Command::new(&python)
+                .arg(&script)
+                .arg(&out)
+                .args(extra)
+                .output()
+                .unwrap()
+        };
+        let accepted = check(&["--unfinished"]);
+        assert!(
+            accepted.status.success(),
+            "{}",
+            String::from_utf8_lossy(&accepted.stdout)
+        );
+        assert!(!check(&[]).status.success());
+    }
 }
 
 // ---------------------------------------------------------------------------------------
