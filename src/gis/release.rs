@@ -180,15 +180,8 @@ pub fn read_shapefile(path: &Path, thickness: ThicknessSource) -> Result<Release
             for (i, item) in reader.iter_shapes_and_records().enumerate() {
                 let (shape, record) = item.map_err(sherr)?;
                 let value = record.get(field).ok_or_else(|| {
-                    let mut names: Vec<String> =
-                        record.clone().into_iter().map(|(name, _)| name).collect();
-                    names.sort();
-                    GisError::MissingAttribute {
-                        path: path.to_path_buf(),
-                        feature: i,
-                        field: field.to_string(),
-                        available: names.join(", "),
-                    }
+                    let names = record.clone().into_iter().map(|(name, _)| name).collect();
+                    missing_attribute(path, i, field, names)
                 })?;
                 use shapefile::dbase::FieldValue as F;
                 let h = match value {
@@ -314,17 +307,11 @@ pub fn read_geojson(path: &Path, thickness: ThicknessSource) -> Result<ReleaseAr
             ThicknessSource::Uniform(h) => h,
             ThicknessSource::Attribute(field) => {
                 let value = props.and_then(|p| p.get(field)).ok_or_else(|| {
-                    let mut names: Vec<String> = props
+                    let names = props
                         .and_then(Value::as_object)
                         .map(|o| o.keys().cloned().collect())
                         .unwrap_or_default();
-                    names.sort();
-                    GisError::MissingAttribute {
-                        path: path.to_path_buf(),
-                        feature: i,
-                        field: field.to_string(),
-                        available: names.join(", "),
-                    }
+                    missing_attribute(path, i, field, names)
                 })?;
                 match value {
                     Value::Number(n) => n.as_f64().unwrap_or(f64::NAN),
@@ -796,4 +783,16 @@ pub fn vertical_thickness(normal: &Raster, dem: &Raster) -> Result<Raster> {
         *h /= cos.values[i];
     }
     Ok(out)
+}
+
+/// The error for feature `feature` of `path` lacking the thickness attribute `field`,
+/// listing the attributes it has (sorted).
+fn missing_attribute(path: &Path, feature: usize, field: &str, mut names: Vec<String>) -> GisError {
+    names.sort();
+    GisError::MissingAttribute {
+        path: path.to_path_buf(),
+        feature,
+        field: field.to_string(),
+        available: names.join(", "),
+    }
 }
