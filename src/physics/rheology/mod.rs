@@ -10,8 +10,8 @@ mod mu_i;
 
 pub use coulomb::Coulomb;
 pub use mu_i::{
-    backward_euler_discharge, backward_euler_speed, inertial_number, local_inertial_number, MuI,
-    STATIC_ROUNDOFF,
+    backward_euler_discharge, backward_euler_speed, inertial_number, inertial_number_with,
+    local_inertial_number, MonolayerShear, MuI, STATIC_ROUNDOFF,
 };
 
 /// Applies a friction impulse `dt_sigma` ≥ 0 against the discharge `q`, stopping it
@@ -31,8 +31,14 @@ pub fn coulomb_update(q: f64, dt_sigma: f64) -> f64 {
 pub enum FrictionLaw {
     /// Constant Coulomb coefficient μ (classical Savage–Hutter).
     Coulomb { mu: f64 },
-    /// μ(I) = μ_s + (μ_2 − μ_s) I / (I_0 + I).
-    MuI { mu_s: f64, mu_2: f64, i0: f64 },
+    /// μ(I) = μ_s + (μ_2 − μ_s) I / (I_0 + I), with the basal shear rate `shear` of a
+    /// depth-averaged layer.
+    MuI {
+        mu_s: f64,
+        mu_2: f64,
+        i0: f64,
+        shear: MonolayerShear,
+    },
 }
 
 /// A basal friction law μ(state).
