@@ -297,7 +297,11 @@ fn mass_median(x: &[f64], h: &[f64]) -> f64 {
     let mut below = 0.0;
     for (i, &hi) in h.iter().enumerate() {
         if below + hi >= 0.5 * total {
-            let dx = if i + 1 < x.len() { x[i + 1] - x[i] } else { x[i] - x[i - 1] };
+            let dx = if i + 1 < x.len() {
+                x[i + 1] - x[i]
+            } else {
+                x[i] - x[i - 1]
+            };
             return x[i] - 0.5 * dx + (0.5 * total - below) / hi * dx;
         }
         below += hi;
@@ -313,8 +317,8 @@ fn mass_median(x: &[f64], h: &[f64]) -> f64 {
 /// comparison is made on what converges for both models: the displacement of the mass
 /// median. Runs of 320, 640 and 1280 cells to the settled state: the median's change
 /// shrinks under refinement for both models, and H/NH − 1 of it stays within 8–12 %
-/// and moves by less than 1 point between the two finer grids (measured 10.2, 9.6,
-/// 9.2 %; 9.6–9.8 % on 2560–10240 cells).
+/// and moves by less than 1 point between the two finer grids (measured 10.3, 9.7,
+/// 9.3 %; 9.6–9.8 % on 2560–10240 cells).
 #[test]
 fn wedge_hydrostatic_local_runout_exceeds_nonhydrostatic() {
     let runout = |cells: usize, pressure: &str| {
@@ -328,7 +332,10 @@ fn wedge_hydrostatic_local_runout_exceeds_nonhydrostatic() {
         // own-depth split of the pressure source, docs/numerics.md).
         let bound = 2.0 * (9.81 * 22f64.to_radians().cos() * 0.14).sqrt();
         let fastest = sink.steps.iter().map(|r| r.max_speed).fold(0.0, f64::max);
-        assert!(fastest < bound, "max speed {fastest} m/s, bound {bound} m/s");
+        assert!(
+            fastest < bound,
+            "max speed {fastest} m/s, bound {bound} m/s"
+        );
         let median = mass_median(&sink.x, &last.h) - mass_median(&sink.x, &first.h);
         let front = front(&sink.x, &last.h, 1e-3) - front(&sink.x, &first.h, 1e-3);
         (median, front)
@@ -349,11 +356,20 @@ fn wedge_hydrostatic_local_runout_exceeds_nonhydrostatic() {
     }
     let excess: Vec<f64> = medians.iter().map(|(h, nh)| h / nh - 1.0).collect();
     for e in &excess {
-        assert!((0.08..0.12).contains(e), "H/NH - 1 of the median {excess:?}");
+        assert!(
+            (0.08..0.12).contains(e),
+            "H/NH - 1 of the median {excess:?}"
+        );
     }
     assert!((excess[2] - excess[1]).abs() < 0.01, "{excess:?}");
     for model in 0..2 {
-        let m = |k: usize| if model == 0 { medians[k].0 } else { medians[k].1 };
+        let m = |k: usize| {
+            if model == 0 {
+                medians[k].0
+            } else {
+                medians[k].1
+            }
+        };
         let (d1, d2) = ((m(1) - m(0)).abs(), (m(2) - m(1)).abs());
         assert!(d2 < d1, "model {model}: median changes {d1:.5}, {d2:.5} m");
     }

@@ -1505,7 +1505,9 @@ mod tests {
         step.apply(&m, dt, &mut state).unwrap();
         let mut mono = LayeredState::from_profiles(&m, &[1.0], &[h0; 3], &[0.0; 3]);
         mono.hu[2] = q_mean;
-        CoulombFrictionStep::new(law).apply(&m, dt, &mut mono).unwrap();
+        CoulombFrictionStep::new(law)
+            .apply(&m, dt, &mut mono)
+            .unwrap();
         println!(
             "film {h0:e} m at {:.4} m/s: leaves at {:.6e} m/s (monolayer {:.6e})",
             q_mean / h0,

@@ -186,12 +186,7 @@ impl BasalFriction for MuI {
     #[inline(always)]
     fn mu(&self, speed: f64, h: f64, p_over_rho: f64) -> f64 {
         self.mu_of_i(inertial_number_with(
-            self.shear,
-            self.d_s,
-            self.phi,
-            speed,
-            h,
-            p_over_rho,
+            self.shear, self.d_s, self.phi, speed, h, p_over_rho,
         ))
     }
 

@@ -6,8 +6,8 @@
 use super::super::error::ScenarioError;
 use super::super::raw::{RawModel, RawRheology};
 use super::super::{
-    BasalCondition, FrictionLaw, ModelKind, MonolayerShear, ModelSpec, MultilayerSpec, Pressure, Regularization,
-    Sidewall, SidewallForm, ViscosityTime,
+    BasalCondition, FrictionLaw, ModelKind, ModelSpec, MonolayerShear, MultilayerSpec, Pressure,
+    Regularization, Sidewall, SidewallForm, ViscosityTime,
 };
 use super::check::*;
 use super::MAX_LAYERS;

@@ -608,8 +608,8 @@ fn check_profiles(
 mod tests {
     use super::*;
     use crate::scenario::{
-        BasalCondition, FrictionLaw, ModelKind, ModelSpec, MonolayerShear, Regularization, SidewallForm,
-        ViscosityTime,
+        BasalCondition, FrictionLaw, ModelKind, ModelSpec, MonolayerShear, Regularization,
+        SidewallForm, ViscosityTime,
     };
     use std::fs;
 
