@@ -810,13 +810,11 @@ fn film_ahead_of_a_sheared_column_keeps_its_layer_speeds_bounded() {
         .map(|a| 1.9 + 1.1 * (1.0 - (-(a as f64) / 3.0).exp()) / (1.0 - (-3.0f64).exp()))
         .collect();
     for i in 1..=3 {
-        for a in 0..n {
-            state.hu[i * n + a] = h[i - 1] * column[a];
+        for (q, u) in state.hu[i * n..(i + 1) * n].iter_mut().zip(&column) {
+            *q = h[i - 1] * u;
         }
     }
-    for a in 0..n {
-        state.hu[4 * n + a] = h[3] * 2.0;
-    }
+    state.hu[4 * n..5 * n].fill(h[3] * 2.0);
     state.fill_ghosts(&mesh);
     let law = MuI {
         mu_s: tan_deg(25.5),
