@@ -31,9 +31,10 @@ DOCS = [ROOT / "docs/validation.md", ROOT / "docs/sweeps.md"]
 GRANFLOW = ROOT / "target/release/granflow"
 
 
-def cargo_test(file, name):
-    return ["cargo", "test", "--test", file, name, "--", "--exact", "--nocapture",
-            "--test-threads=1"]
+def cargo_test(module, name):
+    # The integration tests are one crate, tests/main.rs, with a module per area.
+    return ["cargo", "test", "--test", "main", f"{module}::{name}", "--", "--exact",
+            "--nocapture", "--test-threads=1"]
 
 
 # ID -> the command run (shown in the docs with {tmp} as out)
