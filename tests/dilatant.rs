@@ -941,6 +941,75 @@ mod split_scheme {
         assert!(s.hu[1..=50].iter().any(|q| q.abs() > 1e-5));
     }
 
+    /// ζ_R − ζ_L of the volume-fraction potential (∂_x ζ = h/(2φ) ∂_x φ, Bouchut et al.
+    /// 2021, eq. 2.4) across the face between cells j and j + 1, as `split.rs` forms it.
+    fn fraction_potential_jump(s: &DilatantState, j: usize) -> f64 {
+        let (hl, hr, pl, pr) = (s.h[j], s.h[j + 1], s.phi[j], s.phi[j + 1]);
+        0.5 * (hl + hr) * (pr - pl) / (pr + pl)
+    }
+
+    #[test]
+    fn an_odd_even_fraction_pattern_on_a_flat_layer_is_no_equilibrium() {
+        // A 5 cm layer on a flat bed between walls (Δx = 1 mm, K = 0) with φ = 0.62 and
+        // 0.56 in alternate cells: the grain pressure ½ g φ h² alternates and each face
+        // carries a potential jump |Δζ| = h Δφ/(φ_L + φ_R) = 2.5 mm, 2.5 Δx, far above
+        // μ_1 Δx. A centred φ-gradient (φ_{i+1} − φ_{i−1})/(2Δx) is 0 in every interior
+        // cell: the pattern was held at rest exactly. With the potential on the faces
+        // (split.rs) the pattern moves, the fractions mix, and the layer comes to rest
+        // with every face within the static threshold: |Δ(h + ζ)| ≤ μ_1 Δx.
+        let law = DilatantLaw {
+            k: 0.0,
+            ..DilatantLaw::table1()
+        };
+        let mesh = mesh(0.0, 0.1, 100, 0.0, (true, true));
+        let mut s = state(
+            &mesh,
+            |_| 0.05,
+            |_| 0.0,
+            |x| {
+                if ((x / 1e-3) as usize) % 2 == 0 {
+                    0.62
+                } else {
+                    0.56
+                }
+            },
+        );
+        let grains0: f64 = (1..=s.nx).map(|j| s.phi[j] * s.h[j]).sum();
+        let mut scheme = SplitScheme::new(law, DilatantOptions::default(), mesh.nx, 0.62);
+        let mut moved = false;
+        run_split(&mut scheme, &mesh, &mut s, 1.0, |s| {
+            moved |= s.hu.iter().any(|&q| q != 0.0);
+        });
+        assert!(moved, "the odd–even pattern stayed at rest");
+        assert!(s.hu.iter().all(|&q| q == 0.0), "still moving after 1 s");
+        let grains: f64 = (1..=s.nx).map(|j| s.phi[j] * s.h[j]).sum();
+        assert!((grains / grains0 - 1.0).abs() < 1e-12);
+        let mut worst = 0.0f64;
+        for j in 1..s.nx {
+            let jump = s.h[j + 1] - s.h[j] + fraction_potential_jump(&s, j);
+            worst = worst.max(jump.abs() / mesh.dx);
+        }
+        let contrast = (2..s.nx).map(|j| (s.phi[j + 1] - 2.0 * s.phi[j] + s.phi[j - 1]).abs());
+        let contrast = contrast.fold(0.0, f64::max);
+        println!("at rest: largest |Δ(h + ζ)|/Δx {worst:.4} (μ_1 {}), largest |φ_(i+1) − 2φ_i + φ_(i−1)| {contrast:.4} (0.12 at t = 0)", law.mu_1);
+        assert!(worst <= law.mu_1 * (1.0 + 1e-9), "{worst}");
+    }
+
+    #[test]
+    fn dense_collapse_at_10_degrees_comes_to_rest() {
+        // The shipped dense collapse (Δx = 5 mm) at 10°: Bouchut et al. 2021, §4.3 has it at rest
+        // by 0.66 s. With the centred φ-gradient it grew an odd–even pattern in v and φ
+        // next to the wall and still moved at 2 mm/s after 5 s.
+        let sets = [
+            "domain.slope_deg=10".to_string(),
+            "time.t_end=5".to_string(),
+            "output.every=0.5".to_string(),
+        ];
+        let (_, stop) = scenario_series("dilatancy_dense.toml", &sets);
+        println!("dense, 10°: at rest at {stop} s");
+        assert!(stop < 5.0, "at rest at {stop} s");
+    }
+
     #[test]
     fn static_thresholds_follow_the_dilatant_friction() {
         // Bouchut et al. 2021, eq. (2.16): a uniform layer at rest on a plane of slope tan θ starts to

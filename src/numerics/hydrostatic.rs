@@ -145,6 +145,16 @@ use crate::state::layered::LayeredState;
 /// its own through [`HydrostaticStep::apply_with_friction`].
 pub trait FaceFriction {
     fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64;
+
+    /// An extra jump of the potential across `face` (m), added to Δz = z_R − z_L where
+    /// the face's pressure source 𝓢 and its Coulomb-aware reconstruction (ΔC) see it:
+    /// a force −g_n h ∂_X ζ that is not a bed, such as the volume-fraction pressure of
+    /// the dilatant model (Bouchut et al. 2021, eq. 2.4). 0 by default: the step is
+    /// then unchanged to the bit.
+    #[inline(always)]
+    fn potential_jump(&self, _face: usize) -> f64 {
+        0.0
+    }
 }
 
 impl<L: BasalFriction> FaceFriction for L {
@@ -263,6 +273,7 @@ fn interface<M: Fn(f64, f64) -> f64>(
     mu_of: M,
     mut l: Side,
     mut r: Side,
+    extra: f64,
     g_n: f64,
     dx: f64,
     dt: f64,
@@ -286,7 +297,9 @@ fn interface<M: Fn(f64, f64) -> f64>(
         r.u_base = 0.0;
     }
     let db = r.b - l.b;
-    let dz = r.z - l.z;
+    // `extra` (a potential that is no bed, [`FaceFriction::potential_jump`]) enters
+    // like the plane's slope: in 𝓢 and in ΔC, not in the reconstruction over b.
+    let dz = r.z - l.z + extra;
     let d_plane = dz - db;
     let raw_minus = l.h - db.max(0.0);
     let raw_plus = r.h - (-db).max(0.0);
@@ -328,7 +341,7 @@ fn interface<M: Fn(f64, f64) -> f64>(
     } else {
         (sl * l.u_base + sr * r.u_base) / (sl + sr)
     };
-    let drive = u_base / dt - g_n * ((r.h + r.z) - (l.h + l.z)) / dx;
+    let drive = u_base / dt - g_n * ((r.h + r.z) - (l.h + l.z) + extra) / dx;
     let f = -drive.clamp(-threshold, threshold);
     let dz_c = dz - f * dx / g_n;
     let hc_minus = (l.h - dz_c.max(0.0)).max(0.0);
@@ -425,11 +438,12 @@ fn monolayer_fluxes<M: Fn(f64, f64) -> f64>(
     mu_of: M,
     l: Side,
     r: Side,
+    extra: f64,
     g_n: f64,
     dx: f64,
     dt: f64,
 ) -> (f64, f64, f64, f64, f64, f64) {
-    match interface(mu_of, l, r, g_n, dx, dt) {
+    match interface(mu_of, l, r, extra, g_n, dx, dt) {
         None => (0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
         Some((c, l, r)) => (
             mass_flux(&c, l, r),
@@ -589,7 +603,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             let right = side(k + 1);
             let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
             let mu_of = |speed: f64, h: f64| faces.mu(k, speed, h, g_n * h);
-            let Some((c, l, r)) = interface(mu_of, left, right, g_n, dx, dt) else {
+            let extra = faces.potential_jump(k);
+            let Some((c, l, r)) = interface(mu_of, left, right, extra, g_n, dx, dt) else {
                 // The cell update reads every interface's fluxes: they must be zero here.
                 self.flux_h[k] = 0.0;
                 self.share_left[k] = 0.0;
@@ -674,7 +689,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         let side = |j: usize| Side::monolayer(h[j], hu[j], b[j], z[j]);
         let fluxes = |k: usize, l: Side, r: Side| {
             let mu_of = |speed: f64, h: f64| faces.mu(k, speed, h, g_n * h);
-            monolayer_fluxes(mu_of, l, r, g_n, dx, dt)
+            monolayer_fluxes(mu_of, l, r, faces.potential_jump(k), g_n, dx, dt)
         };
         let mut worst = (f64::INFINITY, 1usize);
         let mut left = side(0);

@@ -1,6 +1,7 @@
 //! Numerics of the dilatant μ(I)–φ model (Bouchut et al. 2021). The default time step is
-//! [`split`]: the Savage–Hutter μ(I) hyperbolic step with φ carried by its mass fluxes,
-//! then the φ-gradient pressure, the dilatant friction and the dilatancy step of §3.2
+//! [`split`]: the Savage–Hutter μ(I) hyperbolic step with the φ-gradient pressure as a
+//! potential on its faces and φ carried by its mass fluxes, then the dilatant friction
+//! and the dilatancy step of §3.2
 //! (K = 0 with uniform φ is the Savage–Hutter step bit for bit). The scheme of Bouchut et al. 2021,
 //! §3 as printed (`dilatancy.scheme = "appendix_b"`, [`step`]) is a two-step splitting
 //! of the system (3.1)–(3.3) plus the stabilising viscosity of (3.20),

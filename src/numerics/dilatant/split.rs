@@ -12,6 +12,20 @@
 //! i.e. shallow water in (h, hv) with three extra terms: the φ-gradient pressure, the
 //! dilatant friction μ_eff = μ(I) + tan ψ (2.13–2.14) and the dilatancy source. One step:
 //!
+//! The φ-gradient pressure is a potential: −g_c h²/(2φ) ∂_x φ = −g_c h ∂_x ζ with
+//! ∂_x ζ = h/(2φ) ∂_x φ, and its jump across each face, Δζ = h̄ (φ_R − φ_L)/(φ_R + φ_L)
+//! (h̄ the mean depth, 0 where a side is dry), enters the hyperbolic step like a bed
+//! step ([`FaceFriction::potential_jump`]): in the face's pressure source and in its
+//! Coulomb-aware reconstruction. A centred cell term −g_c h²/(2φ)(φ_{i+1} − φ_{i−1})/(2Δx)
+//! cannot see an odd–even φ (it is 0 wherever φ_{i+1} = φ_{i−1}) and, added after the
+//! step, was invisible to the faces: a face held by its Coulomb threshold carried no
+//! mass while the cell pass still pushed its cell, so a cell next to a denser one kept
+//! a speed without moving mass. Collapses grew an odd–even pattern in v and φ next to
+//! the back wall and never came to rest (`tests/dilatant.rs`,
+//! `split_scheme::an_odd_even_fraction_pattern_on_a_flat_layer_is_no_equilibrium`,
+//! `split_scheme::dense_collapse_at_10_degrees_comes_to_rest`). On the faces, a mass at
+//! rest stays at rest iff every face's |Δ(h + z + ζ)| is within its static threshold.
+//!
 //! 1. **hyperbolic**: the monolayer's [`HydrostaticStep`] (Garres-Díaz et al. 2021, §3 step 1: HLL/PVM,
 //!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. For
 //!    K = 0 its ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`). For K > 0 it
@@ -33,8 +47,7 @@
 //!    its content, and a uniform φ stays uniform bit for bit (every difference is 0).
 //!    Cells left with h = 0 keep their φ (Bouchut et al. 2021, eq. 3.14 is not needed: the
 //!    hyperbolic step never asks a dry cell for φ).
-//! 3. **cell pass**: the φ-gradient pressure −g_c h²/(2φ) (φ_{i+1} − φ_{i−1})/(2Δx)
-//!    (a neighbour with h ≤ 10⁻¹⁰ m counts with the cell's own φ); the friction step of
+//! 3. **cell pass**: the friction step of
 //!    the monolayer (`friction.rs`: friction stops but never reverses) in backward
 //!    Euler in the speed ([`cell_friction`]): μ(I) + μ_w h/W (4.1) for K = 0 (the
 //!    Savage–Hutter `MuI::friction_update`), μ_eff = μ(I) + μ_w h/W + tan ψ (2.13–2.14,
@@ -105,6 +118,8 @@ pub struct SplitScheme {
     /// marks a cell the friction held (its μ_eff is the static threshold at its h, φ).
     mu: Vec<f64>,
     cons: [Vec<f64>; 3],
+    /// The material's φ (the Savage–Hutter law's, K = 0).
+    phi_ref: f64,
 }
 
 /// The μ(I) law of the hyperbolic step's Coulomb-aware reconstruction: the
@@ -148,7 +163,46 @@ struct DilatantFaces<'a> {
     phi: &'a [f64],
 }
 
+/// The jump ζ_R − ζ_L of the volume-fraction potential across a face, ∂_x ζ = h/(2φ) ∂_x φ
+/// (the pressure term −g_c h²/(2φ) ∂_x φ of Bouchut et al. 2021, eq. 2.4, written as
+/// −g_c h ∂_x ζ): h̄ (φ_R − φ_L)/(φ_R + φ_L) with h̄ the mean depth at t^n; 0 where a
+/// side is dry (≤ `H_DRY`) and, exactly, where φ_L = φ_R.
+#[inline(always)]
+fn fraction_potential_jump(h: &[f64], phi: &[f64], face: usize) -> f64 {
+    let (hl, hr) = (h[face], h[face + 1]);
+    let (pl, pr) = (phi[face], phi[face + 1]);
+    if hl <= H_DRY || hr <= H_DRY || pl == pr {
+        return 0.0;
+    }
+    0.5 * (hl + hr) * (pr - pl) / (pr + pl)
+}
+
+/// The faces of the K = 0 step: the Savage–Hutter μ(I) threshold and the
+/// volume-fraction potential (0 with uniform φ: then the monolayer's step bit for bit).
+struct IncompressibleFaces<'a> {
+    law: &'a MuI,
+    h: &'a [f64],
+    phi: &'a [f64],
+}
+
+impl FaceFriction for IncompressibleFaces<'_> {
+    #[inline(always)]
+    fn mu(&self, _face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
+        BasalFriction::mu(self.law, speed, h, p_over_rho)
+    }
+
+    #[inline(always)]
+    fn potential_jump(&self, face: usize) -> f64 {
+        fraction_potential_jump(self.h, self.phi, face)
+    }
+}
+
 impl FaceFriction for DilatantFaces<'_> {
+    #[inline(always)]
+    fn potential_jump(&self, face: usize) -> f64 {
+        fraction_potential_jump(self.h, self.phi, face)
+    }
+
     #[inline(always)]
     fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
         let law = self.law;
@@ -318,6 +372,7 @@ impl SplitScheme {
             active: Vec::with_capacity(nx + 1),
             mu: vec![0.0; nx + 2],
             cons: [vec![0.0; nx + 2], vec![0.0; nx + 2], vec![0.0; nx + 2]],
+            phi_ref,
         }
     }
 
@@ -341,9 +396,16 @@ impl SplitScheme {
         // The monolayer's hyperbolic step on the state's own (h, hv), ghosts as the
         // monolayer's.
         if self.law.k == 0.0 {
-            // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step).
+            // The Savage–Hutter μ(I) threshold (bit for bit the monolayer's step with
+            // uniform φ).
+            let law = reconstruction_law(&self.law, self.phi_ref);
+            let faces = IncompressibleFaces {
+                law: &law,
+                h: &self.backup[0],
+                phi: &s.phi,
+            };
             self.hyperbolic
-                .advance_monolayer_with_law(mesh, dt, &mut s.h, &mut s.hu)?;
+                .advance_monolayer(mesh, dt, &mut s.h, &mut s.hu, &faces)?;
         } else {
             // μ_eff with the mass-weighted φ of each face's two cells at t^n; backup[0]
             // holds h at t^n.
@@ -415,7 +477,7 @@ impl SplitScheme {
         Ok(())
     }
 
-    /// Step 3: φ-gradient pressure, friction, dilatancy, cell by cell.
+    /// Step 3: friction and dilatancy, cell by cell.
     fn cells(
         &mut self,
         mesh: &Line,
@@ -441,7 +503,7 @@ impl SplitScheme {
         hu: &mut [f64],
         wet: RangeInclusive<usize>,
     ) -> Result<(), StageError> {
-        let (nx, g_c, dx) = (mesh.nx, mesh.g_n, mesh.dx);
+        let (nx, g_c) = (mesh.nx, mesh.g_n);
         let law = &self.law;
         let phi = &mut self.phi_new;
         let mu = &mut self.mu;
@@ -449,23 +511,11 @@ impl SplitScheme {
         // Every index below is < hi_end + 1 ≤ nx + 2: checked once, not per cell.
         assert!(lo >= 1 && hi_end < h.len() && h.len() == hu.len() && h.len() == phi.len());
         assert!(mu.len() == h.len());
-        let gradient_factor = 0.5 * g_c * dt / (2.0 * dx);
-        // φ and wetness of the left neighbour before its dilatancy step.
-        let mut left = (phi[lo - 1], h[lo - 1] > H_DRY);
         for i in lo..hi_end {
             let hi = h[i];
             let p = phi[i];
             let wet = hi > H_DRY;
             let mut q = hu[i];
-            if wet {
-                let phi_l = if left.1 { left.0 } else { p };
-                let phi_r = if h[i + 1] > H_DRY { phi[i + 1] } else { p };
-                let dphi = phi_r - phi_l;
-                if dphi != 0.0 {
-                    q -= gradient_factor * hi * hi / p * dphi;
-                }
-            }
-            left = (p, wet);
             // The friction step of the monolayer (friction.rs), with μ_eff, backward
             // Euler: I_out is the inertial number of the new discharge.
             let mut i_out = 0.0;

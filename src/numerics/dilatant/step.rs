@@ -48,8 +48,9 @@ pub enum DilatantError {
 /// Which time step the dilatant model takes (`dilatancy.scheme`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SchemeKind {
-    /// The Savage–Hutter μ(I) step with φ carried by its mass fluxes, then the
-    /// φ-gradient, dilatant friction, dilatancy and stabilisation terms (`split.rs`).
+    /// The Savage–Hutter μ(I) step with the φ-gradient pressure on its faces and φ
+    /// carried by its mass fluxes, then the dilatant friction, dilatancy and
+    /// stabilisation terms (`split.rs`).
     #[default]
     Split,
     /// Bouchut et al. 2021, §3 as printed: Appendix B fluxes with apparent-topography friction (this
