@@ -560,7 +560,14 @@ fn dilatant_keys_are_validated() {
     assert_eq!(spec.law.k, 4.09);
     assert_eq!(spec.law.mu_1, 0.48);
     assert_eq!(spec.options.viscosity.xi, [0.0, 0.0, 0.0]);
+    // Bouchut et al. 2021, §3.3: 10 grain diameters by default.
+    assert_eq!(spec.options.h_thin, 10.0 * 0.7e-3);
     let cases = [
+        (
+            "n = 1",
+            "n = 1\nthin_layer_grains = -1",
+            "dilatancy.thin_layer_grains",
+        ),
         ("phi = 0.62", "phi = 1.2", "initial.phi"),
         ("phi = 0.62", "", "initial.phi"),
         ("k = 4.09", "k = -1", "dilatancy.k"),
@@ -993,6 +1000,45 @@ mod split_scheme {
         let contrast = contrast.fold(0.0, f64::max);
         println!("at rest: largest |Δ(h + ζ)|/Δx {worst:.4} (μ_1 {}), largest |φ_(i+1) − 2φ_i + φ_(i−1)| {contrast:.4} (0.12 at t = 0)", law.mu_1);
         assert!(worst <= law.mu_1 * (1.0 + 1e-9), "{worst}");
+    }
+
+    #[test]
+    fn layers_thinner_than_the_threshold_do_not_dilate() {
+        // Bouchut et al. 2021, §3.3: below a thickness threshold of about tens of grains the
+        // dilatancy is off. A dense 5 mm layer (φ = 0.62) released on a 30° plane: with
+        // the threshold 10 d = 7 mm it flows as the K = 0 layer bit for bit (μ(I), φ
+        // frozen); without it (0) its static threshold μ_1 + K(φ − φ_stat) holds it.
+        let law = DilatantLaw::table1();
+        let mesh = mesh(0.0, 0.5, 50, 30.0, (true, true));
+        let start = state(&mesh, |_| 0.005, |_| 0.0, |_| 0.62);
+        let after = |law: DilatantLaw, h_thin: f64| {
+            let opt = DilatantOptions {
+                h_thin,
+                ..DilatantOptions::default()
+            };
+            let mut s = start.clone();
+            let mut scheme = SplitScheme::new(law, opt, mesh.nx, 0.62);
+            run_split(&mut scheme, &mesh, &mut s, 0.2, |_| {});
+            s
+        };
+        let thin = after(law, 10.0 * law.d);
+        let incompressible = after(DilatantLaw { k: 0.0, ..law }, 0.0);
+        let dilating = after(law, 0.0);
+        let v = |s: &DilatantState| s.hu[25] / s.h[25];
+        println!(
+            "v(0.25 m, 0.2 s): threshold 7 mm {:.5} m/s, K = 0 {:.5} m/s, no threshold {:.5} m/s (φ {:.4})",
+            v(&thin),
+            v(&incompressible),
+            v(&dilating),
+            dilating.phi[25]
+        );
+        assert_eq!(thin.h, incompressible.h);
+        assert_eq!(thin.hu, incompressible.hu);
+        assert!(thin.phi[1..=50].iter().all(|&p| p == 0.62));
+        // Without the threshold the dense layer is held by μ_1 + K(φ − φ_stat) = 0.635 >
+        // tan 30° (2.16).
+        assert!(v(&thin) > 0.01);
+        assert!(dilating.hu.iter().all(|&q| q == 0.0));
     }
 
     #[test]

@@ -40,6 +40,7 @@ pub(crate) struct RawDilatancy {
     pub lambda: Option<f64>,
     pub xi: Option<Vec<f64>>,
     pub scheme: Option<String>,
+    pub thin_layer_grains: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -158,6 +158,8 @@ pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) 
 /// value bit for bit (μ(0) = μ_1 + 0 and φ_eq(0) = φ_stat exactly), fewer operations.
 struct DilatantFaces<'a> {
     law: &'a DilatantLaw,
+    /// The thickness threshold of Bouchut et al. 2021, §3.3: below it (mean depth) no tan ψ.
+    h_thin: f64,
     /// h and φ at t^n (nx + 2, ghosts included).
     h: &'a [f64],
     phi: &'a [f64],
@@ -208,11 +210,16 @@ impl FaceFriction for DilatantFaces<'_> {
         let law = self.law;
         let (hl, hr) = (self.h[face].max(0.0), self.h[face + 1].max(0.0));
         let (pl, pr) = (self.phi[face], self.phi[face + 1]);
-        let phi = if hl + hr > 0.0 {
-            (hl * pl + hr * pr) / (hl + hr)
+        let phi = if hl > 0.0 && hr > 0.0 {
+            pl.min(pr)
+        } else if hl > 0.0 {
+            pl
         } else {
-            0.5 * (pl + pr)
+            pr
         };
+        if h < self.h_thin {
+            return law.mu_of_i(inertial_number(law.d, phi, speed, h, p_over_rho)) + wall(law, h);
+        }
         if speed == 0.0 {
             let mu = law.mu_1 + wall(law, h);
             return mu + law.tan_psi(phi, law.phi_stat).max(-mu);
@@ -411,6 +418,7 @@ impl SplitScheme {
             // holds h at t^n.
             let faces = DilatantFaces {
                 law: &self.law,
+                h_thin: self.opt.h_thin,
                 h: &self.backup[0],
                 phi: &s.phi,
             };
@@ -505,6 +513,8 @@ impl SplitScheme {
     ) -> Result<(), StageError> {
         let (nx, g_c) = (mesh.nx, mesh.g_n);
         let law = &self.law;
+        let h_thin = self.opt.h_thin;
+        let incompressible = DilatantLaw { k: 0.0, ..*law };
         let phi = &mut self.phi_new;
         let mu = &mut self.mu;
         let (lo, hi_end) = (*wet.start(), *wet.end() + 1);
@@ -522,13 +532,22 @@ impl SplitScheme {
             if q != 0.0 {
                 if !wet {
                     q = 0.0;
-                } else if DILATANT {
+                } else if DILATANT && hi >= h_thin {
                     (q, i_out) = dilatant_friction(law, g_c, dt, hi, q, p, wall(law, hi));
                 } else {
-                    (q, i_out) = cell_friction(law, g_c, dt, hi, q, p);
+                    // K = 0, or a layer thinner than `h_thin`: μ(I).
+                    (q, i_out) = cell_friction(&incompressible, g_c, dt, hi, q, p);
                 }
             }
             hu[i] = q;
+            if DILATANT && wet && hi < h_thin {
+                // Thinner than the threshold of Bouchut et al. 2021, §3.3: μ(I) friction (above),
+                // φ frozen; its μ_eff for the stabilisation is μ(I) + μ_w h/W.
+                if STABILISE {
+                    mu[i] = law.mu_of_i(i_out) + wall(law, hi);
+                }
+                continue;
+            }
             if DILATANT && wet {
                 if q == 0.0 {
                     if STABILISE {

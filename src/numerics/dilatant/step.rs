@@ -66,7 +66,16 @@ pub struct DilatantOptions {
     pub viscosity: Viscosity,
     pub update: DilatancyUpdate,
     pub cfl: f64,
+    /// Thickness threshold (m) of Bouchut et al. 2021, §3.3 (split scheme): a layer thinner
+    /// than this ("about tens of particles", below which the results are "physically
+    /// meaningless") has no dilatancy: μ(I) friction without tan ψ and φ frozen. The
+    /// scenario's default is [`DEFAULT_THIN_LAYER_GRAINS`] grain diameters; 0 here.
+    pub h_thin: f64,
 }
+
+/// `dilatancy.thin_layer_grains` by default: the thickness threshold of Bouchut et al.
+/// 2021, §3.3 ("about tens of particles") in grain diameters, the smallest such number.
+pub const DEFAULT_THIN_LAYER_GRAINS: f64 = 10.0;
 
 impl Default for DilatantOptions {
     fn default() -> Self {
@@ -76,6 +85,7 @@ impl Default for DilatantOptions {
             viscosity: Viscosity::default(),
             update: DilatancyUpdate::Implicit,
             cfl: 0.5,
+            h_thin: 0.0,
         }
     }
 }

@@ -14,7 +14,7 @@ use crate::grid::line::cell_centre;
 use crate::numerics::dilatant::flux::FluxOptions;
 use crate::numerics::dilatant::source::DilatancyUpdate;
 use crate::numerics::dilatant::stabilisation::Viscosity;
-use crate::numerics::dilatant::step::{DilatantOptions, SchemeKind};
+use crate::numerics::dilatant::step::{DilatantOptions, SchemeKind, DEFAULT_THIN_LAYER_GRAINS};
 use crate::physics::dilatancy::{DilatantLaw, PhiEq};
 
 /// The dilatant model's keys (`[dilatancy]`, `initial.phi`, the μ(I) law of
@@ -184,6 +184,12 @@ pub(super) fn dilatancy(
             )
         }
     };
+    // Bouchut et al. 2021, §3.3: no dilatancy in layers thinner than "about tens of
+    // particles"; 10 grain diameters, the smallest such number, by default.
+    let thin_layer_grains = non_negative(
+        "dilatancy.thin_layer_grains",
+        d.thin_layer_grains.unwrap_or(DEFAULT_THIN_LAYER_GRAINS),
+    )?;
     let mu_w = coefficient("mu_w", r.mu_w, r.mu_w_deg)?;
     let (mu_w, width) = match (mu_w, r.channel_width) {
         (None, None) => (0.0, 1.0),
@@ -219,6 +225,7 @@ pub(super) fn dilatancy(
         viscosity: Viscosity { xi },
         update,
         cfl: time.cfl,
+        h_thin: thin_layer_grains * material.d_s,
     };
     Ok(Some(DilatantSpec { law, options }))
 }
