@@ -87,6 +87,11 @@ CHECKS = {
     "dil_collapse": cargo_test("dilatant", "section_4_3_with_the_default_scheme"),
     "dil_threshold": cargo_test("dilatant", "split_scheme::static_thresholds_follow_the_dilatant_friction"),
     "dil_uniform": cargo_test("dilatant", "split_scheme::uniform_flow_on_an_incline_reaches_the_critical_state_split_scheme"),
+    "dil_odd_even": cargo_test(
+        "dilatant", "split_scheme::an_odd_even_fraction_pattern_on_a_flat_layer_is_no_equilibrium"),
+    "dil_rest_10": cargo_test("dilatant", "split_scheme::dense_collapse_at_10_degrees_comes_to_rest"),
+    "dil_thin": cargo_test("dilatant", "split_scheme::layers_thinner_than_the_threshold_do_not_dilate"),
+    "dil_slopes": cargo_test("dilatant", "fig_9a_front_order_on_the_five_slopes"),
     "collapse_pins": cargo_test("scenarios", "collapse_regression_norms"),
     "frozen_hashes": cargo_test("multilayer", "monolayer_numbers_are_frozen"),
     "film_speed": cargo_test("properties", "thin_cell_next_to_a_bed_step_keeps_a_bounded_speed"),

@@ -31,7 +31,12 @@
 //!    K = 0 its ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`). For K > 0 it
 //!    takes the threshold per face ([`HydrostaticStep::apply_with_friction`]):
 //!    μ_eff = μ(I) + μ_w h/W + tan ψ at the face's Roe speed and mean depth, with the
-//!    mass-weighted φ of the two cells at t^n. The reconstruction and the cell friction
+//!    smaller φ of the two cells at t^n (the weaker cell's threshold: a face holds only
+//!    what both its cells would hold; with the mass-weighted φ a dilated cell beside a
+//!    denser one kept moving while its faces, stronger than the cell, held its mass),
+//!    and without tan ψ where the mean depth is below the thickness threshold
+//!    `h_thin` of Bouchut et al. 2021, §3.3 (`dilatancy.thin_layer_grains`, 10 d by
+//!    default). The reconstruction and the cell friction
 //!    below then hold the same masses: a layer at rest stays at rest (to round-off) iff
 //!    its surface slope is below the static threshold μ_1 + K(φ − φ_stat) of (2.16),
 //!    and moves above it (`tests/dilatant.rs`,
@@ -64,7 +69,11 @@
 //!    `split_scheme::uniform_flow_on_an_incline_reaches_the_critical_state_split_scheme`);
 //!    then for K > 0 the semi-implicit dilatancy step (3.15)–(3.19) at the state after
 //!    friction (I* = the I at which μ_eff was taken): φ from (3.17) or (3.18), φh and v
-//!    kept, so h ← φh/φ and hv ← h v.
+//!    kept, so h ← φh/φ and hv ← h v. A cell thinner than `h_thin` (Bouchut et al. 2021, §3.3:
+//!    "a threshold of about tens of particles", below which the results are
+//!    "physically meaningless") takes the K = 0 friction μ(I) + μ_w h/W and keeps its φ:
+//!    without it the fronts dilated to φ = 0.001–0.02 in films of µm and the early
+//!    front and volume change diverged with Δx (docs/validation.md, dil-thin-layer).
 //! 4. **stabilisation** (K > 0 and ξ ≠ 0 only; off in the scenarios, the split scheme
 //!    needs none; Bouchut et al. 2021, §3.3 introduces it for its own scheme): (φh, φhv, φ^α h)
 //!    diffuse with ι = max(0, ξ v Δz) (3.20–3.21), Δz = Δb̂ + Δx Proj_μ(X, v/(g_c Δt))
@@ -149,7 +158,7 @@ pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) 
 
 /// The friction threshold of the hyperbolic step's Coulomb-aware reconstruction for
 /// K > 0: μ_eff (2.13–2.14) at the face's Roe speed and mean depth with the
-/// mass-weighted φ of its two cells at t^n (a dry side counts with the other's φ; both
+/// smaller φ of its two cells at t^n (a dry side counts with the other's φ; both
 /// dry, the face is never asked), so that the reconstruction holds exactly what the
 /// cell friction holds (a mass at rest with a surface slope below μ_1 + K(φ − φ_stat))
 /// and lets through what it does not. φ of the face is formed where it is asked for
@@ -414,7 +423,7 @@ impl SplitScheme {
             self.hyperbolic
                 .advance_monolayer(mesh, dt, &mut s.h, &mut s.hu, &faces)?;
         } else {
-            // μ_eff with the mass-weighted φ of each face's two cells at t^n; backup[0]
+            // μ_eff with the smaller φ of each face's two cells at t^n; backup[0]
             // holds h at t^n.
             let faces = DilatantFaces {
                 law: &self.law,

@@ -186,6 +186,12 @@ pub(super) fn dilatancy(
     };
     // Bouchut et al. 2021, §3.3: no dilatancy in layers thinner than "about tens of
     // particles"; 10 grain diameters, the smallest such number, by default.
+    if d.thin_layer_grains.is_some() && scheme != SchemeKind::Split {
+        return err(
+            "dilatancy.thin_layer_grains",
+            "only used by scheme = \"split\"",
+        );
+    }
     let thin_layer_grains = non_negative(
         "dilatancy.thin_layer_grains",
         d.thin_layer_grains.unwrap_or(DEFAULT_THIN_LAYER_GRAINS),
