@@ -1036,7 +1036,7 @@ mod split_scheme {
             |_| 0.05,
             |_| 0.0,
             |x| {
-                if ((x / 1e-3) as usize) % 2 == 0 {
+                if ((x / 1e-3) as usize).is_multiple_of(2) {
                     0.62
                 } else {
                     0.56
