@@ -41,6 +41,7 @@ fn rand01(k: u64) -> f64 {
     (z >> 11) as f64 / (1u64 << 53) as f64
 }
 
+#[allow(clippy::too_many_arguments)]
 fn raster(
     nx: usize,
     ny: usize,
