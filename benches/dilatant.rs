@@ -30,7 +30,7 @@ use granflow::numerics::friction::CoulombFrictionStep;
 use granflow::numerics::hydrostatic::HydrostaticStep;
 use granflow::numerics::Stage;
 use granflow::physics::dilatancy::DilatantLaw;
-use granflow::physics::rheology::MuI;
+use granflow::physics::rheology::{MonolayerShear, MuI};
 use granflow::physics::shallow::velocity;
 use granflow::scenario::{BoundaryKind, Coordinates};
 use granflow::state::dilatant::DilatantState;
@@ -42,6 +42,7 @@ const MU_I: MuI = MuI {
     i0: 0.279,
     d_s: 7e-4,
     phi: 0.62,
+    shear: MonolayerShear::Bagnold,
 };
 
 struct SavageHutter {

@@ -7,8 +7,10 @@ SWEEP_DIR is the output of `granflow sweep scenarios/sweeps/erodible_bed.toml`. 
 each slope, prints the runout change between the thinnest and the thickest bed of the
 sweep, next to the change measured in the laboratory and computed by the models of
 Fernández-Nieto et al. 2016 (§4.2.4 gives these numbers only at 19° and 22°; its figures, not its text,
-hold the other slopes). Also prints the wall time of the sweep's runs, so accuracy can
-be weighed against cost.
+hold the other slopes), then the settled time of every bed thickness (the time from
+which the kinetic energy stays at or below 1e-6 of its peak; the paper's Fig. 13 plots
+the time at which the front stops against h_i). Also prints the wall time of the
+sweep's runs, so accuracy can be weighed against cost.
 """
 
 import csv
@@ -45,6 +47,12 @@ def main():
             paper = f"{p['lab']:+.1f} / {p['monolayer']:+.1f} / {p['MSM']:+.1f} / {p['C-MSM']:+.1f} % ({a*1e3:g} → {b*1e3:g} mm)"
         h0, h1 = 1e3 * float(lo["initial.erodible_bed"]), 1e3 * float(hi["initial.erodible_bed"])
         print(f"{slope:>6g} {h0:>6.2f} → {h1:<5.2f} {r0:>7.3f} → {r1:<6.3f} {change:>+7.1f}%  {paper}")
+    print(f"\n{'slope':>6}  settled time (s) for h_i = … (mm)")
+    for slope, rs in sorted(by_slope.items()):
+        cells = "  ".join(
+            f"{1e3 * float(r['initial.erodible_bed']):.2f}: {float(r['settled_time']):.3f}"
+            for r in rs)
+        print(f"{slope:>6g}  {cells}")
     wall = sum(float(r["wall_time_s"]) for r in rows)
     print(f"\n{len(rows)} runs, {wall:.2f} s of run wall time in all")
     return 0

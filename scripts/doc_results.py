@@ -31,9 +31,10 @@ DOCS = [ROOT / "docs/validation.md", ROOT / "docs/sweeps.md"]
 GRANFLOW = ROOT / "target/release/granflow"
 
 
-def cargo_test(file, name):
-    return ["cargo", "test", "--test", file, name, "--", "--exact", "--nocapture",
-            "--test-threads=1"]
+def cargo_test(module, name):
+    # The integration tests are one crate, tests/main.rs, with a module per area.
+    return ["cargo", "test", "--test", "main", f"{module}::{name}", "--", "--exact",
+            "--nocapture", "--test-threads=1"]
 
 
 # ID -> the command run (shown in the docs with {tmp} as out)
@@ -65,6 +66,12 @@ CHECKS = {
                        "granflow sweep scenarios/sweeps/erodible_bed.toml --jobs 2 --quiet "
                        "--output {tmp}/erodible && "
                        "python scripts/compare_erodible_lab.py {tmp}/erodible"],
+    "erodible_monolayer": ["sh", "-c",
+                           "for s in layer bagnold; do echo \"monolayer_shear = $s:\"; "
+                           "granflow sweep scenarios/sweeps/erodible_bed.toml --jobs 2 --quiet "
+                           "--output {tmp}/erodible_$s --set model.layers=1 "
+                           "--set rheology.monolayer_shear=$s && "
+                           "python scripts/compare_erodible_lab.py {tmp}/erodible_$s || exit 1; done"],
     "nh_constraint": cargo_test("nonhydrostatic", "discrete_constraint_holds_after_every_projection"),
     "nh_rest": cargo_test("nonhydrostatic", "granular_mass_at_rest_keeps_q_exactly_zero"),
     "nh_wedge": cargo_test("nonhydrostatic", "wedge_hydrostatic_local_runout_exceeds_nonhydrostatic"),

@@ -60,6 +60,7 @@ pub const BUNDLED: &[Bundled] = &[
             "data/complex_topography_local_h.csv"
         ]
     ),
+    bundled!("nh_complex_topography_multilayer"),
     bundled!("nh_coordinates_wedge"),
     bundled!("nh_coordinates_wedge_cartesian"),
     bundled!("nh_multilayer_at_rest"),

@@ -2,7 +2,7 @@
 //! including at dry fronts and wall reflections.
 
 use crate::common::{run, Case};
-use granflow::scenario::FrictionLaw;
+use granflow::scenario::{FrictionLaw, MonolayerShear};
 
 fn check(mut case: Case, slope_deg: f64) {
     case.mesh.slope_deg = slope_deg;
@@ -34,6 +34,7 @@ fn granular_collapse_between_walls_conserves_mass() {
         mu_s: 0.48,
         mu_2: 0.73,
         i0: 0.279,
+        shear: MonolayerShear::Bagnold,
     };
     case.t_end = 2.0;
     check(case, 22.0);

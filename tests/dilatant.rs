@@ -394,7 +394,7 @@ fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (
     use granflow::numerics::friction::CoulombFrictionStep;
     use granflow::numerics::hydrostatic::HydrostaticStep;
     use granflow::numerics::Stage;
-    use granflow::physics::rheology::MuI;
+    use granflow::physics::rheology::{MonolayerShear, MuI};
     use granflow::state::layered::LayeredState as State;
     let mesh = collapse(slope, x_max, cells);
     let law = MuI {
@@ -403,6 +403,7 @@ fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (
         i0: 0.279,
         d_s: 7e-4,
         phi: 0.62,
+        shear: MonolayerShear::Bagnold,
     };
     let h: Vec<f64> = mesh
         .x

@@ -3,7 +3,7 @@
 //! produces a non-finite value.
 
 use crate::common::Case;
-use granflow::scenario::FrictionLaw;
+use granflow::scenario::{FrictionLaw, MonolayerShear};
 use proptest::prelude::*;
 
 fn piecewise(values: Vec<f64>, x_min: f64, width: f64) -> impl Fn(f64) -> f64 {
@@ -30,7 +30,12 @@ proptest! {
         case.t_end = 0.2;
         case.every = 0.05;
         case.law = if use_mu_i {
-            FrictionLaw::MuI { mu_s: mu, mu_2: mu + 0.3, i0: 0.279 }
+            FrictionLaw::MuI {
+                mu_s: mu,
+                mu_2: mu + 0.3,
+                i0: 0.279,
+                shear: MonolayerShear::Bagnold,
+            }
         } else {
             FrictionLaw::Coulomb { mu }
         };

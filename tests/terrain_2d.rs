@@ -12,7 +12,7 @@ use granflow::model::Model;
 use granflow::numerics::friction::CoulombFrictionStep;
 use granflow::numerics::hydrostatic::HydrostaticStep;
 use granflow::numerics::Stage;
-use granflow::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, MuI};
+use granflow::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, MonolayerShear, MuI};
 use granflow::physics::Material;
 use granflow::pipeline::Pipeline;
 use granflow::state::{LayeredState, State2d};
@@ -114,13 +114,19 @@ fn law_pipeline(law: &FrictionLaw, nx: usize) -> Pipeline<Line, LayeredState> {
     let m = material();
     match *law {
         FrictionLaw::Coulomb { mu } => line_pipeline(Coulomb { mu }, nx),
-        FrictionLaw::MuI { mu_s, mu_2, i0 } => line_pipeline(
+        FrictionLaw::MuI {
+            mu_s,
+            mu_2,
+            i0,
+            shear,
+        } => line_pipeline(
             MuI {
                 mu_s,
                 mu_2,
                 i0,
                 d_s: m.d_s,
                 phi: m.phi,
+                shear,
             },
             nx,
         ),
@@ -220,6 +226,7 @@ fn cases() -> Vec<Invariant> {
         mu_s: tan_deg(20.9),
         mu_2: tan_deg(32.76),
         i0: 0.279,
+        shear: MonolayerShear::Bagnold,
     };
     vec![
         // Dam break on a 25° plane, Coulomb δ = 20°, local frame over a bumpy bed.
@@ -334,6 +341,7 @@ fn granular_mass_below_repose_on_a_random_bed_stays_exactly_at_rest() {
             mu_s,
             mu_2: tan_deg(33.0),
             i0: 0.279,
+            shear: MonolayerShear::Bagnold,
         },
     ] {
         for coordinates in [Coordinates::Cartesian, Coordinates::Local] {
@@ -444,6 +452,7 @@ fn cone_run(threads: usize, ny: usize, steps: usize) -> (Raster2d, State2d) {
         mu_s: tan_deg(22.0),
         mu_2: tan_deg(33.0),
         i0: 0.279,
+        shear: MonolayerShear::Bagnold,
     };
     let mut p = granular_2d::pipeline(&law, &material(), &r, threads).unwrap();
     run_2d(&r, &mut s, &mut p, 0.45, steps);

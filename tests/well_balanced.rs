@@ -2,7 +2,7 @@
 //! Escalante et al. 2023, §5.3), and a state just beyond the repose angle moves.
 
 use crate::common::{run, tan_deg, Case};
-use granflow::scenario::{BoundaryKind, FrictionLaw};
+use granflow::scenario::{BoundaryKind, FrictionLaw, MonolayerShear};
 
 /// Deterministic stand-in for RAND(X) ∈ [0, 1) (the papers draw it at run time).
 fn rand01(x: f64) -> f64 {
@@ -27,6 +27,7 @@ fn random_bed_case(
         mu_s: tan_deg(20.0),
         mu_2: tan_deg(36.0),
         i0: 0.279,
+        shear: MonolayerShear::Bagnold,
     };
     case.cfl = 0.7;
     case.t_end = 1.0;

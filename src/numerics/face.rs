@@ -63,6 +63,10 @@ pub struct Interface {
     pub share_right: f64,
     pub body_left: f64,
     pub body_right: f64,
+    /// The fractions θ_L − m α_1 and θ_R + m α_1 of the exchange term 𝓑 that the left
+    /// and right cells take (N > 1).
+    pub exchange_left: f64,
+    pub exchange_right: f64,
     pub left_at_rest: bool,
     pub right_at_rest: bool,
 }
@@ -191,6 +195,8 @@ pub fn interface<M: Fn(f64, f64) -> f64>(
         share_right: theta_right * source_right + m * upwind,
         body_left: theta_left * (source_left - pressure),
         body_right: theta_right * (source_right - pressure),
+        exchange_left: theta_left - m * alpha1,
+        exchange_right: theta_right + m * alpha1,
         left_at_rest,
         right_at_rest,
     };
@@ -220,21 +226,11 @@ pub fn mass_flux(c: &Interface, l: Side, r: Side) -> f64 {
 /// Momentum flux of one layer with velocities `u_l`, `u_r` on the two sides (already
 /// zero on a side seen at rest); `exchange` is the layer's 𝓑 term (N > 1) or `None`.
 #[inline(always)]
-pub fn layer_momentum_flux(
-    c: &Interface,
-    h_l: f64,
-    h_r: f64,
-    u_l: f64,
-    u_r: f64,
-    exchange: Option<f64>,
-) -> f64 {
+pub fn layer_momentum_flux(c: &Interface, h_l: f64, h_r: f64, u_l: f64, u_r: f64) -> f64 {
     let (q_l, q_r) = (h_l * u_l, h_r * u_r);
     let (m_l, m_r) = (q_l * u_l, q_r * u_r);
-    let jump = match exchange {
-        None => m_r - m_l,
-        Some(b) => m_r - m_l + b,
-    };
-    0.5 * (m_l + m_r) - 0.5 * (c.alpha0 * (c.hc_plus * u_r - c.hc_minus * u_l) + c.alpha1 * jump)
+    0.5 * (m_l + m_r)
+        - 0.5 * (c.alpha0 * (c.hc_plus * u_r - c.hc_minus * u_l) + c.alpha1 * (m_r - m_l))
 }
 
 /// (F^h, F^hu, sources of the left and right cells, their gravity parts) of a
@@ -252,7 +248,7 @@ pub fn monolayer_fluxes<M: Fn(f64, f64) -> f64>(
         None => (0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
         Some((c, l, r)) => (
             mass_flux(&c, l, r),
-            layer_momentum_flux(&c, c.h_minus, c.h_plus, l.u, r.u, None),
+            layer_momentum_flux(&c, c.h_minus, c.h_plus, l.u, r.u),
             c.share_left,
             c.share_right,
             c.body_left,

@@ -113,6 +113,7 @@ mod tests {
             i0: 0.3,
             d_s: 1e-3,
             phi: 0.6,
+            shear: Default::default(),
         };
         let voellmy = Voellmy { mu: 0.3, xi: 400.0 };
         let angle = 0.7f64;

@@ -45,6 +45,19 @@
 //! g_n h_i × (a surface slope), the friction step can weigh h_i itself (no ĥ of Escalante et al. 2023,
 //! eq. 25), and a mass at rest with |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s is held exactly.
 //!
+//! The exchange term 𝓑 of a face (N > 1) is split the same way: the left cell takes
+//! (θ_L − m α_1) 𝓑 and the right cell (θ_R + m α_1) 𝓑, which sum to 𝓑 and are the
+//! printed ½(1 ∓ α_1) 𝓑 (½𝓑 each, α_1 𝓑 inside the flux jump) where h_L = h_R. 𝓑
+//! carries the jump of h(u_α − ū), i.e. the shear of the thicker side: with the
+//! printed split a film beside a sheared column took half of it or, upwind of a front
+//! (α_1 = ±1), all of it, an impulse ∝ h_thick/h_film that only moves the layers
+//! against each other (Σ l_α 𝓑_α = 0). A film 3–10 µm thick ahead of a 12 mm column
+//! climbing a 30° bed (the multilayer run of nh_complex_topography.toml with 10
+//! layers) grew layer velocities of ±10²–10⁴ m/s, step after step, that the viscous
+//! step cannot take out (its stress is bounded by μ p, tiny in a film), and the time
+//! step collapsed at t = 1.44 s. With the own-depth split a film takes at most 2 m of
+//! 𝓑: the shear it gets is that of its own depth.
+//!
 //! Thin layers on steep beds. Where the lower side of a face is
 //! thinner than the bed step (h_L < Δb, or h_R < −Δb), h^± is clipped at 0 and 𝓢 sees
 //! the lower side's surface raised to the higher side's bed: a layer of depth h on a
@@ -165,6 +178,9 @@ pub struct HydrostaticStep<L: BasalFriction> {
     /// Per interface (nx + 1): the gravity parts (bed and plane) of those sources.
     body_left: Vec<f64>,
     body_right: Vec<f64>,
+    /// N > 1, per interface (nx + 1): the fractions of 𝓑 the left and right cells take.
+    exchange_left: Vec<f64>,
+    exchange_right: Vec<f64>,
     /// Per interface and layer ((nx + 1)·N, interface-major): momentum flux and, for
     /// N > 1, the exchange term 𝓑.
     flux_hu: Vec<f64>,
@@ -255,6 +271,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             } else {
                 Vec::new()
             },
+            exchange_left: per_cell(nx + 1),
+            exchange_right: per_cell(nx + 1),
             layer_flux: Vec::new(),
             h_new: vec![0.0; nx + 2],
             drain: vec![1.0; nx + 2],
@@ -334,6 +352,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
                 self.share_right[k] = 0.0;
                 self.body_left[k] = 0.0;
                 self.body_right[k] = 0.0;
+                self.exchange_left[k] = 0.0;
+                self.exchange_right[k] = 0.0;
                 fluxes.fill(0.0);
                 self.exchange[k * n..(k + 1) * n].fill(0.0);
                 if !self.layer_flux.is_empty() {
@@ -347,6 +367,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             self.share_right[k] = c.share_right;
             self.body_left[k] = c.body_left;
             self.body_right[k] = c.body_right;
+            self.exchange_left[k] = c.exchange_left;
+            self.exchange_right[k] = c.exchange_right;
             let u_l = &self.u[k * n..(k + 1) * n];
             let u_r = &self.u[(k + 1) * n..(k + 2) * n];
             let seen = |u: f64, at_rest: bool| if at_rest { 0.0 } else { u };
@@ -364,7 +386,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             }
             for a in 0..n {
                 let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
-                fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur, Some(exchange[a]));
+                fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur);
             }
             if !self.layer_flux.is_empty() {
                 // d_α = h(u_α − ū) of each side as the fluxes see it (0 at rest).
@@ -488,9 +510,11 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             let source = self.share_left[i] + self.share_right[i - 1]
                 - body * drained_fraction(state.h[i], h_old);
             let (right, left) = (i * n, (i - 1) * n);
+            let (w_right, w_left) = (self.exchange_left[i], self.exchange_right[i - 1]);
             let hu = &mut state.hu[i * n..(i + 1) * n];
             for (a, q) in hu.iter_mut().enumerate() {
-                let exchange = 0.5 * (self.exchange[right + a] + self.exchange[left + a]);
+                let exchange =
+                    w_right * self.exchange[right + a] + w_left * self.exchange[left + a];
                 *q -= r * (self.flux_hu[right + a] - self.flux_hu[left + a] + source + exchange);
             }
             if state.h[i] <= H_DRY {

@@ -302,7 +302,7 @@ fn face_flux<L: BasalFriction>(
             let t_r = if c.right_at_rest { 0.0 } else { t_r };
             FaceFlux {
                 h: mass_flux(&c, l, r),
-                qn: layer_momentum_flux(&c, c.h_minus, c.h_plus, l.u, r.u, None),
+                qn: layer_momentum_flux(&c, c.h_minus, c.h_plus, l.u, r.u),
                 qt: transverse_flux(&c, l, r, t_l, t_r),
                 share_l: c.share_left,
                 share_r: c.share_right,

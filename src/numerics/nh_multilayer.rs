@@ -155,7 +155,7 @@ mod tests {
     use crate::numerics::projection::multilayer::MultilayerOperator;
     use crate::numerics::viscous::ViscousOptions;
     use crate::numerics::viscous::{BasalCondition, Regularization};
-    use crate::physics::rheology::MuI;
+    use crate::physics::rheology::{MonolayerShear, MuI};
 
     fn law() -> MuI {
         // Escalante et al. 2023, Table 1
@@ -165,6 +165,7 @@ mod tests {
             i0: 0.279,
             d_s: 0.7e-3,
             phi: 0.62,
+            shear: MonolayerShear::Bagnold,
         }
     }
 

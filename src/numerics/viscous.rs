@@ -58,7 +58,8 @@
 //!
 //! Cells thinner than [`THIN_LAYER`] are treated as one layer with Coulomb friction
 //! (Escalante et al. 2023, Remark 2): the depth-averaged discharge gets the monolayer friction update
-//! and every layer moves with it. A cell dry at t^n and wetted by step 1 freezes its
+//! of `friction.rs` — μ at the new speed (backward Euler), whatever `rheology.viscosity`
+//! is — and every layer moves with it. A cell dry at t^n and wetted by step 1 freezes its
 //! coefficients from the state after step 1.
 
 use super::{Stage, StageError};
@@ -711,14 +712,10 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for MultilayerV
             if h < THIN_LAYER {
                 let q = &mut state.hu[i * n..(i + 1) * n];
                 let q_mean: f64 = q.iter().zip(&state.l).map(|(q, l)| q * l).sum();
-                let q_new = if implicit.is_some() {
-                    // μ at the new speed: the monolayer's implicit friction update.
-                    self.law.friction_update(q_mean, h, dt, g_n)
-                } else {
-                    let mu = self.law.mu(velocity(h, q_mean).abs(), h, g_n * h);
-                    coulomb_update(q_mean, dt * mu * g_n * h)
-                };
-                q.fill(q_new);
+                // The monolayer's friction step (`friction.rs`): μ at the new speed
+                // whatever `rheology.viscosity` says for the columns (a film's μ(I)
+                // at its incoming speed is μ_2, which overshoots and stops it).
+                q.fill(self.law.friction_update(q_mean, h, dt, g_n));
                 continue;
             }
             if self.frozen[i * n].is_nan() {
@@ -1162,7 +1159,7 @@ mod tests {
     use super::*;
     use crate::grid::{BoundaryKind, Coordinates};
     use crate::grid::{Line, LineSpec};
-    use crate::physics::rheology::{Coulomb, MuI};
+    use crate::physics::rheology::{Coulomb, MonolayerShear, MuI};
 
     fn mesh(cells: usize, slope_deg: f64) -> Line {
         let spec = LineSpec {
@@ -1217,6 +1214,7 @@ mod tests {
             i0: 0.279,
             d_s: 0.04,
             phi: 0.62,
+            shear: MonolayerShear::Bagnold,
         };
         let l = [0.1, 0.2, 0.3, 0.25, 0.15];
         let n = l.len();
@@ -1388,6 +1386,7 @@ mod tests {
             i0: 0.279,
             d_s: 0.7e-3,
             phi: 0.62,
+            shear: MonolayerShear::Bagnold,
         };
         let l = [0.1, 0.2, 0.3, 0.25, 0.15];
         let n = l.len();
@@ -1474,6 +1473,50 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A thin cell under μ(I) takes the monolayer's friction step (`friction.rs`, μ at
+    /// the new speed) although the columns' coefficients are frozen at t^n. A 0.5 µm
+    /// film has I = I_0 at ~1e-7 m/s; with Δt = 1e-8 s a film at 1.5e-7 m/s loses a
+    /// third of its speed, and μ at the incoming speed (before: I = 0.32) overstates
+    /// the friction of the speed it leaves with (I ≈ 0.22). The result is exactly what
+    /// the monolayer step leaves for the same depth and mean discharge.
+    #[test]
+    fn thin_cells_take_the_monolayer_friction_step_at_the_new_speed() {
+        use crate::numerics::friction::CoulombFrictionStep;
+        let law = MuI {
+            mu_s: 25.5f64.to_radians().tan(),
+            mu_2: 36.0f64.to_radians().tan(),
+            i0: 0.279,
+            d_s: 0.7e-3,
+            phi: 0.62,
+            shear: MonolayerShear::Bagnold,
+        };
+        let l = [0.25, 0.75];
+        let m = mesh(3, 30.0);
+        let h0 = 0.5 * THIN_LAYER;
+        let dt = 1e-8;
+        let mut state = LayeredState::from_profiles(&m, &l, &[h0; 3], &[0.0; 3]);
+        state.hu[2 * 2] = h0 * 0.6e-7;
+        state.hu[2 * 2 + 1] = h0 * 1.8e-7;
+        let q_mean = 0.25 * state.hu[2 * 2] + 0.75 * state.hu[2 * 2 + 1];
+        let mut step = MultilayerViscousStep::new(law, 3, &l, options(BasalCondition::Coulomb));
+        step.prepare(&m, &state);
+        step.apply(&m, dt, &mut state).unwrap();
+        let mut mono = LayeredState::from_profiles(&m, &[1.0], &[h0; 3], &[0.0; 3]);
+        mono.hu[2] = q_mean;
+        CoulombFrictionStep::new(law)
+            .apply(&m, dt, &mut mono)
+            .unwrap();
+        println!(
+            "film {h0:e} m at {:.4} m/s: leaves at {:.6e} m/s (monolayer {:.6e})",
+            q_mean / h0,
+            state.hu[2 * 2] / h0,
+            mono.hu[2] / h0
+        );
+        assert!(mono.hu[2] > 0.0, "the monolayer film keeps moving");
+        assert_eq!(state.hu[2 * 2], mono.hu[2]);
+        assert_eq!(state.hu[2 * 2 + 1], mono.hu[2]);
     }
 
     /// A thin cell is one Coulomb layer: every layer leaves with the mean discharge.

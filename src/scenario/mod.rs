@@ -30,7 +30,7 @@ pub use crate::model::ModelKind;
 pub use crate::numerics::viscous::{
     BasalCondition, Regularization, Sidewall, SidewallForm, ViscosityTime,
 };
-pub use crate::physics::rheology::FrictionLaw;
+pub use crate::physics::rheology::{FrictionLaw, MonolayerShear};
 pub use crate::physics::Material;
 
 #[derive(Debug, Clone, PartialEq)]

@@ -88,6 +88,7 @@ pub(crate) struct RawRheology {
     pub mu_2: Option<f64>,
     pub mu_2_deg: Option<f64>,
     pub i0: Option<f64>,
+    pub monolayer_shear: Option<String>,
     pub basal: Option<String>,
     pub regularization: Option<String>,
     pub delta: Option<f64>,

@@ -33,12 +33,18 @@ pub trait WithLaw {
 pub fn with_law<W: WithLaw>(law: &FrictionLaw, material: &Material, w: W) -> W::Out {
     match *law {
         FrictionLaw::Coulomb { mu } => w.with(Coulomb { mu }),
-        FrictionLaw::MuI { mu_s, mu_2, i0 } => w.with(MuI {
+        FrictionLaw::MuI {
+            mu_s,
+            mu_2,
+            i0,
+            shear,
+        } => w.with(MuI {
             mu_s,
             mu_2,
             i0,
             d_s: material.d_s,
             phi: material.phi,
+            shear,
         }),
         FrictionLaw::Voellmy { mu, xi } => w.with(Voellmy { mu, xi }),
     }

@@ -79,7 +79,9 @@ use crate::grid::Line;
 use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
-use crate::physics::rheology::{inertial_number, BasalFriction, MuI, STATIC_ROUNDOFF};
+use crate::physics::rheology::{
+    inertial_number, BasalFriction, MonolayerShear, MuI, STATIC_ROUNDOFF,
+};
 use crate::physics::shallow::H_DRY;
 use crate::state::DilatantState;
 use std::ops::RangeInclusive;
@@ -114,6 +116,7 @@ pub fn reconstruction_law(law: &DilatantLaw, phi_ref: f64) -> MuI {
         i0: law.i0,
         d_s: law.d,
         phi: phi_ref,
+        shear: MonolayerShear::Bagnold,
     }
 }
 
@@ -274,6 +277,7 @@ pub fn cell_friction(law: &DilatantLaw, g_c: f64, dt: f64, h: f64, q: f64, phi: 
             i0: law.i0,
             d_s: law.d,
             phi,
+            shear: MonolayerShear::Bagnold,
         };
         return (savage_hutter.friction_update(q, h, dt, g_c), 0.0);
     }

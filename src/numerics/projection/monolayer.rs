@@ -37,10 +37,17 @@
 //! depth (and so its share of the force) is proportional to its own depth.
 //!
 //! Faces and boundaries:
-//! - a face is *wet* when both neighbouring cells are thicker than
-//!   [`NH_FILM_FRACTION`] Δx; at other faces (the dry region and the edge of the mass,
+//! - a face is *wet* when both neighbouring cells are thicker than h_nh =
+//!   max([`NH_FILM`], [`NH_FILM_FRACTION`] Δx) = max(0.25 mm, 0.05 Δx). The fraction
+//!   of Δx keeps the checkerboard mode of the system (eigenvalue 4(h/Δx)²) away from
+//!   zero on coarse grids (docs/numerics.md); the floor, 0.05 Δx at the Δx = 5 mm of
+//!   Garres-Díaz et al. 2021's runs, stops the threshold from moving with Δx under
+//!   refinement, where a threshold ∝ Δx would change the model itself; at other faces (the dry region and the edge of the mass,
 //!   a free surface) p = 0: identity row Π = 0, and p is reset to 0 there after the
-//!   correction;
+//!   correction. The threshold does not decide the runout: the wedge of
+//!   `nh_coordinates_wedge.toml` on 1280 cells runs out 0.7870 m (1 mm contour) with
+//!   thresholds from 1 µm to 2 mm and 0.7888 m with 10 mm (docs/validation.md,
+//!   "Non-hydrostatic runout under refinement");
 //! - a wall face carries the constraint, with the ghost cell the mirror image of the
 //!   edge cell (the pressure extended evenly: homogeneous Neumann, Escalante et al. 2023, Remark 6);
 //! - an outflow face carries the Neumann row Π_{1/2} − Π_{3/2} = 0 (Escalante et al. 2023, eq. 37)
@@ -56,11 +63,22 @@ use crate::grid::BoundaryKind;
 use crate::state::layered::{fill_tracer_ghosts, LayeredState, HW};
 
 /// A face carries the constraint only when both neighbouring cells are thicker than
-/// this fraction of Δx (see the module documentation).
+/// [`wet_threshold`]: this fraction of Δx on coarse grids …
 pub const NH_FILM_FRACTION: f64 = 0.05;
 
+/// … and at least this film thickness (m), which it is for Δx ≤ 5 mm: under refinement
+/// the threshold stops moving with Δx (module documentation).
+pub const NH_FILM: f64 = 2.5e-4;
+
+/// The thickness h_nh = max([`NH_FILM`], [`NH_FILM_FRACTION`] Δx) above which both
+/// cells of a face must be for it to carry the constraint.
+#[inline]
+pub fn wet_threshold(dx: f64) -> f64 {
+    NH_FILM.max(NH_FILM_FRACTION * dx)
+}
+
 /// Whether the face between cells of depths `h_l`, `h_r` is wet (carries the
-/// constraint and a pressure), with `h_min` = [`NH_FILM_FRACTION`] Δx.
+/// constraint and a pressure), with `h_min` = [`wet_threshold`].
 #[inline(always)]
 fn wet_face(h_l: f64, h_r: f64, h_min: f64) -> bool {
     h_l > h_min && h_r > h_min
@@ -135,7 +153,7 @@ impl MonolayerOperator {
         MonolayerOperator {
             two_b: doubled_bed(mesh),
             span: 0..0,
-            h_min: NH_FILM_FRACTION * mesh.dx,
+            h_min: wet_threshold(mesh.dx),
         }
     }
 }
@@ -350,7 +368,7 @@ pub fn constraint_residual(mesh: &Line, state: &LayeredState) -> ConstraintResid
     let nx = mesh.nx;
     let two_b = doubled_bed(mesh);
     let inv_dx = 1.0 / mesh.dx;
-    let h_min = NH_FILM_FRACTION * mesh.dx;
+    let h_min = wet_threshold(mesh.dx);
     let mut res = ConstraintResidual {
         max_abs: 0.0,
         scale: 0.0,

@@ -50,7 +50,7 @@
 //! projection removes exactly the kinetic energy of its correction (KE⁺ + KE(δ) = KE⁻).
 //!
 //! **Faces and boundaries** (as `monolayer.rs`): a face is wet when both neighbouring
-//! cells are thicker than `NH_FILM_FRACTION` Δx; other faces carry p = 0 (identity
+//! cells are thicker than max(0.25 mm, 0.05 Δx) (`wet_threshold`); other faces carry p = 0 (identity
 //! rows). Only physical cells enter 𝒯: at a wall, the ghost cell's contribution is
 //! the mirror image of the edge cell's, and dropping it halves the wall row of the
 //! monolayer's system (which counts both) without changing the solution. At an outflow
@@ -70,7 +70,7 @@
 use std::ops::Range;
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use super::monolayer::{doubled_bed, face_depth, ConstraintResidual, NH_FILM_FRACTION};
+use super::monolayer::{doubled_bed, face_depth, wet_threshold, ConstraintResidual};
 use super::{PressureSolver, ProjectionOperator};
 use crate::grid::BoundaryKind;
 use crate::grid::Line;
@@ -134,7 +134,7 @@ impl MultilayerOperator {
             l: l.to_vec(),
             level,
             two_b: doubled_bed(mesh),
-            h_min: NH_FILM_FRACTION * mesh.dx,
+            h_min: wet_threshold(mesh.dx),
             dx: mesh.dx,
             coef: vec![LayerCoefficients::default(); (mesh.nx + 2) * n],
             wet: vec![false; mesh.nx + 1],
@@ -1012,7 +1012,7 @@ mod tests {
 
     /// A wet state on a curved bed with a sheared, layer-dependent velocity field that
     /// violates the constraints; `film` puts a film just thicker than the wet threshold
-    /// 0.05 Δx next to thick cells, as at a front.
+    /// max(0.25 mm, 0.05 Δx) next to thick cells, as at a front.
     fn moving_state(
         cells: usize,
         layers: usize,

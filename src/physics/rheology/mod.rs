@@ -11,8 +11,8 @@ mod voellmy;
 
 pub use coulomb::Coulomb;
 pub use mu_i::{
-    backward_euler_discharge, backward_euler_speed, inertial_number, local_inertial_number, MuI,
-    STATIC_ROUNDOFF,
+    backward_euler_discharge, backward_euler_speed, inertial_number, inertial_number_with,
+    local_inertial_number, MonolayerShear, MuI, STATIC_ROUNDOFF,
 };
 pub use voellmy::Voellmy;
 
@@ -33,8 +33,14 @@ pub fn coulomb_update(q: f64, dt_sigma: f64) -> f64 {
 pub enum FrictionLaw {
     /// Constant Coulomb coefficient μ (classical Savage–Hutter).
     Coulomb { mu: f64 },
-    /// μ(I) = μ_s + (μ_2 − μ_s) I / (I_0 + I).
-    MuI { mu_s: f64, mu_2: f64, i0: f64 },
+    /// μ(I) = μ_s + (μ_2 − μ_s) I / (I_0 + I), with the basal shear rate `shear` of a
+    /// depth-averaged layer.
+    MuI {
+        mu_s: f64,
+        mu_2: f64,
+        i0: f64,
+        shear: MonolayerShear,
+    },
     /// Voellmy: τ = μ p + ρ g |u|²/ξ (turbulence coefficient ξ in m/s²; [`Voellmy`]).
     Voellmy { mu: f64, xi: f64 },
 }

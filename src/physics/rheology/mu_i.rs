@@ -6,8 +6,13 @@
 //!
 //!   I = d_s γ̇ / √(p_b / ρ_s),   p_b/ρ_s = φ_s p_b/ρ   (ρ = φ_s ρ_s),
 //!
-//! and, for the monolayer model, the shear rate of the Bagnold profile
-//! γ̇ = 5|ū| / (2h) (Bouchut et al. 2021, eq. 2.15).
+//! and, for the monolayer model, a basal shear rate γ̇ = c_γ |ū| / h chosen by
+//! `rheology.monolayer_shear` ([`MonolayerShear`]):
+//! - `"bagnold"` (default): c_γ = 5/2, the shear rate at the bed of the Bagnold
+//!   profile with depth average ū (Bouchut et al. 2021, eq. 2.15);
+//! - `"layer"`: c_γ = 1, the basal shear rate u_1/h_1 of the multilayer model with
+//!   one layer (Fernández-Nieto et al. 2016, eq. 26 and 28; Escalante et al. 2023,
+//!   eq. 11), the definition under which the papers compare one layer with many.
 
 use super::{BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
@@ -21,15 +26,53 @@ pub struct MuI {
     pub d_s: f64,
     /// Solid volume fraction φ_s.
     pub phi: f64,
+    /// The basal shear rate of a depth-averaged layer.
+    pub shear: MonolayerShear,
 }
 
-/// Basal inertial number of a monolayer flow (Garres-Díaz et al. 2021, eq. 15e, Bouchut et al. 2021, eq. 2.15).
+/// The basal shear rate γ̇ = c_γ |ū| / h of a depth-averaged (monolayer) μ(I) layer
+/// (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum MonolayerShear {
+    /// c_γ = 5/2: the bed of a Bagnold profile (Bouchut et al. 2021, eq. 2.15).
+    #[default]
+    Bagnold,
+    /// c_γ = 1: u_1/h_1 of one layer (Fernández-Nieto et al. 2016, eq. 26).
+    Layer,
+}
+
+impl MonolayerShear {
+    /// c_γ = γ̇ h / |ū|.
+    #[inline(always)]
+    pub fn factor(self) -> f64 {
+        match self {
+            MonolayerShear::Bagnold => 2.5,
+            MonolayerShear::Layer => 1.0,
+        }
+    }
+}
+
+/// Basal inertial number of a monolayer flow with the Bagnold shear rate 5|ū|/(2h)
+/// (Garres-Díaz et al. 2021, eq. 15e, Bouchut et al. 2021, eq. 2.15).
 #[inline(always)]
 pub fn inertial_number(d_s: f64, phi: f64, speed: f64, h: f64, p_over_rho: f64) -> f64 {
+    inertial_number_with(MonolayerShear::Bagnold, d_s, phi, speed, h, p_over_rho)
+}
+
+/// Basal inertial number of a monolayer flow with the shear rate c_γ |ū|/h of `shear`.
+#[inline(always)]
+pub fn inertial_number_with(
+    shear: MonolayerShear,
+    d_s: f64,
+    phi: f64,
+    speed: f64,
+    h: f64,
+    p_over_rho: f64,
+) -> f64 {
     if h <= H_DRY || p_over_rho <= 0.0 {
         return 0.0;
     }
-    let shear_rate = 2.5 * speed / h;
+    let shear_rate = shear.factor() * speed / h;
     d_s * shear_rate / (phi * p_over_rho).sqrt()
 }
 
@@ -59,7 +102,7 @@ impl MuI {
 ///
 /// for the speed u* ≥ 0 before it, the impulse per unit μ c = Δt W/h (W the weight
 /// g_n h, or the total basal pressure of the non-hydrostatic model) and I = k u
-/// (k = 2.5 d_s / (h √(φ p_b/ρ)), Garres-Díaz et al. 2021, eq. 15e with γ̇ = 5u/2h). If u* ≤ c μ_s
+/// (k = c_γ d_s / (h √(φ p_b/ρ)), Garres-Díaz et al. 2021, eq. 15e with γ̇ = c_γ u/h). If u* ≤ c μ_s
 /// the mass stops (μ ≥ μ_s at any speed). Otherwise, with A = u* − c μ_s and
 /// D = c (μ_2 − μ_s), u is the positive root of k u² + (I_0 + k (D − A)) u − I_0 A = 0,
 /// which lies in (0, A]. Taking μ at u* instead (the semi-implicit update of Garres-Díaz et al. 2021,
@@ -134,7 +177,7 @@ pub fn backward_euler_discharge(
 impl MuI {
     #[inline(always)]
     fn implicit_discharge(&self, q: f64, h: f64, static_impulse: f64, c: f64, p: f64) -> f64 {
-        let k = inertial_number(self.d_s, self.phi, 1.0, h, p);
+        let k = inertial_number_with(self.shear, self.d_s, self.phi, 1.0, h, p);
         backward_euler_discharge(self.mu_s, self.mu_2, self.i0, q, h, static_impulse, c, k)
     }
 }
@@ -142,7 +185,9 @@ impl MuI {
 impl BasalFriction for MuI {
     #[inline(always)]
     fn mu(&self, speed: f64, h: f64, p_over_rho: f64) -> f64 {
-        self.mu_of_i(inertial_number(self.d_s, self.phi, speed, h, p_over_rho))
+        self.mu_of_i(inertial_number_with(
+            self.shear, self.d_s, self.phi, speed, h, p_over_rho,
+        ))
     }
 
     /// Backward Euler in the speed ([`backward_euler_speed`], c = Δt g_n).
@@ -192,6 +237,7 @@ mod tests {
             i0: 0.279,
             d_s: 0.7e-3,
             phi: 0.62,
+            shear: MonolayerShear::Bagnold,
         }
     }
 
@@ -243,6 +289,38 @@ mod tests {
         assert_eq!(law.friction_update(q, h, dt, g_n), 0.0);
         assert!(law.friction_update(f64::NAN, h, dt, g_n).is_nan());
         assert_eq!(law.nh_friction_update(q, q, h, dt, -1.0), q);
+    }
+
+    /// `MonolayerShear::Layer` is the basal friction of the multilayer model with one
+    /// layer: μ at the local inertial number of the shear rate u_1/h_1 = ū/h under the
+    /// basal pressure g h (`LocalFriction::mu_local`, the viscous step's bed), and
+    /// the friction update solves backward Euler with it; the Bagnold closure's I is
+    /// 5/2 times larger.
+    #[test]
+    fn layer_shear_is_the_one_layer_basal_friction() {
+        let layer = MuI {
+            shear: MonolayerShear::Layer,
+            ..beads()
+        };
+        let (h, g) = (0.012, 9.81);
+        for u in [0.01, 0.3, 2.0] {
+            assert_relative_eq!(
+                layer.mu(u, h, g * h),
+                layer.mu_local(u / h, g * h),
+                max_relative = 1e-14
+            );
+            assert_relative_eq!(
+                beads().mu(u, h, g * h),
+                layer.mu_local(2.5 * u / h, g * h),
+                max_relative = 1e-14
+            );
+            assert!(layer.mu(u, h, g * h) < beads().mu(u, h, g * h));
+        }
+        let (dt, u_star) = (1e-2, 1.0);
+        let u = layer.friction_update(u_star * h, h, dt, g) / h;
+        let residual = u + dt * g * layer.mu(u, h, g * h) - u_star;
+        assert!(residual.abs() < 1e-12, "residual {residual:e}");
+        assert!(u > beads().friction_update(u_star * h, h, dt, g) / h);
     }
 
     #[test]

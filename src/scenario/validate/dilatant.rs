@@ -5,7 +5,8 @@
 use super::super::profile::Profile;
 use super::super::raw::{RawDilatancy, RawRheology};
 use super::super::{
-    DilatantSpec, Domain, FrictionLaw, Initial, Material, ModelKind, ModelSpec, TimeSpec,
+    DilatantSpec, Domain, FrictionLaw, Initial, Material, ModelKind, ModelSpec, MonolayerShear,
+    TimeSpec,
 };
 use super::check::*;
 use super::granular::coefficient;
@@ -43,12 +44,24 @@ pub(super) fn dilatancy(
         }
         return Ok(None);
     };
-    let FrictionLaw::MuI { mu_s, mu_2, i0 } = *friction else {
+    let FrictionLaw::MuI {
+        mu_s,
+        mu_2,
+        i0,
+        shear,
+    } = *friction
+    else {
         return err(
             "rheology.law",
             "the dilatant model needs law = \"mu_i\" (Bouchut et al. 2021, eq. 2.14)",
         );
     };
+    if shear != MonolayerShear::Bagnold {
+        return err(
+            "rheology.monolayer_shear",
+            "the dilatant model takes the Bagnold shear rate (Bouchut et al. 2021, eq. 2.15)",
+        );
+    }
     if initial.phi.is_none() {
         return err("initial.phi", "required by model.kind = \"dilatant\"");
     }

@@ -6,8 +6,8 @@
 use super::super::error::ScenarioError;
 use super::super::raw::{RawModel, RawRheology};
 use super::super::{
-    BasalCondition, FrictionLaw, ModelKind, ModelSpec, MultilayerSpec, Pressure, Regularization,
-    Sidewall, SidewallForm, ViscosityTime,
+    BasalCondition, FrictionLaw, ModelKind, ModelSpec, MonolayerShear, MultilayerSpec, Pressure,
+    Regularization, Sidewall, SidewallForm, ViscosityTime,
 };
 use super::check::*;
 use super::MAX_LAYERS;
@@ -68,6 +68,7 @@ pub(super) fn rheology(
         ("mu_2", r.mu_2.is_some()),
         ("mu_2_deg", r.mu_2_deg.is_some()),
         ("i0", r.i0.is_some()),
+        ("monolayer_shear", r.monolayer_shear.is_some()),
     ];
     let (foreign, this, other): (&[(&str, bool)], &str, &str) = match law {
         Law::Coulomb => (&mu_i_keys, "coulomb", "mu_i"),
@@ -117,7 +118,21 @@ pub(super) fn rheology(
                 );
             }
             let i0 = positive("rheology.i0", required("rheology.i0", r.i0)?)?;
-            Ok(FrictionLaw::MuI { mu_s, mu_2, i0 })
+            let shear = choice(
+                "rheology.monolayer_shear",
+                r.monolayer_shear.as_deref(),
+                MonolayerShear::Bagnold,
+                &[
+                    ("bagnold", MonolayerShear::Bagnold),
+                    ("layer", MonolayerShear::Layer),
+                ],
+            )?;
+            Ok(FrictionLaw::MuI {
+                mu_s,
+                mu_2,
+                i0,
+                shear,
+            })
         }
     }
 }

@@ -608,8 +608,8 @@ fn check_profiles(
 mod tests {
     use super::*;
     use crate::scenario::{
-        BasalCondition, FrictionLaw, ModelKind, ModelSpec, Regularization, SidewallForm,
-        ViscosityTime,
+        BasalCondition, FrictionLaw, ModelKind, ModelSpec, MonolayerShear, Regularization,
+        SidewallForm, ViscosityTime,
     };
     use std::fs;
 
@@ -792,7 +792,7 @@ front_threshold = 2e-3
         let s = load(text).unwrap();
         assert_eq!(s.domain.cells, 400);
         assert_eq!(s.domain.slope_deg, 25.5);
-        let FrictionLaw::MuI { mu_s, mu_2, i0 } = s.friction else {
+        let FrictionLaw::MuI { mu_s, mu_2, i0, .. } = s.friction else {
             panic!("{:?}", s.friction)
         };
         assert!((mu_s - 20.9f64.to_radians().tan()).abs() < 1e-15);
@@ -978,6 +978,33 @@ front_threshold = 2e-3
             "law = \"mu_i\"\nmu_s = 0.4\nmu_2 = 0.5\ni0 = 0",
         );
         fails_at(&text, "rheology.i0", Some(10));
+    }
+
+    #[test]
+    fn monolayer_shear_key() {
+        let mu_i = replace(
+            MINIMAL,
+            "law = \"coulomb\"\nmu = 0.5",
+            "law = \"mu_i\"\nmu_s = 0.4\nmu_2 = 0.6\ni0 = 0.3",
+        );
+        let shear = |s: &Scenario| match s.friction {
+            FrictionLaw::MuI { shear, .. } => shear,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(shear(&load(&mu_i).unwrap()), MonolayerShear::Bagnold);
+        let layer = mu_i.replace("i0 = 0.3", "i0 = 0.3\nmonolayer_shear = \"layer\"");
+        assert_eq!(shear(&load(&layer).unwrap()), MonolayerShear::Layer);
+        let set = load_set(&mu_i, &["rheology.monolayer_shear=layer"]).unwrap();
+        assert_eq!(shear(&set), MonolayerShear::Layer);
+        let e = fails_at(
+            &mu_i.replace("i0 = 0.3", "i0 = 0.3\nmonolayer_shear = \"bagnld\""),
+            "rheology.monolayer_shear",
+            Some(11),
+        );
+        assert!(e.message().contains("\"bagnold\" or \"layer\""), "{e}");
+        // Coulomb has no inertial number.
+        let text = replace(MINIMAL, "mu = 0.5", "mu = 0.5\nmonolayer_shear = \"layer\"");
+        fails_at(&text, "rheology.monolayer_shear", Some(9));
     }
 
     #[test]
