@@ -50,6 +50,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &info,
         &GridData {
             x: &x,
+            y: None,
+            shape: None,
             b: &zeros,
             h_bed: &zeros,
         },
@@ -76,6 +78,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             t: step as f64 * 1e-3,
             h: &h,
             u: &u,
+            v: None,
+            shape: None,
             w: None,
             p_nh: None,
             layers: nl,

@@ -86,6 +86,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &info,
         &GridData {
             x: &x,
+            y: None,
+            shape: None,
             b: &b,
             h_bed: &h_bed,
         },
@@ -112,6 +114,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 t,
                 h: &h,
                 u: &u,
+                v: None,
+                shape: None,
                 w: nh.then_some(&w[..]),
                 p_nh: nh.then_some(&p[..]),
                 layers: nl,

@@ -245,6 +245,8 @@ impl<M: Model> Simulation<M> {
         let wall = Instant::now();
         let grid = GridData {
             x: self.grid.axis(0),
+            y: (self.grid.axis_names().len() > 1).then(|| self.grid.axis(1)),
+            shape: self.grid.shape(),
             b: self.grid.bed(),
             h_bed: self.model.bed_layer(),
         };

@@ -112,6 +112,8 @@ impl Synth {
         let (x, b, h_bed) = (self.x(), self.b(), self.h_bed());
         let grid = GridData {
             x: &x,
+            y: None,
+            shape: None,
             b: &b,
             h_bed: &h_bed,
         };
@@ -126,6 +128,8 @@ impl Synth {
             t,
             h: &h,
             u: &u,
+            v: None,
+            shape: None,
             w: nh.then_some(&w[..]),
             p_nh: nh.then_some(&p[..]),
             layers: self.nl,
@@ -476,6 +480,8 @@ fn bad_calls_are_errors() {
         t: 0.0,
         h: &h,
         u: &short_u,
+        v: None,
+        shape: None,
         w: None,
         p_nh: None,
         layers: FULL.nl,
@@ -502,6 +508,8 @@ fn optional_fields_cannot_change_between_snapshots() {
         t: 0.0,
         h: &h,
         u: &u,
+        v: None,
+        shape: None,
         w: None,
         p_nh: None,
         layers: FULL.nl,

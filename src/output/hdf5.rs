@@ -408,6 +408,8 @@ mod tests {
             &info(2),
             &GridData {
                 x: &x,
+                y: None,
+                shape: None,
                 b: &[0.0; 3],
                 h_bed: &[0.0; 3],
             },
@@ -421,6 +423,8 @@ mod tests {
             t,
             h: &data[..3],
             u: data,
+            v: None,
+            shape: None,
             w: None,
             p_nh: None,
             layers: 2,
