@@ -16,6 +16,7 @@ use std::time::Instant;
 
 use crate::gauges::Gauges;
 use crate::grid::Grid;
+use crate::model::tracker::Tracker;
 use crate::model::{Diagnostics, Model};
 use crate::numerics::StageError;
 use crate::output::{GridData, OutputError, OutputSink, RunInfo, RunSummary, StepRecord};
@@ -73,6 +74,8 @@ pub struct Simulation<M: Model> {
     /// Signal speed of the current state when the run loop has already computed it
     /// with the diagnostics (saves a pass); None when stale.
     signal_speed: Option<f64>,
+    /// What the run gathers over its steps (maps of a raster run), if anything.
+    tracker: Option<Box<dyn Tracker<M::Grid, M::State>>>,
 }
 
 /// The state of the loop that the summary needs.
@@ -138,7 +141,14 @@ impl<M: Model> Simulation<M> {
             t: 0.0,
             steps: 0,
             signal_speed: None,
+            tracker: None,
         }
+    }
+
+    /// Gathers over the run with `tracker` (it sees the initial state and every
+    /// accepted one, and writes to the sink before it is finished).
+    pub fn set_tracker(&mut self, tracker: Box<dyn Tracker<M::Grid, M::State>>) {
+        self.tracker = Some(tracker);
     }
 
     /// Adds a stop rule, consulted after the others.
@@ -245,6 +255,7 @@ impl<M: Model> Simulation<M> {
         let wall = Instant::now();
         let grid = GridData {
             x: self.grid.axis(0),
+            y: (self.grid.axis_names().len() > 1).then(|| self.grid.axis(1)),
             b: self.grid.bed(),
             h_bed: self.model.bed_layer(),
         };
@@ -271,7 +282,12 @@ impl<M: Model> Simulation<M> {
         let summary = self.summary(&tally, status);
         // The sink is finished whatever ended the run; an output error of the loop
         // takes precedence over one of `finish`.
+        let maps = match &self.tracker {
+            Some(tracker) => tracker.write(&self.grid, sink),
+            None => Ok(()),
+        };
         let finished = sink.finish(&summary);
+        let finished = maps.and(finished);
         match result {
             Ok(_) => finished.map(|()| summary).map_err(RunError::from),
             Err(e @ RunError::Output(_)) => Err(e),
@@ -291,6 +307,9 @@ impl<M: Model> Simulation<M> {
             return Err(self.failure(FailureReason::NonFinite, Some(i)));
         }
         sink.step(&self.record(&d0, 0.0))?;
+        if let Some(tracker) = self.tracker.as_mut() {
+            tracker.observe(&self.grid, &self.state, self.t);
+        }
         let mut gauges = (!self.config.gauges.is_empty())
             .then(|| Gauges::new(&self.grid, &self.config.gauges, self.config.gauge_every));
         if let Some(g) = gauges.as_mut() {
@@ -344,6 +363,9 @@ impl<M: Model> Simulation<M> {
                 }
             }
             sink.step(&self.record(&d, dt))?;
+            if let Some(tracker) = self.tracker.as_mut() {
+                tracker.observe(&self.grid, &self.state, self.t);
+            }
             if let Some(g) = gauges.as_deref_mut() {
                 g.after_step(&self.model, &self.grid, &self.state, self.t, sink)?;
             }
@@ -489,6 +511,7 @@ mod tests {
         let model = Granular {
             h_bed: vec![0.0; 10],
             front_threshold: 1e-3,
+            raster: None,
             static_threshold: 1e-3,
             rest_speed: 0.0,
         };
@@ -509,6 +532,7 @@ mod tests {
             slope_deg: 0.0,
             scenario_toml: String::new(),
             front_threshold: 1e-3,
+            raster: None,
         };
         let pipeline = Pipeline::new(vec![Box::new(Grow), Box::new(second)]);
         Simulation::new(line, model, state, pipeline, Vec::new(), config, info)

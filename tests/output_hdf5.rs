@@ -88,6 +88,7 @@ impl Synth {
             slope_deg: 31.5,
             scenario_toml: "[model]\nkind = \"granular\"\n# ünïcode\n".into(),
             front_threshold: THRESHOLD,
+            raster: None,
         }
     }
     fn summary(&self, status: &str) -> RunSummary {
@@ -112,6 +113,7 @@ impl Synth {
         let (x, b, h_bed) = (self.x(), self.b(), self.h_bed());
         let grid = GridData {
             x: &x,
+            y: None,
             b: &b,
             h_bed: &h_bed,
         };

@@ -20,6 +20,7 @@
 pub mod dilatant;
 pub mod granular;
 pub mod submarine;
+pub mod tracker;
 
 use crate::grid::Grid;
 use crate::output::{OutputError, OutputSink};

@@ -138,5 +138,6 @@ pub fn run_info(scn: &Scenario, pressure: &str, layers: usize) -> RunInfo {
         slope_deg: scn.domain.slope_deg,
         scenario_toml: scn.source_toml.clone(),
         front_threshold: scn.output.front_threshold,
+        raster: None,
     }
 }
