@@ -31,6 +31,8 @@ pub struct RunConfig {
     pub output_every: f64,
     /// Gauge positions (m); empty: no gauges ([`crate::gauges`]).
     pub gauges: Vec<f64>,
+    /// The gauges' y on a raster (one per gauge); empty on a line.
+    pub gauges_y: Vec<f64>,
     /// Gauge interval (s); `None`: every step.
     pub gauge_every: Option<f64>,
     /// Fraction of the peak kinetic energy below which the run counts as settled
@@ -283,7 +285,7 @@ impl<M: Model> Simulation<M> {
         // The sink is finished whatever ended the run; an output error of the loop
         // takes precedence over one of `finish`.
         let maps = match &self.tracker {
-            Some(tracker) => tracker.write(&self.grid, sink),
+            Some(tracker) => tracker.write(&self.grid, &self.state, sink),
             None => Ok(()),
         };
         let finished = sink.finish(&summary);
@@ -311,7 +313,10 @@ impl<M: Model> Simulation<M> {
             tracker.observe(&self.grid, &self.state, self.t);
         }
         let mut gauges = (!self.config.gauges.is_empty())
-            .then(|| Gauges::new(&self.grid, &self.config.gauges, self.config.gauge_every));
+            .then(|| {
+                let c = &self.config;
+                Gauges::new(&self.grid, &c.gauges, &c.gauges_y, c.gauge_every)
+            });
         if let Some(g) = gauges.as_mut() {
             g.begin(&self.model, &self.grid, &self.state, sink)?;
         }
@@ -520,6 +525,7 @@ mod tests {
             cfl: 0.5,
             output_every: 1.0,
             gauges: Vec::new(),
+            gauges_y: Vec::new(),
             gauge_every: None,
             settle_fraction: 0.0,
         };

@@ -11,6 +11,7 @@ use crate::output::{OutputError, OutputSink};
 pub trait Tracker<G, S>: Send {
     /// Takes the state at time `t` into account.
     fn observe(&mut self, grid: &G, state: &S, t: f64);
-    /// Hands what was gathered to `sink` ([`OutputSink::maps`]).
-    fn write(&self, grid: &G, sink: &mut dyn OutputSink) -> Result<(), OutputError>;
+    /// Hands what was gathered to `sink` ([`OutputSink::maps`]); `state` is the final
+    /// one (the last accepted state, as the run ended).
+    fn write(&self, grid: &G, state: &S, sink: &mut dyn OutputSink) -> Result<(), OutputError>;
 }

@@ -205,6 +205,11 @@ impl<S: OutputSink> OutputSink for Budgeted<S> {
         self.inner.begin_gauges(x)
     }
 
+    fn gauges_y(&mut self, y: &[f64]) -> Result<(), OutputError> {
+        self.spend(GAUGE_VALUE_BYTES * y.len() as u64)?;
+        self.inner.gauges_y(y)
+    }
+
     fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
         let values = maps.maps.iter().map(|f| f.data.len()).sum::<usize>()
             + maps.series.iter().map(|s| s.2.len()).sum::<usize>();

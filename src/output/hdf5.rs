@@ -398,6 +398,16 @@ impl OutputSink for Hdf5Sink {
         Ok(())
     }
 
+    fn gauges_y(&mut self, y: &[f64]) -> Result<(), OutputError> {
+        self.check_open("gauges_y")?;
+        if self.gauges != Some(y.len()) {
+            return Err(self.err("gauges_y without as many gauges from begin_gauges"));
+        }
+        let file = self.open_file()?;
+        layout::gauge_y(&file, y).map_err(|e| self.err(e))?;
+        self.close(file, false)
+    }
+
     fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {
         self.check_open("gauges")?;
         let Some(n) = self.gauges else {

@@ -219,6 +219,10 @@ pub trait OutputSink {
     fn begin_gauges(&mut self, _x: &[f64]) -> Result<(), OutputError> {
         Ok(())
     }
+    /// Called right after `begin_gauges` by raster runs, with the gauges' y (m).
+    fn gauges_y(&mut self, _y: &[f64]) -> Result<(), OutputError> {
+        Ok(())
+    }
     /// Called at every gauge time (after `begin_gauges`), in increasing t.
     fn gauges(&mut self, _rec: &GaugeRecord) -> Result<(), OutputError> {
         Ok(())

@@ -52,6 +52,10 @@ impl<A: OutputSink, B: OutputSink> OutputSink for Tee<A, B> {
         both(self.a.begin_gauges(x), self.b.begin_gauges(x))
     }
 
+    fn gauges_y(&mut self, y: &[f64]) -> Result<(), OutputError> {
+        both(self.a.gauges_y(y), self.b.gauges_y(y))
+    }
+
     fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
         both(self.a.maps(maps), self.b.maps(maps))
     }

@@ -282,6 +282,14 @@ pub(super) fn create_gauges(file: &H5File, x: &[f64]) -> rust_hdf5::Result<()> {
     Ok(())
 }
 
+/// Writes `/gauges/y`, the gauges' y on a raster.
+pub(super) fn gauge_y(file: &H5File, y: &[f64]) -> rust_hdf5::Result<()> {
+    let g = file.root_group().group("gauges")?;
+    let ds = g.new_dataset::<f64>().shape([y.len()]).create("y")?;
+    ds.write_raw(y)?;
+    units(&ds, "m")
+}
+
 /// Gauge rows waiting for the next write: times and row-major (row, gauge) values.
 #[derive(Debug, Default)]
 pub(super) struct GaugeRows {

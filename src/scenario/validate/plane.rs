@@ -191,7 +191,6 @@ pub(super) fn domain_of_raster(d: RawDomain, bed: &Profile) -> Res<Domain> {
 pub(super) fn raster_keys(
     domain: &Domain,
     model: &ModelSpec,
-    friction: &FrictionLaw,
     initial: &RawInitial,
     submarine: bool,
 ) -> Res<()> {
@@ -219,12 +218,6 @@ pub(super) fn raster_keys(
     }
     if model.pressure != Pressure::Hydrostatic {
         return err("model.pressure", format!("non-hydrostatic pressure {why}"));
-    }
-    if matches!(friction, FrictionLaw::MuI { .. }) {
-        return err(
-            "rheology.law",
-            format!("\"mu_i\" {why}; use \"coulomb\" or \"voellmy\""),
-        );
     }
     if submarine {
         return err("submarine", format!("the submarine model {why}"));
