@@ -28,4 +28,5 @@ mod scenarios;
 mod submarine;
 mod submarine_paper;
 mod sweep;
+mod terrain_2d_io;
 mod well_balanced;
