@@ -384,3 +384,34 @@ fn plot_run_draws_a_raster_run_as_maps() {
         .unwrap();
     assert_success(&check);
 }
+
+#[test]
+fn voellmy_keys_are_checked_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let voellmy = RADIAL.replace(
+        "law = \"coulomb\"\nmu_deg = 27.0",
+        "law = \"voellmy\"\nmu = 0.155\nxi = 4000.0",
+    );
+    let scn = load(&voellmy, d).unwrap();
+    assert_eq!(
+        scn.friction,
+        granflow::scenario::FrictionLaw::Voellmy {
+            mu: 0.155,
+            xi: 4000.0
+        }
+    );
+    let m = fails_at(&voellmy.replace("xi = 4000.0\n", ""), d, "rheology.xi");
+    assert!(m.contains("missing"), "{m}");
+    fails_at(&voellmy.replace("xi = 4000.0", "xi = 0.0"), d, "rheology.xi");
+    fails_at(&voellmy.replace("mu = 0.155\n", ""), d, "rheology.mu");
+    let m = fails_at(
+        &RADIAL.replace("mu_deg = 27.0", "mu_deg = 27.0\nxi = 4000.0"),
+        d,
+        "rheology.xi",
+    );
+    assert!(m.contains("only used by law = \"voellmy\""), "{m}");
+    // A line takes the law too, and needs no raster key for it.
+    let line = "[domain]\nx_min = 0.0\nx_max = 1.0\ncells = 10\n[rheology]\nlaw = \"voellmy\"\nmu = 0.2\nxi = 500\n[initial]\nh = 0.1\n[time]\nt_end = 1.0\n";
+    assert!(load(line, d).is_ok());
+}
