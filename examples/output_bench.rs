@@ -52,6 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &GridData {
             x: &x,
             y: None,
+            shape: None,
             b: &zeros,
             h_bed: &zeros,
         },
@@ -78,6 +79,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             t: step as f64 * 1e-3,
             h: &h,
             u: &u,
+            v: None,
+            shape: None,
             w: None,
             p_nh: None,
             layers: nl,

@@ -88,6 +88,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &GridData {
             x: &x,
             y: None,
+            shape: None,
             b: &b,
             h_bed: &h_bed,
         },
@@ -114,6 +115,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 t,
                 h: &h,
                 u: &u,
+                v: None,
+                shape: None,
                 w: nh.then_some(&w[..]),
                 p_nh: nh.then_some(&p[..]),
                 layers: nl,

@@ -258,6 +258,7 @@ impl<M: Model> Simulation<M> {
         let grid = GridData {
             x: self.grid.axis(0),
             y: (self.grid.axis_names().len() > 1).then(|| self.grid.axis(1)),
+            shape: self.grid.shape(),
             b: self.grid.bed(),
             h_bed: self.model.bed_layer(),
         };

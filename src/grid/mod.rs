@@ -12,14 +12,16 @@
 //! - [`CurvedLine`] ([`curved`]): a line whose bed angle θ(x) enters the equations (the
 //!   two-layer submarine model, Fernández-Nieto et al. 2008, §4), with the angle terms of each face.
 //!
-//! A 2-D grid would implement [`Grid`] with its own cell list and face list; see
-//! `docs/architecture.md`, "How to add a grid".
+//! - [`Raster2d`] ([`raster`]): the uniform 2-D raster of the 2-D Savage–Hutter model,
+//!   row-major cells grouped in bands of whole rows (the tiles of its stages).
 
 pub mod curved;
 pub mod line;
+pub mod raster;
 
 pub use curved::CurvedLine;
 pub use line::{Line, LineSpec};
+pub use raster::{Raster2d, RasterSpec, Sides};
 
 /// Frame in which the shallow model is written (Garres-Díaz et al. 2021, §4.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -143,6 +145,10 @@ pub trait Grid: Send + 'static {
     fn locate(&self, p: Point) -> Stencil;
     /// Length in the CFL condition Δt ≤ CFL · length / speed (Δx on a line).
     fn cfl_length(&self) -> f64;
+    /// (ny, nx) of a raster, whose per-cell arrays are row-major; `None` on a line.
+    fn shape(&self) -> Option<(usize, usize)> {
+        None
+    }
     /// Whether material can leave through a boundary (an `outflow` end of a line): the
     /// run then reports the fraction of the initial mass that left.
     fn has_outflow(&self) -> bool {

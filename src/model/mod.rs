@@ -13,12 +13,15 @@
 //! - [`granular`]: the layered family of Garres-Díaz et al. 2021, Fernández-Nieto et al. 2016 and Escalante et al. 2023 (Savage–Hutter with
 //!   Coulomb or μ(I) friction, the multilayer μ(I) model, the weakly non-hydrostatic
 //!   monolayer model).
+//! - [`granular_2d`]: the Savage–Hutter model on a raster (x, y), Coulomb, μ(I) or
+//!   Voellmy friction.
 //! - [`submarine`]: the two-layer water-over-grains model of Fernández-Nieto et al. 2008, on a
 //!   [`CurvedLine`](crate::grid::CurvedLine).
 //! - [`dilatant`]: the compressible μ(I)–φ model of Bouchut et al. 2021 (volume fraction φ).
 
 pub mod dilatant;
 pub mod granular;
+pub mod granular_2d;
 pub mod submarine;
 pub mod tracker;
 

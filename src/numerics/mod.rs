@@ -9,8 +9,11 @@
 
 pub mod banded;
 pub mod dilatant;
+pub mod face;
 pub mod friction;
+pub mod friction_2d;
 pub mod hydrostatic;
+pub mod hydrostatic_2d;
 pub mod linalg;
 pub mod nh_multilayer;
 
@@ -19,6 +22,7 @@ pub mod projection;
 pub mod tracer;
 pub mod two_layer;
 pub mod viscous;
+pub mod workers;
 
 /// Why a stage could not complete a step. The place is a physical cell index (0-based,
 /// as [`crate::grid::Grid::centre`] takes it); the run loop turns it into a position.

@@ -523,6 +523,7 @@ mod tests {
             &GridData {
                 x: &x,
                 y: None,
+                shape: None,
                 b: &[0.0; 3],
                 h_bed: &[0.0; 3],
             },
@@ -536,6 +537,8 @@ mod tests {
             t,
             h: &data[..3],
             u: data,
+            v: None,
+            shape: None,
             w: None,
             p_nh: None,
             layers: 2,

@@ -65,10 +65,13 @@ pub struct RasterInfo {
 /// Static grid data, `/grid`.
 #[derive(Debug, Clone, Copy)]
 pub struct GridData<'a> {
-    /// Cell centres (nx), or the x of every cell of a raster (nx·ny, row-major).
+    /// Cell centres (nx), every cell's x on a raster (nx·ny, row-major).
     pub x: &'a [f64],
-    /// The y of every cell of a raster (nx·ny); `None` on a line.
+    /// Every cell's y on a raster (nx·ny, row-major); `None` on a line.
     pub y: Option<&'a [f64]>,
+    /// (ny, nx) of a raster, whose per-cell arrays are row-major (cell = j·nx + i);
+    /// `None` on a line.
+    pub shape: Option<(usize, usize)>,
     /// Bed elevation over the reference plane (nx).
     pub b: &'a [f64],
     /// Initial erodible-bed thickness (nx).
@@ -93,8 +96,13 @@ pub struct SnapshotView<'a> {
     pub t: f64,
     /// Flow thickness (nx).
     pub h: &'a [f64],
-    /// Downslope velocity of each layer (nl·nx).
+    /// Downslope velocity of each layer (nl·nx); on a raster the x-velocity of every
+    /// cell (nx·ny, row-major).
     pub u: &'a [f64],
+    /// The y-velocity of every cell of a raster (nx·ny, row-major); `None` on a line.
+    pub v: Option<&'a [f64]>,
+    /// (ny, nx) of a raster's per-cell fields (`h`, `u`, `v`, `extra`); `None` on a line.
+    pub shape: Option<(usize, usize)>,
     /// Normal velocity of each layer (nl·nx), when the model has it.
     pub w: Option<&'a [f64]>,
     /// Non-hydrostatic pressure at the interfaces ((nl+1)·(nx+1)), non-hydrostatic runs only.

@@ -20,7 +20,9 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
         .expect("validated: a submarine scenario has its spec");
     let mu = match scn.friction {
         FrictionLaw::Coulomb { mu } => mu,
-        FrictionLaw::MuI { .. } => unreachable!("validated: Coulomb friction"),
+        FrictionLaw::MuI { .. } | FrictionLaw::Voellmy { .. } => {
+            unreachable!("validated: Coulomb friction")
+        }
     };
     let params = spec.params(mu);
     let nx = grid.line.nx;

@@ -5,15 +5,19 @@
 //!
 //! - [`LayeredState`] ([`layered`]): the granular family, N layers of fixed fractions,
 //!   with tracers and the non-hydrostatic pressure;
+//! - [`State2d`] ([`layered_2d`]): the 2-D Savage–Hutter model on a raster, h, hu, hv
+//!   over the physical cells;
 //! - [`TwoLayerState`] ([`two_layer`]): water over grains (Fernández-Nieto et al. 2008);
 //! - [`DilatantState`] ([`dilatant`]): the compressible μ(I)–φ model (Bouchut et al. 2021).
 
 pub mod dilatant;
 pub mod layered;
+pub mod layered_2d;
 pub mod two_layer;
 
 pub use dilatant::DilatantState;
 pub use layered::LayeredState;
+pub use layered_2d::State2d;
 pub use two_layer::TwoLayerState;
 
 #[cfg(test)]

@@ -136,6 +136,8 @@ impl Model for Dilatant {
             t,
             h: &s.h[1..=nx],
             u: &u,
+            v: None,
+            shape: None,
             w: None,
             p_nh: None,
             layers: 1,

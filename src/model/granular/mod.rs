@@ -104,6 +104,8 @@ impl Model for Granular {
             t,
             h: state.h_interior(),
             u: &u,
+            v: None,
+            shape: None,
             w: nh.as_ref().map(|(w, _)| w.as_slice()).or(w_ml.as_deref()),
             p_nh: nh.as_ref().map(|(_, p)| p.as_slice()),
             layers: n,

@@ -17,7 +17,7 @@ use crate::numerics::projection::multilayer::SharedOperator;
 use crate::numerics::projection::{ProjectionStage, ThomasSolver};
 use crate::numerics::viscous::{MultilayerViscousStep, ViscosityTime, ViscousOptions};
 use crate::numerics::Stage;
-use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, MuI};
+use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, MuI, Voellmy};
 use crate::physics::Material;
 use crate::pipeline::Pipeline;
 use crate::state::layered::LayeredState;
@@ -40,6 +40,7 @@ pub fn with_law<W: WithLaw>(law: &FrictionLaw, material: &Material, w: W) -> W::
             d_s: material.d_s,
             phi: material.phi,
         }),
+        FrictionLaw::Voellmy { mu, xi } => w.with(Voellmy { mu, xi }),
     }
 }
 

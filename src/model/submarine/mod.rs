@@ -161,6 +161,8 @@ impl Model for Submarine {
             t,
             h: &s.h2[1..=nx],
             u: &u2,
+            v: None,
+            shape: None,
             w: None,
             p_nh: None,
             layers: 1,

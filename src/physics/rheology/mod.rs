@@ -7,12 +7,14 @@
 
 mod coulomb;
 mod mu_i;
+mod voellmy;
 
 pub use coulomb::Coulomb;
 pub use mu_i::{
     backward_euler_discharge, backward_euler_speed, inertial_number, local_inertial_number, MuI,
     STATIC_ROUNDOFF,
 };
+pub use voellmy::Voellmy;
 
 /// Applies a friction impulse `dt_sigma` ≥ 0 against the discharge `q`, stopping it
 /// if the impulse is large enough. A NaN impulse propagates (it must reach the
@@ -33,6 +35,8 @@ pub enum FrictionLaw {
     Coulomb { mu: f64 },
     /// μ(I) = μ_s + (μ_2 − μ_s) I / (I_0 + I).
     MuI { mu_s: f64, mu_2: f64, i0: f64 },
+    /// Voellmy: τ = μ p + ρ g |u|²/ξ (turbulence coefficient ξ in m/s²; [`Voellmy`]).
+    Voellmy { mu: f64, xi: f64 },
 }
 
 /// A basal friction law μ(state).

@@ -1,0 +1,175 @@
+//! The Savage–Hutter model on a raster (two horizontal dimensions): one layer of
+//! thickness h with the velocity (u, v) ([`State2d`]), on a [`Raster2d`] in Cartesian
+//! or local coordinates, with Coulomb, μ(I) or Voellmy basal friction. The time step
+//! is the pipeline hyperbolic → friction ([`pipeline`]): the 2-D hydrostatic step
+//! (`numerics/hydrostatic_2d.rs`, the 1-D face kernel on every x- and y-face) and the
+//! vector friction step (`numerics/friction_2d.rs`, the disk rule).
+//!
+//! Diagnostics: mass ∫ h dx dy, kinetic energy ∫ ½ h (u² + v²) dx dy, the largest
+//! speed √(u² + v²), the signal speed max(|u|, |v|) + √(g_n h) per cell (with the
+//! raster's `cfl_length` = min(Δx, Δy), the CFL bound of `numerics::hydrostatic_2d`),
+//! and the front: the largest x of a cell thicker than the threshold.
+
+use crate::grid::Raster2d;
+use crate::model::granular::pipeline::{with_law, WithLaw};
+use crate::model::{Diagnostics, Model};
+use crate::numerics::friction_2d::FrictionStep2d;
+use crate::numerics::hydrostatic_2d::HydrostaticStep2d;
+use crate::numerics::workers::Workers;
+use crate::numerics::Stage;
+use crate::output::{OutputError, OutputSink, SnapshotView};
+use crate::physics::rheology::{BasalFriction, FrictionLaw, LocalFriction};
+use crate::physics::shallow::{celerity, velocity};
+use crate::physics::Material;
+use crate::pipeline::Pipeline;
+use crate::state::State2d;
+
+/// The 2-D granular model's run-time parameters.
+#[derive(Debug, Clone)]
+pub struct Granular2d {
+    /// Thickness from which a cell counts for the front (m).
+    pub front_threshold: f64,
+    /// Zeros (no erodible bed on a raster), one per cell, for `/grid/h_bed`.
+    pub h_bed: Vec<f64>,
+}
+
+impl Granular2d {
+    /// The model on `raster` with the front threshold `front_threshold` (m).
+    pub fn new(raster: &Raster2d, front_threshold: f64) -> Granular2d {
+        Granular2d {
+            front_threshold,
+            h_bed: vec![0.0; raster.nx() * raster.ny()],
+        }
+    }
+}
+
+/// The stages of a 2-D run for one friction law.
+struct Stages2d<'a> {
+    raster: &'a Raster2d,
+    workers: Workers,
+}
+
+impl WithLaw for Stages2d<'_> {
+    type Out = Vec<Box<dyn Stage<Raster2d, State2d>>>;
+
+    fn with<L: BasalFriction + LocalFriction + 'static>(self, law: L) -> Self::Out {
+        vec![
+            Box::new(HydrostaticStep2d::new(
+                law,
+                self.raster,
+                self.workers.clone(),
+            )),
+            Box::new(FrictionStep2d::new(law, self.workers)),
+        ]
+    }
+}
+
+/// The pipeline hyperbolic → friction of a 2-D run with friction law `law` on
+/// `threads` threads: 1 runs fully serially (no rayon); more give both stages one
+/// shared rayon pool of that many threads, owned by the pipeline. The results are the
+/// same bits for any `threads` (`numerics::workers`).
+pub fn pipeline(
+    law: &FrictionLaw,
+    material: &Material,
+    raster: &Raster2d,
+    threads: usize,
+) -> Result<Pipeline<Raster2d, State2d>, String> {
+    let workers = Workers::new(threads)?;
+    Ok(Pipeline::new(with_law(
+        law,
+        material,
+        Stages2d { raster, workers },
+    )))
+}
+
+impl Model for Granular2d {
+    type Grid = Raster2d;
+    type State = State2d;
+
+    fn kind(&self) -> &'static str {
+        "granular"
+    }
+
+    fn diagnose(&self, raster: &Raster2d, state: &State2d) -> Diagnostics {
+        let g_n = raster.g_n;
+        let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
+        let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
+        let mut front = f64::NEG_INFINITY;
+        let nx = raster.nx();
+        for (k, ((&h, &qx), &qy)) in state.h.iter().zip(&state.hu).zip(&state.hv).enumerate() {
+            mass += h;
+            q_sum += qx + qy;
+            h_max = h_max.max(h);
+            let (u, v) = (velocity(h, qx), velocity(h, qy));
+            let speed2 = u * u + v * v;
+            ke += h * speed2;
+            max_speed = max_speed.max(speed2);
+            signal = signal.max(u.abs().max(v.abs()) + celerity(g_n, h));
+            if h > self.front_threshold {
+                front = front.max(raster.x(k % nx));
+            }
+        }
+        let non_finite_at = if (mass + q_sum).is_finite() {
+            None
+        } else {
+            (0..state.h.len())
+                .find(|&k| {
+                    !(state.h[k].is_finite() && state.hu[k].is_finite() && state.hv[k].is_finite())
+                })
+                .or(Some(0))
+        };
+        let area = raster.cell_area();
+        Diagnostics {
+            mass: mass * area,
+            kinetic_energy: 0.5 * ke * area,
+            max_speed: max_speed.sqrt(),
+            signal_speed: signal,
+            front_x: if front.is_finite() { front } else { f64::NAN },
+            h_max,
+            non_finite_at,
+        }
+    }
+
+    fn bed_layer(&self) -> &[f64] {
+        &self.h_bed
+    }
+
+    /// The top of the flow b + h and the thickness h.
+    fn gauge_cell(&self, raster: &Raster2d, state: &State2d, i: usize) -> Option<(f64, f64)> {
+        use crate::grid::Grid;
+        let h = state.h[i];
+        Some((raster.bed()[i] + h, h))
+    }
+
+    fn snapshot(
+        &self,
+        raster: &Raster2d,
+        state: &State2d,
+        t: f64,
+        sink: &mut dyn OutputSink,
+    ) -> Result<(), OutputError> {
+        let u: Vec<f64> = state
+            .h
+            .iter()
+            .zip(&state.hu)
+            .map(|(&h, &q)| velocity(h, q))
+            .collect();
+        let v: Vec<f64> = state
+            .h
+            .iter()
+            .zip(&state.hv)
+            .map(|(&h, &q)| velocity(h, q))
+            .collect();
+        sink.snapshot(&SnapshotView {
+            t,
+            h: &state.h,
+            u: &u,
+            v: Some(&v),
+            shape: Some((raster.ny(), raster.nx())),
+            w: None,
+            p_nh: None,
+            layers: 1,
+            extra: &[],
+        })
+    }
+}

@@ -1,0 +1,138 @@
+//! Step 2 on a raster: the basal friction with the vector Coulomb rule,
+//!
+//!   q* = (hu, hv)* after step 1,   σ = μ g_n h (Coulomb), the law's τ/ρ otherwise,
+//!   q ← 0                               if Δt μ_s g_n h ≥ |q*|  (static: a disk),
+//!   q ← q* |q|/|q*|                     otherwise,
+//!
+//! with |q| the law's scalar friction update of the monolayer (`numerics::friction`:
+//! Coulomb semi-implicit, μ(I) and Voellmy backward Euler in the speed) applied to the
+//! magnitude |q*|: friction acts against the velocity and never turns it. The static
+//! threshold is a disk |τ| ≤ μ p in the (x, y) plane, not the square |τ_x|, |τ_y| ≤ μ p
+//! of a dimensionally split step: a mass on a bed sloping (a, a) with a < μ < √2 a
+//! must move (|∇z| = √2 a > μ), and does. Where one component is zero the scalar rule
+//! acts on the other (the same operations as the 1-D step, so a flow invariant in y
+//! reproduces the line to the bit).
+
+use super::workers::Workers;
+use super::{Stage, StageError};
+use crate::grid::raster::BAND_ROWS;
+use crate::grid::Raster2d;
+use crate::physics::rheology::BasalFriction;
+use crate::physics::shallow::H_DRY;
+use crate::state::State2d;
+
+/// The vector friction step of the 2-D monolayer.
+#[derive(Debug)]
+pub struct FrictionStep2d<L: BasalFriction> {
+    law: L,
+    workers: Workers,
+}
+
+impl<L: BasalFriction> FrictionStep2d<L> {
+    pub fn new(law: L, workers: Workers) -> Self {
+        FrictionStep2d { law, workers }
+    }
+}
+
+/// The discharge (qx, qy) after the friction step of a cell of thickness `h`.
+#[inline(always)]
+pub fn vector_friction<L: BasalFriction>(
+    law: &L,
+    qx: f64,
+    qy: f64,
+    h: f64,
+    dt: f64,
+    g_n: f64,
+) -> (f64, f64) {
+    if qx == 0.0 && qy == 0.0 {
+        return (qx, qy);
+    }
+    if h <= H_DRY {
+        return (0.0, 0.0);
+    }
+    if qy == 0.0 {
+        return (law.friction_update(qx, h, dt, g_n), qy);
+    }
+    if qx == 0.0 {
+        return (qx, law.friction_update(qy, h, dt, g_n));
+    }
+    let q = qx.hypot(qy);
+    let q_new = law.friction_update(q, h, dt, g_n);
+    let scale = q_new / q;
+    (qx * scale, qy * scale)
+}
+
+impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
+    fn name(&self) -> &'static str {
+        "friction"
+    }
+
+    fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
+        let (g_n, chunk) = (raster.g_n, BAND_ROWS * raster.nx());
+        let (law, h) = (self.law, &state.h);
+        self.workers
+            .bands2(chunk, &mut state.hu, &mut state.hv, |k, hu, hv| {
+                let h = &h[k * chunk..k * chunk + hu.len()];
+                for ((qx, qy), &h) in hu.iter_mut().zip(hv.iter_mut()).zip(h) {
+                    (*qx, *qy) = vector_friction(&law, *qx, *qy, h, dt, g_n);
+                }
+            });
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::rheology::{Coulomb, MuI, Voellmy};
+
+    /// The static threshold is a disk: a drive of (a, a) with a < μ < √2 a moves.
+    #[test]
+    fn static_threshold_is_a_disk() {
+        let law = Coulomb { mu: 0.5 };
+        let (h, dt, g) = (0.2, 0.01, 9.81);
+        let a = 0.4; // a < μ = 0.5 < √2 a = 0.566
+        let q = dt * g * h * a;
+        let (qx, qy) = vector_friction(&law, q, q, h, dt, g);
+        assert!(qx > 0.0 && qy > 0.0, "a diagonal drive above μ moves");
+        // The speed lost is Δt μ g h along the direction of q.
+        let lost = 2f64.sqrt() * q - qx.hypot(qy);
+        assert!((lost - dt * 0.5 * g * h).abs() < 1e-15);
+        assert!((qx - qy).abs() < 1e-18);
+        // Each component alone is held.
+        assert_eq!(vector_friction(&law, q, 0.0, h, dt, g), (0.0, 0.0));
+        assert_eq!(vector_friction(&law, 0.0, -q, h, dt, g), (0.0, 0.0));
+    }
+
+    #[test]
+    fn the_rule_is_the_scalar_one_along_the_velocity() {
+        let (h, dt, g) = (0.05, 1e-3, 9.0);
+        let mui = MuI {
+            mu_s: 0.4,
+            mu_2: 0.6,
+            i0: 0.3,
+            d_s: 1e-3,
+            phi: 0.6,
+        };
+        let voellmy = Voellmy { mu: 0.3, xi: 400.0 };
+        let angle = 0.7f64;
+        let q = 0.2;
+        let (qx, qy) = (q * angle.cos(), q * angle.sin());
+        for (x, y, scalar) in [
+            {
+                let (x, y) = vector_friction(&mui, qx, qy, h, dt, g);
+                (x, y, mui.friction_update(q, h, dt, g))
+            },
+            {
+                let (x, y) = vector_friction(&voellmy, qx, qy, h, dt, g);
+                (x, y, voellmy.friction_update(q, h, dt, g))
+            },
+        ] {
+            assert!((x.hypot(y) - scalar).abs() < 1e-15);
+            assert!((y.atan2(x) - angle).abs() < 1e-12);
+        }
+        // Dry cells lose their discharge; NaN propagates.
+        assert_eq!(vector_friction(&mui, qx, qy, 0.0, dt, g), (0.0, 0.0));
+        assert!(vector_friction(&mui, f64::NAN, qy, h, dt, g).0.is_nan());
+    }
+}

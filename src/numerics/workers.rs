@@ -1,0 +1,120 @@
+//! Threads inside one run: the bands (tiles of whole rows, [`crate::grid::raster`]) of
+//! a 2-D stage run on a rayon pool that the stages of one pipeline share and own.
+//!
+//! With one thread there is no pool and the bands run in order on the caller's thread
+//! (no rayon at all). With more, each band is one task. The partition into bands does
+//! not depend on the number of threads, each band writes only its own cells, and every
+//! reduction over bands (the smallest new thickness of the step) is combined in band
+//! order: the results are the same bits for 1, 2 or 4 threads. Each band owns its
+//! scratch (allocated once by the stage), so no task allocates.
+
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// The threads of one run's 2-D stages: `None` runs serially.
+#[derive(Debug, Clone, Default)]
+pub struct Workers {
+    pool: Option<Arc<rayon::ThreadPool>>,
+}
+
+impl Workers {
+    /// `threads` ≤ 1: serial, no pool. More: a pool of that many threads.
+    pub fn new(threads: usize) -> Result<Workers, String> {
+        if threads <= 1 {
+            return Ok(Workers::default());
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|k| format!("granflow-band-{k}"))
+            .build()
+            .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
+        Ok(Workers {
+            pool: Some(Arc::new(pool)),
+        })
+    }
+
+    /// Serial execution.
+    pub fn serial() -> Workers {
+        Workers::default()
+    }
+
+    /// Number of threads (1 when serial).
+    pub fn threads(&self) -> usize {
+        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
+    }
+
+    /// Calls `f(k, a_k, s_k)` for every band k, with `a_k` the k-th chunk of `chunk`
+    /// values of `a` and `s_k` the band's scratch.
+    pub fn bands1<S, F>(&self, chunk: usize, a: &mut [f64], scratch: &mut [S], f: F)
+    where
+        S: Send,
+        F: Fn(usize, &mut [f64], &mut S) + Sync + Send,
+    {
+        match &self.pool {
+            None => {
+                for (k, (a, s)) in a.chunks_mut(chunk).zip(scratch.iter_mut()).enumerate() {
+                    f(k, a, s);
+                }
+            }
+            Some(pool) => pool.install(|| {
+                a.par_chunks_mut(chunk)
+                    .zip(scratch.par_iter_mut())
+                    .enumerate()
+                    .for_each(|(k, (a, s))| f(k, a, s));
+            }),
+        }
+    }
+
+    /// Calls `f(k, a_k, b_k)` for every band k (chunks of `chunk` values).
+    pub fn bands2<F>(&self, chunk: usize, a: &mut [f64], b: &mut [f64], f: F)
+    where
+        F: Fn(usize, &mut [f64], &mut [f64]) + Sync + Send,
+    {
+        match &self.pool {
+            None => {
+                for (k, (a, b)) in a.chunks_mut(chunk).zip(b.chunks_mut(chunk)).enumerate() {
+                    f(k, a, b);
+                }
+            }
+            Some(pool) => pool.install(|| {
+                a.par_chunks_mut(chunk)
+                    .zip(b.par_chunks_mut(chunk))
+                    .enumerate()
+                    .for_each(|(k, (a, b))| f(k, a, b));
+            }),
+        }
+    }
+
+    /// Calls `f(k, (a_k, b_k, c_k), s_k)` for every band k (chunks of `chunk` values,
+    /// the band's scratch `s_k`).
+    pub fn bands3<S, F>(
+        &self,
+        chunk: usize,
+        (a, b, c): (&mut [f64], &mut [f64], &mut [f64]),
+        scratch: &mut [S],
+        f: F,
+    ) where
+        S: Send,
+        F: Fn(usize, (&mut [f64], &mut [f64], &mut [f64]), &mut S) + Sync + Send,
+    {
+        match &self.pool {
+            None => {
+                let chunks = a
+                    .chunks_mut(chunk)
+                    .zip(b.chunks_mut(chunk))
+                    .zip(c.chunks_mut(chunk));
+                for (k, (((a, b), c), s)) in chunks.zip(scratch.iter_mut()).enumerate() {
+                    f(k, (a, b, c), s);
+                }
+            }
+            Some(pool) => pool.install(|| {
+                a.par_chunks_mut(chunk)
+                    .zip(b.par_chunks_mut(chunk))
+                    .zip(c.par_chunks_mut(chunk))
+                    .zip(scratch.par_iter_mut())
+                    .enumerate()
+                    .for_each(|(k, (((a, b), c), s))| f(k, (a, b, c), s));
+            }),
+        }
+    }
+}

@@ -1,0 +1,76 @@
+//! The state of the 2-D Savage–Hutter model on a raster: cell averages of the
+//! thickness h and of the two discharges hu, hv (u along x, v along y), over the
+//! physical cells only, row-major (cell = j·nx + i). The boundary rules (a wall
+//! mirrors h and reverses the normal discharge, an outflow copies the edge cell) are
+//! applied by the stages at the edge faces, so the state needs no ghost ring.
+
+/// h, hu, hv per cell (nx·ny each, row-major).
+#[derive(Debug, PartialEq)]
+pub struct State2d {
+    pub h: Vec<f64>,
+    pub hu: Vec<f64>,
+    pub hv: Vec<f64>,
+}
+
+impl State2d {
+    /// A state of `cells` dry cells.
+    pub fn zeros(cells: usize) -> State2d {
+        State2d {
+            h: vec![0.0; cells],
+            hu: vec![0.0; cells],
+            hv: vec![0.0; cells],
+        }
+    }
+
+    /// The state with thickness `h` and velocities `u`, `v` per cell (hu = h u,
+    /// hv = h v).
+    pub fn from_velocities(h: Vec<f64>, u: &[f64], v: &[f64]) -> State2d {
+        assert!(h.len() == u.len() && h.len() == v.len());
+        let hu = h.iter().zip(u).map(|(h, u)| h * u).collect();
+        let hv = h.iter().zip(v).map(|(h, v)| h * v).collect();
+        State2d { h, hu, hv }
+    }
+
+    /// Number of cells.
+    pub fn cells(&self) -> usize {
+        self.h.len()
+    }
+}
+
+// `Clone` by hand: the run loop copies the state into its backup every step, and the
+// derived `clone_from` would allocate new buffers.
+impl Clone for State2d {
+    fn clone(&self) -> Self {
+        State2d {
+            h: self.h.clone(),
+            hu: self.hu.clone(),
+            hv: self.hv.clone(),
+        }
+    }
+
+    fn clone_from(&mut self, source: &Self) {
+        self.h.clone_from(&source.h);
+        self.hu.clone_from(&source.hu);
+        self.hv.clone_from(&source.hv);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clone_from_copies_into_the_existing_buffers() {
+        let mut s = State2d::from_velocities(vec![1.0, 2.0], &[0.5, 0.0], &[0.0, -1.0]);
+        assert_eq!(s.hv, vec![0.0, -2.0]);
+        let mut backup = s.clone();
+        let before = (backup.h.as_ptr(), backup.hu.as_ptr(), backup.hv.as_ptr());
+        s.h[1] = 7.0;
+        backup.clone_from(&s);
+        assert_eq!(backup, s);
+        assert_eq!(
+            (backup.h.as_ptr(), backup.hu.as_ptr(), backup.hv.as_ptr()),
+            before
+        );
+    }
+}
