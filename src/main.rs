@@ -115,9 +115,8 @@ fn run(args: &RunArgs) -> ExitCode {
     let threads = args
         .threads
         .map_or_else(granflow::cli::default_threads, usize::from);
-    let result = runner::run_to_files_threads(&scn, &output, limit, threads, &mut |p| {
-        progress.update(&p)
-    });
+    let result =
+        runner::run_to_files_threads(&scn, &output, limit, threads, &mut |p| progress.update(&p));
     progress.finish();
     if let Ok(report) = &result {
         for w in report.warnings() {

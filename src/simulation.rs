@@ -313,11 +313,10 @@ impl<M: Model> Simulation<M> {
         if let Some(tracker) = self.tracker.as_mut() {
             tracker.observe(&self.grid, &self.state, self.t);
         }
-        let mut gauges = (!self.config.gauges.is_empty())
-            .then(|| {
-                let c = &self.config;
-                Gauges::new(&self.grid, &c.gauges, &c.gauges_y, c.gauge_every)
-            });
+        let mut gauges = (!self.config.gauges.is_empty()).then(|| {
+            let c = &self.config;
+            Gauges::new(&self.grid, &c.gauges, &c.gauges_y, c.gauge_every)
+        });
         if let Some(g) = gauges.as_mut() {
             g.begin(&self.model, &self.grid, &self.state, sink)?;
         }

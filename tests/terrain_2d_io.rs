@@ -85,11 +85,23 @@ fn raster_keys_are_refused_with_their_key_and_line() {
     // cells = [nx, ny]: wrong length, zero, a non-integer.
     let m = fails_at(&with("cells = [24, 12]", "cells = [24]"), d, "domain.cells");
     assert!(m.contains("[nx, ny]"), "{m}");
-    let m = fails_at(&with("cells = [24, 12]", "cells = [24, 12, 3]"), d, "domain.cells");
+    let m = fails_at(
+        &with("cells = [24, 12]", "cells = [24, 12, 3]"),
+        d,
+        "domain.cells",
+    );
     assert!(m.contains("got 3 values"), "{m}");
-    let m = fails_at(&with("cells = [24, 12]", "cells = [24, 0]"), d, "domain.cells");
+    let m = fails_at(
+        &with("cells = [24, 12]", "cells = [24, 0]"),
+        d,
+        "domain.cells",
+    );
     assert!(m.contains("ny must be at least 1"), "{m}");
-    fails_at(&with("cells = [24, 12]", "cells = [24, 1.5]"), d, "domain.cells");
+    fails_at(
+        &with("cells = [24, 12]", "cells = [24, 1.5]"),
+        d,
+        "domain.cells",
+    );
     let m = fails_at(&with("cells = [24, 12]", "cells = 24"), d, "domain.cells");
     assert!(m.contains("[nx, ny]"), "{m}");
     // y_min ≥ y_max, a missing y_max.
@@ -97,7 +109,11 @@ fn raster_keys_are_refused_with_their_key_and_line() {
     assert!(m.contains("greater than domain.y_min"), "{m}");
     fails_at(&with("y_max = 0.5\n", ""), d, "domain.y_max");
     // An unknown side, a side given twice, a side of a raster on a line.
-    let m = fails_at(&format!("{RADIAL}\n[boundary]\nup = \"wall\"\n"), d, "boundary.up");
+    let m = fails_at(
+        &format!("{RADIAL}\n[boundary]\nup = \"wall\"\n"),
+        d,
+        "boundary.up",
+    );
     assert!(m.contains("unknown key 'up'"), "{m}");
     fails_at(
         &format!("{RADIAL}\n[boundary]\nleft = \"wall\"\nwest = \"outflow\"\n"),
@@ -110,16 +126,32 @@ fn raster_keys_are_refused_with_their_key_and_line() {
         "boundary.south",
     );
     let line = "[domain]\nx_min = 0.0\nx_max = 1.0\ncells = 10\n[rheology]\nlaw = \"coulomb\"\nmu = 0.5\n[initial]\nh = 0.1\n[time]\nt_end = 1.0\n";
-    fails_at(&format!("{line}[boundary]\nnorth = \"wall\"\n"), d, "boundary.north");
+    fails_at(
+        &format!("{line}[boundary]\nnorth = \"wall\"\n"),
+        d,
+        "boundary.north",
+    );
     // y and initial.v need a raster domain.
-    let m = fails_at(&line.replace("h = 0.1", "h = \"0.1 + 0*y\""), d, "initial.h");
+    let m = fails_at(
+        &line.replace("h = 0.1", "h = \"0.1 + 0*y\""),
+        d,
+        "initial.h",
+    );
     assert!(m.contains("depends on y"), "{m}");
     fails_at(&line.replace("h = 0.1", "h = 0.1\nv = 1.0"), d, "initial.v");
     // The 1-D models' keys on a raster.
-    fails_at(&format!("{RADIAL}\n[model]\nlayers = 2\n"), d, "model.layers");
+    fails_at(
+        &format!("{RADIAL}\n[model]\nlayers = 2\n"),
+        d,
+        "model.layers",
+    );
     fails_at(&with("h = \"", "w = 0.1\nh = \""), d, "initial.w");
     // Gauges are points inside the domain.
-    fails_at(&with("every = 0.1", "every = 0.1\ngauges = [0.5]"), d, "output.gauges");
+    fails_at(
+        &with("every = 0.1", "every = 0.1\ngauges = [0.5]"),
+        d,
+        "output.gauges",
+    );
     fails_at(
         &with("every = 0.1", "every = 0.1\ngauges = [[0.5, 0.9]]"),
         d,
@@ -174,7 +206,12 @@ fn a_raster_bed_gives_its_grid_and_its_values_north_up() {
     let d = dir.path();
     // 4 columns, 3 rows: the bed is 10·row_from_top + col.
     write_asc(&d.join("dem.asc"), 4, 3, |c, r| (10 * r + c) as f64);
-    write_asc(&d.join("h.asc"), 4, 3, |c, _| if c == 0 { 0.2 } else { 0.0 });
+    write_asc(
+        &d.join("h.asc"),
+        4,
+        3,
+        |c, _| if c == 0 { 0.2 } else { 0.0 },
+    );
     let scn = load(RASTER_BED, d).unwrap();
     let plane = scn.domain.plane.as_ref().unwrap();
     assert_eq!((scn.domain.cells, plane.ny), (4, 3));
@@ -403,7 +440,11 @@ fn voellmy_keys_are_checked_by_name() {
     );
     let m = fails_at(&voellmy.replace("xi = 4000.0\n", ""), d, "rheology.xi");
     assert!(m.contains("missing"), "{m}");
-    fails_at(&voellmy.replace("xi = 4000.0", "xi = 0.0"), d, "rheology.xi");
+    fails_at(
+        &voellmy.replace("xi = 4000.0", "xi = 0.0"),
+        d,
+        "rheology.xi",
+    );
     fails_at(&voellmy.replace("mu = 0.155\n", ""), d, "rheology.mu");
     let m = fails_at(
         &RADIAL.replace("mu_deg = 27.0", "mu_deg = 27.0\nxi = 4000.0"),

@@ -17,8 +17,8 @@
 //! of least s and the runout point the reached cell of largest s. In world
 //! coordinates (X, Y, Z) — (x, y, b) in Cartesian coordinates, (x cos θ + b sin θ, y,
 //! −x sin θ + b cos θ) over a reference plane of slope θ — the runout length L is the
-//! horizontal distance between the two points and the travel angle
-//! α = atan((Z_top − Z_runout)/L) (Heim 1932's Fahrböschung, the angle of the line
+//! horizontal distance from the top to the runout point along the horizontal direction
+//! of d, and the travel angle α = atan((Z_top − Z_runout)/L) (Heim 1932's Fahrböschung, the angle of the line
 //! from the top of the release to the farthest point reached).
 
 use crate::grid::raster::Raster2d;
@@ -100,15 +100,23 @@ impl RasterMaps {
                 -p.x * theta.sin() + b * theta.cos(),
             )
         };
+        // The horizontal direction of d, along which the runout is measured.
+        let (hx, hy) = (dx * theta.cos(), dy);
+        let norm = hx.hypot(hy);
         let (length, angle, front_xy, top_xy) = match (top, front) {
             (Some(t), Some(f)) => {
                 let (a, b) = (world(t), world(f));
-                let l = (b.0 - a.0).hypot(b.1 - a.1);
+                let l = ((b.0 - a.0) * hx + (b.1 - a.1) * hy) / norm;
                 let angle = (a.2 - b.2).atan2(l).to_degrees();
                 let (pt, pf) = (grid.centre(t), grid.centre(f));
                 (l, angle, (pf.x, pf.y), (pt.x, pt.y))
             }
-            _ => (f64::NAN, f64::NAN, (f64::NAN, f64::NAN), (f64::NAN, f64::NAN)),
+            _ => (
+                f64::NAN,
+                f64::NAN,
+                (f64::NAN, f64::NAN),
+                (f64::NAN, f64::NAN),
+            ),
         };
         vec![
             ("area_reached", self.reached as f64 * grid.cell_area()),

@@ -103,7 +103,7 @@ struct Shape {
 const MAX_PENDING_STEPS: usize = 8192;
 
 /// Names of `/snapshots` datasets that a per-cell field may not take.
-const FIXED_SNAPSHOT_NAMES: [&str; 5] = ["t", "h", "u", "w", "p_nh"];
+const FIXED_SNAPSHOT_NAMES: [&str; 8] = ["t", "h", "u", "v", "w", "p_nh", "x", "y"];
 
 impl Shape {
     /// Checks the lengths of a snapshot's arrays.
@@ -116,6 +116,18 @@ impl Shape {
         expect("layer count", Some(snap.layers), nl)?;
         expect("h", Some(snap.h.len()), nx)?;
         expect("u", Some(snap.u.len()), nl * nx)?;
+        match (self.raster, snap.v) {
+            (Some(_), None) => return Err("a raster snapshot without v".into()),
+            (None, Some(_)) => return Err("v in a snapshot that is not on a raster".into()),
+            _ => expect("v", snap.v.map(<[f64]>::len), nx)?,
+        }
+        if let (Some((rx, ry)), Some((ny, nx))) = (self.raster, snap.shape) {
+            if (rx, ry) != (nx, ny) {
+                return Err(format!(
+                    "snapshot of shape (ny, nx) = ({ny}, {nx}) on a {rx} × {ry} raster"
+                ));
+            }
+        }
         expect("w", snap.w.map(<[f64]>::len), nl * nx)?;
         expect("p_nh", snap.p_nh.map(<[f64]>::len), (nl + 1) * (nx + 1))?;
         for (k, field) in snap.extra.iter().enumerate() {
@@ -241,7 +253,7 @@ impl Hdf5Sink {
         let Some((nx, ny)) = shape.raster else {
             return Ok(());
         };
-        let mut fields = vec!["h", "u"];
+        let mut fields = vec!["h", "u", "v"];
         fields.extend(shape.extra.iter().flatten().copied());
         let desc = super::xdmf::XdmfRun {
             h5_name: &self

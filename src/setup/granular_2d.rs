@@ -58,9 +58,6 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let config = run_config(scn);
     let cells = grid.nx() * grid.ny();
     let mut sim = Simulation::new(grid, model, state, stages, rules, config, info);
-    sim.set_tracker(Box::new(RasterMaps::new(
-        cells,
-        scn.output.front_threshold,
-    )));
+    sim.set_tracker(Box::new(RasterMaps::new(cells, scn.output.front_threshold)));
     sim
 }

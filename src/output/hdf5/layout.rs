@@ -175,6 +175,7 @@ fn write_raster_layout(
     }
     frames(&s, "h", &[ny, nx], "m", &[Dim::Y, Dim::X])?;
     frames(&s, "u", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
+    frames(&s, "v", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
     step_groups(file, info, &RASTER_STEP_DATASETS)
 }
 
@@ -344,6 +345,7 @@ pub(super) fn append_snapshot(file: &H5File, snap: &SnapshotView) -> rust_hdf5::
         ("snapshots/t", Some(std::slice::from_ref(&snap.t))),
         ("snapshots/h", Some(snap.h)),
         ("snapshots/u", Some(snap.u)),
+        ("snapshots/v", snap.v),
         ("snapshots/w", snap.w),
         ("snapshots/p_nh", snap.p_nh),
     ];

@@ -90,7 +90,10 @@ pub(super) fn rheology(
         .collect();
     let this = name(law);
     if law_overridden && !foreign.is_empty() {
-        let keys: Vec<String> = foreign.iter().map(|(n, _)| format!("rheology.{n}")).collect();
+        let keys: Vec<String> = foreign
+            .iter()
+            .map(|(n, _)| format!("rheology.{n}"))
+            .collect();
         let others: Vec<String> = foreign
             .iter()
             .flat_map(|(_, laws)| laws.iter().map(|&l| format!("\"{}\"", name(l))))

@@ -242,13 +242,7 @@ fn validate(
     nonhydrostatic_solver_fits(&domain, &model)?;
     let raw_initial = section("initial", raw.initial)?;
     let raw_w = raw_initial.w.is_some();
-    plane::raster_keys(
-        &domain,
-        &model,
-        &friction,
-        &raw_initial,
-        raw.submarine.is_some(),
-    )?;
+    plane::raster_keys(&domain, &model, &raw_initial, raw.submarine.is_some())?;
     let initial = initial(raw_initial, base_dir)?;
     plane::profiles_fit(&mut domain, &bed, &initial, from_bed)?;
     // Sampled once here; the checks below look at these values and setup uses them.

@@ -8,8 +8,8 @@
 use super::super::error::ScenarioError;
 use super::super::raw::{RawBoundary, RawDomain, RawInitial};
 use super::super::{
-    raster_centres, Boundaries, BoundaryKind, Domain, FrictionLaw, Initial, ModelKind, ModelSpec,
-    Plane, Pressure, Profile, Sampled,
+    raster_centres, Boundaries, BoundaryKind, Domain, Initial, ModelKind, ModelSpec, Plane,
+    Pressure, Profile, Sampled,
 };
 use super::check::*;
 use super::{frame, line_boundary, line_gauges, MAX_CELLS, MIN_RELATIVE_DX};
