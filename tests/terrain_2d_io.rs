@@ -305,7 +305,7 @@ assert abs(h[0].sum() * dx * dy - mass[0]) <= 1e-12 * mass[0]
 area = f["diagnostics/area_reached"][:]
 assert area.shape == mass.shape and (np.diff(area) >= 0).all()
 s = f["summary"].attrs
-assert s["area_reached"] == reached.sum() * dx * dy
+assert abs(s["area_reached"] - reached.sum() * dx * dy) <= 1e-12 * s["area_reached"]
 assert np.isfinite(s["runout_length"]) and s["runout_length"] > 0.2
 assert abs(s["travel_angle_deg"]) < 1e-9, s["travel_angle_deg"]  # a flat bed
 print("ok")

@@ -856,9 +856,17 @@ impl RasterProfile {
                 b.y_max
             ));
         }
-        // Fractional column and row of the point, counted from the first centre.
-        let fc = ((x - r.x_left) / r.cell_size - 0.5).clamp(0.0, (r.nx - 1) as f64);
-        let fr = ((r.y_top - y) / r.cell_size - 0.5).clamp(0.0, (r.ny - 1) as f64);
+        // Fractional column and row of the point, counted from the first centre; a
+        // centre (up to round-off of its coordinates) reads its own cell exactly.
+        let snap = |f: f64| {
+            if (f - f.round()).abs() < 1e-9 {
+                f.round()
+            } else {
+                f
+            }
+        };
+        let fc = snap((x - r.x_left) / r.cell_size - 0.5).clamp(0.0, (r.nx - 1) as f64);
+        let fr = snap((r.y_top - y) / r.cell_size - 0.5).clamp(0.0, (r.ny - 1) as f64);
         let (c0, r0) = (fc.floor() as usize, fr.floor() as usize);
         let (c1, r1) = ((c0 + 1).min(r.nx - 1), (r0 + 1).min(r.ny - 1));
         let (wc, wr) = (fc - c0 as f64, fr - r0 as f64);
