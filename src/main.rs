@@ -95,6 +95,7 @@ fn run(args: &RunArgs) -> ExitCode {
         &args.scenario.scenario,
         &output,
         !scn.output.gauges.is_empty(),
+        scn.domain.plane.is_some(),
         args.force,
     ) {
         print_err(&format!("error: {e}\n"));

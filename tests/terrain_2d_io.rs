@@ -456,3 +456,35 @@ fn voellmy_keys_are_checked_by_name() {
     let line = "[domain]\nx_min = 0.0\nx_max = 1.0\ncells = 10\n[rheology]\nlaw = \"voellmy\"\nmu = 0.2\nxi = 500\n[initial]\nh = 0.1\n[time]\nt_end = 1.0\n";
     assert!(load(line, d).is_ok());
 }
+
+#[test]
+fn a_file_in_the_way_of_the_xdmf_file_is_not_replaced_without_force() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("mine.toml");
+    fs::write(&file, RADIAL).unwrap();
+    let h5 = dir.path().join("mine.h5");
+    let xmf = dir.path().join("mine.xmf");
+    fs::write(&xmf, "my own notes\n").unwrap();
+    let out = granflow()
+        .args(["run", "--quiet", "--threads", "1"])
+        .arg(&file)
+        .arg("--output")
+        .arg(&h5)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("XDMF"));
+    assert_eq!(fs::read_to_string(&xmf).unwrap(), "my own notes\n");
+    // Its own earlier XDMF file it replaces.
+    fs::remove_file(&xmf).unwrap();
+    for _ in 0..2 {
+        let out = granflow()
+            .args(["run", "--quiet", "--threads", "1"])
+            .arg(&file)
+            .arg("--output")
+            .arg(&h5)
+            .output()
+            .unwrap();
+        assert_success(&out);
+    }
+}

@@ -15,6 +15,10 @@ use std::path::{Path, PathBuf};
 
 use super::OutputError;
 
+/// How every XDMF file granflow writes begins (`overwrite` recognises its own files
+/// by it).
+pub const XDMF_HEAD: &str = "<?xml version=\"1.0\" ?>\n<!-- written by granflow -->\n";
+
 /// The datasets of `/maps` (written by raster runs at their end).
 pub const MAP_NAMES: [&str; 4] = ["h_max", "speed_max", "arrival_time", "deposit"];
 
@@ -68,7 +72,7 @@ pub fn render(run: &XdmfRun) -> String {
     let h5 = escape(run.h5_name);
     let mut out = String::new();
     let w = &mut out;
-    let _ = writeln!(w, "<?xml version=\"1.0\" ?>");
+    w.push_str(XDMF_HEAD);
     let _ = writeln!(w, "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>");
     let _ = writeln!(w, "<Xdmf Version=\"2.0\">");
     let _ = writeln!(w, " <Domain>");
