@@ -28,5 +28,6 @@ mod scenarios;
 mod submarine;
 mod submarine_paper;
 mod sweep;
+mod terrain_2d;
 mod terrain_2d_io;
 mod well_balanced;
