@@ -516,7 +516,6 @@ mod tests {
         let model = Granular {
             h_bed: vec![0.0; 10],
             front_threshold: 1e-3,
-            raster: None,
             static_threshold: 1e-3,
             rest_speed: 0.0,
         };
