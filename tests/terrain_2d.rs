@@ -41,6 +41,7 @@ fn rand01(k: u64) -> f64 {
     (z >> 11) as f64 / (1u64 << 53) as f64
 }
 
+#[allow(clippy::too_many_arguments)]
 fn raster(
     nx: usize,
     ny: usize,
@@ -600,7 +601,10 @@ fn rotated_releases_agree_within_a_tolerance_that_shrinks_with_the_cell_size() {
             .collect();
         // 90° is the transpose of 0° (up to cos 90° ≈ 6e-17 in the bed).
         for m in 0..3 {
-            assert!((results[0][m] - results[3][m]).abs() < 1e-6 * results[0][m], "{results:?}");
+            assert!(
+                (results[0][m] - results[3][m]).abs() < 1e-6 * results[0][m],
+                "{results:?}"
+            );
         }
         let spread = |m: usize| {
             let r0 = results[0][m];
