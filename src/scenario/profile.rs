@@ -990,8 +990,12 @@ mod tests {
     fn compile_errors() {
         assert!(Expression::compile("x +", true).is_err());
         assert!(Expression::compile("", true).is_err());
-        let e = Expression::compile("y * 2", true).unwrap_err();
-        assert!(e.contains("unknown variable 'y'"), "{e}");
+        let e = Expression::compile("z * 2", true).unwrap_err();
+        assert!(e.contains("unknown variable 'z'"), "{e}");
+        // y is a variable (of raster domains), which the profile records.
+        let y = Expression::compile("y * 2", true).unwrap();
+        assert!(y.uses_y && !Expression::compile("x * 2", true).unwrap().uses_y);
+        assert_eq!(y.eval(0.0, 1.5, 0.0), Ok(3.0));
         let e = Expression::compile("b + 1", false).unwrap_err();
         assert!(e.contains("bed elevation b"), "{e}");
         let e = Expression::compile("math::sin(x)", true).unwrap_err();
