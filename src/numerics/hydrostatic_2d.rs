@@ -81,6 +81,10 @@ impl FaceFlux {
 struct BandScratch {
     below: Vec<FaceFlux>,
     above: Vec<FaceFlux>,
+    /// The sides that the y-faces see in the rows under and over them (each row's
+    /// computed once per sweep).
+    lower: Vec<(Side, f64)>,
+    upper: Vec<(Side, f64)>,
     worst: (f64, usize),
 }
 
@@ -104,6 +108,8 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let band = BandScratch {
             below: vec![FaceFlux::default(); nx],
             above: vec![FaceFlux::default(); nx],
+            lower: vec![(Side::monolayer(0.0, 0.0, 0.0, 0.0), 0.0); nx],
+            upper: vec![(Side::monolayer(0.0, 0.0, 0.0, 0.0), 0.0); nx],
             worst: (f64::INFINITY, 0),
         };
         HydrostaticStep2d {
@@ -124,7 +130,10 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let faces: usize = self
             .scratch
             .iter()
-            .map(|s| (s.below.len() + s.above.len()) * std::mem::size_of::<FaceFlux>())
+            .map(|s| {
+                (s.below.len() + s.above.len()) * std::mem::size_of::<FaceFlux>()
+                    + (s.lower.len() + s.upper.len()) * std::mem::size_of::<(Side, f64)>()
+            })
             .sum();
         (4.0 * 8.0 * cells + faces as f64) / cells
     }
@@ -202,32 +211,28 @@ impl<L: BasalFriction> Ctx<'_, L> {
         donor.map_or(1.0, |c| theta[c])
     }
 
-    /// The y-face between ghost-inclusive rows `r` and `r + 1` at column i.
-    #[inline(always)]
-    fn y_face(&self, i: usize, r: usize) -> FaceFlux {
-        let (lo, t_lo) = self.y_side(i, r);
-        let (hi, t_hi) = self.y_side(i, r + 1);
-        let f = face_flux(
-            &self.law,
-            lo,
-            hi,
-            t_lo,
-            t_hi,
-            self.raster.g_n,
-            self.raster.dy(),
-            self.dt,
-        );
-        if self.theta.is_none() {
-            return f;
+    /// The sides of ghost-inclusive row `r` as the y-faces see them.
+    fn y_sides(&self, r: usize, row: &mut [(Side, f64)]) {
+        for (i, side) in row.iter_mut().enumerate() {
+            *side = self.y_side(i, r);
         }
-        let cell = |r: usize| (r >= 1 && r <= self.ny).then(|| (r - 1) * self.nx + i);
-        f.drained(self.donor_theta(f.h, cell(r), cell(r + 1)))
     }
 
-    /// Computes the y-faces between rows `r` and `r + 1` (ghost-inclusive) into `row`.
-    fn y_faces(&self, r: usize, row: &mut [FaceFlux]) {
-        for (i, f) in row.iter_mut().enumerate() {
-            *f = self.y_face(i, r);
+    /// The y-faces between ghost-inclusive rows `r` and `r + 1` from their sides.
+    fn y_faces(
+        &self,
+        r: usize,
+        lower: &[(Side, f64)],
+        upper: &[(Side, f64)],
+        row: &mut [FaceFlux],
+    ) {
+        let (g_n, dy) = (self.raster.g_n, self.raster.dy());
+        let cell = |r: usize, i: usize| (r >= 1 && r <= self.ny).then(|| (r - 1) * self.nx + i);
+        for (i, ((f, lo), hi)) in row.iter_mut().zip(lower).zip(upper).enumerate() {
+            *f = face_flux(&self.law, lo.0, hi.0, lo.1, hi.1, g_n, dy, self.dt);
+            if self.theta.is_some() {
+                *f = f.drained(self.donor_theta(f.h, cell(r, i), cell(r + 1, i)));
+            }
         }
     }
 
@@ -242,9 +247,13 @@ impl<L: BasalFriction> Ctx<'_, L> {
     ) {
         let (nx, g_n, dx) = (self.nx, self.raster.g_n, self.raster.dx());
         let rows = self.raster.band_rows(k);
-        self.y_faces(rows.start, &mut s.below);
+        self.y_sides(rows.start, &mut s.lower);
+        self.y_sides(rows.start + 1, &mut s.upper);
+        self.y_faces(rows.start, &s.lower, &s.upper, &mut s.below);
         for j in rows {
-            self.y_faces(j + 1, &mut s.above);
+            std::mem::swap(&mut s.lower, &mut s.upper);
+            self.y_sides(j + 2, &mut s.upper);
+            self.y_faces(j + 1, &s.lower, &s.upper, &mut s.above);
             let x_cell = |c: usize| (c >= 1 && c <= nx).then(|| j * nx + c - 1);
             let x_face = |left: (Side, f64), right: (Side, f64), c: usize| {
                 let f = face_flux(
