@@ -44,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         slope_deg: 30.0,
         scenario_toml: String::new(),
         front_threshold: 1e-3,
+        raster: None,
     };
     let mut sink = Hdf5Sink::create(&path)?;
     sink.begin(

@@ -79,6 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         slope_deg: 30.0,
         scenario_toml: "# synthetic run written by examples/synthetic_output.rs\n".into(),
         front_threshold: 1e-3,
+        raster: None,
     };
 
     let mut sink = create_run_sinks(&args.path)?;

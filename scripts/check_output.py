@@ -3,6 +3,12 @@
 
     python scripts/check_output.py FILE.h5 [--expect-layers N] [--unfinished]
 
+A raster (2-D) run (root attribute grid = "raster") is checked against its own
+layout: (ny, nx) grid arrays, (nt, ny, nx) snapshots, the volume in /diagnostics/mass
+against sum(h) dx dy of the snapshots, the /maps (h_max >= deposit, arrival_time NaN
+exactly where h_max never exceeded the front threshold) and the XDMF file beside it
+(it parses, and every dataset it names exists with the dimensions it states).
+
 Prints one line starting with "OK" and exits 0 when the file conforms; otherwise
 prints every problem found, one per line on stderr, and exits 1.
 --unfinished accepts a file whose run has not reached finish() yet (no /summary
@@ -10,7 +16,9 @@ attributes), e.g. one read while the run is going or after it was killed.
 """
 
 import argparse
+import os
 import sys
+import xml.etree.ElementTree as ET
 
 import h5py
 import numpy as np
@@ -288,8 +296,143 @@ class Checker:
                 self.fail(f"/summary stage time {name!r} should be named time_<stage>_s")
         return status
 
+    def run_raster(self):
+        """The checks of a raster run; returns the OK line."""
+        f = self.f
+        for group in ("grid", "snapshots", "front", "diagnostics", "summary"):
+            if group not in f:
+                self.fail(f"group /{group} is missing")
+        if self.problems:
+            raise Problems
+        nx, ny = int(f.attrs.get("nx", -1)), int(f.attrs.get("ny", -1))
+        nt = f["snapshots/t"].shape[0]
+        expected = {
+            "grid/x": (nx,), "grid/y": (ny,), "grid/b": (ny, nx), "grid/h_bed": (ny, nx),
+            "snapshots/x": (nx,), "snapshots/y": (ny,), "snapshots/t": (nt,),
+            "snapshots/h": (nt, ny, nx), "snapshots/u": (nt, ny, nx),
+            "snapshots/v": (nt, ny, nx),
+        }
+        units = {"grid/x": "m", "grid/y": "m", "grid/b": "m", "grid/h_bed": "m",
+                 "snapshots/h": "m", "snapshots/u": "m/s", "snapshots/v": "m/s",
+                 "diagnostics/mass": "m^3", "diagnostics/kinetic_energy": "m^5/s^2"}
+        for name, shape in expected.items():
+            if name not in f:
+                self.fail(f"dataset /{name} is missing")
+            elif f[name].shape != shape:
+                self.fail(f"/{name} has shape {f[name].shape}, expected {shape}")
+        for name, unit in units.items():
+            got = f[name].attrs.get("units") if name in f else None
+            if isinstance(got, bytes):
+                got = got.decode()
+            if name in f and got != unit:
+                self.fail(f"/{name} units attribute is {got!r}, expected {unit!r}")
+        if self.problems:
+            raise Problems
+        x, y = f["grid/x"][:], f["grid/y"][:]
+        for name, a in (("x", x), ("y", y)):
+            if len(a) > 1 and not np.all(np.diff(a) > 0):
+                self.fail(f"/grid/{name} is not strictly increasing")
+        h = f["snapshots/h"][:]
+        for name in ("h", "u", "v"):
+            a = f[f"snapshots/{name}"][:]
+            if not np.isfinite(a).all():
+                self.fail(f"/snapshots/{name} has non-finite values")
+        if (h < 0).any():
+            self.fail(f"/snapshots/h has negative values (min {np.nanmin(h):.3g})")
+        # The volume: sum(h) dx dy of each snapshot against /diagnostics/mass.
+        dx = float(f.attrs["dx"]) if nx > 1 else np.nan
+        dy = float(f.attrs["dy"]) if ny > 1 else np.nan
+        td, mass = f["diagnostics/t"][:], f["diagnostics/mass"][:]
+        checked = 0
+        if np.isfinite(dx) and np.isfinite(dy):
+            for k, t in enumerate(f["snapshots/t"][:]):
+                hits = np.flatnonzero(np.abs(td - t) <= 1e-12 * max(1.0, abs(t)))
+                if hits.size == 0:
+                    continue
+                want, got = h[k].sum() * dx * dy, mass[hits[-1]]
+                checked += 1
+                if abs(got - want) > 1e-9 * max(abs(want), abs(got), np.finfo(float).tiny):
+                    self.fail(f"/diagnostics/mass at t = {t:g} is {got:.15g}, "
+                              f"but sum(h)*dx*dy of the snapshot is {want:.15g}")
+        status = self.summary(nt)
+        if status not in (None, "unfinished"):
+            self.maps(nx, ny, h)
+        self.xdmf(nx, ny, nt)
+        if self.problems:
+            raise Problems
+        return (f"model {f.attrs['model']} on a {nx} x {ny} raster, nt={nt} snapshots, "
+                f"{len(td)} step records, mass checked at {checked} snapshot(s), "
+                f"status {status}")
+
+    def maps(self, nx, ny, h):
+        """/maps of a finished raster run."""
+        f = self.f
+        names = ("h_max", "speed_max", "arrival_time", "deposit")
+        missing = [n for n in names if f"maps/{n}" not in f]
+        if missing:
+            self.fail(f"/maps lacks {missing}")
+            return
+        m = {n: f[f"maps/{n}"][:] for n in names}
+        for n, a in m.items():
+            if a.shape != (ny, nx):
+                self.fail(f"/maps/{n} has shape {a.shape}, expected {(ny, nx)}")
+                return
+        if not (m["h_max"] >= m["deposit"]).all():
+            self.fail("/maps/h_max is below /maps/deposit somewhere")
+        if len(h) and not (m["h_max"] >= h.max(axis=0)).all():
+            self.fail("/maps/h_max is below a snapshot's h somewhere")
+        thr = float(f["front"].attrs["threshold"])
+        reached = np.isfinite(m["arrival_time"])
+        if (reached != (m["h_max"] > thr)).any():
+            self.fail("/maps/arrival_time is not finite exactly where h_max > the threshold")
+        t_end = float(f["summary"].attrs.get("t_end", np.inf))
+        a = m["arrival_time"][reached]
+        if a.size and (a.min() < 0 or a.max() > t_end * (1 + 1e-12)):
+            self.fail("/maps/arrival_time leaves [0, t_end]")
+        if (m["speed_max"] < 0).any() or not np.isfinite(m["speed_max"]).all():
+            self.fail("/maps/speed_max is negative or not finite")
+        area = f["diagnostics/area_reached"][:] if "diagnostics/area_reached" in f else None
+        if area is None or area.shape != f["diagnostics/t"].shape:
+            self.fail("/diagnostics/area_reached is missing or not one value per step")
+        elif (np.diff(area) < 0).any():
+            self.fail("/diagnostics/area_reached decreases")
+        for name in ("area_reached", "runout_length", "travel_angle_deg"):
+            if name not in f["summary"].attrs:
+                self.fail(f"/summary attribute {name!r} is missing")
+
+    def xdmf(self, nx, ny, nt):
+        """The XDMF file beside the HDF5 file parses and names existing datasets."""
+        path = os.path.splitext(self.f.filename)[0] + ".xmf"
+        if not os.path.exists(path):
+            self.fail(f"no XDMF file {path}")
+            return
+        try:
+            root = ET.parse(path).getroot()
+        except ET.ParseError as e:
+            self.fail(f"{path} is not XML: {e}")
+            return
+        frames = root.findall("./Domain/Grid/Grid")
+        if len(frames) != nt:
+            self.fail(f"{path} lists {len(frames)} snapshots, the file has {nt}")
+        for item in root.iter("DataItem"):
+            if item.get("Format") != "HDF":
+                continue
+            name = item.text.strip().split(":", 1)[1].lstrip("/")
+            dims = tuple(int(d) for d in item.get("Dimensions").split())
+            if name not in self.f:
+                self.fail(f"{path} names /{name}, which the file does not have")
+            elif self.f[name].shape != dims:
+                self.fail(f"{path} gives /{name} dimensions {dims}, "
+                          f"the file {self.f[name].shape}")
+
     def run(self):
         f = self.f
+        grid = f.attrs.get("grid")
+        if isinstance(grid, bytes):
+            grid = grid.decode()
+        if grid == "raster":
+            self.attrs("root", f, ROOT_ATTRS)
+            return self.run_raster()
         self.attrs("root", f, ROOT_ATTRS)
         version = f.attrs.get("format_version")
         if version is not None and version != FORMAT_VERSION:

@@ -33,6 +33,10 @@ with measurements). A figure with a panel that holds no data is not written: the
 script fails naming it (scripts/plot_common.py).
 With --gif, PREFIX.gif: the flow over the bed, one frame per snapshot (matplotlib's
 PillowWriter; needs pillow). Prints the summary attributes.
+A raster (2-D) run is drawn as maps instead (scripts/plot_raster.py): PREFIX.png with
+the largest thickness, the deposit, the largest speed, the arrival time and the bed,
+over the hillshaded bed with the deposit and release outlines, and the kinetic energy
+and area reached against time; --gif animates the thickness over the hillshade.
 Needs h5py, numpy and matplotlib.
 """
 
@@ -47,7 +51,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib import cm, colors  # noqa: E402
 
+import h5py  # noqa: E402
+
 import plot_common  # noqa: E402
+import plot_raster  # noqa: E402
 from granflow_io import Run  # noqa: E402
 
 CMAP = "viridis"
@@ -337,6 +344,27 @@ def animate(r, path, out, fps):
     plt.close(fig)
 
 
+def main_raster(args, prefix, ext, dpi):
+    """The maps of a raster run (plot_raster.py)."""
+    with h5py.File(args.run, "r") as f:
+        a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    name = pathlib.Path(args.run).name
+    heading = (f"{name}: {a.get('model')} on a {a.get('nx')} × {a.get('ny')} raster, "
+               f"{a.get('coordinates')}")
+    written = [f"{prefix}.{ext}"]
+    try:
+        r = plot_raster.plot_maps(args.run, written[0], dpi, heading)
+    except plot_common.EmptyPlot as e:
+        return plot_common.fail_empty(e)
+    if args.gif:
+        written.append(f"{prefix}.gif")
+        plot_raster.animate(r, written[-1], args.fps, heading)
+    for k, v in sorted(r.summary.items()):
+        print(f"{k:>22}: {v}")
+    print("plot: " + ", ".join(written))
+    return 0
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("run")
@@ -351,10 +379,12 @@ def main():
                    help="spatial panels over the whole domain (default: where the material went)")
     plot_common.add_output_options(p)
     args = p.parse_args()
-    r = Run(args.run)
     prefix = pathlib.Path(args.out) if args.out else pathlib.Path(args.run).with_suffix("")
     prefix.parent.mkdir(parents=True, exist_ok=True)
     ext, dpi = args.format, args.dpi
+    if plot_raster.is_raster(args.run):
+        return main_raster(args, prefix, ext, dpi)
+    r = Run(args.run)
     xlim = zoom(r, args.whole)
     written = [f"{prefix}.{ext}"]
     try:

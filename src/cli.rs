@@ -100,6 +100,15 @@ pub struct RunArgs {
     /// of failing.
     #[arg(long)]
     pub wait: bool,
+    /// Threads of a raster (2-D) run; default: the machine's cores. The results are
+    /// the same bits whatever the count. 1-D runs use one thread.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
+}
+
+/// The default of `--threads`: the machine's cores.
+pub fn default_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, usize::from)
 }
 
 /// How `granflow run` shows its progress.

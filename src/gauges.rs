@@ -27,6 +27,8 @@ pub use crate::grid::line::interpolate as interpolation;
 #[derive(Debug, Clone)]
 pub struct Gauges {
     x: Vec<f64>,
+    /// The y of each gauge on a raster, empty on a line.
+    y: Vec<f64>,
     at: Vec<Stencil>,
     every: Option<f64>,
     /// Values after the current step: free surface, grain depth.
@@ -45,14 +47,20 @@ pub struct Gauges {
 }
 
 impl Gauges {
-    /// Gauges at `x` (inside the grid), recorded every step or every `every` seconds.
-    pub fn new<G: Grid>(grid: &G, x: &[f64], every: Option<f64>) -> Gauges {
+    /// Gauges at `x` (inside the grid; on a raster at the points (x, y), `y` empty on
+    /// a line), recorded every step or every `every` seconds.
+    pub fn new<G: Grid>(grid: &G, x: &[f64], y: &[f64], every: Option<f64>) -> Gauges {
         let n = x.len();
         Gauges {
             x: x.to_vec(),
+            y: y.to_vec(),
             at: x
                 .iter()
-                .map(|&x| grid.locate(Point { x, y: 0.0 }))
+                .enumerate()
+                .map(|(k, &x)| {
+                    let y = y.get(k).copied().unwrap_or(0.0);
+                    grid.locate(Point { x, y })
+                })
                 .collect(),
             every,
             eta: vec![0.0; n],
@@ -116,6 +124,9 @@ impl Gauges {
             });
         }
         sink.begin_gauges(&self.x)?;
+        if !self.y.is_empty() {
+            sink.gauges_y(&self.y)?;
+        }
         self.prev_t = 0.0;
         self.next = 1;
         self.emit_current(0.0, sink)

@@ -95,6 +95,7 @@ fn run(args: &RunArgs) -> ExitCode {
         &args.scenario.scenario,
         &output,
         !scn.output.gauges.is_empty(),
+        scn.domain.plane.is_some(),
         args.force,
     ) {
         print_err(&format!("error: {e}\n"));
@@ -109,10 +110,14 @@ fn run(args: &RunArgs) -> ExitCode {
         args.progress,
         args.quiet,
         args.progress_every,
-        scn.domain.cells,
+        scn.domain.cell_count(),
     );
     let limit = (!args.force).then_some(OUTPUT_LIMIT);
-    let result = runner::run_to_files_within(&scn, &output, limit, &mut |p| progress.update(&p));
+    let threads = args
+        .threads
+        .map_or_else(granflow::cli::default_threads, usize::from);
+    let result =
+        runner::run_to_files_threads(&scn, &output, limit, threads, &mut |p| progress.update(&p));
     progress.finish();
     if let Ok(report) = &result {
         for w in report.warnings() {

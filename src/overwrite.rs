@@ -1,15 +1,16 @@
 //! What `granflow run` may overwrite: its own earlier outputs, nothing else by surprise.
 //!
-//! Before a run starts, each file it would write (the HDF5 file, its `_front.csv` and,
-//! with gauges, its `_gauges.csv`) is checked: an existing file is replaced only when it
-//! is what granflow writes there (an HDF5 file with granflow's root attributes; a front
-//! CSV by its `t,x` header; a gauge CSV by its `t,eta_` header) and is not the scenario
-//! itself. Anything else needs `--force`. An output name ending in a path separator
+//! Before a run starts, each file it would write (the HDF5 file, its `_front.csv`,
+//! with gauges its `_gauges.csv`, and for a raster run its `.xmf`) is checked: an
+//! existing file is replaced only when it is what granflow writes there (an HDF5 file
+//! with granflow's root attributes; a front CSV by its `t,x` header; a gauge CSV by its
+//! `t,eta_` header; an XDMF file by its first lines) and is not the scenario itself. Anything else needs `--force`. An output name ending in a path separator
 //! names a directory, never a file, and is refused before anything is created.
 
 use std::io::Read;
 use std::path::Path;
 
+use crate::output::xdmf::{xdmf_path, XDMF_HEAD};
 use crate::output::{front_csv_path, gauge_csv_path};
 
 /// The 8-byte signature at the start of an HDF5 file (granflow writes the superblock at
@@ -24,10 +25,16 @@ const GRANFLOW_MARK: &[u8] = b"granflow_version";
 /// the root attributes are written when the run begins, and again when it ends.
 const MARK_WINDOW: u64 = 4 << 20;
 
-/// Checks that writing `h5` (and its front CSV, and its gauge CSV when `gauges`) for the
-/// scenario file `scenario` would not replace anything it should not. Returns the
-/// reason otherwise.
-pub fn check_outputs(scenario: &Path, h5: &Path, gauges: bool, force: bool) -> Result<(), String> {
+/// Checks that writing `h5` (and its front CSV, its gauge CSV when `gauges`, its XDMF
+/// file when `xdmf`) for the scenario file `scenario` would not replace anything it
+/// should not. Returns the reason otherwise.
+pub fn check_outputs(
+    scenario: &Path,
+    h5: &Path,
+    gauges: bool,
+    xdmf: bool,
+    force: bool,
+) -> Result<(), String> {
     let name = h5.as_os_str().to_string_lossy();
     if name.ends_with('/') || name.ends_with(std::path::MAIN_SEPARATOR) {
         return Err(format!(
@@ -44,6 +51,10 @@ pub fn check_outputs(scenario: &Path, h5: &Path, gauges: bool, force: bool) -> R
     let mut targets = vec![(h5, "HDF5 output"), (csv.as_path(), "front CSV")];
     if gauges {
         targets.push((gauge_csv.as_path(), "gauge CSV"));
+    }
+    let xmf = xdmf_path(h5);
+    if xdmf {
+        targets.push((xmf.as_path(), "XDMF file"));
     }
     for (target, what) in targets {
         if !target.exists() {
@@ -65,6 +76,10 @@ pub fn check_outputs(scenario: &Path, h5: &Path, gauges: bool, force: bool) -> R
                 "an HDF5 file that granflow did not write",
             ),
             "front CSV" => (starts_with(target, b"t,x\n"), "not a granflow front CSV"),
+            "XDMF file" => (
+                starts_with(target, XDMF_HEAD.as_bytes()),
+                "not an XDMF file granflow wrote",
+            ),
             _ => (starts_with(target, b"t,eta_"), "not a granflow gauge CSV"),
         };
         if !ours {

@@ -8,7 +8,7 @@ use crate::output::budget::{Budgeted, OUTPUT_LIMIT};
 use crate::output::csv::front_csv_path;
 use crate::output::{create_run_sinks, OutputError, RunSummary};
 use crate::scenario::Scenario;
-use crate::setup::{build, Run};
+use crate::setup::{build, build_threads, Run};
 use crate::simulation::{Progress, RunError};
 
 /// Why a run did not produce a complete result.
@@ -53,7 +53,18 @@ pub fn run_to_files_within(
     limit: Option<u64>,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<RunReport, RunFailure> {
-    let mut sim = build(scn);
+    run_to_files_threads(scn, h5, limit, 1, progress)
+}
+
+/// [`run_to_files_within`] on `threads` threads (raster runs; a line runs on one).
+pub fn run_to_files_threads(
+    scn: &Scenario,
+    h5: &Path,
+    limit: Option<u64>,
+    threads: usize,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<RunReport, RunFailure> {
+    let mut sim = build_threads(scn, threads);
     let front_csv = front_csv_path(h5);
     let mut sink = Budgeted::new(create_run_sinks(h5)?, limit, h5);
     match sim.run(&mut sink, progress) {

@@ -16,6 +16,7 @@ use std::time::Instant;
 
 use crate::gauges::Gauges;
 use crate::grid::Grid;
+use crate::model::tracker::Tracker;
 use crate::model::{Diagnostics, Model};
 use crate::numerics::StageError;
 use crate::output::{GridData, OutputError, OutputSink, RunInfo, RunSummary, StepRecord};
@@ -30,6 +31,8 @@ pub struct RunConfig {
     pub output_every: f64,
     /// Gauge positions (m); empty: no gauges ([`crate::gauges`]).
     pub gauges: Vec<f64>,
+    /// The gauges' y on a raster (one per gauge); empty on a line.
+    pub gauges_y: Vec<f64>,
     /// Gauge interval (s); `None`: every step.
     pub gauge_every: Option<f64>,
     /// Fraction of the peak kinetic energy below which the run counts as settled
@@ -73,6 +76,8 @@ pub struct Simulation<M: Model> {
     /// Signal speed of the current state when the run loop has already computed it
     /// with the diagnostics (saves a pass); None when stale.
     signal_speed: Option<f64>,
+    /// What the run gathers over its steps (maps of a raster run), if anything.
+    tracker: Option<Box<dyn Tracker<M::Grid, M::State>>>,
 }
 
 /// The state of the loop that the summary needs.
@@ -138,7 +143,14 @@ impl<M: Model> Simulation<M> {
             t: 0.0,
             steps: 0,
             signal_speed: None,
+            tracker: None,
         }
+    }
+
+    /// Gathers over the run with `tracker` (it sees the initial state and every
+    /// accepted one, and writes to the sink before it is finished).
+    pub fn set_tracker(&mut self, tracker: Box<dyn Tracker<M::Grid, M::State>>) {
+        self.tracker = Some(tracker);
     }
 
     /// Adds a stop rule, consulted after the others.
@@ -273,7 +285,12 @@ impl<M: Model> Simulation<M> {
         let summary = self.summary(&tally, status);
         // The sink is finished whatever ended the run; an output error of the loop
         // takes precedence over one of `finish`.
+        let maps = match &self.tracker {
+            Some(tracker) => tracker.write(&self.grid, &self.state, sink),
+            None => Ok(()),
+        };
         let finished = sink.finish(&summary);
+        let finished = maps.and(finished);
         match result {
             Ok(_) => finished.map(|()| summary).map_err(RunError::from),
             Err(e @ RunError::Output(_)) => Err(e),
@@ -293,8 +310,13 @@ impl<M: Model> Simulation<M> {
             return Err(self.failure(FailureReason::NonFinite, Some(i)));
         }
         sink.step(&self.record(&d0, 0.0))?;
-        let mut gauges = (!self.config.gauges.is_empty())
-            .then(|| Gauges::new(&self.grid, &self.config.gauges, self.config.gauge_every));
+        if let Some(tracker) = self.tracker.as_mut() {
+            tracker.observe(&self.grid, &self.state, self.t);
+        }
+        let mut gauges = (!self.config.gauges.is_empty()).then(|| {
+            let c = &self.config;
+            Gauges::new(&self.grid, &c.gauges, &c.gauges_y, c.gauge_every)
+        });
         if let Some(g) = gauges.as_mut() {
             g.begin(&self.model, &self.grid, &self.state, sink)?;
         }
@@ -346,6 +368,9 @@ impl<M: Model> Simulation<M> {
                 }
             }
             sink.step(&self.record(&d, dt))?;
+            if let Some(tracker) = self.tracker.as_mut() {
+                tracker.observe(&self.grid, &self.state, self.t);
+            }
             if let Some(g) = gauges.as_deref_mut() {
                 g.after_step(&self.model, &self.grid, &self.state, self.t, sink)?;
             }
@@ -499,6 +524,7 @@ mod tests {
             cfl: 0.5,
             output_every: 1.0,
             gauges: Vec::new(),
+            gauges_y: Vec::new(),
             gauge_every: None,
             settle_fraction: 0.0,
         };
@@ -511,6 +537,7 @@ mod tests {
             slope_deg: 0.0,
             scenario_toml: String::new(),
             front_threshold: 1e-3,
+            raster: None,
         };
         let pipeline = Pipeline::new(vec![Box::new(Grow), Box::new(second)]);
         Simulation::new(line, model, state, pipeline, Vec::new(), config, info)

@@ -29,4 +29,5 @@ mod submarine;
 mod submarine_paper;
 mod sweep;
 mod terrain_2d;
+mod terrain_2d_io;
 mod well_balanced;

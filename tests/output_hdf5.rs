@@ -88,6 +88,7 @@ impl Synth {
             slope_deg: 31.5,
             scenario_toml: "[model]\nkind = \"granular\"\n# ünïcode\n".into(),
             front_threshold: THRESHOLD,
+            raster: None,
         }
     }
     fn summary(&self, status: &str) -> RunSummary {

@@ -22,7 +22,9 @@
 pub mod dilatant;
 pub mod granular;
 pub mod granular_2d;
+pub mod raster_maps;
 pub mod submarine;
+pub mod tracker;
 
 use crate::grid::Grid;
 use crate::output::{OutputError, OutputSink};

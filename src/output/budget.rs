@@ -7,7 +7,8 @@
 //! foresees (the number of CFL steps). `--force` lifts both.
 
 use super::{
-    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary, SnapshotView,
+    StepRecord,
 };
 
 /// Largest output of one run without `--force` (bytes): 1 GiB.
@@ -202,6 +203,18 @@ impl<S: OutputSink> OutputSink for Budgeted<S> {
     fn begin_gauges(&mut self, x: &[f64]) -> Result<(), OutputError> {
         self.spend(GAUGE_VALUE_BYTES * x.len() as u64)?;
         self.inner.begin_gauges(x)
+    }
+
+    fn gauges_y(&mut self, y: &[f64]) -> Result<(), OutputError> {
+        self.spend(GAUGE_VALUE_BYTES * y.len() as u64)?;
+        self.inner.gauges_y(y)
+    }
+
+    fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
+        let values = maps.maps.iter().map(|f| f.data.len()).sum::<usize>()
+            + maps.series.iter().map(|s| s.2.len()).sum::<usize>();
+        self.spend(8 * values as u64)?;
+        self.inner.maps(maps)
     }
 
     fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {

@@ -52,8 +52,8 @@ pub use layout::stage_attr_name;
 use layout::GaugeRows;
 
 use super::{
-    CellField, GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView,
-    StepRecord,
+    CellField, GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary,
+    SnapshotView, StepRecord,
 };
 
 /// Writes one run to an HDF5 file, progressively (see the module docs).
@@ -70,6 +70,10 @@ pub struct Hdf5Sink {
     /// once they hold [`GAUGE_BUFFER_VALUES`] values.
     pending_gauges: GaugeRows,
     finished: bool,
+    /// Times of the snapshots written (raster runs: listed in the XDMF file).
+    times: Vec<f64>,
+    /// Whether `/maps` was written (raster runs).
+    has_maps: bool,
 }
 
 /// Bound on the buffered gauge values (4 MiB): a run with gauges at every step and
@@ -86,6 +90,11 @@ struct Shape {
     has_p_nh: Option<bool>,
     /// Names of the per-cell fields; `None` until the first snapshot.
     extra: Option<Vec<&'static str>>,
+    /// (nx, ny) of a raster run (`nx` above is then nx·ny).
+    raster: Option<(usize, usize)>,
+    /// The raster's origin (lower-left corner) and spacing, for the XDMF file.
+    origin: (f64, f64),
+    spacing: (f64, f64),
 }
 
 /// Step records kept in memory at most (~56 bytes each): beyond, they are appended on
@@ -94,7 +103,7 @@ struct Shape {
 const MAX_PENDING_STEPS: usize = 8192;
 
 /// Names of `/snapshots` datasets that a per-cell field may not take.
-const FIXED_SNAPSHOT_NAMES: [&str; 5] = ["t", "h", "u", "w", "p_nh"];
+const FIXED_SNAPSHOT_NAMES: [&str; 8] = ["t", "h", "u", "v", "w", "p_nh", "x", "y"];
 
 impl Shape {
     /// Checks the lengths of a snapshot's arrays.
@@ -107,6 +116,18 @@ impl Shape {
         expect("layer count", Some(snap.layers), nl)?;
         expect("h", Some(snap.h.len()), nx)?;
         expect("u", Some(snap.u.len()), nl * nx)?;
+        match (self.raster, snap.v) {
+            (Some(_), None) => return Err("a raster snapshot without v".into()),
+            (None, Some(_)) => return Err("v in a snapshot that is not on a raster".into()),
+            _ => expect("v", snap.v.map(<[f64]>::len), nx)?,
+        }
+        if let (Some((rx, ry)), Some((ny, nx))) = (self.raster, snap.shape) {
+            if (rx, ry) != (nx, ny) {
+                return Err(format!(
+                    "snapshot of shape (ny, nx) = ({ny}, {nx}) on a {rx} × {ry} raster"
+                ));
+            }
+        }
         expect("w", snap.w.map(<[f64]>::len), nl * nx)?;
         expect("p_nh", snap.p_nh.map(<[f64]>::len), (nl + 1) * (nx + 1))?;
         for (k, field) in snap.extra.iter().enumerate() {
@@ -177,6 +198,8 @@ impl Hdf5Sink {
             gauges: None,
             pending_gauges: GaugeRows::default(),
             finished: false,
+            times: Vec::new(),
+            has_maps: false,
         };
         let file = sink.create_file()?;
         sink.close(file, false)?;
@@ -221,6 +244,38 @@ impl Hdf5Sink {
         Ok(())
     }
 
+    /// The XDMF file beside a raster run's HDF5 file ([`super::xdmf`]), rewritten
+    /// with every snapshot so that it lists exactly the frames on disk.
+    fn write_xdmf(&self) -> Result<(), OutputError> {
+        let Some(shape) = &self.shape else {
+            return Ok(());
+        };
+        let Some((nx, ny)) = shape.raster else {
+            return Ok(());
+        };
+        let mut fields = vec!["h", "u", "v"];
+        fields.extend(shape.extra.iter().flatten().copied());
+        let desc = super::xdmf::XdmfRun {
+            h5_name: &self
+                .path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            nx,
+            ny,
+            origin: shape.origin,
+            spacing: shape.spacing,
+            times: &self.times,
+            fields: &fields,
+            maps: if self.has_maps {
+                &super::xdmf::MAP_NAMES
+            } else {
+                &[]
+            },
+        };
+        super::xdmf::write(&super::xdmf::xdmf_path(&self.path), &desc)
+    }
+
     fn check_open(&self, call: &str) -> Result<Shape, OutputError> {
         if self.finished {
             return Err(self.err(format!("{call} after finish")));
@@ -246,6 +301,10 @@ impl OutputSink for Hdf5Sink {
                 info.layers
             )));
         }
+        let raster = match &info.raster {
+            Some(r) => Some(raster_geometry(r.nx, r.ny, grid).map_err(|e| self.err(e))?),
+            None => None,
+        };
         let file = self.create_file()?;
         layout::write_layout(&file, info, grid).map_err(|e| self.err(e))?;
         self.close(file, false)?;
@@ -255,6 +314,9 @@ impl OutputSink for Hdf5Sink {
             has_w: None,
             has_p_nh: None,
             extra: None,
+            raster: raster.map(|g| g.0),
+            origin: raster.map_or((0.0, 0.0), |g| g.1),
+            spacing: raster.map_or((0.0, 0.0), |g| g.2),
         });
         Ok(())
     }
@@ -266,11 +328,11 @@ impl OutputSink for Hdf5Sink {
             .and_then(|()| shape.fix_optional(snap))
             .and_then(|create| Ok((create, shape.fix_extra(snap)?)))
             .map_err(|e| self.err(format!("snapshot at t = {}: {e}", snap.t)))?;
-        let (nx, nl) = (shape.nx, shape.nl);
+        let (nx, nl, raster) = (shape.nx, shape.nl, shape.raster);
         self.shape = Some(shape);
         let file = self.open_file()?;
         layout::create_optional(&file, (nx, nl), create)
-            .and_then(|()| layout::create_cell_fields(&file, nx, &create_extra))
+            .and_then(|()| layout::create_cell_fields(&file, nx, raster, &create_extra))
             .and_then(|()| layout::append_steps(&file, &self.pending))
             .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
             .and_then(|()| layout::append_snapshot(&file, snap))
@@ -278,7 +340,8 @@ impl OutputSink for Hdf5Sink {
         self.close(file, false)?;
         self.pending.clear();
         self.pending_gauges.clear();
-        Ok(())
+        self.times.push(snap.t);
+        self.write_xdmf()
     }
 
     fn step(&mut self, rec: &StepRecord) -> Result<(), OutputError> {
@@ -302,7 +365,34 @@ impl OutputSink for Hdf5Sink {
             .map_err(|e| self.err(e))?;
         self.pending.clear();
         self.pending_gauges.clear();
-        self.close(file, true)
+        self.close(file, true)?;
+        self.write_xdmf()
+    }
+
+    fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
+        let shape = self.check_open("maps")?;
+        let Some(raster) = shape.raster else {
+            return Err(self.err("maps of a run that is not on a raster"));
+        };
+        if self.has_maps {
+            return Err(self.err("maps written twice"));
+        }
+        let cells = raster.0 * raster.1;
+        if let Some(bad) = maps.maps.iter().find(|f| f.data.len() != cells) {
+            return Err(self.err(format!(
+                "map {} has {} values, expected {cells}",
+                bad.name,
+                bad.data.len()
+            )));
+        }
+        let file = self.open_file()?;
+        layout::append_steps(&file, &self.pending)
+            .and_then(|()| layout::write_maps(&file, raster, maps))
+            .map_err(|e| self.err(e))?;
+        self.pending.clear();
+        self.close(file, false)?;
+        self.has_maps = true;
+        Ok(())
     }
 
     fn begin_gauges(&mut self, x: &[f64]) -> Result<(), OutputError> {
@@ -318,6 +408,16 @@ impl OutputSink for Hdf5Sink {
         self.close(file, false)?;
         self.gauges = Some(x.len());
         Ok(())
+    }
+
+    fn gauges_y(&mut self, y: &[f64]) -> Result<(), OutputError> {
+        self.check_open("gauges_y")?;
+        if self.gauges != Some(y.len()) {
+            return Err(self.err("gauges_y without as many gauges from begin_gauges"));
+        }
+        let file = self.open_file()?;
+        layout::gauge_y(&file, y).map_err(|e| self.err(e))?;
+        self.close(file, false)
     }
 
     fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {
@@ -369,6 +469,31 @@ impl Drop for Hdf5Sink {
     }
 }
 
+/// The raster of a run: (nx, ny), the lower-left corner and the spacing, from the
+/// cell centres handed to `begin` (row-major x and y of every cell).
+#[allow(clippy::type_complexity)]
+fn raster_geometry(
+    nx: usize,
+    ny: usize,
+    grid: &GridData,
+) -> Result<((usize, usize), (f64, f64), (f64, f64)), String> {
+    let cells = grid.x.len();
+    let Some(y) = grid.y else {
+        return Err("a raster run without y coordinates".into());
+    };
+    if nx == 0 || ny == 0 || nx * ny != cells || y.len() != cells {
+        return Err(format!(
+            "bad raster: {nx} × {ny} cells but x, y have {} and {} values",
+            cells,
+            y.len()
+        ));
+    }
+    let dx = if nx > 1 { grid.x[1] - grid.x[0] } else { 1.0 };
+    let dy = if ny > 1 { y[nx] - y[0] } else { dx };
+    let dx = if nx > 1 { dx } else { dy };
+    Ok(((nx, ny), (grid.x[0] - 0.5 * dx, y[0] - 0.5 * dy), (dx, dy)))
+}
+
 fn present(yes: bool) -> &'static str {
     if yes {
         "present"
@@ -398,6 +523,7 @@ mod tests {
             slope_deg: 0.0,
             scenario_toml: String::new(),
             front_threshold: 1e-3,
+            raster: None,
         }
     }
 

@@ -2,7 +2,8 @@
 //! callers that post-process a run without touching the disk.
 
 use super::{
-    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary, SnapshotView,
+    StepRecord,
 };
 
 /// One stored snapshot (owned copy of a [`SnapshotView`]).
@@ -41,6 +42,10 @@ pub struct MemorySink {
     pub gauge_x: Vec<f64>,
     /// (t, η per gauge, grain depth per gauge) at every gauge time.
     pub gauges: Vec<(f64, Vec<f64>, Vec<f64>)>,
+    /// The maps of a raster run (name, one value per cell), empty otherwise.
+    pub maps: Vec<(String, Vec<f64>)>,
+    /// Its summary numbers (name, value).
+    pub map_scalars: Vec<(String, f64)>,
 }
 
 impl OutputSink for MemorySink {
@@ -86,6 +91,20 @@ impl OutputSink for MemorySink {
     fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {
         self.gauges
             .push((rec.t, rec.eta.to_vec(), rec.h_grains.to_vec()));
+        Ok(())
+    }
+
+    fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
+        self.maps = maps
+            .maps
+            .iter()
+            .map(|f| (f.name.to_string(), f.data.to_vec()))
+            .collect();
+        self.map_scalars = maps
+            .scalars
+            .iter()
+            .map(|&(n, v)| (n.to_string(), v))
+            .collect();
         Ok(())
     }
 }

@@ -11,6 +11,7 @@ pub mod gauges;
 pub mod hdf5;
 pub mod memory;
 pub mod tee;
+pub mod xdmf;
 
 use std::path::Path;
 
@@ -46,6 +47,19 @@ pub struct RunInfo {
     pub scenario_toml: String,
     /// Front threshold (m), stored as `/front` attribute `threshold`.
     pub front_threshold: f64,
+    /// The raster of a 2-D run (cells row-major, index j·nx + i); `None` on a line.
+    pub raster: Option<RasterInfo>,
+}
+
+/// The shape and coordinate reference system of a raster run's grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RasterInfo {
+    pub nx: usize,
+    pub ny: usize,
+    /// EPSG code of the input rasters, when known.
+    pub crs_epsg: Option<u32>,
+    /// WKT of the input rasters (their `.prj`), when known.
+    pub crs_wkt: Option<String>,
 }
 
 /// Static grid data, `/grid`.
@@ -96,6 +110,18 @@ pub struct SnapshotView<'a> {
     pub layers: usize,
     /// Model-specific per-cell fields; the same names in every snapshot of a run.
     pub extra: &'a [CellField<'a>],
+}
+
+/// What a raster run gathers over the whole run, handed to the sink once before
+/// `finish`: maps (`/maps/*`, one value per cell), per-step series that extend
+/// `/diagnostics` (one value per step record) and summary numbers (`/summary`).
+#[derive(Debug, Clone, Copy)]
+pub struct RunMaps<'a> {
+    pub maps: &'a [CellField<'a>],
+    /// (name, units, one value per step record).
+    pub series: &'a [(&'static str, &'static str, &'a [f64])],
+    /// (name, value), written as `/summary` attributes.
+    pub scalars: &'a [(&'static str, f64)],
 }
 
 /// One row per time step: `/diagnostics/*` and `/front/*`.
@@ -201,8 +227,17 @@ pub trait OutputSink {
     fn begin_gauges(&mut self, _x: &[f64]) -> Result<(), OutputError> {
         Ok(())
     }
+    /// Called right after `begin_gauges` by raster runs, with the gauges' y (m).
+    fn gauges_y(&mut self, _y: &[f64]) -> Result<(), OutputError> {
+        Ok(())
+    }
     /// Called at every gauge time (after `begin_gauges`), in increasing t.
     fn gauges(&mut self, _rec: &GaugeRecord) -> Result<(), OutputError> {
+        Ok(())
+    }
+    /// Called once before `finish` by runs that gather maps over the run (raster
+    /// runs). Sinks that do not record them keep this default.
+    fn maps(&mut self, _maps: &RunMaps) -> Result<(), OutputError> {
         Ok(())
     }
 }

@@ -1,7 +1,8 @@
 //! Fan-out of one run to two sinks, e.g. the HDF5 file and the front CSV.
 
 use super::{
-    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
+    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary, SnapshotView,
+    StepRecord,
 };
 
 /// Forwards every call to `a`, then to `b`. Both are called even when `a` fails, so
@@ -49,6 +50,14 @@ impl<A: OutputSink, B: OutputSink> OutputSink for Tee<A, B> {
 
     fn begin_gauges(&mut self, x: &[f64]) -> Result<(), OutputError> {
         both(self.a.begin_gauges(x), self.b.begin_gauges(x))
+    }
+
+    fn gauges_y(&mut self, y: &[f64]) -> Result<(), OutputError> {
+        both(self.a.gauges_y(y), self.b.gauges_y(y))
+    }
+
+    fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
+        both(self.a.maps(maps), self.b.maps(maps))
     }
 
     fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {

@@ -3,7 +3,8 @@
 //! Two layers, as in ripgrep's LowArgs → HiArgs: `raw` is a serde mirror of the TOML
 //! (`deny_unknown_fields`, no logic); `validate` turns it into the [`Scenario`] below,
 //! checking every key and naming it (with its line) in the error. Profiles (`bed.b`,
-//! `initial.h`, `initial.u`, `initial.w`) are expressions in `x` or CSV tables (`profile`).
+//! `initial.h`, `initial.u`, `initial.v`, `initial.w`) are expressions in `x` (and `y`
+//! on a raster domain), CSV tables or raster files (`profile`).
 //! `--set key=value` overrides are applied to the document before deserialising
 //! (`overrides`), so a sweep is a list of override sets over one base file.
 
@@ -22,6 +23,7 @@ pub use validate::{load_file, load_file_within, load_str, load_str_within};
 
 use std::path::PathBuf;
 
+pub use crate::gis::Crs;
 pub use crate::grid::{BoundaryKind, Coordinates};
 pub use crate::model::dilatant::DilatantSpec;
 pub use crate::model::granular::config::{MultilayerSpec, Pressure};
@@ -41,6 +43,25 @@ pub struct Domain {
     /// Inclination θ of the reference plane, degrees (0 for Cartesian runs).
     pub slope_deg: f64,
     pub coordinates: Coordinates,
+    /// The y axis of a raster domain (`cells` is then nx); `None` on a line.
+    pub plane: Option<Plane>,
+}
+
+/// The y extent of a raster domain of nx × ny cells, with the coordinate reference
+/// system of its raster files (carried into the output, never used).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plane {
+    pub y_min: f64,
+    pub y_max: f64,
+    pub ny: usize,
+    pub crs: crate::gis::Crs,
+}
+
+impl Domain {
+    /// Number of cells: nx on a line, nx · ny on a raster.
+    pub fn cell_count(&self) -> usize {
+        self.cells * self.plane.as_ref().map_or(1, |p| p.ny)
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -56,6 +77,8 @@ pub struct Initial {
     pub h: Profile,
     /// Depth-averaged downslope velocity u(x).
     pub u: Profile,
+    /// Depth-averaged velocity along y, v(x, y) (raster domains; 0 on a line).
+    pub v: Profile,
     /// Normal velocity w(x) (non-hydrostatic model only; Garres-Díaz et al. 2021, eq. 30).
     pub w: Profile,
     /// Uniform erodible-bed thickness h_i ≥ 0 (Fernández-Nieto et al. 2016, §4.2).
@@ -69,8 +92,14 @@ pub struct Initial {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Boundaries {
+    /// x = x_min (`boundary.left`, or `boundary.west` on a raster).
     pub left: BoundaryKind,
+    /// x = x_max (`boundary.right`, or `boundary.east` on a raster).
     pub right: BoundaryKind,
+    /// y = y_min (`boundary.south`; raster domains only).
+    pub south: BoundaryKind,
+    /// y = y_max (`boundary.north`; raster domains only).
+    pub north: BoundaryKind,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -97,11 +126,14 @@ pub struct OutputSpec {
     pub front_threshold: f64,
     /// Gauge positions (m), inside the domain; empty: no gauges.
     pub gauges: Vec<f64>,
+    /// The gauges' y on a raster domain (one per gauge), empty on a line.
+    pub gauges_y: Vec<f64>,
     /// Gauge interval (s); `None`: every time step.
     pub gauge_every: Option<f64>,
 }
 
-/// The profiles at the cell centres x_i = x_min + (i + ½)Δx, sampled once by
+/// The profiles at the cell centres x_i = x_min + (i + ½)Δx (on a raster domain at
+/// (x_i, y_j), y_j = y_min + (j + ½)Δy, row-major: index j·nx + i), sampled once by
 /// validation (which checks these very values) and used by setup to build the mesh and
 /// the initial state.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -112,6 +144,8 @@ pub struct Sampled {
     pub h: Vec<f64>,
     /// `initial.u`.
     pub u: Vec<f64>,
+    /// `initial.v` (raster domains; empty on a line).
+    pub v: Vec<f64>,
     /// `initial.w`.
     pub w: Vec<f64>,
     /// `initial.eta`, when given.
@@ -126,6 +160,9 @@ impl Sampled {
     /// assembled by hand (tests) calls it to fill [`Scenario::sampled`].
     pub fn of(domain: &Domain, bed: &Profile, initial: &Initial) -> Sampled {
         use rayon::prelude::*;
+        if let Some(plane) = &domain.plane {
+            return Sampled::of_plane(domain, plane, bed, initial);
+        }
         let n = domain.cells;
         let dx = (domain.x_max - domain.x_min) / n as f64;
         let x_min = domain.x_min;
@@ -152,9 +189,53 @@ impl Sampled {
             w: at(&initial.w),
             eta: initial.eta.as_ref().map(&at),
             phi: initial.phi.as_ref().map(&at),
+            v: Vec::new(),
             b,
         }
     }
+
+    /// [`Sampled::of`] on a raster domain: every profile at the nx · ny centres,
+    /// row-major (no w, η or φ there).
+    fn of_plane(domain: &Domain, plane: &Plane, bed: &Profile, initial: &Initial) -> Sampled {
+        use rayon::prelude::*;
+        let centres = raster_centres(domain, plane);
+        let b: Vec<f64> = centres
+            .par_iter()
+            .map(|&(x, y)| bed.eval_xy(x, y, 0.0))
+            .collect();
+        let at = |p: &Profile| -> Vec<f64> {
+            centres
+                .par_iter()
+                .zip(&b)
+                .map(|(&(x, y), &b)| p.eval_xy(x, y, b))
+                .collect()
+        };
+        Sampled {
+            h: at(&initial.h),
+            u: at(&initial.u),
+            v: at(&initial.v),
+            w: Vec::new(),
+            eta: None,
+            phi: None,
+            b,
+        }
+    }
+}
+
+/// The centres (x_i, y_j) of a raster domain, row-major (index j·nx + i), with the
+/// line's centre formula on each axis.
+pub fn raster_centres(domain: &Domain, plane: &Plane) -> Vec<(f64, f64)> {
+    let (nx, ny) = (domain.cells, plane.ny);
+    let dx = (domain.x_max - domain.x_min) / nx as f64;
+    let dy = (plane.y_max - plane.y_min) / ny as f64;
+    let mut centres = Vec::with_capacity(nx * ny);
+    for j in 0..ny {
+        let y = crate::grid::line::cell_centre(plane.y_min, dy, j);
+        for i in 0..nx {
+            centres.push((crate::grid::line::cell_centre(domain.x_min, dx, i), y));
+        }
+    }
+    centres
 }
 
 impl Scenario {
@@ -162,7 +243,7 @@ impl Scenario {
     /// (`crate::output::budget`).
     pub fn output_estimate(&self) -> crate::output::budget::OutputEstimate {
         let nl = self.model.layers;
-        let nx = self.domain.cells;
+        let nx = self.domain.cell_count();
         let nh = self.model.pressure == Pressure::NonHydrostatic;
         // h, u per layer, w per layer (non-hydrostatic), up to three model fields;
         // p_nh at the (nl + 1) interfaces of the nx + 1 faces.

@@ -1,11 +1,13 @@
-//! Spatial profiles: `bed.b`, `initial.h`, `initial.u`, `initial.w`.
+//! Spatial profiles: `bed.b`, `initial.h`, `initial.u`, `initial.v`, `initial.w`.
 //!
-//! A profile is written in the scenario as a number, as an expression in `x` (a string),
-//! or as a CSV table (`{ table = "file.csv" }`). Expressions are parsed once with
-//! `evalexpr` and evaluated per point through a small fixed context: the variables `x`,
-//! `b` (bed elevation, only where allowed), the constants `pi` and `deg`, and a fixed set
-//! of functions (see [`FUNCTIONS`]). Integer literals are turned into floats right after
-//! parsing, so `1/2` is 0.5.
+//! A profile is written in the scenario as a number, as an expression in `x` (and `y`
+//! on a raster domain) (a string), as a CSV table along x (`{ table = "file.csv" }`)
+//! or as a raster file (`{ raster = "dem.asc" }`, ESRI ASCII grid or GeoTIFF, read by
+//! [`crate::gis`] and interpolated bilinearly between its cell centres). Expressions
+//! are parsed once with `evalexpr` and evaluated per point through a small fixed
+//! context: the variables `x`, `y`, `b` (bed elevation, only where allowed), the
+//! constants `pi` and `deg`, and a fixed set of functions (see [`FUNCTIONS`]). Integer
+//! literals are turned into floats right after parsing, so `1/2` is 0.5.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -38,6 +40,7 @@ enum Kind {
     Constant(f64),
     Expr(Arc<Expression>),
     Table(Arc<Table>),
+    Raster(Arc<RasterProfile>),
     Function(Function),
 }
 
@@ -88,6 +91,30 @@ impl Profile {
         self.try_eval(x, b).unwrap_or(f64::NAN)
     }
 
+    /// Value at the point (x, y) of a raster domain, where the bed elevation is `b`
+    /// (NaN where it cannot be computed, as [`Profile::eval`]).
+    pub fn eval_xy(&self, x: f64, y: f64, b: f64) -> f64 {
+        self.try_eval_xy(x, y, b).unwrap_or(f64::NAN)
+    }
+
+    /// Whether the profile depends on y (an expression using `y`, or a raster): such a
+    /// profile needs a raster domain.
+    pub fn uses_y(&self) -> bool {
+        match &self.kind {
+            Kind::Expr(e) => e.uses_y,
+            Kind::Raster(_) => true,
+            _ => false,
+        }
+    }
+
+    /// The raster behind a `{ raster = "…" }` profile.
+    pub fn raster(&self) -> Option<&crate::gis::Raster> {
+        match &self.kind {
+            Kind::Raster(r) => Some(&r.raster),
+            _ => None,
+        }
+    }
+
     /// `Some(v)` for a constant profile.
     pub fn as_constant(&self) -> Option<f64> {
         match self.kind {
@@ -110,16 +137,29 @@ impl Profile {
                 t.xs[0],
                 t.xs[t.xs.len() - 1]
             ),
+            Kind::Raster(r) => format!(
+                "raster \"{}\" ({} × {} cells of {} m)",
+                r.path.display(),
+                r.raster.nx,
+                r.raster.ny,
+                r.raster.cell_size
+            ),
             Kind::Function(_) => "function".to_string(),
         }
     }
 
     /// Value at `x`, or a description of why it cannot be computed.
     pub(crate) fn try_eval(&self, x: f64, b: f64) -> Result<f64, String> {
+        self.try_eval_xy(x, 0.0, b)
+    }
+
+    /// Value at (x, y), or a description of why it cannot be computed.
+    pub(crate) fn try_eval_xy(&self, x: f64, y: f64, b: f64) -> Result<f64, String> {
         match &self.kind {
             Kind::Constant(v) => Ok(*v),
-            Kind::Expr(e) => e.eval(x, b),
+            Kind::Expr(e) => e.eval(x, y, b),
             Kind::Table(t) => Ok(t.eval(x)),
+            Kind::Raster(r) => r.eval(x, y),
             Kind::Function(f) => Ok((f.0)(x, b)),
         }
     }
@@ -145,11 +185,36 @@ impl Profile {
                 })
                 .map_err(|m| ScenarioError::at(key, m)),
             toml::Value::Table(t) => {
-                if let Some(other) = t.keys().find(|k| k.as_str() != "table") {
+                if let Some(other) = t.keys().find(|k| k.as_str() != "table" && k.as_str() != "raster") {
                     return Err(ScenarioError::at(
                         format!("{key}.{other}"),
-                        format!("unknown key '{other}' in a table profile (only 'table' is allowed)"),
+                        format!("unknown key '{other}' in a table profile (only 'table' or 'raster' is allowed)"),
                     ));
+                }
+                if t.contains_key("raster") {
+                    if t.contains_key("table") {
+                        return Err(ScenarioError::at(
+                            format!("{key}.raster"),
+                            "give either table (a CSV along x) or raster (a grid file), not both",
+                        ));
+                    }
+                    return match t.get("raster") {
+                        Some(toml::Value::String(file)) => {
+                            RasterProfile::load(Path::new(file), base_dir)
+                                .map(|r| Profile {
+                                    kind: Kind::Raster(Arc::new(r)),
+                                })
+                                .map_err(|m| ScenarioError::at(key, m))
+                        }
+                        Some(other) => Err(ScenarioError::at(
+                            format!("{key}.raster"),
+                            format!(
+                                "must be a file name (a string), found {}",
+                                other.type_str()
+                            ),
+                        )),
+                        None => unreachable!("checked above"),
+                    };
                 }
                 match t.get("table") {
                     Some(toml::Value::String(file)) => Table::load(Path::new(file), base_dir, key)
@@ -173,7 +238,7 @@ impl Profile {
             other => Err(ScenarioError::at(
                 key,
                 format!(
-                    "must be a number, an expression in x (a string) or {{ table = \"file.csv\" }}, found {}",
+                    "must be a number, an expression in x (a string), {{ table = \"file.csv\" }} or {{ raster = \"file.asc\" }}, found {}",
                     other.type_str()
                 ),
             )),
@@ -188,6 +253,8 @@ struct Expression {
     source: String,
     node: Node<DefaultNumericTypes>,
     allow_b: bool,
+    /// Whether it reads `y`.
+    uses_y: bool,
 }
 
 impl fmt::Debug for Expression {
@@ -220,9 +287,11 @@ impl Expression {
                 "expression \"{source}\" assigns to '{w}'; assignments are not allowed"
             ));
         }
+        let mut uses_y = false;
         for var in node.iter_read_variable_identifiers() {
             match var {
                 "x" | "pi" | "deg" => {}
+                "y" => uses_y = true,
                 "b" if allow_b => {}
                 "b" => {
                     return Err(format!(
@@ -231,7 +300,7 @@ impl Expression {
                 }
                 _ => {
                     return Err(format!(
-                        "unknown variable '{var}' in expression \"{source}\" (available: x, {}pi, deg)",
+                        "unknown variable '{var}' in expression \"{source}\" (available: x, y, {}pi, deg)",
                         if allow_b { "b, " } else { "" }
                     ))
                 }
@@ -249,13 +318,14 @@ impl Expression {
             source: source.to_owned(),
             node,
             allow_b,
+            uses_y,
         };
         // Some malformed input (`x +`, `sin(x, 1)`, `x < 1`) only shows when evaluated;
         // one trial evaluation catches it here. Functions give NaN, not errors, outside
         // their domain, so this does not reject e.g. `ln(x)`.
         match expr
             .node
-            .eval_with_context(&ExprContext::new(0.0, 0.0, allow_b))
+            .eval_with_context(&ExprContext::new(0.0, 0.0, 0.0, allow_b))
         {
             Ok(Value::Float(_)) | Ok(Value::Int(_)) => Ok(expr),
             Ok(other) => Err(format!(
@@ -268,10 +338,10 @@ impl Expression {
         }
     }
 
-    fn eval(&self, x: f64, b: f64) -> Result<f64, String> {
+    fn eval(&self, x: f64, y: f64, b: f64) -> Result<f64, String> {
         match self
             .node
-            .eval_with_context(&ExprContext::new(x, b, self.allow_b))
+            .eval_with_context(&ExprContext::new(x, y, b, self.allow_b))
         {
             Ok(Value::Float(v)) => Ok(v),
             Ok(Value::Int(i)) => Ok(i as f64),
@@ -380,14 +450,16 @@ const DEG: Value<DefaultNumericTypes> = Value::Float(std::f64::consts::PI / 180.
 /// (evalexpr's own builtins are disabled).
 struct ExprContext {
     x: Value<DefaultNumericTypes>,
+    y: Value<DefaultNumericTypes>,
     b: Value<DefaultNumericTypes>,
     allow_b: bool,
 }
 
 impl ExprContext {
-    fn new(x: f64, b: f64, allow_b: bool) -> Self {
+    fn new(x: f64, y: f64, b: f64, allow_b: bool) -> Self {
         ExprContext {
             x: Value::Float(x),
+            y: Value::Float(y),
             b: Value::Float(b),
             allow_b,
         }
@@ -400,6 +472,7 @@ impl Context for ExprContext {
     fn get_value(&self, identifier: &str) -> Option<&Value<DefaultNumericTypes>> {
         match identifier {
             "x" => Some(&self.x),
+            "y" => Some(&self.y),
             "b" if self.allow_b => Some(&self.b),
             "pi" => Some(&PI),
             "deg" => Some(&DEG),
@@ -730,6 +803,98 @@ impl Table {
     }
 }
 
+// ---------------------------------------------------------------------------------------
+// Rasters
+
+/// A raster file as a profile: bilinear interpolation between the cell centres,
+/// constant beyond the outer centres (up to the raster's edge), no value outside the
+/// raster or where a neighbouring cell is nodata.
+#[derive(Debug)]
+struct RasterProfile {
+    /// The path as written in the scenario (for messages).
+    path: PathBuf,
+    raster: crate::gis::Raster,
+}
+
+impl RasterProfile {
+    /// Reads an ESRI ASCII grid (`.asc`) or a GeoTIFF (`.tif`, `.tiff`); errors are
+    /// messages naming the file (the caller adds the key).
+    fn load(path: &Path, base_dir: &Path) -> Result<RasterProfile, String> {
+        let full = base_dir.join(path);
+        let ext = full
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        let raster = match ext.as_str() {
+            "asc" => crate::gis::asc::read(&full),
+            "tif" | "tiff" => crate::gis::geotiff::read(&full),
+            _ => {
+                return Err(format!(
+                    "raster file '{}': unknown format (expected an ESRI ASCII grid .asc or a GeoTIFF .tif)",
+                    full.display()
+                ))
+            }
+        }
+        .map_err(|e| format!("cannot read raster file: {e}"))?;
+        Ok(RasterProfile {
+            path: path.to_owned(),
+            raster,
+        })
+    }
+
+    /// The bilinear interpolation at (x, y) of the values at the cell centres.
+    fn eval(&self, x: f64, y: f64) -> Result<f64, String> {
+        let r = &self.raster;
+        let b = r.bbox();
+        if !(x >= b.x_min && x <= b.x_max && y >= b.y_min && y <= b.y_max) {
+            return Err(format!(
+                "raster \"{}\" covers x in [{}, {}], y in [{}, {}], not the point",
+                self.path.display(),
+                b.x_min,
+                b.x_max,
+                b.y_min,
+                b.y_max
+            ));
+        }
+        // Fractional column and row of the point, counted from the first centre; a
+        // centre (up to round-off of its coordinates) reads its own cell exactly.
+        let snap = |f: f64| {
+            if (f - f.round()).abs() < 1e-9 {
+                f.round()
+            } else {
+                f
+            }
+        };
+        let fc = snap((x - r.x_left) / r.cell_size - 0.5).clamp(0.0, (r.nx - 1) as f64);
+        let fr = snap((r.y_top - y) / r.cell_size - 0.5).clamp(0.0, (r.ny - 1) as f64);
+        let (c0, r0) = (fc.floor() as usize, fr.floor() as usize);
+        let (c1, r1) = ((c0 + 1).min(r.nx - 1), (r0 + 1).min(r.ny - 1));
+        let (wc, wr) = (fc - c0 as f64, fr - r0 as f64);
+        let mut v = 0.0;
+        for (col, row, w) in [
+            (c0, r0, (1.0 - wc) * (1.0 - wr)),
+            (c1, r0, wc * (1.0 - wr)),
+            (c0, r1, (1.0 - wc) * wr),
+            (c1, r1, wc * wr),
+        ] {
+            if w == 0.0 {
+                continue;
+            }
+            match r.get(col, row) {
+                Some(value) => v += w * value,
+                None => {
+                    let (cx, cy) = r.cell_centre(col, row);
+                    return Err(format!(
+                        "raster \"{}\" has no value (nodata) in its cell centred at ({cx}, {cy})",
+                        self.path.display()
+                    ));
+                }
+            }
+        }
+        Ok(v)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -825,8 +990,12 @@ mod tests {
     fn compile_errors() {
         assert!(Expression::compile("x +", true).is_err());
         assert!(Expression::compile("", true).is_err());
-        let e = Expression::compile("y * 2", true).unwrap_err();
-        assert!(e.contains("unknown variable 'y'"), "{e}");
+        let e = Expression::compile("z * 2", true).unwrap_err();
+        assert!(e.contains("unknown variable 'z'"), "{e}");
+        // y is a variable (of raster domains), which the profile records.
+        let y = Expression::compile("y * 2", true).unwrap();
+        assert!(y.uses_y && !Expression::compile("x * 2", true).unwrap().uses_y);
+        assert_eq!(y.eval(0.0, 1.5, 0.0), Ok(3.0));
         let e = Expression::compile("b + 1", false).unwrap_err();
         assert!(e.contains("bed elevation b"), "{e}");
         let e = Expression::compile("math::sin(x)", true).unwrap_err();

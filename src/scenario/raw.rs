@@ -59,7 +59,10 @@ pub(crate) struct RawSubmarine {
 pub(crate) struct RawDomain {
     pub x_min: Option<f64>,
     pub x_max: Option<f64>,
-    pub cells: Option<i64>,
+    pub y_min: Option<f64>,
+    pub y_max: Option<f64>,
+    /// `n` (a line) or `[nx, ny]` (a raster).
+    pub cells: Option<toml::Value>,
     pub slope_deg: Option<f64>,
     pub coordinates: Option<String>,
 }
@@ -96,6 +99,7 @@ pub(crate) struct RawRheology {
     pub mu_w: Option<f64>,
     pub mu_w_deg: Option<f64>,
     pub channel_width: Option<f64>,
+    pub xi: Option<f64>,
     pub sidewall: Option<String>,
     pub c_msm: Option<bool>,
     pub viscosity: Option<String>,
@@ -117,6 +121,7 @@ pub(crate) struct RawModel {
 pub(crate) struct RawInitial {
     pub h: Option<RawProfile>,
     pub u: Option<RawProfile>,
+    pub v: Option<RawProfile>,
     pub w: Option<RawProfile>,
     pub phi: Option<RawProfile>,
     pub erodible_bed: Option<f64>,
@@ -128,6 +133,10 @@ pub(crate) struct RawInitial {
 pub(crate) struct RawBoundary {
     pub left: Option<String>,
     pub right: Option<String>,
+    pub west: Option<String>,
+    pub east: Option<String>,
+    pub south: Option<String>,
+    pub north: Option<String>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -147,6 +156,7 @@ pub(crate) struct RawOutput {
     pub every: Option<f64>,
     pub front_threshold: Option<f64>,
     pub static_threshold: Option<f64>,
-    pub gauges: Option<Vec<f64>>,
+    /// Positions `[x, …]` on a line, points `[[x, y], …]` on a raster.
+    pub gauges: Option<toml::Value>,
     pub gauge_every: Option<f64>,
 }

@@ -5,6 +5,7 @@
 
 mod dilatant;
 mod granular;
+mod granular_2d;
 mod submarine;
 
 use crate::grid::{Grid, Line, LineSpec};
@@ -59,9 +60,18 @@ impl<M: crate::model::Model> Run for Simulation<M> {
     }
 }
 
-/// The run of `scn`'s model.
+/// The run of `scn`'s model, on one thread (a sweep's runs, `granflow check`).
 pub fn build(scn: &Scenario) -> Box<dyn Run> {
+    build_threads(scn, 1)
+}
+
+/// The run of `scn`'s model; a raster run works on `threads` threads (≥ 1), a line on
+/// one. The results do not depend on `threads`.
+pub fn build_threads(scn: &Scenario, threads: usize) -> Box<dyn Run> {
     match scn.model.kind {
+        ModelKind::Granular if scn.domain.plane.is_some() => {
+            Box::new(build_granular_2d(scn, threads.max(1)))
+        }
         ModelKind::Granular => Box::new(build_granular(scn)),
         ModelKind::Submarine => Box::new(build_submarine(scn)),
         ModelKind::Dilatant => Box::new(build_dilatant(scn)),
@@ -81,6 +91,14 @@ pub fn build_submarine(scn: &Scenario) -> Simulation<crate::model::submarine::Su
 
 pub fn build_granular(scn: &Scenario) -> Simulation<Granular> {
     granular::build(scn)
+}
+
+/// The run of a granular scenario on a raster domain (2-D), on `threads` threads.
+pub fn build_granular_2d(
+    scn: &Scenario,
+    threads: usize,
+) -> Simulation<crate::model::granular_2d::Granular2d> {
+    granular_2d::build(scn, threads)
 }
 
 /// The line of a scenario, with its bed sampled at the cell centres.
@@ -118,6 +136,7 @@ pub fn run_config(scn: &Scenario) -> RunConfig {
         cfl: scn.time.cfl,
         output_every: scn.output.every,
         gauges: scn.output.gauges.clone(),
+        gauges_y: scn.output.gauges_y.clone(),
         gauge_every: scn.output.gauge_every,
         settle_fraction: scn.time.settle_fraction,
     }
@@ -138,5 +157,6 @@ pub fn run_info(scn: &Scenario, pressure: &str, layers: usize) -> RunInfo {
         slope_deg: scn.domain.slope_deg,
         scenario_toml: scn.source_toml.clone(),
         front_threshold: scn.output.front_threshold,
+        raster: None,
     }
 }

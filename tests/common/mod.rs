@@ -68,6 +68,7 @@ impl Case {
                 cells: self.mesh.cells,
                 slope_deg: self.mesh.slope_deg,
                 coordinates: self.mesh.coordinates,
+                plane: None,
             },
             bed: Profile::function(move |x, _| b(x)),
             material: Self::beads_material(),
@@ -90,6 +91,7 @@ impl Case {
             initial: Initial {
                 h: Profile::function(h),
                 u: Profile::function(move |x, _| u(x)),
+                v: Profile::constant(0.0),
                 w: Profile::constant(0.0),
                 erodible_bed: 0.0,
                 eta: None,
@@ -98,6 +100,8 @@ impl Case {
             boundary: Boundaries {
                 left: self.mesh.left,
                 right: self.mesh.right,
+                south: BoundaryKind::Wall,
+                north: BoundaryKind::Wall,
             },
             time: TimeSpec {
                 t_end: self.t_end,
@@ -111,6 +115,7 @@ impl Case {
                 every: self.every,
                 front_threshold: 1e-3,
                 gauges: Vec::new(),
+                gauges_y: Vec::new(),
                 gauge_every: None,
             },
             submarine: None,

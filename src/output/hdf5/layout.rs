@@ -5,7 +5,8 @@
 use rust_hdf5::{DatatypeMessage, H5Dataset, H5File, H5Group, VarLenUnicode};
 
 use crate::output::{
-    CellField, GaugeRecord, GridData, RunInfo, RunSummary, SnapshotView, StepRecord, FORMAT_VERSION,
+    CellField, GaugeRecord, GridData, RasterInfo, RunInfo, RunMaps, RunSummary, SnapshotView,
+    StepRecord, FORMAT_VERSION,
 };
 
 /// Rows per chunk of the per-step series (`/diagnostics/*`, `/front/*`): 64 KiB.
@@ -38,6 +39,9 @@ pub(super) fn write_layout(
     file.set_attr_string("coordinates", &info.coordinates)?;
     file.set_attr_numeric("slope_deg", &info.slope_deg)?;
     file.set_attr_string("scenario_toml", &info.scenario_toml)?;
+    if let Some(r) = &info.raster {
+        return write_raster_layout(file, info, r, grid);
+    }
 
     let g = file.create_group("grid")?;
     for (name, data) in [("x", grid.x), ("b", grid.b), ("h_bed", grid.h_bed)] {
@@ -84,11 +88,20 @@ pub(super) fn write_layout(
     }
     frames(&s, "h", &[nx], "m", &[Dim::X])?;
     frames(&s, "u", &[info.layers, nx], "m/s", &[Dim::Layer, Dim::X])?;
+    step_groups(file, info, &STEP_DATASETS)
+}
 
+/// `/front`, `/diagnostics` with their empty series (`datasets`: path, units) and the
+/// `/summary` group with the status of an unfinished run.
+fn step_groups(
+    file: &H5File,
+    info: &RunInfo,
+    datasets: &[(&str, &str); 7],
+) -> rust_hdf5::Result<()> {
     let front = file.create_group("front")?;
     front.set_attr_numeric("threshold", &info.front_threshold)?;
     file.create_group("diagnostics")?;
-    for (path, unit) in STEP_DATASETS {
+    for &(path, unit) in datasets {
         let (group, name) = path.split_once('/').expect("group/name");
         let ds = series(&file.root_group().group(group)?, name, STEP_CHUNK)?;
         units(&ds, unit)?;
@@ -100,6 +113,95 @@ pub(super) fn write_layout(
     // Replaced by the real status at finish: a file whose writer was killed says so.
     let summary = file.create_group("summary")?;
     summary.set_attr_string("status", UNFINISHED)?;
+    Ok(())
+}
+
+/// The per-step datasets of a raster run: volumes in m³, energies in m⁵/s².
+const RASTER_STEP_DATASETS: [(&str, &str); 7] = [
+    ("diagnostics/t", "s"),
+    ("diagnostics/dt", "s"),
+    ("diagnostics/mass", "m^3"),
+    ("diagnostics/kinetic_energy", "m^5/s^2"),
+    ("diagnostics/max_speed", "m/s"),
+    ("front/t", "s"),
+    ("front/x", "m"),
+];
+
+/// The layout of a raster run (docs/output-format.md, "Raster runs"): `/grid/x` (nx)
+/// and `/grid/y` (ny) axes, `/grid/b` and `/grid/h_bed` as (ny, nx), the raster
+/// attributes, and `/snapshots/{h, u}` as (nt, ny, nx) with t, y, x dimension scales.
+fn write_raster_layout(
+    file: &H5File,
+    info: &RunInfo,
+    r: &RasterInfo,
+    grid: &GridData,
+) -> rust_hdf5::Result<()> {
+    let (nx, ny) = (r.nx, r.ny);
+    let ys = grid.y.unwrap_or(grid.x);
+    let x: Vec<f64> = grid.x[..nx].to_vec();
+    let y: Vec<f64> = (0..ny).map(|j| ys[j * nx]).collect();
+    file.set_attr_string("grid", "raster")?;
+    file.set_attr_numeric("nx", &(nx as i64))?;
+    file.set_attr_numeric("ny", &(ny as i64))?;
+    let spacing = |v: &[f64]| if v.len() > 1 { v[1] - v[0] } else { f64::NAN };
+    file.set_attr_numeric("dx", &spacing(&x))?;
+    file.set_attr_numeric("dy", &spacing(&y))?;
+    if let Some(code) = r.crs_epsg {
+        file.set_attr_numeric("crs_epsg", &(code as i64))?;
+    }
+    if let Some(wkt) = &r.crs_wkt {
+        file.set_attr_string("crs_wkt", wkt)?;
+    }
+    let g = file.create_group("grid")?;
+    for (name, data) in [("x", &x), ("y", &y)] {
+        let ds = g.new_dataset::<f64>().shape([data.len()]).create(name)?;
+        ds.write_raw(data)?;
+        units(&ds, "m")?;
+    }
+    for (name, data) in [("b", grid.b), ("h_bed", grid.h_bed)] {
+        let ds = g.new_dataset::<f64>().shape([ny, nx]).create(name)?;
+        ds.write_raw(data)?;
+        units(&ds, "m")?;
+    }
+    let s = file.create_group("snapshots")?;
+    let t = series(&s, "t", SNAP_T_CHUNK)?;
+    units(&t, "s")?;
+    dimension_scale(&t, Dim::T)?;
+    for (name, data, dim) in [("x", &x, Dim::X), ("y", &y, Dim::Y)] {
+        let ds = s.new_dataset::<f64>().shape([data.len()]).create(name)?;
+        ds.write_raw(data)?;
+        units(&ds, "m")?;
+        dimension_scale(&ds, dim)?;
+    }
+    frames(&s, "h", &[ny, nx], "m", &[Dim::Y, Dim::X])?;
+    frames(&s, "u", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
+    frames(&s, "v", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
+    step_groups(file, info, &RASTER_STEP_DATASETS)
+}
+
+/// Writes what a raster run gathered: `/maps/<name>` (ny, nx), the per-step series
+/// as `/diagnostics/<name>`, the numbers as `/summary` attributes.
+pub(super) fn write_maps(
+    file: &H5File,
+    (nx, ny): (usize, usize),
+    maps: &RunMaps,
+) -> rust_hdf5::Result<()> {
+    let g = file.create_group("maps")?;
+    for field in maps.maps {
+        let ds = g.new_dataset::<f64>().shape([ny, nx]).create(field.name)?;
+        ds.write_raw(field.data)?;
+        units(&ds, field.units)?;
+    }
+    let d = file.root_group().group("diagnostics")?;
+    for &(name, unit, values) in maps.series {
+        let ds = d.new_dataset::<f64>().shape([values.len()]).create(name)?;
+        ds.write_raw(values)?;
+        units(&ds, unit)?;
+    }
+    let summary = file.root_group().group("summary")?;
+    for &(name, value) in maps.scalars {
+        summary.set_attr_numeric(name, &value)?;
+    }
     Ok(())
 }
 
@@ -134,6 +236,7 @@ pub(super) fn create_optional(
 pub(super) fn create_cell_fields(
     file: &H5File,
     nx: usize,
+    raster: Option<(usize, usize)>,
     fields: &[CellField],
 ) -> rust_hdf5::Result<()> {
     if fields.is_empty() {
@@ -141,7 +244,16 @@ pub(super) fn create_cell_fields(
     }
     let group = file.root_group().group("snapshots")?;
     for field in fields {
-        frames(&group, field.name, &[nx], field.units, &[Dim::X])?;
+        match raster {
+            Some((nx, ny)) => frames(
+                &group,
+                field.name,
+                &[ny, nx],
+                field.units,
+                &[Dim::Y, Dim::X],
+            )?,
+            None => frames(&group, field.name, &[nx], field.units, &[Dim::X])?,
+        }
     }
     Ok(())
 }
@@ -169,6 +281,14 @@ pub(super) fn create_gauges(file: &H5File, x: &[f64]) -> rust_hdf5::Result<()> {
         units(&ds, "m")?;
     }
     Ok(())
+}
+
+/// Writes `/gauges/y`, the gauges' y on a raster.
+pub(super) fn gauge_y(file: &H5File, y: &[f64]) -> rust_hdf5::Result<()> {
+    let g = file.root_group().group("gauges")?;
+    let ds = g.new_dataset::<f64>().shape([y.len()]).create("y")?;
+    ds.write_raw(y)?;
+    units(&ds, "m")
 }
 
 /// Gauge rows waiting for the next write: times and row-major (row, gauge) values.
@@ -225,6 +345,7 @@ pub(super) fn append_snapshot(file: &H5File, snap: &SnapshotView) -> rust_hdf5::
         ("snapshots/t", Some(std::slice::from_ref(&snap.t))),
         ("snapshots/h", Some(snap.h)),
         ("snapshots/u", Some(snap.u)),
+        ("snapshots/v", snap.v),
         ("snapshots/w", snap.w),
         ("snapshots/p_nh", snap.p_nh),
     ];
@@ -318,6 +439,7 @@ enum Dim {
     Layer = 2,
     Level = 3,
     XFace = 4,
+    Y = 5,
 }
 
 impl Dim {
@@ -328,6 +450,7 @@ impl Dim {
             Dim::Layer => "layer",
             Dim::Level => "level",
             Dim::XFace => "x_face",
+            Dim::Y => "y",
         }
     }
 }

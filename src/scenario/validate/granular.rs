@@ -54,41 +54,69 @@ pub(super) fn rheology(
     enum Law {
         Coulomb,
         MuI,
+        Voellmy,
     }
     let law = choice(
         "rheology.law",
         Some(law),
         Law::Coulomb,
-        &[("coulomb", Law::Coulomb), ("mu_i", Law::MuI)],
+        &[
+            ("coulomb", Law::Coulomb),
+            ("mu_i", Law::MuI),
+            ("voellmy", Law::Voellmy),
+        ],
     )?;
-    let coulomb_keys = [("mu", r.mu.is_some()), ("mu_deg", r.mu_deg.is_some())];
-    let mu_i_keys = [
-        ("mu_s", r.mu_s.is_some()),
-        ("mu_s_deg", r.mu_s_deg.is_some()),
-        ("mu_2", r.mu_2.is_some()),
-        ("mu_2_deg", r.mu_2_deg.is_some()),
-        ("i0", r.i0.is_some()),
-        ("monolayer_shear", r.monolayer_shear.is_some()),
-    ];
-    let (foreign, this, other): (&[(&str, bool)], &str, &str) = match law {
-        Law::Coulomb => (&mu_i_keys, "coulomb", "mu_i"),
-        Law::MuI => (&coulomb_keys, "mu_i", "coulomb"),
+    let name = |l: Law| match l {
+        Law::Coulomb => "coulomb",
+        Law::MuI => "mu_i",
+        Law::Voellmy => "voellmy",
     };
-    let given: Vec<&str> = foreign
+    // Each law's keys, and the laws that use them.
+    const COULOMB_LIKE: &[Law] = &[Law::Coulomb, Law::Voellmy];
+    let keys: [(&str, bool, &[Law]); 9] = [
+        ("mu", r.mu.is_some(), COULOMB_LIKE),
+        ("mu_deg", r.mu_deg.is_some(), COULOMB_LIKE),
+        ("mu_s", r.mu_s.is_some(), &[Law::MuI]),
+        ("mu_s_deg", r.mu_s_deg.is_some(), &[Law::MuI]),
+        ("mu_2", r.mu_2.is_some(), &[Law::MuI]),
+        ("mu_2_deg", r.mu_2_deg.is_some(), &[Law::MuI]),
+        ("i0", r.i0.is_some(), &[Law::MuI]),
+        ("monolayer_shear", r.monolayer_shear.is_some(), &[Law::MuI]),
+        ("xi", r.xi.is_some(), &[Law::Voellmy]),
+    ];
+    let foreign: Vec<(&str, &[Law])> = keys
         .iter()
-        .filter(|(_, given)| *given)
-        .map(|(name, _)| *name)
+        .filter(|(_, given, laws)| *given && !laws.contains(&law))
+        .map(|&(key, _, laws)| (key, laws))
         .collect();
-    if law_overridden && !given.is_empty() {
-        let keys: Vec<String> = given.iter().map(|n| format!("rheology.{n}")).collect();
+    let this = name(law);
+    if law_overridden && !foreign.is_empty() {
+        let keys: Vec<String> = foreign
+            .iter()
+            .map(|(n, _)| format!("rheology.{n}"))
+            .collect();
+        let others: Vec<String> = foreign
+            .iter()
+            .flat_map(|(_, laws)| laws.iter().map(|&l| format!("\"{}\"", name(l))))
+            .fold(Vec::new(), |mut all, l| {
+                if !all.contains(&l) {
+                    all.push(l);
+                }
+                all
+            });
         notes.push(format!(
-            "{} ignored: only used by law = \"{other}\" and rheology.law was set to \"{this}\"",
-            keys.join(", ")
+            "{} ignored: only used by law = {} and rheology.law was set to \"{this}\"",
+            keys.join(", "),
+            others.join(" or ")
         ));
-    } else if let Some(name) = given.first() {
+    } else if let Some((key, laws)) = foreign.first() {
+        let others: Vec<String> = laws.iter().map(|&l| format!("\"{}\"", name(l))).collect();
         return err(
-            &format!("rheology.{name}"),
-            format!("only used by law = \"{other}\" (rheology.law is \"{this}\"); remove it"),
+            &format!("rheology.{key}"),
+            format!(
+                "only used by law = {} (rheology.law is \"{this}\"); remove it",
+                others.join(" or ")
+            ),
         );
     }
     match law {
@@ -133,6 +161,16 @@ pub(super) fn rheology(
                 i0,
                 shear,
             })
+        }
+        Law::Voellmy => {
+            let (mu, _) = coefficient("mu", r.mu, r.mu_deg)?.ok_or_else(|| {
+                ScenarioError::at(
+                    "rheology.mu",
+                    "missing required key (law = \"voellmy\" needs mu or mu_deg)",
+                )
+            })?;
+            let xi = positive("rheology.xi", required("rheology.xi", r.xi)?)?;
+            Ok(FrictionLaw::Voellmy { mu, xi })
         }
     }
 }

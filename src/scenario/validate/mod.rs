@@ -11,6 +11,7 @@ use rayon::prelude::*;
 mod check;
 mod dilatant;
 mod granular;
+mod plane;
 mod submarine;
 
 use crate::output::budget::{size, OUTPUT_LIMIT};
@@ -207,10 +208,20 @@ fn validate(
     law_overridden: bool,
 ) -> Res<Scenario> {
     let mut notes = Vec::new();
-    let domain = domain(section("domain", raw.domain)?)?;
-    let bed = match raw.bed.and_then(|b| b.b) {
-        Some(v) => Profile::from_toml("bed.b", &v, base_dir, false)?,
-        None => Profile::constant(0.0),
+    let raw_domain = section("domain", raw.domain)?;
+    let raw_bed = raw.bed.and_then(|b| b.b);
+    let read_bed = |v: &Option<toml::Value>| match v {
+        Some(v) => Profile::from_toml("bed.b", v, base_dir, false),
+        None => Ok(Profile::constant(0.0)),
+    };
+    // A domain without its grid keys takes the grid of a raster bed (read first then).
+    let from_bed = plane::grid_from_bed(&raw_domain, raw_bed.as_ref());
+    let (mut domain, bed) = if from_bed {
+        let bed = read_bed(&raw_bed)?;
+        (plane::domain_of_raster(raw_domain, &bed)?, bed)
+    } else {
+        let domain = domain(raw_domain)?;
+        (domain, read_bed(&raw_bed)?)
     };
     let material = material(raw.material.unwrap_or_default())?;
     let raw_rheology = section("rheology", raw.rheology)?;
@@ -231,7 +242,9 @@ fn validate(
     nonhydrostatic_solver_fits(&domain, &model)?;
     let raw_initial = section("initial", raw.initial)?;
     let raw_w = raw_initial.w.is_some();
+    plane::raster_keys(&domain, &model, &raw_initial, raw.submarine.is_some())?;
     let initial = initial(raw_initial, base_dir)?;
+    plane::profiles_fit(&mut domain, &bed, &initial, from_bed)?;
     // Sampled once here; the checks below look at these values and setup uses them.
     let sampled = Sampled::of(&domain, &bed, &initial);
     let submarine = submarine::submarine(
@@ -243,7 +256,7 @@ fn validate(
         raw_w,
         &sampled,
     )?;
-    let boundary = boundary(raw.boundary.unwrap_or_default())?;
+    let boundary = plane::boundary(raw.boundary.unwrap_or_default(), &domain)?;
     let time = time(section("time", raw.time)?)?;
     let raw_output = raw.output.unwrap_or_default();
     let output = output(&raw_output, &time, &domain, default_output)?;
@@ -269,7 +282,11 @@ fn validate(
         raw_output.static_threshold,
         model.layers,
     )?;
-    check_profiles(&domain, &sampled, &bed, &initial, model.pressure)?;
+    if domain.plane.is_some() {
+        plane::check_profiles(&domain, &sampled, &bed, &initial)?;
+    } else {
+        check_profiles(&domain, &sampled, &bed, &initial, model.pressure)?;
+    }
     if let (Some(phi), Some(values)) = (&initial.phi, &sampled.phi) {
         check_fraction(&domain, &sampled.b, phi, values)?;
     }
@@ -330,6 +347,10 @@ fn nonhydrostatic_solver_fits(domain: &Domain, model: &ModelSpec) -> Res<()> {
 }
 
 fn domain(d: RawDomain) -> Res<Domain> {
+    if plane::is_raster(&d) {
+        return plane::domain(d);
+    }
+    let cells = plane::line_cells(d.cells.as_ref())?;
     let x_min = finite("domain.x_min", required("domain.x_min", d.x_min)?)?;
     let x_max = finite("domain.x_max", required("domain.x_max", d.x_max)?)?;
     if x_max <= x_min {
@@ -346,7 +367,7 @@ fn domain(d: RawDomain) -> Res<Domain> {
     }
     let cells = int_in(
         "domain.cells",
-        required("domain.cells", d.cells)?,
+        required("domain.cells", cells)?,
         1,
         MAX_CELLS,
     )?;
@@ -363,6 +384,19 @@ fn domain(d: RawDomain) -> Res<Domain> {
             ),
         );
     }
+    let (coordinates, slope_deg) = frame(&d)?;
+    Ok(Domain {
+        x_min,
+        x_max,
+        cells,
+        slope_deg,
+        coordinates,
+        plane: None,
+    })
+}
+
+/// `domain.coordinates` and `domain.slope_deg`.
+fn frame(d: &RawDomain) -> Res<(Coordinates, f64)> {
     let coordinates = choice(
         "domain.coordinates",
         d.coordinates.as_deref(),
@@ -390,13 +424,7 @@ fn domain(d: RawDomain) -> Res<Domain> {
             ),
         );
     }
-    Ok(Domain {
-        x_min,
-        x_max,
-        cells,
-        slope_deg,
-        coordinates,
-    })
+    Ok((coordinates, slope_deg))
 }
 
 fn material(m: RawMaterial) -> Res<Material> {
@@ -418,6 +446,10 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
         Some(v) => Profile::from_toml("initial.u", &v, base_dir, true)?,
         None => Profile::constant(0.0),
     };
+    let v = match i.v {
+        Some(v) => Profile::from_toml("initial.v", &v, base_dir, true)?,
+        None => Profile::constant(0.0),
+    };
     let w = match i.w {
         Some(v) => Profile::from_toml("initial.w", &v, base_dir, true)?,
         None => Profile::constant(0.0),
@@ -434,6 +466,7 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
     Ok(Initial {
         h,
         u,
+        v,
         w,
         erodible_bed,
         eta,
@@ -441,7 +474,7 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
     })
 }
 
-fn boundary(b: RawBoundary) -> Res<Boundaries> {
+fn line_boundary(b: RawBoundary) -> Res<Boundaries> {
     let kinds = [
         ("wall", BoundaryKind::Wall),
         ("outflow", BoundaryKind::Outflow),
@@ -459,6 +492,8 @@ fn boundary(b: RawBoundary) -> Res<Boundaries> {
             BoundaryKind::Wall,
             &kinds,
         )?,
+        south: BoundaryKind::Wall,
+        north: BoundaryKind::Wall,
     })
 }
 
@@ -504,7 +539,7 @@ fn output(o: &RawOutput, time: &TimeSpec, domain: &Domain, default_file: &str) -
         );
     }
     let front_threshold = positive("output.front_threshold", o.front_threshold.unwrap_or(1e-3))?;
-    let gauges = gauges(o.gauges.as_deref().unwrap_or(&[]), domain)?;
+    let (gauges, gauges_y) = plane::gauges(o.gauges.as_ref(), domain)?;
     let gauge_every = match o.gauge_every {
         Some(_) if gauges.is_empty() => {
             return err(
@@ -520,12 +555,13 @@ fn output(o: &RawOutput, time: &TimeSpec, domain: &Domain, default_file: &str) -
         every,
         front_threshold,
         gauges,
+        gauges_y,
         gauge_every,
     })
 }
 
 /// `output.gauges`: finite positions inside [x_min, x_max], each at most once.
-fn gauges(xs: &[f64], domain: &Domain) -> Res<Vec<f64>> {
+fn line_gauges(xs: &[f64], domain: &Domain) -> Res<Vec<f64>> {
     const KEY: &str = "output.gauges";
     for (k, &x) in xs.iter().enumerate() {
         if !x.is_finite() {
@@ -685,7 +721,8 @@ t_end = 2.0
                 x_max: 1.0,
                 cells: 10,
                 slope_deg: 0.0,
-                coordinates: Coordinates::Local
+                coordinates: Coordinates::Local,
+                plane: None,
             }
         );
         assert_eq!(s.bed.as_constant(), Some(0.0));
@@ -713,7 +750,9 @@ t_end = 2.0
             s.boundary,
             Boundaries {
                 left: BoundaryKind::Wall,
-                right: BoundaryKind::Wall
+                right: BoundaryKind::Wall,
+                south: BoundaryKind::Wall,
+                north: BoundaryKind::Wall,
             }
         );
         assert_eq!(
@@ -733,6 +772,7 @@ t_end = 2.0
                 every: 0.1,
                 front_threshold: 1e-3,
                 gauges: Vec::new(),
+                gauges_y: Vec::new(),
                 gauge_every: None,
             }
         );

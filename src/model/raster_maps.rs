@@ -1,0 +1,199 @@
+//! The maps of a raster run and what is derived from them, gathered over every
+//! accepted state ([`Tracker`]):
+//!
+//! - `h_max` = max_t h(x, y, t) over every state (so h_max ≥ the deposit everywhere);
+//! - `speed_max` = max_t |(hu, hv)|/h over the states where h > h_f, the flow
+//!   threshold `output.front_threshold` (0 where never reached: a film thinner than
+//!   h_f has no meaningful velocity);
+//! - `arrival_time` = the first t with h > h_f (NaN where never reached; 0 inside the
+//!   release);
+//! - `deposit` = h at the end of the run.
+//!
+//! The area reached A(t) = Δx Δy · #{cells reached by t} is a per-step series. The
+//! runout and the travel angle are measured along the main flow direction d: the unit
+//! vector from the centre of mass of the release, c₀ = Σ h₀ x / Σ h₀, to that of the
+//! final state, c₁ (or +x when c₁ is within half a cell of c₀, e.g. a radial collapse
+//! on a flat bed). With s = (x − c₀)·d, the top of the release is its cell (h₀ > h_f)
+//! of least s and the runout point the reached cell of largest s. In world
+//! coordinates (X, Y, Z) — (x, y, b) in Cartesian coordinates, (x cos θ + b sin θ, y,
+//! −x sin θ + b cos θ) over a reference plane of slope θ — the runout length L is the
+//! horizontal distance from the top to the runout point along the horizontal direction
+//! of d, and the travel angle α = atan((Z_top − Z_runout)/L) (Heim 1932's Fahrböschung, the angle of the line
+//! from the top of the release to the farthest point reached).
+
+use crate::grid::raster::Raster2d;
+use crate::grid::{Coordinates, Grid};
+use crate::model::tracker::Tracker;
+use crate::output::{CellField, OutputError, OutputSink, RunMaps};
+use crate::state::layered_2d::State2d;
+
+/// The maps of one raster run (allocated once, updated in place).
+#[derive(Debug, Clone)]
+pub struct RasterMaps {
+    threshold: f64,
+    h_max: Vec<f64>,
+    speed_max: Vec<f64>,
+    arrival: Vec<f64>,
+    /// The initial thickness (the release), kept for the runout.
+    h0: Vec<f64>,
+    reached: usize,
+    area: Vec<f64>,
+}
+
+impl RasterMaps {
+    /// Maps for `cells` cells with the flow threshold `threshold` (m).
+    pub fn new(cells: usize, threshold: f64) -> RasterMaps {
+        RasterMaps {
+            threshold,
+            h_max: vec![0.0; cells],
+            speed_max: vec![0.0; cells],
+            arrival: vec![f64::NAN; cells],
+            h0: Vec::new(),
+            reached: 0,
+            area: Vec::new(),
+        }
+    }
+
+    /// Area reached, runout and travel angle at the end (the `/summary` numbers).
+    fn runout(&self, grid: &Raster2d, h1: &[f64]) -> Vec<(&'static str, f64)> {
+        let centre = |h: &[f64]| {
+            let (mut m, mut mx, mut my) = (0.0, 0.0, 0.0);
+            for (k, &h) in h.iter().enumerate() {
+                let p = grid.centre(k);
+                if h.is_finite() {
+                    m += h;
+                    mx += h * p.x;
+                    my += h * p.y;
+                }
+            }
+            (mx / m, my / m)
+        };
+        let c0 = centre(&self.h0);
+        let c1 = centre(h1);
+        let (ex, ey) = (c1.0 - c0.0, c1.1 - c0.1);
+        let len = ex.hypot(ey);
+        let (dx, dy) = if len.is_finite() && len > 0.5 * grid.dx().min(grid.dy()) {
+            (ex / len, ey / len)
+        } else {
+            (1.0, 0.0)
+        };
+        let s = |k: usize| {
+            let p = grid.centre(k);
+            (p.x - c0.0) * dx + (p.y - c0.1) * dy
+        };
+        let top = (0..self.h0.len())
+            .filter(|&k| self.h0[k] > self.threshold)
+            .min_by(|&a, &b| s(a).total_cmp(&s(b)));
+        let front = (0..self.arrival.len())
+            .filter(|&k| self.arrival[k].is_finite())
+            .max_by(|&a, &b| s(a).total_cmp(&s(b)));
+        let theta = match grid.coordinates() {
+            Coordinates::Local => grid.theta,
+            Coordinates::Cartesian => 0.0,
+        };
+        let world = |k: usize| {
+            let p = grid.centre(k);
+            let b = grid.bed()[k];
+            (
+                p.x * theta.cos() + b * theta.sin(),
+                p.y,
+                -p.x * theta.sin() + b * theta.cos(),
+            )
+        };
+        // The horizontal direction of d, along which the runout is measured.
+        let (hx, hy) = (dx * theta.cos(), dy);
+        let norm = hx.hypot(hy);
+        let (length, angle, front_xy, top_xy) = match (top, front) {
+            (Some(t), Some(f)) => {
+                let (a, b) = (world(t), world(f));
+                let l = ((b.0 - a.0) * hx + (b.1 - a.1) * hy) / norm;
+                let angle = (a.2 - b.2).atan2(l).to_degrees();
+                let (pt, pf) = (grid.centre(t), grid.centre(f));
+                (l, angle, (pf.x, pf.y), (pt.x, pt.y))
+            }
+            _ => (
+                f64::NAN,
+                f64::NAN,
+                (f64::NAN, f64::NAN),
+                (f64::NAN, f64::NAN),
+            ),
+        };
+        vec![
+            ("area_reached", self.reached as f64 * grid.cell_area()),
+            ("runout_length", length),
+            ("travel_angle_deg", angle),
+            ("flow_direction_x", dx),
+            ("flow_direction_y", dy),
+            ("runout_x", front_xy.0),
+            ("runout_y", front_xy.1),
+            ("release_top_x", top_xy.0),
+            ("release_top_y", top_xy.1),
+        ]
+    }
+}
+
+impl Tracker<Raster2d, State2d> for RasterMaps {
+    fn observe(&mut self, grid: &Raster2d, state: &State2d, t: f64) {
+        if self.h0.is_empty() {
+            self.h0.clone_from(&state.h);
+        }
+        let thr = self.threshold;
+        for k in 0..state.h.len() {
+            let h = state.h[k];
+            if h > self.h_max[k] {
+                self.h_max[k] = h;
+            }
+            if h > thr {
+                let speed = state.hu[k].hypot(state.hv[k]) / h;
+                if speed > self.speed_max[k] {
+                    self.speed_max[k] = speed;
+                }
+                if self.arrival[k].is_nan() {
+                    self.arrival[k] = t;
+                    self.reached += 1;
+                }
+            }
+        }
+        self.area.push(self.reached as f64 * grid.cell_area());
+    }
+
+    fn write(
+        &self,
+        grid: &Raster2d,
+        state: &State2d,
+        sink: &mut dyn OutputSink,
+    ) -> Result<(), OutputError> {
+        let maps = [
+            CellField {
+                name: "h_max",
+                units: "m",
+                data: &self.h_max,
+            },
+            CellField {
+                name: "speed_max",
+                units: "m/s",
+                data: &self.speed_max,
+            },
+            CellField {
+                name: "arrival_time",
+                units: "s",
+                data: &self.arrival,
+            },
+            CellField {
+                name: "deposit",
+                units: "m",
+                data: &state.h,
+            },
+        ];
+        let scalars = if self.h0.is_empty() {
+            Vec::new()
+        } else {
+            self.runout(grid, &state.h)
+        };
+        sink.maps(&RunMaps {
+            maps: &maps,
+            series: &[("area_reached", "m^2", &self.area)],
+            scalars: &scalars,
+        })
+    }
+}

@@ -1,0 +1,17 @@
+//! What a run gathers over all its steps, beyond the per-step diagnostics: the maps of
+//! a raster run (largest thickness and speed, arrival time, deposit) and the numbers
+//! derived from them (area reached, runout, travel angle). The run loop hands a
+//! [`Tracker`] every accepted state and, once before the sink is finished, lets it
+//! write what it gathered ([`crate::output::RunMaps`]).
+
+use crate::output::{OutputError, OutputSink};
+
+/// Gathers over a run; `observe` is called with the initial state and after every
+/// accepted step, in the order of the step records.
+pub trait Tracker<G, S>: Send {
+    /// Takes the state at time `t` into account.
+    fn observe(&mut self, grid: &G, state: &S, t: f64);
+    /// Hands what was gathered to `sink` ([`OutputSink::maps`]); `state` is the final
+    /// one (the last accepted state, as the run ended).
+    fn write(&self, grid: &G, state: &S, sink: &mut dyn OutputSink) -> Result<(), OutputError>;
+}

@@ -1,0 +1,63 @@
+//! From a validated [`Scenario`] on a raster domain to a ready 2-D granular
+//! [`Simulation`]: the [`Raster2d`] of `[domain]` and `[boundary]` with the bed sampled
+//! at its centres, the state (h, hu, hv) from `initial.h`, `initial.u`, `initial.v`,
+//! the model and its pipeline for the friction law on `threads` threads, and the
+//! [`RasterMaps`] tracker (maxima, arrival time, deposit, runout).
+//! Everything that can be wrong with the scenario was refused by its validation.
+
+use crate::grid::raster::{Raster2d, RasterSpec, Sides};
+use crate::model::granular_2d::{pipeline, Granular2d};
+use crate::model::raster_maps::RasterMaps;
+use crate::output::RasterInfo;
+use crate::scenario::Scenario;
+use crate::setup::{run_config, run_info};
+use crate::simulation::Simulation;
+use crate::state::layered_2d::State2d;
+
+/// The raster of a scenario, with its bed sampled at the cell centres.
+pub fn scenario_raster(scn: &Scenario) -> Raster2d {
+    let d = &scn.domain;
+    let plane = d.plane.as_ref().expect("a raster domain");
+    let spec = RasterSpec {
+        nx: d.cells,
+        ny: plane.ny,
+        x_min: d.x_min,
+        x_max: d.x_max,
+        y_min: plane.y_min,
+        y_max: plane.y_max,
+        sides: Sides {
+            west: scn.boundary.left,
+            east: scn.boundary.right,
+            south: scn.boundary.south,
+            north: scn.boundary.north,
+        },
+        coordinates: d.coordinates,
+        slope_deg: d.slope_deg,
+    };
+    Raster2d::new(spec, scn.sampled.b.clone())
+        .unwrap_or_else(|e| panic!("a validated raster domain was refused: {e}"))
+}
+
+pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
+    let grid = scenario_raster(scn);
+    let plane = scn.domain.plane.as_ref().expect("a raster domain");
+    let state = State2d::from_velocities(scn.sampled.h.clone(), &scn.sampled.u, &scn.sampled.v);
+    let model = Granular2d::new(&grid, scn.output.front_threshold);
+    // A pool that cannot be started falls back to one thread: the same bits, slower.
+    let stages = pipeline(&scn.friction, &scn.material, &grid, threads)
+        .or_else(|_| pipeline(&scn.friction, &scn.material, &grid, 1))
+        .expect("a serial pipeline starts no thread");
+    let mut info = run_info(scn, "hydrostatic", 1);
+    info.raster = Some(RasterInfo {
+        nx: grid.nx(),
+        ny: grid.ny(),
+        crs_epsg: plane.crs.epsg,
+        crs_wkt: plane.crs.wkt.clone(),
+    });
+    let rules = crate::stop::default_rules(super::stop_options(&scn.time));
+    let config = run_config(scn);
+    let cells = grid.nx() * grid.ny();
+    let mut sim = Simulation::new(grid, model, state, stages, rules, config, info);
+    sim.set_tracker(Box::new(RasterMaps::new(cells, scn.output.front_threshold)));
+    sim
+}
