@@ -28,4 +28,5 @@ mod scenarios;
 mod submarine;
 mod submarine_paper;
 mod sweep;
+mod water_nh;
 mod well_balanced;

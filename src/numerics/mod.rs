@@ -19,6 +19,7 @@ pub mod projection;
 pub mod tracer;
 pub mod two_layer;
 pub mod viscous;
+pub mod water_nh;
 
 /// Why a stage could not complete a step. The place is a physical cell index (0-based,
 /// as [`crate::grid::Grid::centre`] takes it); the run loop turns it into a position.

@@ -5,16 +5,20 @@
 //!
 //! - [`LayeredState`] ([`layered`]): the granular family, N layers of fixed fractions,
 //!   with tracers and the non-hydrostatic pressure;
-//! - [`TwoLayerState`] ([`two_layer`]): water over grains (Fernández-Nieto et al. 2008);
+//! - [`TwoLayerState`] ([`two_layer`]): water over grains (Fernández-Nieto et al. 2008),
+//!   with the water's layers and non-hydrostatic pressure ([`WaterColumn`],
+//!   [`water_column`]) when the water is non-hydrostatic;
 //! - [`DilatantState`] ([`dilatant`]): the compressible μ(I)–φ model (Bouchut et al. 2021).
 
 pub mod dilatant;
 pub mod layered;
 pub mod two_layer;
+pub mod water_column;
 
 pub use dilatant::DilatantState;
 pub use layered::LayeredState;
 pub use two_layer::TwoLayerState;
+pub use water_column::WaterColumn;
 
 #[cfg(test)]
 mod tests {
