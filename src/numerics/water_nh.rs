@@ -28,8 +28,10 @@
 //! **Time step** (a non-incremental projection, Chorin's; the pressure is implicit):
 //! 1. the two-layer step advances H₁, Q₁ (the depth mean U₁ = Σ l_α u_α), H₂, Q₂ with
 //!    the hydrostatic pressures, plus the grains' share of the water pressure of t^n
-//!    (below); the layer deviations u'_α = u_α − U₁ and w_α are carried unchanged
-//!    (their advection is neglected: exact for linear waves, see docs/numerics.md);
+//!    (below); the layer deviations u'_α = u_α − U₁ and w_α are advected by U₁
+//!    (first-order upwind, [`advect`]; the other transport terms of the deviations,
+//!    u'_α ∂_x u'_α and the exchange through the layer interfaces, are neglected:
+//!    quadratic in the deviations, they vanish for linear waves, docs/numerics.md);
 //! 2. the discrete bottom rate ż_b = (z_b^{n+1} − z_b^n)/Δt from the grain thicknesses
 //!    before and after step 1;
 //! 3. the projection on the water column: with the state
@@ -76,6 +78,8 @@ pub struct WaterProjection {
     zb: Vec<f64>,
     /// ż_b per cell (with ghosts).
     zb_rate: Vec<f64>,
+    /// Scratch of the advection of u'_α, w_α (cell-major, with ghosts).
+    advected: Vec<f64>,
 }
 
 /// z_b = b + H₂cos²θ per cell with ghosts.
@@ -102,6 +106,7 @@ impl WaterProjection {
             zb_old: vec![0.0; nx + 2],
             zb: vec![0.0; nx + 2],
             zb_rate: vec![0.0; nx + 2],
+            advected: vec![0.0; (nx + 2) * layers],
         }
     }
 
@@ -134,6 +139,12 @@ impl WaterProjection {
             .water
             .as_mut()
             .expect("a non-hydrostatic water carries its column");
+        // Advection of the layers' deviations and vertical velocities by U₁.
+        let lam = dt / g.line.dx;
+        for f in [&mut water.du, &mut water.w] {
+            advect(f, &s.h1, &s.q1, n, lam, &mut self.advected);
+            f[n..(nx + 1) * n].copy_from_slice(&self.advected[n..(nx + 1) * n]);
+        }
         // The column in the multilayer variables: h = d, hu_α = d u_α, hw_α = d w̃_α.
         {
             let LayeredState {
@@ -203,6 +214,26 @@ impl WaterProjection {
             g.line.left.discharge_sign(),
             g.line.right.discharge_sign(),
         );
+    }
+}
+
+/// First-order upwind advection ∂_t f + U₁ ∂_x f = 0 of a per-layer field `f` (with
+/// ghosts) by the depth-mean water velocity U₁ = Q₁/H₁ of each cell, into `out` (the
+/// physical cells). `lam` = Δt/Δx; |U₁| λ ≤ 1 by the CFL condition of the two-layer
+/// step, whose speed bounds contain U₁.
+fn advect(f: &[f64], h1: &[f64], q1: &[f64], n: usize, lam: f64, out: &mut [f64]) {
+    let nx = h1.len() - 2;
+    for i in 1..=nx {
+        let u = if h1[i] > H_DRY_TWO_LAYER {
+            q1[i] / h1[i]
+        } else {
+            0.0
+        };
+        let (c_up, c_down) = (lam * u.max(0.0), lam * u.min(0.0));
+        for a in 0..n {
+            let k = i * n + a;
+            out[k] = f[k] - c_up * (f[k] - f[k - n]) - c_down * (f[k + n] - f[k]);
+        }
     }
 }
 
