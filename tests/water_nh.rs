@@ -235,3 +235,277 @@ fn a_solitary_wave_keeps_its_shape_over_fifty_depths() {
         }
     }
 }
+
+/// The surface of linear potential theory over a bottom that rises,
+/// ζ(x, t) = A e^{−x²} T(t), T = (1 − cos(πt/τ))/2 up to τ and 1 after, in the basin
+/// [0, L] with walls (depth h = 1): each cosine mode k_n = nπ/L of the surface obeys
+/// η_n'' + ω_n² η_n = ζ_n''/cosh(k_n h) (Hammack 1973, eq. 2.10 in Fourier form),
+/// ω_n² = g k_n tanh(k_n h), from rest; ζ_n = A√π/L e^{−k_n²/4} (½ of it for n = 0).
+fn uplift_exact(a: f64, tau: f64, l: f64, x: f64, t: f64) -> f64 {
+    let big_omega = std::f64::consts::PI / tau;
+    let mut eta = 0.0;
+    for n in 0..2000 {
+        let k = n as f64 * std::f64::consts::PI / l;
+        let mut c = a * std::f64::consts::PI.sqrt() / l * (-k * k / 4.0).exp();
+        if n == 0 {
+            c *= 0.5;
+        }
+        if c.abs() < 1e-16 {
+            break;
+        }
+        let omega = airy(k, 1.0);
+        // Forcing c T''/cosh = F cos(Ω t) up to τ.
+        let f = c * 0.5 * big_omega * big_omega / k.cosh();
+        let d = omega * omega - big_omega * big_omega;
+        let ts = t.min(tau);
+        let (e, de) = (
+            f / d * ((big_omega * ts).cos() - (omega * ts).cos()),
+            f / d * (-big_omega * (big_omega * ts).sin() + omega * (omega * ts).sin()),
+        );
+        let value = if t <= tau || omega == 0.0 {
+            if omega == 0.0 {
+                c * 0.5 * (1.0 - (big_omega * ts).cos())
+            } else {
+                e
+            }
+        } else {
+            let s = t - tau;
+            e * (omega * s).cos() + de / omega * (omega * s).sin()
+        };
+        eta += value * (k * x).cos();
+    }
+    eta
+}
+
+/// Relative L² distance between the model's surface and [`uplift_exact`] at `t_end`,
+/// for the bottom rising as in [`uplift_exact`] (A = 0.01 h, τ√(g/h) = 1.57).
+fn uplift_error(layers: Option<usize>, dx: f64, t_end: f64) -> f64 {
+    let (a, tau, l) = (0.01, 0.5, 30.0);
+    let zeta = |x: f64, t: f64| {
+        let ramp = if t < tau {
+            0.5 * (1.0 - (std::f64::consts::PI * t / tau).cos())
+        } else {
+            1.0
+        };
+        a * (-x * x).exp() * ramp
+    };
+    let nx = (l / dx).round() as usize;
+    let mut tank = Tank::new(0.0, dx, nx, |_| 1.0, |_| 0.0, layers, BoundaryKind::Wall);
+    while tank.t < t_end - 1e-12 {
+        let s = tank.solver.max_speed(&tank.grid, &tank.state);
+        let dt = (0.8 * dx / s).min(t_end - tank.t).min(tau / 50.0);
+        if let Some(p) = &mut tank.projection {
+            p.record_bottom(&tank.grid, &tank.state);
+        }
+        tank.solver.step_with(&tank.grid, &mut tank.state, dt);
+        tank.t += dt;
+        // The prescribed bottom: the grain layer's thickness, at rest.
+        for i in 1..=nx {
+            tank.state.h2[i] = zeta(tank.grid.line.x[i - 1], tank.t);
+            tank.state.q2[i] = 0.0;
+        }
+        tank.state.fill_ghosts(&tank.grid);
+        if let Some(p) = &mut tank.projection {
+            p.project(&tank.grid, &mut tank.state, dt);
+        }
+    }
+    let (mut num, mut den) = (0.0, 0.0);
+    for i in 0..nx {
+        let x = tank.grid.line.x[i];
+        let exact = uplift_exact(a, tau, l, x, t_end);
+        num += (tank.eta(i) - 1.0 - exact).powi(2);
+        den += exact * exact;
+    }
+    (num / den).sqrt()
+}
+
+/// Hammack's problem (a bed uplift of width ~h in τ√(g/h) = 1.57): the surface at
+/// t = 3 s and 6 s against linear potential theory, on Δx = h/10, h/20, h/40. With M ≥ 2
+/// layers the error falls with Δx (observed order ≈ 1, the scheme's) to 4–8 % at
+/// h/40, and at h/40 it falls with M; the hydrostatic water (the surface lifted with
+/// the bed, then long waves) is off by 80–100 % and gets no better with Δx.
+#[test]
+fn a_rising_bottom_makes_the_waves_of_linear_potential_theory() {
+    for (t_end, bound) in [(3.0, 0.05), (6.0, 0.08)] {
+        let mut fine = Vec::new();
+        for layers in [None, Some(1), Some(2), Some(3)] {
+            let errors: Vec<f64> = [0.1, 0.05, 0.025]
+                .iter()
+                .map(|&dx| uplift_error(layers, dx, t_end))
+                .collect();
+            let orders: Vec<f64> = errors.windows(2).map(|e| (e[0] / e[1]).log2()).collect();
+            println!("t = {t_end}, layers {layers:?}: relative L2 error {errors:.3?} (dx = 0.1, 0.05, 0.025), observed orders {orders:.2?}");
+            if layers >= Some(2) {
+                assert!(orders.iter().all(|&p| p > 0.5), "{layers:?}: {errors:?}");
+            }
+            fine.push(errors[2]);
+        }
+        let (hydrostatic, m1, m2, m3) = (fine[0], fine[1], fine[2], fine[3]);
+        assert!(hydrostatic > 0.6, "{fine:?}");
+        assert!(m3 < m2 && m2 < m1 && m1 < 0.4 * hydrostatic, "{fine:?}");
+        assert!(m3 < bound, "{fine:?}");
+    }
+}
+
+const LAKE: &str = r#"
+[domain]
+x_min = 0.0
+x_max = 10.0
+cells = 200
+coordinates = "cartesian"
+
+[bed]
+b = "0.2 * x + 0.05 * sin(2 * x)"
+
+[rheology]
+law = "coulomb"
+mu_deg = 40.0
+
+[model]
+kind = "submarine"
+
+[submarine]
+r = 0.3
+water_pressure = "nonhydrostatic"
+water_layers = 2
+
+[initial]
+h = "0.3 * exp(-(x - 4.5)^2)"
+eta = 1.8
+
+[boundary]
+left = "wall"
+right = "wall"
+
+[time]
+t_end = 2.0
+cfl = 0.8
+stop_at_rest = false
+
+[output]
+every = 1.0
+"#;
+
+fn load(text: &str, sets: &[&str]) -> granflow::scenario::Scenario {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    granflow::scenario::load_str(text, std::path::Path::new("."), &sets).expect("valid scenario")
+}
+
+fn field<'a>(snap: &'a granflow::output::memory::Snapshot, name: &str) -> &'a [f64] {
+    &snap
+        .extra
+        .iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("{name}"))
+        .1
+}
+
+/// A lake at rest (with a shoreline) over a grain deposit at rest held by friction on
+/// an uneven slope stays at rest to round-off with non-hydrostatic water (M = 1, 3):
+/// velocities, pressure and the surface.
+#[test]
+fn a_lake_at_rest_over_a_deposit_stays_at_rest() {
+    for layers in ["1", "3"] {
+        let scn = load(LAKE, &[&format!("submarine.water_layers={layers}")]);
+        let mut sim = granflow::setup::build_submarine(&scn);
+        let mut sink = granflow::output::memory::MemorySink::default();
+        sim.run(&mut sink, &mut |_| {}).unwrap();
+        let (first, last) = (&sink.snapshots[0], sink.snapshots.last().unwrap());
+        let max = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let n: usize = layers.parse().unwrap();
+        for a in 1..=n {
+            assert!(max(field(last, &format!("p_water_{a}"))) < 1e-12);
+            assert!(max(field(last, &format!("w_water_{a}"))) < 1e-13);
+        }
+        assert!(max(field(last, "u_water")) < 1e-13);
+        assert_eq!(max(&last.u), 0.0);
+        let (e0, e1) = (field(first, "eta"), field(last, "eta"));
+        let moved = e0
+            .iter()
+            .zip(e1)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(moved < 1e-12, "{moved}");
+        // Some cells are dry (the shoreline).
+        assert!(field(last, "h_water").iter().any(|&h| h == 0.0));
+    }
+}
+
+/// A slide into non-hydrostatic water (M = 2, walls): water and grain volumes are
+/// those of t = 0 to round-off, the water moves, and the key "hydrostatic" is the
+/// default bit for bit.
+#[test]
+fn volumes_are_conserved_and_hydrostatic_is_the_default() {
+    let steep = LAKE.replace("mu_deg = 40.0", "mu_deg = 10.0");
+    let run = |text: &str, sets: &[&str]| {
+        let mut sim = granflow::setup::build_submarine(&load(text, sets));
+        let mut sink = granflow::output::memory::MemorySink::default();
+        sim.run(&mut sink, &mut |_| {}).unwrap();
+        sink
+    };
+    let sink = run(&steep, &[]);
+    let dx = 10.0 / 200.0;
+    let water =
+        |s: &granflow::output::memory::Snapshot| field(s, "h_water").iter().sum::<f64>() * dx;
+    let grains = |s: &granflow::output::memory::Snapshot| s.h.iter().sum::<f64>() * dx;
+    let (first, last) = (&sink.snapshots[0], sink.snapshots.last().unwrap());
+    assert!((water(last) - water(first)).abs() < 1e-13 * water(first));
+    assert!((grains(last) - grains(first)).abs() < 1e-13 * grains(first));
+    let speed = field(last, "u_water")
+        .iter()
+        .fold(0.0f64, |m, u| m.max(u.abs()));
+    assert!(speed > 1e-2, "the slide must move the water: {speed}");
+    let p = field(last, "p_water_1")
+        .iter()
+        .fold(0.0f64, |m, p| m.max(p.abs()));
+    assert!(p > 0.0);
+
+    let hydrostatic = steep.replace(
+        "water_pressure = \"nonhydrostatic\"\nwater_layers = 2\n",
+        "",
+    );
+    let explicit = steep.replace(
+        "water_pressure = \"nonhydrostatic\"\nwater_layers = 2",
+        "water_pressure = \"hydrostatic\"",
+    );
+    assert_ne!(hydrostatic, steep);
+    let (a, b) = (run(&hydrostatic, &[]), run(&explicit, &[]));
+    assert_eq!(a.snapshots, b.snapshots);
+    assert!(a.snapshots[0]
+        .extra
+        .iter()
+        .all(|(n, _)| !n.starts_with("p_water")));
+}
+
+fn rejects(text: &str, needle: &str) {
+    let err = granflow::scenario::load_str(text, std::path::Path::new("."), &[])
+        .expect_err("invalid scenario")
+        .to_string();
+    assert!(err.contains(needle), "expected '{needle}' in: {err}");
+    assert!(err.contains("line"), "no line in: {err}");
+}
+
+#[test]
+fn bad_water_keys_are_named_with_their_line() {
+    let nh = "water_pressure = \"nonhydrostatic\"\nwater_layers = 2";
+    rejects(
+        &LAKE.replace(nh, "water_pressure = \"dispersive\""),
+        "submarine.water_pressure",
+    );
+    rejects(
+        &LAKE.replace("water_layers = 2", "water_layers = 0"),
+        "submarine.water_layers",
+    );
+    rejects(
+        &LAKE.replace("water_layers = 2", "water_layers = 17"),
+        "submarine.water_layers",
+    );
+    rejects(
+        &LAKE.replace(nh, "water_layers = 2"),
+        "submarine.water_layers",
+    );
+    rejects(
+        &LAKE.replace(nh, "water_pressure = \"hydrostatic\"\nwater_layers = 3"),
+        "submarine.water_layers",
+    );
+}

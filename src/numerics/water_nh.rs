@@ -27,8 +27,7 @@
 //!
 //! **Time step** (a non-incremental projection, Chorin's; the pressure is implicit):
 //! 1. the two-layer step advances H₁, Q₁ (the depth mean U₁ = Σ l_α u_α), H₂, Q₂ with
-//!    the hydrostatic pressures, plus the grains' share of the water pressure of t^n
-//!    (below); the layer deviations u'_α = u_α − U₁ and w_α are advected by U₁
+//!    the hydrostatic pressures; the layer deviations u'_α = u_α − U₁ and w_α are advected by U₁
 //!    (first-order upwind, [`advect`]; the other transport terms of the deviations,
 //!    u'_α ∂_x u'_α and the exchange through the layer interfaces, are neglected:
 //!    quadratic in the deviations, they vanish for linear waves, docs/numerics.md);
@@ -40,14 +39,15 @@
 //!    U₁, u'_α, w_α = w̃_α + ż_b are read back: Q₁ ← Q₁ + H₁ Σ l_α δu_α. H₁ and H₂ are
 //!    not touched, so both volumes stay exactly those of step 1.
 //!
-//! **Grains.** The water's non-hydrostatic pressure at the interface acts on the grain
-//! column as the hydrostatic water pressure does (transmitted through the pores, the
-//! r g H₂ ∂_x H₁ term of eq. 62): per unit grain density −r H₂ ∂_x p_{1/2}, added to Q₂*
-//! before the Coulomb rule (so a deposit the friction can hold stays at rest, the
-//! rule's well-balancing is unchanged) with the pressure of the last projection
-//! ([`grain_force`], lagged by one step). Together with the water's reaction −p_{1/2}∂_x z_b
-//! the momentum exchange is r(−p_{1/2}∂_x z_b − H₂ ∂_x p_{1/2}) = −r(∂_x(H₂p_{1/2}) + p_{1/2}∂_x b)
-//! on the whole column: conservative up to the force on the fixed bed.
+//! **Grains.** The coupling is one way: the grains move the water through the
+//! kinematic condition of the moving bottom (ż_b above), and feel the water's
+//! hydrostatic pressure in the two-layer step; the water's non-hydrostatic pressure
+//! does not act on the grains. Its share, −r H₂ ∂_x p_{1/2} per unit grain density,
+//! added explicitly (with p_{1/2} of the last projection, before the Coulomb rule) is
+//! unstable: the pressure at the interface answers the bottom's acceleration (the
+//! water's added mass), and a lagged added-mass force grows from step to step once the
+//! added mass of the water column exceeds that of the grains (docs/numerics.md). The
+//! coupling both ways needs the grain discharge corrected inside the projection.
 //!
 //! On a sloping bed the projection is written with the vertical depths d = H₁cos²θ and
 //! the velocities U₁ of the two-layer model (docs/numerics.md); on a flat bed it is the
@@ -235,13 +235,6 @@ fn advect(f: &[f64], h1: &[f64], q1: &[f64], n: usize, lam: f64, out: &mut [f64]
             out[k] = f[k] - c_up * (f[k] - f[k - n]) - c_down * (f[k + n] - f[k]);
         }
     }
-}
-
-/// The grains' share of the water's non-hydrostatic pressure in cell i (1-based), per
-/// unit grain density: −r H₂ (p_{1/2,i+1/2} − p_{1/2,i−1/2})/Δx (module documentation).
-#[inline(always)]
-pub fn grain_force(water: &WaterColumn, r: f64, h2: f64, i: usize, inv_dx: f64) -> f64 {
-    -r * h2 * (water.base_pressure(i) - water.base_pressure(i - 1)) * inv_dx
 }
 
 /// The projection as the second stage of a submarine run with non-hydrostatic water.

@@ -28,7 +28,6 @@ pub mod face;
 use crate::grid::CurvedLine;
 use crate::state::TwoLayerState;
 
-use super::water_nh::grain_force;
 use crate::physics::two_layer::{max_num, speed_bounds, TwoLayerParams, H_DRY_TWO_LAYER};
 use face::{face_flux, face_speeds_with, roe_velocities, CellView, FaceOut, StepTerms};
 
@@ -257,17 +256,13 @@ impl TwoLayerSolver {
         }
         let (cos_mean, dsin_dx) = geom.coulomb_terms();
         let s = state;
-        // Non-hydrostatic water: its pressure at the interface of t^n pushes the grains
-        // too (`water_nh`), before the Coulomb rule.
-        let water = s.water.take();
-        let inv_dx = 1.0 / dx;
         let cells = s.h1[1..=nx]
             .iter_mut()
             .zip(&mut s.q1[1..=nx])
             .zip(s.h2[1..=nx].iter_mut().zip(&mut s.q2[1..=nx]))
             .zip(cos_mean[1..=nx].iter().zip(&dsin_dx[1..=nx]));
-        for (i, ((((h1, q1), (h2, q2)), (&cos_mean, &dsin_dx)), pair)) in
-            cells.zip(self.faces[..nx + 1].windows(2)).enumerate()
+        for ((((h1, q1), (h2, q2)), (&cos_mean, &dsin_dx)), pair) in
+            cells.zip(self.faces[..nx + 1].windows(2))
         {
             let (fl, fr) = (&pair[0], &pair[1]);
             let h1n = *h1 - lam * (fr.phi1 - fl.phi1);
@@ -281,20 +276,14 @@ impl TwoLayerSolver {
             } else {
                 0.0
             };
-            let mut q2n = if h2n > H_DRY_TWO_LAYER {
+            let q2n = if h2n > H_DRY_TWO_LAYER {
                 desingularise(h2n, *q2 - lam * (fl.d4_plus + fr.d4_minus), film)
             } else {
                 0.0
             };
-            if let Some(w) = &water {
-                if h2n > H_DRY_TWO_LAYER {
-                    q2n += dt * grain_force(w, p.r, h2n, i + 1, inv_dx);
-                }
-            }
             // Second step of §4.1 (eq. 84–85).
             *q2 = coulomb::coulomb_cell(&p, h1n, h2n, q2n, cos_mean, dsin_dx, dt);
         }
-        s.water = water;
         s.fill_ghosts(geom);
     }
 
