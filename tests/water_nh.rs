@@ -239,7 +239,7 @@ fn a_solitary_wave_keeps_its_shape_over_fifty_depths() {
 /// The surface of linear potential theory over a bottom that rises,
 /// ζ(x, t) = A e^{−x²} T(t), T = (1 − cos(πt/τ))/2 up to τ and 1 after, in the basin
 /// [0, L] with walls (depth h = 1): each cosine mode k_n = nπ/L of the surface obeys
-/// η_n'' + ω_n² η_n = ζ_n''/cosh(k_n h) (Hammack 1973, eq. 2.10 in Fourier form),
+/// η_n'' + ω_n² η_n = ζ_n''/cosh(k_n h) (Hammack 1973, in cosine modes),
 /// ω_n² = g k_n tanh(k_n h), from rest; ζ_n = A√π/L e^{−k_n²/4} (½ of it for n = 0).
 fn uplift_exact(a: f64, tau: f64, l: f64, x: f64, t: f64) -> f64 {
     let big_omega = std::f64::consts::PI / tau;

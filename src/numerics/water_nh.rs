@@ -28,7 +28,7 @@
 //! **Time step** (a non-incremental projection, Chorin's; the pressure is implicit):
 //! 1. the two-layer step advances H₁, Q₁ (the depth mean U₁ = Σ l_α u_α), H₂, Q₂ with
 //!    the hydrostatic pressures; the layer deviations u'_α = u_α − U₁ and w_α are advected by U₁
-//!    (first-order upwind, [`advect`]; the other transport terms of the deviations,
+//!    (first-order upwind, [`advect_cell`]; the other transport terms of the deviations,
 //!    u'_α ∂_x u'_α and the exchange through the layer interfaces, are neglected:
 //!    quadratic in the deviations, they vanish for linear waves, docs/numerics.md);
 //! 2. the discrete bottom rate ż_b = (z_b^{n+1} − z_b^n)/Δt from the grain thicknesses
@@ -59,7 +59,7 @@ use super::projection::PressureSolver;
 use super::{Stage, StageError};
 use crate::grid::CurvedLine;
 use crate::physics::two_layer::H_DRY_TWO_LAYER;
-use crate::state::layered::{LayeredState, Tracer, HW};
+use crate::state::layered::{fill_tracer_ghosts, LayeredState, Tracer, HW};
 use crate::state::{TwoLayerState, WaterColumn};
 
 /// The projection of the water column, with its operator, solver and scratch column.
@@ -78,8 +78,6 @@ pub struct WaterProjection {
     zb: Vec<f64>,
     /// ż_b per cell (with ghosts).
     zb_rate: Vec<f64>,
-    /// Scratch of the advection of u'_α, w_α (cell-major, with ghosts).
-    advected: Vec<f64>,
 }
 
 /// z_b = b + H₂cos²θ per cell with ghosts.
@@ -106,7 +104,6 @@ impl WaterProjection {
             zb_old: vec![0.0; nx + 2],
             zb: vec![0.0; nx + 2],
             zb_rate: vec![0.0; nx + 2],
-            advected: vec![0.0; (nx + 2) * layers],
         }
     }
 
@@ -139,13 +136,9 @@ impl WaterProjection {
             .water
             .as_mut()
             .expect("a non-hydrostatic water carries its column");
-        // Advection of the layers' deviations and vertical velocities by U₁.
+        // The column in the multilayer variables, h = d, hu_α = d u_α, hw_α = d w̃_α,
+        // with u'_α and w_α advected by U₁ on the way ([`advect_cell`]).
         let lam = dt / g.line.dx;
-        for f in [&mut water.du, &mut water.w] {
-            advect(f, &s.h1, &s.q1, n, lam, &mut self.advected);
-            f[n..(nx + 1) * n].copy_from_slice(&self.advected[n..(nx + 1) * n]);
-        }
-        // The column in the multilayer variables: h = d, hu_α = d u_α, hw_α = d w̃_α.
         {
             let LayeredState {
                 h, hu, tracers, nh, ..
@@ -155,28 +148,35 @@ impl WaterProjection {
                 .find(|t: &&mut Tracer| t.name == HW)
                 .expect("the column carries hw")
                 .q;
-            for i in 0..nx + 2 {
-                let (h1, c2) = (s.h1[i], g.cos2[i]);
-                let d = h1 * c2;
+            let m = (nx + 2) * n;
+            let (hu, hw, du, w) = (&mut hu[..m], &mut hw[..m], &water.du[..m], &water.w[..m]);
+            let (h1, q1, cos2) = (&s.h1[..nx + 2], &s.q1[..nx + 2], &g.cos2[..nx + 2]);
+            let rate = &self.zb_rate[..nx + 2];
+            for i in 1..=nx {
+                let d = h1[i] * cos2[i];
                 h[i] = d;
-                let u1 = if h1 > H_DRY_TWO_LAYER {
-                    s.q1[i] / h1
+                let u1 = if h1[i] > H_DRY_TWO_LAYER {
+                    q1[i] / h1[i]
                 } else {
                     0.0
                 };
-                let rate = self.zb_rate[i];
-                for a in 0..n {
-                    let k = i * n + a;
-                    hu[k] = d * (u1 + water.du[k]);
-                    hw[k] = d * (water.w[k] - rate);
+                let (c_up, c_down) = (lam * u1.max(0.0), lam * u1.min(0.0));
+                for k in i * n..(i + 1) * n {
+                    hu[k] = d * (u1 + advect_cell(du, k, n, c_up, c_down));
+                    hw[k] = d * (advect_cell(w, k, n, c_up, c_down) - rate[i]);
                 }
             }
+            h[0] = h1[0] * cos2[0];
+            h[nx + 1] = h1[nx + 1] * cos2[nx + 1];
             // Non-incremental: the correction's pressure is the whole p^{n+1}.
             nh.as_mut()
                 .expect("the column is non-hydrostatic")
                 .p
                 .fill(0.0);
+            fill_tracer_ghosts(hw, nx, n);
         }
+        // Ghosts: h as the state's, hu copied or reversed.
+        self.column.fill_ghosts(&g.line);
         self.op.update(&g.line, &self.column);
         {
             let rows = self.op.rows(&self.column);
@@ -217,24 +217,13 @@ impl WaterProjection {
     }
 }
 
-/// First-order upwind advection ∂_t f + U₁ ∂_x f = 0 of a per-layer field `f` (with
-/// ghosts) by the depth-mean water velocity U₁ = Q₁/H₁ of each cell, into `out` (the
-/// physical cells). `lam` = Δt/Δx; |U₁| λ ≤ 1 by the CFL condition of the two-layer
-/// step, whose speed bounds contain U₁.
-fn advect(f: &[f64], h1: &[f64], q1: &[f64], n: usize, lam: f64, out: &mut [f64]) {
-    let nx = h1.len() - 2;
-    for i in 1..=nx {
-        let u = if h1[i] > H_DRY_TWO_LAYER {
-            q1[i] / h1[i]
-        } else {
-            0.0
-        };
-        let (c_up, c_down) = (lam * u.max(0.0), lam * u.min(0.0));
-        for a in 0..n {
-            let k = i * n + a;
-            out[k] = f[k] - c_up * (f[k] - f[k - n]) - c_down * (f[k + n] - f[k]);
-        }
-    }
+/// First-order upwind advection ∂_t f + U₁ ∂_x f = 0 of a per-layer field `f` (cell-major
+/// with ghosts, `n` layers) at index k, with the Courant numbers c_up = λ max(U₁, 0) and
+/// c_down = λ min(U₁, 0) of the cell (λ = Δt/Δx; |U₁| λ ≤ 1 by the CFL condition of
+/// the two-layer step, whose speed bounds contain U₁).
+#[inline(always)]
+fn advect_cell(f: &[f64], k: usize, n: usize, c_up: f64, c_down: f64) -> f64 {
+    f[k] - c_up * (f[k] - f[k - n]) - c_down * (f[k + n] - f[k])
 }
 
 /// The projection as the second stage of a submarine run with non-hydrostatic water.
