@@ -28,7 +28,7 @@
 //! **Time step** (a non-incremental projection, Chorin's; the pressure is implicit):
 //! 1. the two-layer step advances H₁, Q₁ (the depth mean U₁ = Σ l_α u_α), H₂, Q₂ with
 //!    the hydrostatic pressures; the layer deviations u'_α = u_α − U₁ and w_α are advected by U₁
-//!    (first-order upwind, [`advect_cell`]; the other transport terms of the deviations,
+//!    (first-order upwind, `advect_cell`; the other transport terms of the deviations,
 //!    u'_α ∂_x u'_α and the exchange through the layer interfaces, are neglected:
 //!    quadratic in the deviations, they vanish for linear waves, docs/numerics.md);
 //! 2. the discrete bottom rate ż_b = (z_b^{n+1} − z_b^n)/Δt from the grain thicknesses
@@ -55,7 +55,7 @@
 
 use super::banded::BandedCholesky;
 use super::projection::multilayer::MultilayerOperator;
-use super::projection::PressureSolver;
+use super::projection::{PressureSolver, ProjectionOperator};
 use super::{Stage, StageError};
 use crate::grid::CurvedLine;
 use crate::physics::two_layer::H_DRY_TWO_LAYER;
@@ -123,6 +123,7 @@ impl WaterProjection {
 
     /// The projection of the water of `s` over the bottom recorded by
     /// [`record_bottom`](Self::record_bottom) before this step of length `dt`.
+    #[allow(clippy::needless_range_loop)] // cell i indexes the state, column and layers
     pub fn project(&mut self, g: &CurvedLine, s: &mut TwoLayerState, dt: f64) {
         let n = self.layers;
         let nx = g.line.nx;
@@ -137,7 +138,7 @@ impl WaterProjection {
             .as_mut()
             .expect("a non-hydrostatic water carries its column");
         // The column in the multilayer variables, h = d, hu_α = d u_α, hw_α = d w̃_α,
-        // with u'_α and w_α advected by U₁ on the way ([`advect_cell`]).
+        // with u'_α and w_α advected by U₁ on the way (`advect_cell`).
         let lam = dt / g.line.dx;
         {
             let LayeredState {
@@ -182,7 +183,6 @@ impl WaterProjection {
             let rows = self.op.rows(&self.column);
             self.solver.solve(&rows, &mut self.pi);
         }
-        use super::projection::ProjectionOperator;
         self.op.correct(&g.line, &mut self.column, &self.pi, dt);
         let (h, hu, hw) = (&self.column.h, &self.column.hu, self.column.hw());
         for i in 1..=nx {
