@@ -30,4 +30,5 @@ mod submarine_paper;
 mod sweep;
 mod terrain_2d;
 mod terrain_2d_io;
+mod water_nh;
 mod well_balanced;

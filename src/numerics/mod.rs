@@ -22,6 +22,7 @@ pub mod projection;
 pub mod tracer;
 pub mod two_layer;
 pub mod viscous;
+pub mod water_nh;
 pub mod workers;
 
 /// Why a stage could not complete a step. The place is a physical cell index (0-based,

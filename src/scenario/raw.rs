@@ -52,6 +52,8 @@ pub(crate) struct RawSubmarine {
     pub lambda2: Option<f64>,
     pub k_in: Option<f64>,
     pub buoyancy: Option<String>,
+    pub water_pressure: Option<String>,
+    pub water_layers: Option<i64>,
 }
 
 #[derive(Debug, Default, Deserialize)]

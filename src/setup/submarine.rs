@@ -1,10 +1,13 @@
 //! Builds the submarine model (Fernández-Nieto et al. 2008) from a validated scenario: the bed angle from
 //! b(x), the grains' vertical thickness `initial.h` = H₂cos²θ and velocity `initial.u`,
-//! the water up to the surface `initial.eta` (H₁cos²θ = max(0, η − b − H₂cos²θ)), at rest.
+//! the water up to the surface `initial.eta` (H₁cos²θ = max(0, η − b − H₂cos²θ)), at rest;
+//! with `submarine.water_pressure = "nonhydrostatic"` the water's layers (at rest) and
+//! its projection stage ([`crate::numerics::water_nh`]).
 
 use crate::grid::CurvedLine;
-use crate::model::submarine::Submarine;
+use crate::model::submarine::{Submarine, WaterPressure};
 use crate::numerics::two_layer::{TwoLayerSolver, TwoLayerStage};
+use crate::numerics::water_nh::{WaterProjection, WaterProjectionStage};
 use crate::numerics::Stage;
 use crate::physics::rheology::FrictionLaw;
 use crate::pipeline::Pipeline;
@@ -41,7 +44,14 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
     let stage = TwoLayerStage {
         solver: TwoLayerSolver::new(params, scn.time.cfl, nx),
     };
-    let stages: Vec<Box<dyn Stage<CurvedLine, TwoLayerState>>> = vec![Box::new(stage)];
+    let mut stages: Vec<Box<dyn Stage<CurvedLine, TwoLayerState>>> = vec![Box::new(stage)];
+    // Non-hydrostatic water: its layers at rest, and the projection after the
+    // two-layer step. Hydrostatic water builds none of it.
+    if let WaterPressure::NonHydrostatic { layers } = spec.water {
+        let projection = WaterProjection::new(&grid, layers);
+        state.water = Some(projection.water_at_rest(nx));
+        stages.push(Box::new(WaterProjectionStage { projection }));
+    }
     let eta0 = Submarine::initial_surface(&grid, &state, scn.output.front_threshold);
     let model = Submarine {
         params,

@@ -7,18 +7,22 @@
 //!   with tracers and the non-hydrostatic pressure;
 //! - [`State2d`] ([`layered_2d`]): the 2-D Savage–Hutter model on a raster, h, hu, hv
 //!   over the physical cells;
-//! - [`TwoLayerState`] ([`two_layer`]): water over grains (Fernández-Nieto et al. 2008);
+//! - [`TwoLayerState`] ([`two_layer`]): water over grains (Fernández-Nieto et al. 2008),
+//!   with the water's layers and non-hydrostatic pressure ([`WaterColumn`],
+//!   [`water_column`]) when the water is non-hydrostatic;
 //! - [`DilatantState`] ([`dilatant`]): the compressible μ(I)–φ model (Bouchut et al. 2021).
 
 pub mod dilatant;
 pub mod layered;
 pub mod layered_2d;
 pub mod two_layer;
+pub mod water_column;
 
 pub use dilatant::DilatantState;
 pub use layered::LayeredState;
 pub use layered_2d::State2d;
 pub use two_layer::TwoLayerState;
+pub use water_column::WaterColumn;
 
 #[cfg(test)]
 mod tests {

@@ -3,6 +3,7 @@
 //! measured normal to and along the bed of a [`CurvedLine`].
 
 use crate::grid::CurvedLine;
+use crate::state::water_column::WaterColumn;
 
 /// Two-layer state with one ghost cell on each side (length nx + 2).
 #[derive(Debug, PartialEq)]
@@ -11,6 +12,9 @@ pub struct TwoLayerState {
     pub q1: Vec<f64>,
     pub h2: Vec<f64>,
     pub q2: Vec<f64>,
+    /// The water's layers and non-hydrostatic pressure; `None` for hydrostatic water,
+    /// which carries nothing more.
+    pub water: Option<WaterColumn>,
 }
 
 // `Clone` by hand: `clone_from` copies into the existing buffers (the run loop's
@@ -22,6 +26,7 @@ impl Clone for TwoLayerState {
             q1: self.q1.clone(),
             h2: self.h2.clone(),
             q2: self.q2.clone(),
+            water: self.water.clone(),
         }
     }
 
@@ -30,6 +35,7 @@ impl Clone for TwoLayerState {
         self.q1.clone_from(&source.q1);
         self.h2.clone_from(&source.h2);
         self.q2.clone_from(&source.q2);
+        self.water.clone_from(&source.water);
     }
 }
 
@@ -40,6 +46,7 @@ impl TwoLayerState {
             q1: vec![0.0; nx + 2],
             h2: vec![0.0; nx + 2],
             q2: vec![0.0; nx + 2],
+            water: None,
         }
     }
 

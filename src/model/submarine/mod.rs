@@ -14,7 +14,7 @@ use crate::model::{Diagnostics, Model};
 use crate::numerics::two_layer::{max_face_speed, sweep_speeds};
 use crate::output::{CellField, OutputError, OutputSink, SnapshotView};
 use crate::physics::two_layer::{layer_velocity, max_num, TwoLayerParams};
-use crate::state::TwoLayerState;
+use crate::state::{TwoLayerState, WaterColumn};
 
 #[derive(Debug, Clone)]
 pub struct Submarine {
@@ -135,7 +135,7 @@ impl Model for Submarine {
             eta[i] = s.eta(g, i + 1);
             interface[i] = s.interface(g, i + 1);
         }
-        let extra = [
+        let mut extra = vec![
             CellField {
                 name: "h_water",
                 units: "m",
@@ -157,6 +157,24 @@ impl Model for Submarine {
                 data: &interface,
             },
         ];
+        // Non-hydrostatic water: w_α per cell and p_{α−1/2} (mean of the cell's two
+        // faces) per layer, α = 1 at the grains.
+        let columns = s.water.as_ref().map(|w| water_fields(w, nx));
+        if let Some((w, p)) = &columns {
+            let layers = w.len() / nx;
+            for a in 0..layers {
+                extra.push(CellField {
+                    name: W_WATER[a],
+                    units: "m/s",
+                    data: &w[a * nx..(a + 1) * nx],
+                });
+                extra.push(CellField {
+                    name: P_WATER[a],
+                    units: "m2/s2",
+                    data: &p[a * nx..(a + 1) * nx],
+                });
+            }
+        }
         sink.snapshot(&SnapshotView {
             t,
             h: &s.h2[1..=nx],
@@ -171,6 +189,62 @@ impl Model for Submarine {
     }
 }
 
+/// Snapshot names of the water layers' w_α and p_{α−1/2} (α = 1 at the grains).
+/// Most water layers (`submarine.water_layers`), the length of the name tables below.
+pub const MAX_WATER_LAYERS: usize = 16;
+
+const W_WATER: [&str; MAX_WATER_LAYERS] = [
+    "w_water_1",
+    "w_water_2",
+    "w_water_3",
+    "w_water_4",
+    "w_water_5",
+    "w_water_6",
+    "w_water_7",
+    "w_water_8",
+    "w_water_9",
+    "w_water_10",
+    "w_water_11",
+    "w_water_12",
+    "w_water_13",
+    "w_water_14",
+    "w_water_15",
+    "w_water_16",
+];
+const P_WATER: [&str; MAX_WATER_LAYERS] = [
+    "p_water_1",
+    "p_water_2",
+    "p_water_3",
+    "p_water_4",
+    "p_water_5",
+    "p_water_6",
+    "p_water_7",
+    "p_water_8",
+    "p_water_9",
+    "p_water_10",
+    "p_water_11",
+    "p_water_12",
+    "p_water_13",
+    "p_water_14",
+    "p_water_15",
+    "p_water_16",
+];
+
+/// w_α per physical cell and the mean of p_{α−1/2} over each cell's two faces, both
+/// layer-major (α·nx + i).
+fn water_fields(water: &WaterColumn, nx: usize) -> (Vec<f64>, Vec<f64>) {
+    let n = water.layers;
+    let mut w = vec![0.0; n * nx];
+    let mut p = vec![0.0; n * nx];
+    for i in 0..nx {
+        for a in 0..n {
+            w[a * nx + i] = water.w[(i + 1) * n + a];
+            p[a * nx + i] = 0.5 * (water.p[i * n + a] + water.p[(i + 1) * n + a]);
+        }
+    }
+    (w, p)
+}
+
 /// The validated `[submarine]` keys (Fernández-Nieto et al. 2008, eq. 50).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SubmarineSpec {
@@ -181,6 +255,16 @@ pub struct SubmarineSpec {
     pub lambda1: f64,
     pub lambda2: f64,
     pub buoyancy: crate::physics::two_layer::Buoyancy,
+    /// `submarine.water_pressure` and `submarine.water_layers`.
+    pub water: WaterPressure,
+}
+
+/// The water's pressure: hydrostatic (Fernández-Nieto et al. 2008, the default) or
+/// non-hydrostatic in M layers ([`crate::numerics::water_nh`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WaterPressure {
+    Hydrostatic,
+    NonHydrostatic { layers: usize },
 }
 
 impl SubmarineSpec {

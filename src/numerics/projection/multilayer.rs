@@ -152,6 +152,20 @@ impl MultilayerOperator {
         self.layers
     }
 
+    /// Replaces the bed by the bottom `z` (with ghosts, nx + 2; the ghosts repeat the
+    /// edge values, as [`doubled_bed`]): for a column whose bottom moves, the water over
+    /// the grains of the submarine model (`numerics::water_nh`). The next
+    /// [`update`](Self::update) recomputes the coefficients.
+    pub fn set_bottom(&mut self, z: &[f64]) {
+        let nx = self.nx;
+        for (t, &z) in self.two_b[1..=nx].iter_mut().zip(&z[1..=nx]) {
+            *t = 2.0 * z;
+        }
+        self.two_b[0] = self.two_b[1];
+        self.two_b[nx + 1] = self.two_b[nx];
+        self.h_last.clear();
+    }
+
     /// Faces that carry unknowns, as a range of scalar unknowns (face-major).
     fn active_unknowns(&self) -> Range<usize> {
         self.span.start * self.layers..self.span.end * self.layers

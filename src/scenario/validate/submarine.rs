@@ -4,7 +4,7 @@
 
 use super::check::*;
 use crate::grid::line::cell_centre;
-use crate::model::submarine::SubmarineSpec;
+use crate::model::submarine::{SubmarineSpec, WaterPressure, MAX_WATER_LAYERS};
 use crate::physics::two_layer::Buoyancy;
 use crate::scenario::raw::RawSubmarine;
 use crate::scenario::{Coordinates, Domain, FrictionLaw, Initial, ModelSpec, Pressure, Sampled};
@@ -115,12 +115,14 @@ pub(super) fn submarine(
             ("submerged", Buoyancy::Submerged),
         ],
     )?;
+    let water = water_pressure(s.water_pressure.as_deref(), s.water_layers)?;
     let spec = SubmarineSpec {
         r,
         k,
         lambda1,
         lambda2,
         buoyancy,
+        water,
     };
     if !spec.params(0.0).bound_is_proven() {
         return err(
@@ -137,4 +139,31 @@ pub(super) fn submarine(
         }
     }
     Ok(Some(spec))
+}
+
+/// `submarine.water_pressure` ("hydrostatic", the default, or "nonhydrostatic") and
+/// `submarine.water_layers` (M ≥ 1, default 1, only with the non-hydrostatic water).
+fn water_pressure(pressure: Option<&str>, layers: Option<i64>) -> Res<WaterPressure> {
+    let nonhydrostatic = choice(
+        "submarine.water_pressure",
+        pressure,
+        false,
+        &[("hydrostatic", false), ("nonhydrostatic", true)],
+    )?;
+    if !nonhydrostatic {
+        if layers.is_some() {
+            return err(
+                "submarine.water_layers",
+                "water layers need submarine.water_pressure = \"nonhydrostatic\" (hydrostatic water is one layer)",
+            );
+        }
+        return Ok(WaterPressure::Hydrostatic);
+    }
+    let layers = int_in(
+        "submarine.water_layers",
+        layers.unwrap_or(1),
+        1,
+        MAX_WATER_LAYERS as i64,
+    )?;
+    Ok(WaterPressure::NonHydrostatic { layers })
 }

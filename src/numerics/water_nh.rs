@@ -1,0 +1,253 @@
+//! The non-hydrostatic pressure of the submarine model's water: a projection of the
+//! water column over the moving grain surface, after the two-layer step
+//! ([`super::two_layer`]) of Fernández-Nieto et al. 2008.
+//!
+//! **Model.** The water above the interface z_b = b + H₂cos²θ, of vertical depth
+//! d = H₁cos²θ, is cut into M layers of depth l_α d (l_α = 1/M), with horizontal
+//! velocities u_α, mean vertical velocities w_α and the non-hydrostatic pressure (over
+//! water density) p_{α−1/2} at the base of each layer, p_{M+1/2} = 0 at the surface:
+//! the multilayer non-hydrostatic system of Fernández-Nieto et al. 2018 (its discrete
+//! form: Escalante et al. 2023, eq. 9, [`MultilayerOperator`]), whose pressure terms are
+//!
+//!   ∂_t(h_α u_α) = −∂_x(h_α p_α) + p_{α+1/2} ∂_x Z_{α+1/2} − p_{α−1/2} ∂_x Z_{α−1/2},
+//!   ∂_t(h_α w_α) = p_{α−1/2} − p_{α+1/2},
+//!
+//! with Z_{α+1/2} = z_b + L_{α+1/2} d, and whose constraints are the incompressibility
+//! of each layer with the kinematic condition at the moving bottom,
+//! w_{1/2} = ∂_t z_b + u_1 ∂_x z_b (Stelling & Zijlema 2003; Ma, Shi & Kirby 2012):
+//!
+//!   (w_1 − ∂_t z_b) − u_1 ∂_x z_b + ½ h_1 ∂_x u_1 = 0,
+//!   (w_α − w_{α−1}) − (u_α − u_{α−1}) ∂_x Z_{α−1/2} + ½ (h_α ∂_x u_α + h_{α−1} ∂_x u_{α−1}) = 0.
+//!
+//! Only the first constraint sees the bottom's motion, and only through w_1 − ∂_t z_b;
+//! the others hold differences of w. So with the shifted vertical velocities
+//! w̃_α = w_α − ∂_t z_b (the same shift in every layer) the constraints are those of a
+//! fixed bed at z_b, and the pressure force on w is unchanged by the shift: the moving
+//! bottom is the fixed-bed projection of the shifted state, shifted back.
+//!
+//! **Time step** (a non-incremental projection, Chorin's; the pressure is implicit):
+//! 1. the two-layer step advances H₁, Q₁ (the depth mean U₁ = Σ l_α u_α), H₂, Q₂ with
+//!    the hydrostatic pressures; the layer deviations u'_α = u_α − U₁ and w_α are advected by U₁
+//!    (first-order upwind, `advect_cell`; the other transport terms of the deviations,
+//!    u'_α ∂_x u'_α and the exchange through the layer interfaces, are neglected:
+//!    quadratic in the deviations, they vanish for linear waves, docs/numerics.md);
+//! 2. the discrete bottom rate ż_b = (z_b^{n+1} − z_b^n)/Δt from the grain thicknesses
+//!    before and after step 1;
+//! 3. the projection on the water column: with the state
+//!    (d, d u_α, d (w_α − ż_b)) and the bed z_b^{n+1}, the impulses Π = Δt p^{n+1} solve
+//!    A Π = −𝒞 (A = 𝒯ᵀM⁻¹𝒯, banded Cholesky, exact), the correction 𝒯Π is added, and
+//!    U₁, u'_α, w_α = w̃_α + ż_b are read back: Q₁ ← Q₁ + H₁ Σ l_α δu_α. H₁ and H₂ are
+//!    not touched, so both volumes stay exactly those of step 1.
+//!
+//! **Grains.** The coupling is one way: the grains move the water through the
+//! kinematic condition of the moving bottom (ż_b above), and feel the water's
+//! hydrostatic pressure in the two-layer step; the water's non-hydrostatic pressure
+//! does not act on the grains. Its share, −r H₂ ∂_x p_{1/2} per unit grain density,
+//! added explicitly (with p_{1/2} of the last projection, before the Coulomb rule) is
+//! unstable: the pressure at the interface answers the bottom's acceleration (the
+//! water's added mass), and a lagged added-mass force grows from step to step once the
+//! added mass of the water column exceeds that of the grains (docs/numerics.md). The
+//! coupling both ways needs the grain discharge corrected inside the projection.
+//!
+//! On a sloping bed the projection is written with the vertical depths d = H₁cos²θ and
+//! the velocities U₁ of the two-layer model (docs/numerics.md); on a flat bed it is the
+//! multilayer system exactly.
+
+use super::banded::BandedCholesky;
+use super::projection::multilayer::MultilayerOperator;
+use super::projection::{PressureSolver, ProjectionOperator};
+use super::{Stage, StageError};
+use crate::grid::CurvedLine;
+use crate::physics::two_layer::H_DRY_TWO_LAYER;
+use crate::state::layered::{fill_tracer_ghosts, LayeredState, Tracer, HW};
+use crate::state::{TwoLayerState, WaterColumn};
+
+/// The projection of the water column, with its operator, solver and scratch column.
+#[derive(Debug)]
+pub struct WaterProjection {
+    layers: usize,
+    l: Vec<f64>,
+    op: MultilayerOperator,
+    solver: BandedCholesky,
+    /// The water column in the multilayer model's variables (scratch, every step).
+    column: LayeredState,
+    /// Impulses Π = Δt p^{n+1} (face-major).
+    pi: Vec<f64>,
+    /// z_b at t^n and at t^{n+1} (with ghosts).
+    zb_old: Vec<f64>,
+    zb: Vec<f64>,
+    /// ż_b per cell (with ghosts).
+    zb_rate: Vec<f64>,
+}
+
+/// z_b = b + H₂cos²θ per cell with ghosts.
+fn bottom(g: &CurvedLine, s: &TwoLayerState, zb: &mut [f64]) {
+    for (((z, &b), &h2), &c2) in zb.iter_mut().zip(&g.line.b_ghost).zip(&s.h2).zip(&g.cos2) {
+        *z = b + h2 * c2;
+    }
+}
+
+impl WaterProjection {
+    pub fn new(g: &CurvedLine, layers: usize) -> Self {
+        assert!(layers >= 1);
+        let nx = g.line.nx;
+        let l = vec![1.0 / layers as f64; layers];
+        let mut column = LayeredState::from_profiles(&g.line, &l, &vec![0.0; nx], &vec![0.0; nx]);
+        column.add_nonhydrostatic(&vec![0.0; nx]);
+        WaterProjection {
+            layers,
+            op: MultilayerOperator::new(&g.line, &l),
+            l,
+            solver: BandedCholesky::new(layers, nx + 1),
+            column,
+            pi: vec![0.0; (nx + 1) * layers],
+            zb_old: vec![0.0; nx + 2],
+            zb: vec![0.0; nx + 2],
+            zb_rate: vec![0.0; nx + 2],
+        }
+    }
+
+    pub fn layers(&self) -> usize {
+        self.layers
+    }
+
+    /// The water column of `state` at rest with zero pressure, for this stage.
+    pub fn water_at_rest(&self, nx: usize) -> WaterColumn {
+        WaterColumn::at_rest(nx, self.layers)
+    }
+
+    /// Records z_b^n (call with the state at t^n, before the two-layer step).
+    pub fn record_bottom(&mut self, g: &CurvedLine, s: &TwoLayerState) {
+        bottom(g, s, &mut self.zb_old);
+    }
+
+    /// The projection of the water of `s` over the bottom recorded by
+    /// [`record_bottom`](Self::record_bottom) before this step of length `dt`.
+    #[allow(clippy::needless_range_loop)] // cell i indexes the state, column and layers
+    pub fn project(&mut self, g: &CurvedLine, s: &mut TwoLayerState, dt: f64) {
+        let n = self.layers;
+        let nx = g.line.nx;
+        let inv_dt = 1.0 / dt;
+        bottom(g, s, &mut self.zb);
+        for ((r, &z), &z0) in self.zb_rate.iter_mut().zip(&self.zb).zip(&self.zb_old) {
+            *r = (z - z0) * inv_dt;
+        }
+        self.op.set_bottom(&self.zb);
+        let water = s
+            .water
+            .as_mut()
+            .expect("a non-hydrostatic water carries its column");
+        // The column in the multilayer variables, h = d, hu_α = d u_α, hw_α = d w̃_α,
+        // with u'_α and w_α advected by U₁ on the way (`advect_cell`).
+        let lam = dt / g.line.dx;
+        {
+            let LayeredState {
+                h, hu, tracers, nh, ..
+            } = &mut self.column;
+            let hw = &mut tracers
+                .iter_mut()
+                .find(|t: &&mut Tracer| t.name == HW)
+                .expect("the column carries hw")
+                .q;
+            let m = (nx + 2) * n;
+            let (hu, hw, du, w) = (&mut hu[..m], &mut hw[..m], &water.du[..m], &water.w[..m]);
+            let (h1, q1, cos2) = (&s.h1[..nx + 2], &s.q1[..nx + 2], &g.cos2[..nx + 2]);
+            let rate = &self.zb_rate[..nx + 2];
+            for i in 1..=nx {
+                let d = h1[i] * cos2[i];
+                h[i] = d;
+                let u1 = if h1[i] > H_DRY_TWO_LAYER {
+                    q1[i] / h1[i]
+                } else {
+                    0.0
+                };
+                let (c_up, c_down) = (lam * u1.max(0.0), lam * u1.min(0.0));
+                for k in i * n..(i + 1) * n {
+                    hu[k] = d * (u1 + advect_cell(du, k, n, c_up, c_down));
+                    hw[k] = d * (advect_cell(w, k, n, c_up, c_down) - rate[i]);
+                }
+            }
+            h[0] = h1[0] * cos2[0];
+            h[nx + 1] = h1[nx + 1] * cos2[nx + 1];
+            // Non-incremental: the correction's pressure is the whole p^{n+1}.
+            nh.as_mut()
+                .expect("the column is non-hydrostatic")
+                .p
+                .fill(0.0);
+            fill_tracer_ghosts(hw, nx, n);
+        }
+        // Ghosts: h as the state's, hu copied or reversed.
+        self.column.fill_ghosts(&g.line);
+        self.op.update(&g.line, &self.column);
+        {
+            let rows = self.op.rows(&self.column);
+            self.solver.solve(&rows, &mut self.pi);
+        }
+        self.op.correct(&g.line, &mut self.column, &self.pi, dt);
+        let (h, hu, hw) = (&self.column.h, &self.column.hu, self.column.hw());
+        for i in 1..=nx {
+            let (h1, d) = (s.h1[i], h[i]);
+            let cells = i * n..(i + 1) * n;
+            if h1 <= H_DRY_TWO_LAYER || d <= 0.0 {
+                water.du[cells.clone()].fill(0.0);
+                water.w[cells].fill(0.0);
+                continue;
+            }
+            let inv_d = 1.0 / d;
+            let mut mean = 0.0;
+            for (a, k) in cells.clone().enumerate() {
+                mean += self.l[a] * hu[k] * inv_d;
+            }
+            s.q1[i] = h1 * mean;
+            let rate = self.zb_rate[i];
+            for k in cells {
+                water.du[k] = hu[k] * inv_d - mean;
+                water.w[k] = hw[k] * inv_d + rate;
+            }
+        }
+        water
+            .p
+            .copy_from_slice(&self.column.nh.as_ref().expect("non-hydrostatic").p);
+        s.fill_ghosts(g);
+        s.water.as_mut().expect("checked above").fill_ghosts(
+            nx,
+            g.line.left.discharge_sign(),
+            g.line.right.discharge_sign(),
+        );
+    }
+}
+
+/// First-order upwind advection ∂_t f + U₁ ∂_x f = 0 of a per-layer field `f` (cell-major
+/// with ghosts, `n` layers) at index k, with the Courant numbers c_up = λ max(U₁, 0) and
+/// c_down = λ min(U₁, 0) of the cell (λ = Δt/Δx; |U₁| λ ≤ 1 by the CFL condition of
+/// the two-layer step, whose speed bounds contain U₁).
+#[inline(always)]
+fn advect_cell(f: &[f64], k: usize, n: usize, c_up: f64, c_down: f64) -> f64 {
+    f[k] - c_up * (f[k] - f[k - n]) - c_down * (f[k + n] - f[k])
+}
+
+/// The projection as the second stage of a submarine run with non-hydrostatic water.
+#[derive(Debug)]
+pub struct WaterProjectionStage {
+    pub projection: WaterProjection,
+}
+
+impl Stage<CurvedLine, TwoLayerState> for WaterProjectionStage {
+    fn name(&self) -> &'static str {
+        "water_projection"
+    }
+
+    fn prepare(&mut self, grid: &CurvedLine, state: &TwoLayerState) {
+        self.projection.record_bottom(grid, state);
+    }
+
+    fn apply(
+        &mut self,
+        grid: &CurvedLine,
+        dt: f64,
+        state: &mut TwoLayerState,
+    ) -> Result<(), StageError> {
+        self.projection.project(grid, state, dt);
+        Ok(())
+    }
+}
