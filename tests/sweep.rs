@@ -398,11 +398,12 @@ fn a_failing_run_is_recorded_and_the_others_go_on() {
     let tmp = TempDir::new().unwrap();
     // A run of 1e9 s is valid input, but at the CFL step of about 2e-3 s it would take
     // 5e11 steps: it fails at its first step.
-    let file = sweep_file(
-        tmp.path(),
-        "fail.toml",
-        "[[zip]]\ntime.t_end = [0.4, 1e9, 0.3]\noutput.every = [0.1, 1e9, 0.1]\n",
+    let file = tmp.path().join("fail.toml");
+    let text = format!(
+        "scenario = {:?}\nset = [\"domain.cells=60\"]\n[[zip]]\ntime.t_end = [0.4, 1e9, 0.3]\noutput.every = [0.1, 1e9, 0.1]\n",
+        collapse().display().to_string()
     );
+    fs::write(&file, text).unwrap();
     let out = tmp.path().join("out");
     let (code, _, stderr) = sweep(&file, &out, &["--jobs", "2"]);
     assert_eq!(code, 1, "{stderr}");

@@ -140,3 +140,9 @@ pub(super) const THICKNESS_WHY: &str =
     "the largest landslides are under 2 km thick; 10 km is the height of the highest mountains";
 pub(super) const DEPTH_WHY: &str = "the water depth η − b; the deepest ocean trench is 11 km deep";
 pub(super) const ELEVATION_WHY: &str = "ten times the height of Everest";
+
+/// Largest stabilisation coefficient ξ of the dilatant scheme (`dilatancy.xi`): the
+/// paper's values are ξ = (2, 2, 5) (Bouchut et al. 2021, §3.3), and the explicit
+/// sub-steps a time step takes grow as ξ (a run asking for more than 10 000 of them in
+/// one step fails).
+pub(crate) const MAX_XI: f64 = 1e3;

@@ -177,6 +177,15 @@ pub(super) fn dilatancy(
         Some(v) if v.len() == 3 => {
             for x in v {
                 non_negative("dilatancy.xi", *x)?;
+                if *x > MAX_XI {
+                    return err(
+                        "dilatancy.xi",
+                        format!(
+                            "{} is beyond the largest stabilisation coefficient {MAX_XI:e} (Bouchut et al. 2021, §3.3 uses ξ = (2, 2, 5); the explicit sub-steps of a time step grow as ξ)",
+                            num(*x)
+                        ),
+                    );
+                }
             }
             [v[0], v[1], v[2]]
         }
