@@ -36,6 +36,10 @@ enum Display {
     Hidden,
 }
 
+/// The heartbeat speaks once no step has finished for this long (s), and at most
+/// every progress interval.
+pub const HEARTBEAT_AFTER_S: f64 = 5.0;
+
 /// A step running longer than this (s) gets a warning from the heartbeat.
 pub const SLOW_STEP_S: f64 = 60.0;
 
@@ -90,15 +94,16 @@ impl Heartbeat {
                     b.warned = true;
                     out.push(slow_step_warning(running, &b.last));
                 }
+                let quiet_for = Duration::from_secs_f64(HEARTBEAT_AFTER_S).max(every);
                 if lines
-                    && now.duration_since(b.since) >= every
-                    && now.duration_since(b.printed) >= every
+                    && now.duration_since(b.since) >= quiet_for
+                    && now.duration_since(b.printed) >= quiet_for
                 {
                     b.printed = now;
                     out.push(step_running_line(running, &b.last));
                 }
                 if let Some(bar) = &bar {
-                    if running >= 1.0 {
+                    if running >= HEARTBEAT_AFTER_S {
                         bar.set_message(step_running_line(running, &b.last));
                     }
                 }
@@ -140,22 +145,23 @@ impl Drop for Heartbeat {
     }
 }
 
-/// The heartbeat's line while step `last.steps + 1` runs.
+/// The heartbeat's line when no step has finished for `running_s` since `last` (step
+/// `last.steps + 1` is running, or the output is being finished).
 pub fn step_running_line(running_s: f64, last: &Progress) -> String {
     if !last.t_end.is_finite() {
         return format!(
-            "granflow: step {} running for {}",
-            last.steps + 1,
+            "granflow: t = 0 s, {} steps, no step finished for {}",
+            last.steps,
             hms(running_s)
         );
     }
     format!(
-        "granflow: step {} running for {} (t = {:.4e} s of {} s, {:.1} %)",
-        last.steps + 1,
-        hms(running_s),
+        "granflow: t = {:.4e} s of {} s ({:.1} %), {} steps, no step finished for {}",
         last.t,
         last.t_end,
-        100.0 * last.t / last.t_end
+        100.0 * last.t / last.t_end,
+        last.steps,
+        hms(running_s)
     )
 }
 
@@ -419,7 +425,7 @@ mod tests {
         let line = step_running_line(75.0, &p(2.5, 10.0, 100));
         assert_eq!(
             line,
-            "granflow: step 101 running for 0:01:15 (t = 2.5000e0 s of 10 s, 25.0 %)"
+            "granflow: t = 2.5000e0 s of 10 s (25.0 %), 100 steps, no step finished for 0:01:15"
         );
         // 100 steps of 0.025 s so far: 300 more, each at 75 s, take 22 500 s.
         let w = slow_step_warning(75.0, &p(2.5, 10.0, 100));

@@ -229,9 +229,13 @@ impl StopRule for SpeedBound {
     }
 }
 
-/// Relative growth of the mass above which a run without mass sources fails: the
-/// schemes conserve mass to round-off (1e-13 relative) and outflow ends only remove it.
-pub const MASS_GAIN_TOLERANCE: f64 = 1e-6;
+/// Relative growth of the mass above which a run without mass sources fails. The
+/// hydrostatic schemes conserve mass to round-off; the multilayer non-hydrostatic
+/// scheme's wet/dry treatment gains up to about 1e-6 of it (measured on
+/// `nh_multilayer_convergence.toml` and a mass below its repose slope); outflow ends
+/// only remove mass. A tenth of a percent is far above both and far below an inflow
+/// through an outflow end (a 7.6e4-fold growth in the unstable submarine run).
+pub const MASS_GAIN_TOLERANCE: f64 = 1e-3;
 
 /// Fails a run whose mass grows by more than [`MASS_GAIN_TOLERANCE`] of the initial
 /// mass when nothing can add any (no erodible bed): the mass budget initial −
