@@ -247,7 +247,7 @@ pub struct MassGain;
 impl StopRule for MassGain {
     fn check(&mut self, ctx: &StepContext) -> Verdict {
         let (mass, mass0) = (ctx.diagnostics.mass, ctx.mass0);
-        if !(mass0 > 0.0) || mass <= mass0 * (1.0 + MASS_GAIN_TOLERANCE) {
+        if mass0.is_nan() || mass0 <= 0.0 || mass <= mass0 * (1.0 + MASS_GAIN_TOLERANCE) {
             return Verdict::Continue;
         }
         Verdict::Fail(SolverFailure {

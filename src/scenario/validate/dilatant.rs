@@ -111,7 +111,7 @@ pub(super) fn dilatancy(
         "dilatancy.phi_stat",
         required("dilatancy.phi_stat", d.phi_stat)?,
     )?;
-    if !(phi_stat >= MIN_PHI && phi_stat < 1.0) {
+    if !(MIN_PHI..1.0).contains(&phi_stat) {
         return err(
             "dilatancy.phi_stat",
             format!(
@@ -253,7 +253,7 @@ pub(super) fn dilatancy(
 pub(super) fn check_fraction(domain: &Domain, b: &[f64], phi: &Profile, values: &[f64]) -> Res<()> {
     let n = domain.cells;
     let dx = (domain.x_max - domain.x_min) / n as f64;
-    let Some(i) = values.iter().position(|&v| !(v >= MIN_PHI && v < 1.0)) else {
+    let Some(i) = values.iter().position(|&v| !(MIN_PHI..1.0).contains(&v)) else {
         return Ok(());
     };
     let x = cell_centre(domain.x_min, dx, i);
