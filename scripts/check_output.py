@@ -197,6 +197,11 @@ class Checker:
             s = f["snapshots/static_interface"][:]
             if np.isnan(s).any() or (s < 0).any() or (s > h * (1 + 1e-12)).any():
                 self.fail("/snapshots/static_interface is not within [0, h]")
+        for d in DIAGNOSTICS:
+            a = f[f"diagnostics/{d}"][:]
+            if not np.isfinite(a).all():
+                k = int(np.argwhere(~np.isfinite(a))[0][0])
+                self.fail(f"/diagnostics/{d} has non-finite values (first at step {k})")
         for name in ("snapshots/t", "diagnostics/t", "front/t"):
             t = f[name][:]
             if np.isnan(t).any() or (np.diff(t) < 0).any():

@@ -8,8 +8,14 @@
 //! (estimated steps t_end/Δt̄) × (cost per step). It overestimates runs that stop at
 //! rest and underestimates flows that speed up (the CFL step shrinks), so it only
 //! warns when the estimate is far above the limit.
+//!
+//! A single slow step (a fine multilayer non-hydrostatic grid, many sub-steps) does
+//! not leave the display silent: a heartbeat thread ([`Heartbeat`]) says, every
+//! progress interval, how long the current step has been running, and warns once when
+//! one step alone runs past [`SLOW_STEP_S`], with what that pace means to t_end.
 
 use std::io::IsTerminal;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -30,8 +36,160 @@ enum Display {
     Hidden,
 }
 
+/// The heartbeat speaks once no step has finished for this long (s), and at most
+/// every progress interval.
+pub const HEARTBEAT_AFTER_S: f64 = 5.0;
+
+/// A step running longer than this (s) gets a warning from the heartbeat.
+pub const SLOW_STEP_S: f64 = 60.0;
+
+/// What the heartbeat thread shares with [`RunProgress::update`].
+#[derive(Debug)]
+struct Beat {
+    /// When the last step ended (or the run started), and where the run was then.
+    since: Instant,
+    last: Progress,
+    /// When the heartbeat last printed.
+    printed: Instant,
+    warned: bool,
+    done: bool,
+}
+
+/// The heartbeat of a run: a thread that reports a step running for long.
+pub struct Heartbeat {
+    beat: Arc<Mutex<Beat>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Heartbeat {
+    /// Starts the thread: with `lines`, a line every `every` while a step runs longer
+    /// than that; always, the slow-step warning.
+    fn start(every: Duration, lines: bool, bar: Option<ProgressBar>, t_end: f64) -> Heartbeat {
+        let now = Instant::now();
+        let beat = Arc::new(Mutex::new(Beat {
+            since: now,
+            last: Progress {
+                t: 0.0,
+                t_end,
+                steps: 0,
+            },
+            printed: now,
+            warned: false,
+            done: false,
+        }));
+        let shared = Arc::clone(&beat);
+        let every = every.max(Duration::from_millis(200));
+        let thread = std::thread::Builder::new()
+            .name("granflow-heartbeat".into())
+            .spawn(move || loop {
+                std::thread::sleep(Duration::from_millis(200));
+                let mut b = shared.lock().unwrap_or_else(|e| e.into_inner());
+                if b.done {
+                    return;
+                }
+                let now = Instant::now();
+                let running = now.duration_since(b.since).as_secs_f64();
+                let mut out = Vec::new();
+                if !b.warned && running >= SLOW_STEP_S {
+                    b.warned = true;
+                    out.push(slow_step_warning(running, &b.last));
+                }
+                let quiet_for = Duration::from_secs_f64(HEARTBEAT_AFTER_S).max(every);
+                if lines
+                    && now.duration_since(b.since) >= quiet_for
+                    && now.duration_since(b.printed) >= quiet_for
+                {
+                    b.printed = now;
+                    out.push(step_running_line(running, &b.last));
+                }
+                if let Some(bar) = &bar {
+                    if running >= HEARTBEAT_AFTER_S {
+                        bar.set_message(step_running_line(running, &b.last));
+                    }
+                }
+                drop(b);
+                for line in out {
+                    match &bar {
+                        Some(bar) => {
+                            bar.suspend(|| crate::terminal::print_err(&format!("{line}\n")))
+                        }
+                        None => crate::terminal::print_err(&format!("{line}\n")),
+                    }
+                }
+            })
+            .ok();
+        Heartbeat { beat, thread }
+    }
+
+    /// A step ended at `p`.
+    fn beat(&self, p: &Progress, printed: bool) {
+        let mut b = self.beat.lock().unwrap_or_else(|e| e.into_inner());
+        b.since = Instant::now();
+        b.last = *p;
+        if printed {
+            b.printed = b.since;
+        }
+    }
+
+    fn stop(&mut self) {
+        self.beat.lock().unwrap_or_else(|e| e.into_inner()).done = true;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for Heartbeat {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+/// The heartbeat's line when no step has finished for `running_s` since `last` (step
+/// `last.steps + 1` is running, or the output is being finished).
+pub fn step_running_line(running_s: f64, last: &Progress) -> String {
+    if !last.t_end.is_finite() {
+        return format!(
+            "granflow: t = 0 s, {} steps, no step finished for {}",
+            last.steps,
+            hms(running_s)
+        );
+    }
+    format!(
+        "granflow: t = {:.4e} s of {} s ({:.1} %), {} steps, no step finished for {}",
+        last.t,
+        last.t_end,
+        100.0 * last.t / last.t_end,
+        last.steps,
+        hms(running_s)
+    )
+}
+
+/// The warning for one step running `running_s`: with the mean Δt of the steps so
+/// far, what that pace per step means to t_end.
+pub fn slow_step_warning(running_s: f64, last: &Progress) -> String {
+    let pace = if last.steps > 0 && last.t > 0.0 {
+        let steps_left = (last.t_end - last.t) / (last.t / last.steps as f64);
+        format!(
+            "; at that pace the {:.3e} steps to t_end = {} s take about {}",
+            steps_left,
+            last.t_end,
+            hms(steps_left * running_s)
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        "warning: step {} has been running for {}{pace}; a coarser grid (--set domain.cells=…) \
+         is much cheaper, and Ctrl-C stops the run after this step",
+        last.steps + 1,
+        hms(running_s)
+    )
+}
+
 /// The progress display of one run.
 pub struct RunProgress {
+    heartbeat: Option<Heartbeat>,
     display: Display,
     start: Instant,
     /// Wall clock, time and steps at the first step: the pace is measured from there.
@@ -58,7 +216,18 @@ impl RunProgress {
             (_, ProgressMode::Auto) if terminal => Display::Bar(bar()),
             (_, ProgressMode::Auto) => lines(),
         };
+        let heartbeat = match &display {
+            Display::Bar(bar) => Some(Heartbeat::start(
+                Duration::from_secs_f64(every_s.max(0.0)),
+                false,
+                Some(bar.clone()),
+                f64::NAN,
+            )),
+            Display::Lines { every, .. } => Some(Heartbeat::start(*every, true, None, f64::NAN)),
+            Display::Hidden => Some(Heartbeat::start(Duration::MAX, false, None, f64::NAN)),
+        };
         RunProgress {
+            heartbeat,
             display,
             start: now,
             first: None,
@@ -100,6 +269,7 @@ impl RunProgress {
                 }
             }
         }
+        let mut printed = false;
         match &mut self.display {
             Display::Bar(bar) => {
                 // Touch the bar every 64 steps: cheap, and smooth enough for a human.
@@ -116,15 +286,22 @@ impl RunProgress {
                 let now = Instant::now();
                 if now.duration_since(*last) >= *every {
                     *last = now;
+                    printed = true;
                     crate::terminal::print_err(&format!("{}\n", progress_line(elapsed, &pace, p)));
                 }
             }
             Display::Hidden => {}
         }
+        if let Some(h) = &self.heartbeat {
+            h.beat(p, printed);
+        }
     }
 
     /// Removes the bar (lines stay in the log).
-    pub fn finish(self) {
+    pub fn finish(mut self) {
+        if let Some(mut h) = self.heartbeat.take() {
+            h.stop();
+        }
         if let Display::Bar(bar) = self.display {
             bar.finish_and_clear();
         }
@@ -241,6 +418,24 @@ mod tests {
         );
         let short = long_run_warning(1.0, &pace(1.0, 0.1, 100), &p(0.1, 10.0, 100), 640);
         assert_eq!(short, None);
+    }
+
+    #[test]
+    fn a_slow_step_is_reported_with_its_pace_to_t_end() {
+        let line = step_running_line(75.0, &p(2.5, 10.0, 100));
+        assert_eq!(
+            line,
+            "granflow: t = 2.5000e0 s of 10 s (25.0 %), 100 steps, no step finished for 0:01:15"
+        );
+        // 100 steps of 0.025 s so far: 300 more, each at 75 s, take 22 500 s.
+        let w = slow_step_warning(75.0, &p(2.5, 10.0, 100));
+        assert!(w.contains("step 101 has been running for 0:01:15"), "{w}");
+        assert!(w.contains("3.000e2 steps") && w.contains("6:15:00"), "{w}");
+        let first = slow_step_warning(61.0, &p(0.0, 10.0, 0));
+        assert!(
+            first.contains("step 1 has been running for 0:01:01;"),
+            "{first}"
+        );
     }
 
     #[test]

@@ -5,7 +5,8 @@
 //!
 //! The default rules ([`default_rules`]): a non-finite value fails the run, a CFL step
 //! that collapses fails it, Ctrl-C ends it (`interrupted`), an empty domain ends it
-//! (`no_mass`, `outflowed`), with `time.stop_at_rest` a mass at rest ends it and with
+//! (`no_mass`, `outflowed`), a speed beyond the run's physical bound or a mass that
+//! grows without a source fails it, with `time.stop_at_rest` a mass at rest ends it and with
 //! `time.stop_when_settled` a mass whose kinetic energy has fallen to
 //! `time.settle_fraction` of its peak ends it (`settled`).
 //! The end time is the loop's own condition.
@@ -50,6 +51,10 @@ pub enum FailureReason {
     DtCollapse { dt: f64, max_speed: f64 },
     /// A stage left the model's admissible states (e.g. a volume fraction outside (0, 1)).
     Inadmissible { quantity: &'static str, value: f64 },
+    /// The largest speed exceeds the run's physical bound ([`SpeedBound`]).
+    SpeedBound { speed: f64, bound: f64 },
+    /// The mass grew although nothing can add any ([`MassGain`]).
+    MassGain { mass: f64, mass0: f64 },
 }
 
 impl std::fmt::Display for SolverFailure {
@@ -74,6 +79,20 @@ impl std::fmt::Display for SolverFailure {
             FailureReason::Inadmissible { quantity, value } => write!(
                 f,
                 "{quantity} = {value:e} is outside its admissible range at x = {x} m, t = {t:.6e} s (step {step})"
+            ),
+            FailureReason::SpeedBound { speed, bound } => write!(
+                f,
+                "the largest speed {speed:.3e} m/s exceeds the physical bound {bound:.3e} m/s \
+                 ({SPEED_BOUND_FACTOR} × the speed of free fall over the bed's relief and the \
+                 initial thickness, from the initial speed) at t = {t:.6e} s (step {step}): \
+                 the scheme is unstable for these parameters"
+            ),
+            FailureReason::MassGain { mass, mass0 } => write!(
+                f,
+                "the mass grew from {mass0:.6e} to {mass:.6e} (+{:.3e} %) by t = {t:.6e} s \
+                 (step {step}) although nothing adds mass: material entered the domain \
+                 (through an outflow end) or the scheme created it",
+                100.0 * (mass / mass0 - 1.0)
             ),
         }
     }
@@ -176,6 +195,70 @@ impl StopRule for MassGone {
     }
 }
 
+/// The speed bound of a run is this factor × √(u₀² + w₀² + 2 g (Δz + h₀)): the speed
+/// of free fall over the bed's relief Δz (of the potential elevation z, the plane's
+/// drop included in local coordinates) and the largest initial thickness h₀ (water
+/// depth included), starting at the largest initial speed. Energy conservation bounds
+/// a particle's speed by the free-fall one; pressure gradients drive the front of a
+/// dam break to 2√(g h₀), √2 times it, so the factor leaves a wide margin for fronts
+/// and thin cells while catching a blow-up (speeds of 1e4–1e8 m/s) in its first steps.
+pub const SPEED_BOUND_FACTOR: f64 = 10.0;
+
+/// Fails a run whose largest speed exceeds its physical bound (∞: no bound), the sign
+/// of an unstable scheme that has not yet produced a NaN.
+#[derive(Debug)]
+pub struct SpeedBound {
+    pub bound: f64,
+}
+
+impl StopRule for SpeedBound {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        let speed = ctx.diagnostics.max_speed;
+        if speed <= self.bound {
+            return Verdict::Continue;
+        }
+        Verdict::Fail(SolverFailure {
+            reason: FailureReason::SpeedBound {
+                speed,
+                bound: self.bound,
+            },
+            x: None,
+            t: ctx.t,
+            step: ctx.steps,
+        })
+    }
+}
+
+/// Relative growth of the mass above which a run without mass sources fails. The
+/// hydrostatic schemes conserve mass to round-off; the multilayer non-hydrostatic
+/// scheme's wet/dry treatment gains up to about 1e-6 of it (measured on
+/// `nh_multilayer_convergence.toml` and a mass below its repose slope); outflow ends
+/// only remove mass. A tenth of a percent is far above both and far below an inflow
+/// through an outflow end (a 7.6e4-fold growth in the unstable submarine run).
+pub const MASS_GAIN_TOLERANCE: f64 = 1e-3;
+
+/// Fails a run whose mass grows by more than [`MASS_GAIN_TOLERANCE`] of the initial
+/// mass when nothing can add any (no erodible bed): the mass budget initial −
+/// outflowed = current has outflowed ≥ 0, so a gain means material entered through an
+/// outflow end (the ghost state of an unstable run) or the scheme created it.
+#[derive(Debug, Default)]
+pub struct MassGain;
+
+impl StopRule for MassGain {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        let (mass, mass0) = (ctx.diagnostics.mass, ctx.mass0);
+        if mass0.is_nan() || mass0 <= 0.0 || mass <= mass0 * (1.0 + MASS_GAIN_TOLERANCE) {
+            return Verdict::Continue;
+        }
+        Verdict::Fail(SolverFailure {
+            reason: FailureReason::MassGain { mass, mass0 },
+            x: None,
+            t: ctx.t,
+            step: ctx.steps,
+        })
+    }
+}
+
 /// Ends the run after Ctrl-C or SIGTERM (see [`crate::interrupt`]).
 #[derive(Debug, Default)]
 pub struct Interrupted;
@@ -240,6 +323,11 @@ pub struct StopOptions {
     /// End the run (status `settled`) once the kinetic energy is at or below this
     /// fraction of its peak.
     pub settled_fraction: Option<f64>,
+    /// Fail the run once a speed exceeds this bound (m/s; ∞: never), [`SpeedBound`].
+    pub speed_bound: f64,
+    /// Fail the run if its mass grows ([`MassGain`]): true unless something (an
+    /// erodible bed) adds mass.
+    pub mass_conserved: bool,
 }
 
 /// The rules every run consults, in order.
@@ -247,9 +335,15 @@ pub fn default_rules(options: StopOptions) -> Vec<Box<dyn StopRule>> {
     let mut rules: Vec<Box<dyn StopRule>> = vec![
         Box::new(NonFinite),
         Box::new(DtCollapse),
+        Box::new(SpeedBound {
+            bound: options.speed_bound,
+        }),
         Box::new(Interrupted),
         Box::new(MassGone),
     ];
+    if options.mass_conserved {
+        rules.insert(3, Box::new(MassGain));
+    }
     if options.at_rest {
         rules.push(Box::new(AtRest));
     }
@@ -311,6 +405,8 @@ mod tests {
         let mut options = StopOptions {
             at_rest: false,
             settled_fraction: None,
+            speed_bound: f64::INFINITY,
+            mass_conserved: false,
         };
         let n = default_rules(options).len();
         options.settled_fraction = Some(1e-6);

@@ -155,31 +155,102 @@ fn quiet_run_prints_nothing() {
 }
 
 #[test]
-fn solver_blow_up_exits_1_naming_where_and_when_and_keeps_the_file() {
-    // Finite but absurd input: u² overflows to infinity in the first flux.
+fn solver_blow_up_exits_1_naming_when_and_keeps_the_file() {
+    // The submarine scheme with a huge interlayer coefficient K is unstable: its speeds
+    // jump to about 1e3 m/s in the first step, beyond the physical bound of a mass on a
+    // 2 m relief under 2.7 m of water.
     let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "ok.toml", MINIMAL);
+    let scn = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/submarine_landslide.toml");
     let h5 = dir.path().join("blowup.h5");
     let out = granflow()
-        .args([
-            "run",
-            &path,
-            "-o",
-            h5.to_str().unwrap(),
-            "--set",
-            "initial.u=1e200",
-        ])
+        .arg("run")
+        .arg(&scn)
+        .args(["-o", h5.to_str().unwrap(), "--set", "submarine.k=1e6"])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("non-finite value at x ="), "{stderr}");
-    assert!(stderr.contains("t ="), "{stderr}");
+    assert!(stderr.contains("exceeds the physical bound"), "{stderr}");
+    assert!(
+        stderr.contains("at t = ") && stderr.contains("(step 1)"),
+        "{stderr}"
+    );
     let f = rust_hdf5::H5File::open(&h5).unwrap();
     let t = read_h5(&f, "snapshots/t");
     assert_eq!(t, vec![0.0], "only the valid initial snapshot");
     let h = read_h5(&f, "snapshots/h");
     assert!(h.iter().all(|v| v.is_finite()));
+    let status = f
+        .root_group()
+        .group("summary")
+        .unwrap()
+        .attr_string("status")
+        .unwrap();
+    assert!(status.starts_with("failed: the largest speed"), "{status}");
+}
+
+#[test]
+fn non_physical_magnitudes_are_refused_naming_the_key() {
+    for (set, key) in [
+        ("initial.u=1e300", "initial.u"),
+        ("initial.u=-2000", "initial.u"),
+        ("initial.h=\"if(x <= 0, 1e300, 0)\"", "initial.h"),
+        ("initial.erodible_bed=2e4", "initial.erodible_bed"),
+        ("bed.b=\"1e6 * x\"", "bed.b"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = write(dir.path(), "ok.toml", MINIMAL);
+        let out = granflow()
+            .args(["check", &path, "--set", set])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{set}: {stderr}");
+        assert!(stderr.contains(&format!("key '{key}'")), "{set}: {stderr}");
+        assert!(stderr.contains("physical bound"), "{set}: {stderr}");
+    }
+    let scenarios = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    for (file, sets, key) in [
+        (
+            "dilatancy_dense.toml",
+            &["dilatancy.alpha=1e300"][..],
+            "dilatancy.alpha",
+        ),
+        (
+            "dilatancy_dense.toml",
+            &["initial.phi=1e-300"],
+            "initial.phi",
+        ),
+        (
+            "dilatancy_dense.toml",
+            &["dilatancy.phi_stat=1e-300"],
+            "dilatancy.phi_stat",
+        ),
+        (
+            "submarine_landslide.toml",
+            &["initial.eta=1e300"],
+            "initial.eta",
+        ),
+        (
+            "erodible_bed.toml",
+            &["model.layers=2", "model.layer_fractions=[1e-300, 1]"],
+            "model.layer_fractions",
+        ),
+        ("collapse_nh.toml", &["initial.w=1e200"], "initial.w"),
+    ] {
+        let mut cmd = granflow();
+        cmd.arg("check").arg(scenarios.join(file));
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        let out = cmd.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{sets:?}: {stderr}");
+        assert!(
+            stderr.contains(&format!("key '{key}'")),
+            "{sets:?}: {stderr}"
+        );
+    }
 }
 
 #[test]
@@ -229,38 +300,16 @@ fn bed_from_a_csv_table_is_interpolated_relative_to_the_scenario_file() {
 }
 
 #[test]
-fn overflowing_column_fails_instead_of_vanishing() {
-    // Regression: a NaN produced by overflow was clipped to h = 0 and the run
-    // "completed" with the mass gone.
-    let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "ok.toml", MINIMAL);
-    let h5 = dir.path().join("huge.h5");
-    let out = granflow()
-        .args(["run", &path, "-o", h5.to_str().unwrap()])
-        .args(["--set", "initial.h=\"if(x <= 0, 1e300, 0)\""])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("non-finite value at x ="), "{stderr}");
-}
-
-#[test]
 fn collapsing_time_step_fails_instead_of_running_forever() {
-    // Regression: u = 1e100 m/s keeps every value finite but makes Δt ≈ 1e-102 s; the
-    // run crawled on, filling memory and the front CSV.
+    // A run of 1e9 s at the collapse's CFL step (about 2e-3 s) would take 5e11 steps:
+    // it fails at its first step instead of crawling on, filling memory and the front
+    // CSV.
     let dir = tempfile::tempdir().unwrap();
     let path = write(dir.path(), "ok.toml", MINIMAL);
     let h5 = dir.path().join("crawl.h5");
     let out = granflow()
-        .args([
-            "run",
-            &path,
-            "-o",
-            h5.to_str().unwrap(),
-            "--set",
-            "initial.u=1e100",
-        ])
+        .args(["run", &path, "-o", h5.to_str().unwrap()])
+        .args(["--set", "time.t_end=1e9", "--set", "output.every=1e9"])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -1,5 +1,7 @@
-//! Fuzzing the scenario loader and the run setup: any byte string, any edit
-//! of a real scenario and any combination of schema keys with hostile values must give
+//! Fuzzing the scenario loader, the sweep-file loader and the run setup: any byte
+//! string, any edit of a real scenario or sweep file and any combination of schema keys
+//! of every model (granular, multilayer, non-hydrostatic, dilatant, submarine) with
+//! hostile values must give
 //! a scenario or a `ScenarioError` (exit 0 or 2), never a panic, an abort (stack
 //! overflow, out of memory) or a hang.
 //!
@@ -92,6 +94,23 @@ const NASTY: &[&str] = &[
     "\"layer\"",
     "\"no_slip\"",
     "\"bound\"",
+    "\"dilatant\"",
+    "\"submarine\"",
+    "\"granular\"",
+    "\"split\"",
+    "\"appendix_b\"",
+    "\"implicit\"",
+    "\"exponential\"",
+    "\"f0\"",
+    "\"f2\"",
+    "\"submerged\"",
+    "[1e300, 1e300, 1e300]",
+    "[2, 2, 5]",
+    "[1e-300, 1]",
+    "[0.5, 0.5]",
+    "1e300",
+    "1e-300",
+    "1e6",
     "2",
     "20",
     "1000",
@@ -158,8 +177,13 @@ const KEYS: &[&str] = &[
     "rheology.delta",
     "rheology.c_msm",
     "rheology.mu_w",
+    "rheology.mu_w_deg",
     "rheology.width",
+    "rheology.channel_width",
     "rheology.sidewall",
+    "rheology.viscosity",
+    "rheology.viscosity_tolerance",
+    "rheology.viscosity_iterations",
     "model.kind",
     "model.pressure",
     "model.layers",
@@ -168,6 +192,24 @@ const KEYS: &[&str] = &[
     "initial.u",
     "initial.w",
     "initial.erodible_bed",
+    "initial.eta",
+    "initial.phi",
+    "dilatancy.k",
+    "dilatancy.k_tilde",
+    "dilatancy.phi_stat",
+    "dilatancy.phi_eq",
+    "dilatancy.n",
+    "dilatancy.update",
+    "dilatancy.alpha",
+    "dilatancy.lambda",
+    "dilatancy.xi",
+    "dilatancy.scheme",
+    "submarine.r",
+    "submarine.k",
+    "submarine.lambda1",
+    "submarine.lambda2",
+    "submarine.k_in",
+    "submarine.buoyancy",
     "boundary.left",
     "boundary.right",
     "time.t_end",
@@ -179,6 +221,8 @@ const KEYS: &[&str] = &[
     "output.every",
     "output.front_threshold",
     "output.static_threshold",
+    "output.gauges",
+    "output.gauge_every",
     "domain",
     "x",
     "domain.x_min.y",
@@ -310,6 +354,102 @@ fn profile_edit() -> impl Strategy<Value = String> {
     })
 }
 
+/// Sweep files: the bundled ones edited like scenarios (their `scenario` made
+/// absolute), and generated ones whose axes take schema keys and hostile values.
+fn sweep_text() -> impl Strategy<Value = String> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let mut texts: Vec<String> = std::fs::read_dir(dir.join("sweeps"))
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| std::fs::read_to_string(e.path()).unwrap())
+        .map(|t| {
+            t.replace(
+                "scenario = \"../",
+                &format!("scenario = \"{}/", dir.display()),
+            )
+        })
+        .collect();
+    texts.sort();
+    let bases: Vec<String> = scenarios_paths();
+    let edited = (
+        0..texts.len(),
+        prop::collection::vec((any::<prop::sample::Index>(), 0..N_NASTY), 1..4),
+    )
+        .prop_map(move |(k, edits)| {
+            let mut lines: Vec<String> = texts[k].lines().map(str::to_owned).collect();
+            for (at, value) in edits {
+                let i = at.index(lines.len());
+                if let Some((key, _)) = lines[i].split_once('=') {
+                    if key.trim() != "scenario" && key.trim() != "output" {
+                        lines[i] = format!("{key}= {}", nasty(value));
+                    }
+                }
+            }
+            lines.join("\n")
+        });
+    let generated = (
+        0..bases.len(),
+        prop::collection::vec(
+            (0..KEYS.len(), prop::collection::vec(0..N_NASTY, 0..4)),
+            0..4,
+        ),
+        any::<bool>(),
+    )
+        .prop_map(move |(k, axes, zip)| {
+            let mut text = format!("scenario = {:?}\nset = [\"domain.cells=20\"]\n", bases[k]);
+            text.push_str(if zip { "[[zip]]\n" } else { "[axes]\n" });
+            for (key, values) in axes {
+                let values: Vec<String> = values.into_iter().map(nasty).collect();
+                text.push_str(&format!("{} = [{}]\n", KEYS[key], values.join(", ")));
+            }
+            text
+        });
+    prop_oneof![edited, generated]
+}
+
+fn scenarios_paths() -> Vec<String> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let mut paths: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| p.display().to_string())
+        .collect();
+    paths.sort();
+    paths
+}
+
+/// Parses a sweep file, expands it when it is small, and loads and builds the first
+/// runs' scenarios as `granflow sweep` would.
+fn exercise_sweep(text: &str) -> Result<(), TestCaseError> {
+    let start = Instant::now();
+    let path = std::env::temp_dir().join("granflow-fuzz-sweep.toml");
+    if let Ok(spec) = granflow::sweep::spec::parse(&path, text) {
+        if spec.run_count() <= 64 {
+            if let Ok(points) = granflow::sweep::expand::expand_spec(&spec) {
+                let base = std::fs::read_to_string(&spec.scenario).unwrap_or_default();
+                let dir = spec
+                    .scenario
+                    .parent()
+                    .unwrap_or(Path::new("."))
+                    .to_path_buf();
+                for point in points.iter().take(4) {
+                    let sets = point.overrides();
+                    if let Ok(scn) = granflow::scenario::load_str(&base, &dir, &sets) {
+                        if scn.domain.cells * scn.model.layers <= 200_000 {
+                            let _ = granflow::runner::check(&scn);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let took = start.elapsed();
+    prop_assert!(took < PER_INPUT, "took {took:?}");
+    Ok(())
+}
+
 fn input() -> impl Strategy<Value = (String, Vec<String>)> {
     prop_oneof![
         any::<Vec<u8>>().prop_map(|b| String::from_utf8_lossy(&b).into_owned()),
@@ -346,6 +486,10 @@ fn any_input_loads_or_is_refused_without_panic_or_hang() {
         let result = runner.run(&input(), |(text, sets)| exercise(&text, &sets));
         if let Err(e) = result {
             panic!("{e}");
+        }
+        let result = runner.run(&sweep_text(), |text| exercise_sweep(&text));
+        if let Err(e) = result {
+            panic!("sweep file: {e}");
         }
         round += 1;
         // Without a budget: a fixed number of rounds (about a second in a debug build).

@@ -104,7 +104,7 @@ fn an_output_rate_that_would_fill_the_disk_is_refused_naming_the_key() {
 }
 
 #[test]
-fn a_step_that_would_iterate_for_hours_fails_at_once() {
+fn a_step_that_would_iterate_for_hours_is_refused_naming_the_key() {
     let dir = tempfile::tempdir().unwrap();
     let dense = scenario("dilatancy_dense.toml");
     let (code, stderr) = run_in(
@@ -119,8 +119,9 @@ fn a_step_that_would_iterate_for_hours_fails_at_once() {
         ],
         MINUTE,
     );
-    assert_eq!(code, 1, "{stderr}");
-    assert!(stderr.contains("dilatancy.xi"), "{stderr}");
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("key 'dilatancy.xi'"), "{stderr}");
+    assert!(!dir.path().join("d.h5").exists());
 }
 
 #[test]

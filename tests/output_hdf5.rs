@@ -617,3 +617,178 @@ assert f["front"].attrs["threshold"] == {THRESHOLD:e}
         crate::common::assert_success(&out);
     }
 }
+
+/// A disk that fills mid-run (a [`LimitedDisk`] of 560 kB: the layout, the first step
+/// chunks and a few snapshots of the collapse fit) stops the run with a write error
+/// and leaves a file that reads: every per-step series with the same number of rows,
+/// every snapshot dataset with the same number of frames, and the status saying why.
+#[test]
+fn a_full_disk_leaves_a_consistent_file_whose_status_says_why() {
+    use granflow::output::hdf5::space::LimitedDisk;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("full.h5");
+    let collapse = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/collapse.toml");
+    let scn = granflow::scenario::load_file(&collapse, &["output.every=0.002".into()]).unwrap();
+    let mut sim = granflow::setup::build(&scn);
+    let mut sink = Hdf5Sink::create_with_space(&path, Box::new(LimitedDisk::new(560_000))).unwrap();
+    let err = sim.run(&mut sink, &mut |_| {}).unwrap_err();
+    assert!(err.to_string().contains("write error"), "{err}");
+    drop(sink);
+    let file = H5File::open(&path).unwrap();
+    let status = file
+        .root_group()
+        .group("summary")
+        .unwrap()
+        .attr_string("status")
+        .unwrap();
+    assert!(
+        status.starts_with("failed: ") && status.contains("write error: no space left"),
+        "{status}"
+    );
+    let rows: Vec<usize> = [
+        "diagnostics/t",
+        "diagnostics/dt",
+        "diagnostics/mass",
+        "diagnostics/kinetic_energy",
+        "diagnostics/max_speed",
+        "front/t",
+        "front/x",
+    ]
+    .iter()
+    .map(|name| file.dataset(name).unwrap().read_raw::<f64>().unwrap().len())
+    .collect();
+    assert!(
+        rows.iter().all(|&n| n == rows[0]) && rows[0] > 1,
+        "{rows:?}"
+    );
+    let t = file
+        .dataset("snapshots/t")
+        .unwrap()
+        .read_raw::<f64>()
+        .unwrap();
+    assert!(t.len() > 1, "{t:?}");
+    for name in ["snapshots/h", "snapshots/u"] {
+        let ds = file.dataset(name).unwrap();
+        assert_eq!(ds.shape()[0], t.len(), "{name}");
+        assert!(ds.read_raw::<f64>().unwrap().iter().all(|v| v.is_finite()));
+    }
+    // The last snapshot is no later than the last step record.
+    let steps = file
+        .dataset("diagnostics/t")
+        .unwrap()
+        .read_raw::<f64>()
+        .unwrap();
+    assert!(t.last() <= steps.last(), "{t:?} {steps:?}");
+    drop(file);
+    let Some(python) = crate::common::python_with_h5py() else {
+        return;
+    };
+    let script = "import sys, h5py\n\
+        f = h5py.File(sys.argv[1], 'r')\n\
+        n = {len(f[k]) for k in ('diagnostics/t', 'diagnostics/dt', 'diagnostics/mass', \
+        'diagnostics/kinetic_energy', 'diagnostics/max_speed', 'front/t', 'front/x')}\n\
+        m = {len(f[k]) for k in ('snapshots/t', 'snapshots/h', 'snapshots/u')}\n\
+        assert len(n) == 1 and len(m) == 1, (n, m)\n\
+        print(f['summary'].attrs['status'])\n";
+    let out = Command::new(python)
+        .args(["-c", script])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("write error"));
+}
+
+/// `scripts/check_output.py` refuses a file with a non-finite value in `/diagnostics`
+/// or in a snapshot, naming the dataset.
+#[test]
+fn the_checker_refuses_non_finite_diagnostics_and_snapshots() {
+    let Some(python) = crate::common::python_with_h5py() else {
+        return;
+    };
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/check_output.py");
+    let dir = tempfile::tempdir().unwrap();
+    for (k, (speed, h0, needle)) in [
+        (
+            f64::INFINITY,
+            0.1,
+            "/diagnostics/max_speed has non-finite values",
+        ),
+        (1.0, f64::INFINITY, "/snapshots/h has non-finite values"),
+        (1.0, 0.1, ""),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let path = dir.path().join(format!("c{k}.h5"));
+        let mut sink = Hdf5Sink::create(&path).unwrap();
+        let x = [0.25, 0.75];
+        let info = RunInfo {
+            granflow_version: "test".into(),
+            model: "granular".into(),
+            pressure: "hydrostatic".into(),
+            layers: 1,
+            coordinates: "cartesian".into(),
+            slope_deg: 0.0,
+            scenario_toml: String::new(),
+            front_threshold: THRESHOLD,
+            raster: None,
+        };
+        let grid = GridData {
+            x: &x,
+            y: None,
+            b: &[0.0; 2],
+            h_bed: &[0.0; 2],
+            shape: None,
+        };
+        sink.begin(&info, &grid).unwrap();
+        let h = [h0, 0.1];
+        let u = [0.0, 0.0];
+        for t in [0.0, 1.0] {
+            sink.step(&StepRecord {
+                t,
+                dt: if t == 0.0 { 0.0 } else { 1.0 },
+                mass: 0.5 * (h0.min(1e300) + 0.1),
+                kinetic_energy: 0.0,
+                max_speed: if t == 0.0 { 0.0 } else { speed },
+                front_x: 0.75,
+            })
+            .unwrap();
+            sink.snapshot(&SnapshotView {
+                t,
+                h: &h,
+                u: &u,
+                v: None,
+                w: None,
+                p_nh: None,
+                layers: 1,
+                extra: &[],
+                shape: None,
+            })
+            .unwrap();
+        }
+        let mut summary = RunSummary::not_run("completed".into(), 0.0);
+        summary.t_end = 1.0;
+        sink.finish(&summary).unwrap();
+        let out = Command::new(&python)
+            .arg(&script)
+            .arg(&path)
+            .output()
+            .unwrap();
+        let said = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        if needle.is_empty() {
+            assert!(out.status.success(), "{said}");
+        } else {
+            assert!(!out.status.success(), "{said}");
+            assert!(said.contains(needle), "{said}");
+        }
+    }
+}

@@ -396,12 +396,14 @@ fn rerun_skips_completed_runs_and_force_reruns_them() {
 #[test]
 fn a_failing_run_is_recorded_and_the_others_go_on() {
     let tmp = TempDir::new().unwrap();
-    // A 1e300 m column is valid input but overflows the solver at the first step.
-    let file = sweep_file(
-        tmp.path(),
-        "fail.toml",
-        "[axes]\ninitial.h = [\"if(x <= 0, 0.14, 0)\", \"if(x <= 0, 1e300, 0)\", \"if(x <= 0, 0.1, 0)\"]\n",
+    // A run of 1e9 s is valid input, but at the CFL step of about 2e-3 s it would take
+    // 5e11 steps: it fails at its first step.
+    let file = tmp.path().join("fail.toml");
+    let text = format!(
+        "scenario = {:?}\nset = [\"domain.cells=60\"]\n[[zip]]\ntime.t_end = [0.4, 1e9, 0.3]\noutput.every = [0.1, 1e9, 0.1]\n",
+        collapse().display().to_string()
     );
+    fs::write(&file, text).unwrap();
     let out = tmp.path().join("out");
     let (code, _, stderr) = sweep(&file, &out, &["--jobs", "2"]);
     assert_eq!(code, 1, "{stderr}");
@@ -412,7 +414,7 @@ fn a_failing_run_is_recorded_and_the_others_go_on() {
         "{status:?}"
     );
     assert!(
-        status[1].starts_with("failed: non-finite value at x ="),
+        status[1].starts_with("failed: time step collapsed"),
         "{status:?}"
     );
     assert!(
@@ -422,7 +424,7 @@ fn a_failing_run_is_recorded_and_the_others_go_on() {
     let failed = column(&out.join("summary.csv"), "run")[1].clone();
     let record = fs::read_to_string(out.join(format!("{failed}.result.toml"))).unwrap();
     assert!(
-        record.contains("status = \"failed: non-finite value"),
+        record.contains("status = \"failed: time step collapsed"),
         "{record}"
     );
 
@@ -572,4 +574,38 @@ fn the_expected_longest_run_starts_first_and_the_summary_keeps_its_order() {
             "slope_deg=22"
         ]
     );
+}
+
+#[test]
+fn resume_reruns_a_run_whose_file_is_another_runs_or_damaged() {
+    let tmp = TempDir::new().unwrap();
+    let file = sweep_file(
+        tmp.path(),
+        "slopes.toml",
+        "[axes]\ndomain.slope_deg = [16, 19, 22]\n",
+    );
+    let out = tmp.path().join("out");
+    assert_eq!(sweep(&file, &out, &["-q"]).0, 0);
+    let runout = column(&out.join("summary.csv"), "runout");
+    assert!(runout[0] != runout[2], "{runout:?}");
+    let h5 = |slope: &str| out.join(format!("slope_deg={slope}.h5"));
+    // The 16° file replaced by the 22° one (another run, status "completed" too), the
+    // 19° file scrambled (its bytes reversed), the 22° one cut in half.
+    fs::copy(h5("22"), h5("16")).unwrap();
+    let mut bytes = fs::read(h5("19")).unwrap();
+    bytes.reverse();
+    fs::write(h5("19"), bytes).unwrap();
+    let full = fs::read(h5("22")).unwrap();
+    fs::write(h5("22"), &full[..full.len() / 2]).unwrap();
+    let (code, stdout, stderr) = sweep(&file, &out, &[]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("(3 run now, 0 already done)"), "{stdout}");
+    // The files are each run's own again: merge reports the numbers of the first sweep.
+    fs::remove_file(out.join("summary.csv")).unwrap();
+    let (code, _, stderr) = merge(&out);
+    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(column(&out.join("summary.csv"), "runout"), runout);
+    let (code, stdout, _) = sweep(&file, &out, &[]);
+    assert_eq!(code, 0);
+    assert!(stdout.contains("(0 run now, 3 already done)"), "{stdout}");
 }

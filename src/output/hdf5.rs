@@ -38,10 +38,18 @@
 //! holding the file open (a notebook, say) cannot make the run fail at its next
 //! snapshot; such a reader may see stale metadata and should reopen the file.
 //!
+//! A full disk: every batch first claims the room it can take ([`space`]), so a disk
+//! that fills stops the run with a write error while the file is still the consistent
+//! one of the previous batch (every series with its rows, every snapshot whole), and
+//! a reserve held since `begin` is given back to write the status
+//! `failed: … write error: …` at finish. A batch that fails anyway (another process
+//! took the room) is reported and the file is not touched again.
+//!
 //! Layered fields arrive layer-major (α·nx + i), which is the C order of the
 //! (nt, nl, nx) datasets, so each snapshot is one contiguous frame.
 
 mod layout;
+pub mod space;
 
 use std::path::{Path, PathBuf};
 
@@ -50,6 +58,7 @@ use rust_hdf5::H5File;
 pub use layout::stage_attr_name;
 
 use layout::GaugeRows;
+use space::{DiskSpace, Space};
 
 use super::{
     CellField, GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary,
@@ -74,7 +83,20 @@ pub struct Hdf5Sink {
     times: Vec<f64>,
     /// Whether `/maps` was written (raster runs).
     has_maps: bool,
+    /// Where batches claim their room ([`space`]).
+    space: Box<dyn Space>,
+    /// Step records and gauge rows on disk.
+    steps_written: u64,
+    gauge_rows_written: u64,
+    /// A batch failed half-way: the file is left as it is.
+    damaged: bool,
+    /// A claim failed: the disk is full.
+    full: bool,
 }
+
+/// Room for what a batch rewrites besides its data: object headers, chunk indices,
+/// the global heap of the string attributes.
+const HEADER_BYTES: u64 = 16 * 1024;
 
 /// Bound on the buffered gauge values (4 MiB): a run with gauges at every step and
 /// rare snapshots writes them in pieces of this size.
@@ -191,6 +213,19 @@ impl Hdf5Sink {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| io_err(path, e))?;
         }
+        let space = DiskSpace::new(path).map_err(|e| {
+            io_err(
+                path,
+                format!("write error: cannot reserve room beside the file: {e}"),
+            )
+        })?;
+        Self::create_with_space(path, Box::new(space))
+    }
+
+    /// [`Hdf5Sink::create`] with the room claimed from `space` (e.g. a
+    /// [`space::LimitedDisk`] to test the full-disk path); the parent directory must
+    /// exist.
+    pub fn create_with_space(path: &Path, space: Box<dyn Space>) -> Result<Self, OutputError> {
         let sink = Hdf5Sink {
             path: path.to_path_buf(),
             shape: None,
@@ -200,6 +235,11 @@ impl Hdf5Sink {
             finished: false,
             times: Vec::new(),
             has_maps: false,
+            space,
+            steps_written: 0,
+            gauge_rows_written: 0,
+            damaged: false,
+            full: false,
         };
         let file = sink.create_file()?;
         sink.close(file, false)?;
@@ -237,11 +277,80 @@ impl Hdf5Sink {
     /// Appends the buffered step records on their own (reopen, append, close), when
     /// many steps pass between two snapshots.
     fn flush_steps(&mut self) -> Result<(), OutputError> {
-        let file = self.open_file()?;
-        layout::append_steps(&file, &self.pending).map_err(|e| self.err(e))?;
-        self.close(file, false)?;
-        self.pending.clear();
-        Ok(())
+        self.claim(self.batch_bytes(0, false))?;
+        let written = self.open_file().and_then(|file| {
+            layout::append_steps(&file, &self.pending).map_err(|e| self.err(e))?;
+            self.close(file, false)
+        });
+        self.after_batch(written, true, false)
+    }
+
+    /// Bytes the next batch can add to the file: the pending step records (and their
+    /// new chunks), with `gauges` the pending gauge rows, a snapshot of `snapshot_values`
+    /// numbers, and [`HEADER_BYTES`].
+    fn batch_bytes(&self, snapshot_values: usize, gauges: bool) -> u64 {
+        let new_chunks = |written: u64, more: u64, chunk: u64| {
+            (written + more).div_ceil(chunk) - written.div_ceil(chunk)
+        };
+        let series = layout::STEP_DATASETS.len() as u64;
+        let p = self.pending.len() as u64;
+        let chunk = layout::STEP_CHUNK as u64;
+        let mut bytes = series * 8 * (p + chunk * new_chunks(self.steps_written, p, chunk));
+        if gauges {
+            let n = self.gauges.unwrap_or(0) as u64;
+            let rows = (layout::GAUGE_CHUNK_VALUES as u64 / n.max(1)).max(1);
+            let g = self.pending_gauges.t.len() as u64;
+            let chunks = new_chunks(self.gauge_rows_written, g, rows);
+            bytes += 8 * (1 + 2 * n) * (g + rows * chunks);
+        }
+        if snapshot_values > 0 {
+            bytes += 8 * (snapshot_values as u64 + layout::SNAP_T_CHUNK as u64);
+        }
+        bytes + HEADER_BYTES
+    }
+
+    /// Claims room for a batch of `bytes` before it touches the file.
+    fn claim(&mut self, bytes: u64) -> Result<(), OutputError> {
+        if self.damaged {
+            return Err(self.err("write error: an earlier write failed half-way"));
+        }
+        let len = std::fs::metadata(&self.path).map_or(0, |m| m.len());
+        self.space.claim(len, bytes).map_err(|e| {
+            self.full = true;
+            self.err(format!(
+                "write error: {e} (the file keeps what was written before)"
+            ))
+        })
+    }
+
+    /// Records a batch's outcome: on success its records are on disk; on failure the
+    /// file is left alone from now on.
+    fn after_batch(
+        &mut self,
+        written: Result<(), OutputError>,
+        steps: bool,
+        gauges: bool,
+    ) -> Result<(), OutputError> {
+        match written {
+            Ok(()) => {
+                if steps {
+                    self.steps_written += self.pending.len() as u64;
+                    self.pending.clear();
+                }
+                if gauges {
+                    self.gauge_rows_written += self.pending_gauges.t.len() as u64;
+                    self.pending_gauges.clear();
+                }
+                Ok(())
+            }
+            Err(OutputError::Io { path, message }) => {
+                self.damaged = true;
+                Err(OutputError::Io {
+                    path,
+                    message: format!("write error: {message}"),
+                })
+            }
+        }
     }
 
     /// The XDMF file beside a raster run's HDF5 file ([`super::xdmf`]), rewritten
@@ -329,17 +438,25 @@ impl OutputSink for Hdf5Sink {
             .and_then(|create| Ok((create, shape.fix_extra(snap)?)))
             .map_err(|e| self.err(format!("snapshot at t = {}: {e}", snap.t)))?;
         let (nx, nl, raster) = (shape.nx, shape.nl, shape.raster);
+        let values = snap.h.len()
+            + snap.u.len()
+            + snap.v.map_or(0, <[f64]>::len)
+            + snap.w.map_or(0, <[f64]>::len)
+            + snap.p_nh.map_or(0, <[f64]>::len)
+            + snap.extra.iter().map(|f| f.data.len()).sum::<usize>();
+        self.claim(self.batch_bytes(values, true))?;
+        // Fixed only once the batch may go ahead: a refused snapshot leaves no trace.
         self.shape = Some(shape);
-        let file = self.open_file()?;
-        layout::create_optional(&file, (nx, nl), create)
-            .and_then(|()| layout::create_cell_fields(&file, nx, raster, &create_extra))
-            .and_then(|()| layout::append_steps(&file, &self.pending))
-            .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
-            .and_then(|()| layout::append_snapshot(&file, snap))
-            .map_err(|e| self.err(e))?;
-        self.close(file, false)?;
-        self.pending.clear();
-        self.pending_gauges.clear();
+        let written = self.open_file().and_then(|file| {
+            layout::create_optional(&file, (nx, nl), create)
+                .and_then(|()| layout::create_cell_fields(&file, nx, raster, &create_extra))
+                .and_then(|()| layout::append_steps(&file, &self.pending))
+                .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
+                .and_then(|()| layout::append_snapshot(&file, snap))
+                .map_err(|e| self.err(e))?;
+            self.close(file, false)
+        });
+        self.after_batch(written, true, true)?;
         self.times.push(snap.t);
         self.write_xdmf()
     }
@@ -358,15 +475,43 @@ impl OutputSink for Hdf5Sink {
             return Err(self.err("finish called twice"));
         }
         self.finished = true;
-        let file = self.open_file()?;
-        layout::append_steps(&file, &self.pending)
-            .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
-            .and_then(|()| layout::write_summary(&file, summary, self.shape.is_some()))
-            .map_err(|e| self.err(e))?;
-        self.pending.clear();
-        self.pending_gauges.clear();
-        self.close(file, true)?;
-        self.write_xdmf()
+        if self.damaged {
+            self.space.release();
+            return Err(self.err(
+                "write error: an earlier write failed half-way; the file was left as it was",
+            ));
+        }
+        // A full disk: the reserve makes room for the last records and the status; if
+        // even that is not enough, the status alone, saying so.
+        let mut summary = summary.clone();
+        let mut lost = None;
+        if self.full {
+            self.space.release();
+        }
+        if let Err(e) = self.claim(self.batch_bytes(0, true)) {
+            self.space.release();
+            if self.claim(self.batch_bytes(0, true)).is_err() {
+                lost = Some(e);
+                self.pending.clear();
+                self.pending_gauges.clear();
+                if !summary.status.starts_with("failed") {
+                    summary.status = format!("failed: {}", lost.as_ref().expect("set above"));
+                }
+            }
+        }
+        let written = self.open_file().and_then(|file| {
+            layout::append_steps(&file, &self.pending)
+                .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
+                .and_then(|()| layout::write_summary(&file, &summary, self.shape.is_some()))
+                .map_err(|e| self.err(e))?;
+            self.close(file, true)
+        });
+        let written = self.after_batch(written, true, true);
+        self.space.release();
+        match lost {
+            Some(e) => Err(e),
+            None => written.and_then(|()| self.write_xdmf()),
+        }
     }
 
     fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
@@ -385,12 +530,15 @@ impl OutputSink for Hdf5Sink {
                 bad.data.len()
             )));
         }
-        let file = self.open_file()?;
-        layout::append_steps(&file, &self.pending)
-            .and_then(|()| layout::write_maps(&file, raster, maps))
-            .map_err(|e| self.err(e))?;
-        self.pending.clear();
-        self.close(file, false)?;
+        let values: usize = maps.maps.iter().map(|f| f.data.len()).sum();
+        self.claim(self.batch_bytes(values, false))?;
+        let written = self.open_file().and_then(|file| {
+            layout::append_steps(&file, &self.pending)
+                .and_then(|()| layout::write_maps(&file, raster, maps))
+                .map_err(|e| self.err(e))?;
+            self.close(file, false)
+        });
+        self.after_batch(written, true, false)?;
         self.has_maps = true;
         Ok(())
     }
@@ -435,13 +583,14 @@ impl OutputSink for Hdf5Sink {
         }
         self.pending_gauges.push(rec);
         if self.pending_gauges.values() >= GAUGE_BUFFER_VALUES {
-            let file = self.open_file()?;
-            layout::append_steps(&file, &self.pending)
-                .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
-                .map_err(|e| self.err(e))?;
-            self.close(file, false)?;
-            self.pending.clear();
-            self.pending_gauges.clear();
+            self.claim(self.batch_bytes(0, true))?;
+            let written = self.open_file().and_then(|file| {
+                layout::append_steps(&file, &self.pending)
+                    .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
+                    .map_err(|e| self.err(e))?;
+                self.close(file, false)
+            });
+            self.after_batch(written, true, true)?;
         }
         Ok(())
     }
@@ -452,15 +601,18 @@ impl Drop for Hdf5Sink {
     /// produced since its last snapshot, when the file can take them.
     fn drop(&mut self) {
         let nothing = self.pending.is_empty() && self.pending_gauges.t.is_empty();
-        if self.finished || nothing || self.shape.is_none() {
+        if self.finished || nothing || self.shape.is_none() || self.damaged {
             return;
         }
-        let saved = self.open_file().and_then(|file| {
-            let appended = layout::append_steps(&file, &self.pending)
-                .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
-                .map_err(|e| self.err(e));
-            appended.and(self.close(file, false))
-        });
+        let saved = self
+            .claim(self.batch_bytes(0, true))
+            .and_then(|()| self.open_file())
+            .and_then(|file| {
+                let appended = layout::append_steps(&file, &self.pending)
+                    .and_then(|()| layout::append_gauges(&file, &self.pending_gauges))
+                    .map_err(|e| self.err(e));
+                appended.and(self.close(file, false))
+            });
         if let Err(e) = saved {
             crate::terminal::print_err(&format!(
                 "granflow: the last step records were not saved: {e}\n"

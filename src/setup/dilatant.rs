@@ -54,7 +54,7 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
         rest_speed,
     };
     let info = run_info(scn, "hydrostatic", 1);
-    let rules = crate::stop::default_rules(super::stop_options(&scn.time));
+    let rules = crate::stop::default_rules(super::stop_options(scn));
     let pipeline = Pipeline::new(vec![stage]);
     Simulation::new(mesh, model, state, pipeline, rules, run_config(scn), info)
 }

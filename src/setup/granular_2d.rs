@@ -6,6 +6,7 @@
 //! Everything that can be wrong with the scenario was refused by its validation.
 
 use crate::grid::raster::{Raster2d, RasterSpec, Sides};
+use crate::grid::{Coordinates, Grid};
 use crate::model::granular_2d::{pipeline, Granular2d};
 use crate::model::raster_maps::RasterMaps;
 use crate::output::RasterInfo;
@@ -54,7 +55,13 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
         crs_epsg: plane.crs.epsg,
         crs_wkt: plane.crs.wkt.clone(),
     });
-    let rules = crate::stop::default_rules(super::stop_options(&scn.time));
+    let tan_theta = match grid.coordinates() {
+        Coordinates::Local => grid.spec().slope_deg.to_radians().tan(),
+        Coordinates::Cartesian => 0.0,
+    };
+    let nx = grid.nx();
+    let z = (0..grid.nx() * grid.ny()).map(|c| grid.bed()[c] - grid.x(c % nx) * tan_theta);
+    let rules = crate::stop::default_rules(super::stop_options_over(scn, z));
     let config = run_config(scn);
     let cells = grid.nx() * grid.ny();
     let mut sim = Simulation::new(grid, model, state, stages, rules, config, info);

@@ -12,7 +12,7 @@ use crate::grid::{Grid, Line, LineSpec};
 use crate::model::granular::Granular;
 use crate::model::ModelKind;
 use crate::output::{OutputSink, RunInfo, RunSummary};
-use crate::scenario::{Coordinates, Scenario, TimeSpec};
+use crate::scenario::{Coordinates, Scenario};
 use crate::simulation::{Progress, RunConfig, RunError, Simulation};
 
 /// A run of any model, as the command line and the sweeps drive it.
@@ -121,13 +121,47 @@ pub fn scenario_line(scn: &Scenario) -> Line {
     Line::new(&spec, scn.sampled.b.clone())
 }
 
-/// The time-loop settings of a scenario.
-/// The optional stop rules of `[time]`, as the plain values `stop` takes.
-pub fn stop_options(time: &TimeSpec) -> crate::stop::StopOptions {
+/// The stop rules' plain values: the optional rules of `[time]`, the run's speed bound
+/// and whether its mass is conserved (no erodible bed).
+pub fn stop_options(scn: &Scenario) -> crate::stop::StopOptions {
+    let line = scenario_line(scn);
+    stop_options_over(scn, line.z[1..=line.nx].iter().copied())
+}
+
+/// [`stop_options`] given the potential elevation z (bed and plane) at the cell centres.
+pub fn stop_options_over(
+    scn: &Scenario,
+    z: impl Iterator<Item = f64>,
+) -> crate::stop::StopOptions {
+    let time = &scn.time;
     crate::stop::StopOptions {
         at_rest: time.stop_at_rest,
         settled_fraction: time.stop_when_settled.then_some(time.settle_fraction),
+        speed_bound: speed_bound(scn, z),
+        mass_conserved: scn.initial.erodible_bed == 0.0,
     }
+}
+
+/// [`crate::stop::SPEED_BOUND_FACTOR`] × √(u₀² + w₀² + 2 g (Δz + h₀)): Δz the relief of
+/// the potential elevation z (bed and plane) over the domain, h₀ the largest initial
+/// thickness (erodible bed and water depth included), u₀, w₀ the largest initial
+/// speeds.
+pub fn speed_bound(scn: &Scenario, z: impl Iterator<Item = f64>) -> f64 {
+    let (z_min, z_max) = z.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    let s = &scn.sampled;
+    let largest = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let mut h0 = largest(&s.h) + scn.initial.erodible_bed;
+    if let Some(eta) = &s.eta {
+        let depth = eta.iter().zip(&s.b).fold(0.0f64, |m, (e, b)| m.max(e - b));
+        h0 = h0.max(depth);
+    }
+    // On a raster the largest speed of the two components (w is empty there).
+    let (u0, w0) = (largest(&s.u).max(largest(&s.v)), largest(&s.w));
+    let drop = (z_max - z_min).max(0.0) + h0;
+    crate::stop::SPEED_BOUND_FACTOR
+        * (u0 * u0 + w0 * w0 + 2.0 * crate::physics::GRAVITY * drop).sqrt()
 }
 
 pub fn run_config(scn: &Scenario) -> RunConfig {

@@ -14,7 +14,9 @@
 //! A run counts as done (and is skipped on a re-run) when its result file says
 //! `completed`, `stopped_at_rest` or `settled`, its scenario hash matches the scenario the sweep
 //! would run now (same base file, `set`, `--set` and axis values), and its HDF5 file
-//! exists with the same status in `/summary`.
+//! reads as that run's: the same status in `/summary`, a `scenario_toml` attribute
+//! with the same hash, and per-step series and snapshots that read with agreeing
+//! lengths. Otherwise the run is run again.
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -144,6 +146,42 @@ pub fn h5_status(path: &Path) -> Option<String> {
     status.ok()
 }
 
+/// The `/summary` `status` of the HDF5 file of a run of the scenario whose hash is
+/// `hash`, if the file reads as one: its `scenario_toml` attribute hashes to `hash`
+/// (a file of another run copied over it does not), every per-step series reads with
+/// one length, and the snapshot times read with as many values as the snapshot
+/// frames (a damaged file does not).
+pub fn h5_status_of_run(path: &Path, hash: &str) -> Option<String> {
+    let file = rust_hdf5::H5File::options().no_locking().open(path).ok()?;
+    let root = file.root_group();
+    let text = root.attr_string("scenario_toml").ok()?;
+    if format!("{:016x}", super::naming::fnv1a(text.as_bytes())) != hash {
+        return None;
+    }
+    let read = |name: &str| file.dataset(name).ok()?.read_raw::<f64>().ok();
+    let mut rows = None;
+    for name in [
+        "diagnostics/t",
+        "diagnostics/dt",
+        "diagnostics/mass",
+        "diagnostics/kinetic_energy",
+        "diagnostics/max_speed",
+        "front/t",
+        "front/x",
+    ] {
+        let n = read(name)?.len();
+        if *rows.get_or_insert(n) != n {
+            return None;
+        }
+    }
+    let times = read("snapshots/t")?.len();
+    let frames = file.dataset("snapshots/h").ok()?.shape();
+    if frames.first() != Some(&times) {
+        return None;
+    }
+    root.group("summary").ok()?.attr_string("status").ok()
+}
+
 /// The stored result of run `name`, if it is done and was run with the scenario whose
 /// hash is `hash` (see the module docs).
 pub fn done(dir: &Path, name: &str, hash: &str) -> Option<RunRecord> {
@@ -151,7 +189,7 @@ pub fn done(dir: &Path, name: &str, hash: &str) -> Option<RunRecord> {
     if !record.is_ok() || record.name != name || record.scenario_hash != hash {
         return None;
     }
-    let status = h5_status(&dir.join(&record.h5))?;
+    let status = h5_status_of_run(&dir.join(&record.h5), hash)?;
     (status == record.summary.status).then_some(record)
 }
 

@@ -10,12 +10,12 @@ use crate::output::{
 };
 
 /// Rows per chunk of the per-step series (`/diagnostics/*`, `/front/*`): 64 KiB.
-const STEP_CHUNK: usize = 8192;
+pub(super) const STEP_CHUNK: usize = 8192;
 /// Rows per chunk of `/snapshots/t`.
-const SNAP_T_CHUNK: usize = 256;
+pub(super) const SNAP_T_CHUNK: usize = 256;
 
 /// Per-step datasets, in the order of [`step_columns`]: (path, units).
-const STEP_DATASETS: [(&str, &str); 7] = [
+pub(super) const STEP_DATASETS: [(&str, &str); 7] = [
     ("diagnostics/t", "s"),
     ("diagnostics/dt", "s"),
     ("diagnostics/mass", "m^2"),
@@ -259,7 +259,7 @@ pub(super) fn create_cell_fields(
 }
 
 /// Values per chunk of the gauge datasets: 32 KiB.
-const GAUGE_CHUNK_VALUES: usize = 4096;
+pub(super) const GAUGE_CHUNK_VALUES: usize = 4096;
 
 /// Creates `/gauges` with the positions `x` and empty `t`, `eta`, `h_grains`.
 pub(super) fn create_gauges(file: &H5File, x: &[f64]) -> rust_hdf5::Result<()> {

@@ -82,3 +82,67 @@ pub(super) fn choice<T: Copy>(
         }
     }
 }
+
+/// Largest speed (m/s) an initial profile may give (`initial.u`, `initial.w`): the
+/// fastest rock avalanches reach about 100 m/s, and free fall from the height of
+/// Everest (8.8 km) ends at √(2 g · 8848 m) ≈ 417 m/s. A larger value is a typo or a
+/// unit mistake, and one of 1e100 m/s only sends the CFL step to zero.
+pub(crate) const MAX_SPEED: f64 = 1e3;
+
+/// Largest thickness (m) of the granular layer (`initial.h`, `initial.erodible_bed`):
+/// the largest known landslides are under 2 km thick; 10 km is the height of the
+/// highest mountains.
+pub(crate) const MAX_THICKNESS: f64 = 1e4;
+
+/// Largest water depth (m) over the bed (`initial.eta` − `bed.b`): the deepest ocean
+/// trench is 11 km deep.
+pub(crate) const MAX_DEPTH: f64 = 2e4;
+
+/// Largest bed elevation |b| (m) over the reference plane: ten times the height of
+/// Everest.
+pub(crate) const MAX_ELEVATION: f64 = 1e5;
+
+/// Smallest solid volume fraction (`initial.phi`, `dilatancy.phi_stat`): below 1 %
+/// solid the mixture is a dilute suspension, not the dense granular mass of the model,
+/// whose terms scale with 1/φ.
+pub(crate) const MIN_PHI: f64 = 0.01;
+
+/// Largest exponent α of the dilatant scheme's variable φ^α h (Bouchut et al. 2021,
+/// eq. B.19): the scheme divides by φ^(α−1), which for φ ≥ [`MIN_PHI`] stays above
+/// 1e-198 up to α = 100 and underflows to 0 beyond α ≈ 155.
+pub(crate) const MAX_ALPHA: f64 = 100.0;
+
+/// Smallest layer fraction (`model.layer_fractions`): a layer thinner than 1e-4 of the
+/// column makes the viscous system's conditioning (l_max / l_min)² worse than 1e8.
+pub(crate) const MIN_LAYER_FRACTION: f64 = 1e-4;
+
+/// `v` with |v| ≤ `max`, else an error naming `key` and the bound's `why`.
+pub(super) fn magnitude_at_most(key: &str, v: f64, max: f64, unit: &str, why: &str) -> Res<f64> {
+    finite(key, v)?;
+    if v.abs() <= max {
+        Ok(v)
+    } else {
+        err(
+            key,
+            format!(
+                "{} {unit} is beyond the physical bound |{}| ≤ {} {unit} ({why})",
+                num(v),
+                key.rsplit('.').next().unwrap_or(key),
+                num(max)
+            ),
+        )
+    }
+}
+
+pub(super) const SPEED_WHY: &str =
+    "the fastest rock avalanches reach about 100 m/s; free fall from 8.8 km ends at 417 m/s";
+pub(super) const THICKNESS_WHY: &str =
+    "the largest landslides are under 2 km thick; 10 km is the height of the highest mountains";
+pub(super) const DEPTH_WHY: &str = "the water depth η − b; the deepest ocean trench is 11 km deep";
+pub(super) const ELEVATION_WHY: &str = "ten times the height of Everest";
+
+/// Largest stabilisation coefficient ξ of the dilatant scheme (`dilatancy.xi`): the
+/// paper's values are ξ = (2, 2, 5) (Bouchut et al. 2021, §3.3), and the explicit
+/// sub-steps a time step takes grow as ξ (a run asking for more than 10 000 of them in
+/// one step fails).
+pub(crate) const MAX_XI: f64 = 1e3;

@@ -111,10 +111,13 @@ pub(super) fn dilatancy(
         "dilatancy.phi_stat",
         required("dilatancy.phi_stat", d.phi_stat)?,
     )?;
-    if !(phi_stat > 0.0 && phi_stat < 1.0) {
+    if !(MIN_PHI..1.0).contains(&phi_stat) {
         return err(
             "dilatancy.phi_stat",
-            format!("must be in (0, 1), got {}", num(phi_stat)),
+            format!(
+                "must be in [{MIN_PHI}, 1) (a solid volume fraction of a dense granular mass), got {}",
+                num(phi_stat)
+            ),
         );
     }
     #[derive(Clone, Copy, PartialEq)]
@@ -148,11 +151,11 @@ pub(super) fn dilatancy(
         ],
     )?;
     let alpha = finite("dilatancy.alpha", d.alpha.unwrap_or(2.0))?;
-    if alpha <= 1.0 {
+    if alpha <= 1.0 || alpha > MAX_ALPHA {
         return err(
             "dilatancy.alpha",
             format!(
-                "must be > 1 (Bouchut et al. 2021, eq. B.19), got {}",
+                "must be in (1, {MAX_ALPHA}] (Bouchut et al. 2021, eq. B.19; the scheme carries φ^α h, and φ^(α−1) must not underflow for φ ≥ 0.01), got {}",
                 num(alpha)
             ),
         );
@@ -174,6 +177,15 @@ pub(super) fn dilatancy(
         Some(v) if v.len() == 3 => {
             for x in v {
                 non_negative("dilatancy.xi", *x)?;
+                if *x > MAX_XI {
+                    return err(
+                        "dilatancy.xi",
+                        format!(
+                            "{} is beyond the largest stabilisation coefficient {MAX_XI:e} (Bouchut et al. 2021, §3.3 uses ξ = (2, 2, 5); the explicit sub-steps of a time step grow as ξ)",
+                            num(*x)
+                        ),
+                    );
+                }
             }
             [v[0], v[1], v[2]]
         }
@@ -236,18 +248,22 @@ pub(super) fn dilatancy(
     Ok(Some(DilatantSpec { law, options }))
 }
 
-/// `initial.phi` at every cell centre (`values`, at the bed `b`): finite and in (0, 1).
+/// `initial.phi` at every cell centre (`values`, at the bed `b`): finite, at least
+/// [`MIN_PHI`] and below 1.
 pub(super) fn check_fraction(domain: &Domain, b: &[f64], phi: &Profile, values: &[f64]) -> Res<()> {
     let n = domain.cells;
     let dx = (domain.x_max - domain.x_min) / n as f64;
-    let Some(i) = values.iter().position(|&v| !(v > 0.0 && v < 1.0)) else {
+    let Some(i) = values.iter().position(|&v| !(MIN_PHI..1.0).contains(&v)) else {
         return Ok(());
     };
     let x = cell_centre(domain.x_min, dx, i);
     match phi.try_eval(x, b[i]) {
         Ok(v) => err(
             "initial.phi",
-            format!("must be in (0, 1), got {} at x = {x}", num(v)),
+            format!(
+                "must be in [{MIN_PHI}, 1) (a solid volume fraction of a dense granular mass), got {} at x = {x}",
+                num(v)
+            ),
         ),
         Err(m) => err("initial.phi", format!("{m} at x = {x}")),
     }

@@ -404,6 +404,15 @@ pub(super) fn layer_fractions(l: Vec<f64>, layers: usize) -> Res<Vec<f64>> {
     }
     for &v in &l {
         positive(key, v)?;
+        if v < MIN_LAYER_FRACTION {
+            return err(
+                key,
+                format!(
+                    "{} is below the smallest layer fraction {MIN_LAYER_FRACTION:e} (the viscous system's conditioning grows as (l_max / l_min)²)",
+                    num(v)
+                ),
+            );
+        }
     }
     let sum: f64 = l.iter().sum();
     if (sum - 1.0).abs() > 1e-9 {

@@ -455,6 +455,13 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
         None => Profile::constant(0.0),
     };
     let erodible_bed = non_negative("initial.erodible_bed", i.erodible_bed.unwrap_or(0.0))?;
+    magnitude_at_most(
+        "initial.erodible_bed",
+        erodible_bed,
+        MAX_THICKNESS,
+        "m",
+        THICKNESS_WHY,
+    )?;
     let eta = match i.eta {
         Some(v) => Some(Profile::from_toml("initial.eta", &v, base_dir, true)?),
         None => None,
@@ -630,6 +637,25 @@ fn check_profiles(
     }
     if let Some(i) = first_bad(&sampled.w, &|w| !w.is_finite()) {
         return Err(not_finite("initial.w", &initial.w, centre(i), b[i]));
+    }
+    // Physical magnitudes (the bounds and their reasons: `check.rs`).
+    let beyond = |key: &str, values: &[f64], max: f64, unit: &str, why: &str| -> Res<()> {
+        match first_bad(values, &|v| v.abs() > max) {
+            None => Ok(()),
+            Some(i) => magnitude_at_most(key, values[i], max, unit, why)
+                .map(|_| ())
+                .map_err(|e| {
+                    ScenarioError::at(key, format!("{} at x = {}", e.message(), centre(i)))
+                }),
+        }
+    };
+    beyond("bed.b", b, MAX_ELEVATION, "m", ELEVATION_WHY)?;
+    beyond("initial.h", &sampled.h, MAX_THICKNESS, "m", THICKNESS_WHY)?;
+    beyond("initial.u", &sampled.u, MAX_SPEED, "m/s", SPEED_WHY)?;
+    beyond("initial.w", &sampled.w, MAX_SPEED, "m/s", SPEED_WHY)?;
+    if let Some(eta) = &sampled.eta {
+        let depth: Vec<f64> = eta.iter().zip(b).map(|(e, b)| e - b).collect();
+        beyond("initial.eta", &depth, MAX_DEPTH, "m", DEPTH_WHY)?;
     }
     if pressure == Pressure::Hydrostatic && first_bad(&sampled.w, &|w| w != 0.0).is_some() {
         return err(

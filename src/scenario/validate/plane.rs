@@ -468,5 +468,19 @@ pub(super) fn check_profiles(
             return Err(not_finite(key, p, i, b[i]));
         }
     }
+    // Physical magnitudes, as on a line (the bounds and their reasons: `check.rs`).
+    for (key, values, max, unit, why) in [
+        ("bed.b", b, MAX_ELEVATION, "m", ELEVATION_WHY),
+        ("initial.h", &sampled.h, MAX_THICKNESS, "m", THICKNESS_WHY),
+        ("initial.u", &sampled.u, MAX_SPEED, "m/s", SPEED_WHY),
+        ("initial.v", &sampled.v, MAX_SPEED, "m/s", SPEED_WHY),
+    ] {
+        if let Some(i) = values.iter().position(|v| v.abs() > max) {
+            let (x, y) = centres[i];
+            magnitude_at_most(key, values[i], max, unit, why).map_err(|e| {
+                ScenarioError::at(key, format!("{} at (x, y) = ({x}, {y})", e.message()))
+            })?;
+        }
+    }
     Ok(())
 }
