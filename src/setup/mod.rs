@@ -129,10 +129,7 @@ pub fn stop_options(scn: &Scenario) -> crate::stop::StopOptions {
 }
 
 /// [`stop_options`] given the potential elevation z (bed and plane) at the cell centres.
-pub fn stop_options_over(
-    scn: &Scenario,
-    z: impl Iterator<Item = f64>,
-) -> crate::stop::StopOptions {
+pub fn stop_options_over(scn: &Scenario, z: impl Iterator<Item = f64>) -> crate::stop::StopOptions {
     let time = &scn.time;
     crate::stop::StopOptions {
         at_rest: time.stop_at_rest,
