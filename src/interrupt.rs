@@ -1,7 +1,10 @@
 //! Ctrl-C (SIGINT) and SIGTERM: stop cleanly instead of dying mid-write.
 //!
 //! The handler only raises a flag. The run loop consults it after every step through
-//! the [`Interrupted`](crate::stop::Interrupted) stop rule, so an interrupted run writes
+//! the [`Interrupted`](crate::stop::Interrupted) stop rule, and long loops inside a
+//! step (the dilatant model's stabilisation sub-steps, up to 10 000 of them) look at it
+//! every [`INTERRUPT_CHECK_EVERY`](crate::numerics::INTERRUPT_CHECK_EVERY) iterations and
+//! give the step up, the state going back to the last accepted step ([`StageError::Interrupted`](crate::numerics::StageError::Interrupted)). So an interrupted run writes
 //! a last snapshot, flushes its step records and finishes its file with the status
 //! `interrupted`; `granflow run` then says where the partial results are and exits with
 //! 130 (128 + SIGINT, the shell convention). A sweep starts no new run and lets the
@@ -26,7 +29,7 @@ pub fn install() {
             std::process::exit(i32::from(EXIT_INTERRUPTED));
         }
         crate::terminal::print_err(
-            "\ninterrupt: stopping after the current step (press Ctrl-C again to quit at once)\n",
+            "\ninterrupt: stopping at the end of the current step, or inside it if it is long (press Ctrl-C again to quit at once)\n",
         );
     });
 }

@@ -188,6 +188,9 @@ impl<M: Model> Simulation<M> {
     /// The step is transactional: if a stage refuses it, the state of t^n is restored
     /// before the retry with half the Δt (or before the run fails), whichever stage
     /// refused and whatever the stages before it changed.
+    ///
+    /// Returns 0 (the state left at t^n) when a stage gave the step up on Ctrl-C
+    /// ([`StageError::Interrupted`]); any step taken is longer than 0.
     pub fn step(&mut self, dt_max: f64) -> Result<f64, RunError> {
         let s = match self.signal_speed.take() {
             Some(s) => s,
@@ -215,6 +218,10 @@ impl<M: Model> Simulation<M> {
                     self.state.clone_from(&self.backup);
                     let reason = FailureReason::Inadmissible { quantity, value };
                     return Err(self.failure(reason, Some(cell)));
+                }
+                Err(StageError::Interrupted) => {
+                    self.state.clone_from(&self.backup);
+                    return Ok(0.0);
                 }
             }
         }
@@ -341,8 +348,18 @@ impl<M: Model> Simulation<M> {
         let cfg = self.config.clone();
         let mut next_output = cfg.output_every.min(cfg.t_end);
         let mut output_index = 1u64;
+        // Time of the last snapshot written (run_loop wrote the one of t = 0).
+        let mut snapshot_t = self.t;
         while self.t < cfg.t_end {
             let dt = self.step(next_output - self.t)?;
+            if dt == 0.0 {
+                // Ctrl-C inside the step: the state is that of the last accepted step,
+                // which gets its snapshot (unless it has one) as at any interrupt.
+                if snapshot_t < self.t {
+                    self.snapshot(sink)?;
+                }
+                return Ok("interrupted");
+            }
             let at_output = self.t + dt >= next_output * (1.0 - 1e-14);
             self.t = if at_output { next_output } else { self.t + dt };
             let d = self.diagnose_for_next_step();
@@ -387,6 +404,7 @@ impl<M: Model> Simulation<M> {
             tally.last = d;
             if at_output || stop.is_some() {
                 self.snapshot(sink)?;
+                snapshot_t = self.t;
             }
             if at_output {
                 output_index += 1;
@@ -499,9 +517,27 @@ mod tests {
         }
     }
 
+    /// Accepts `accepted` steps, then gives the next one up as on Ctrl-C.
+    struct GiveUpAfter {
+        accepted: usize,
+    }
+
+    impl Stage<Line, LayeredState> for GiveUpAfter {
+        fn name(&self) -> &'static str {
+            "give_up"
+        }
+        fn apply(&mut self, _: &Line, _: f64, _: &mut LayeredState) -> Result<(), StageError> {
+            if self.accepted == 0 {
+                return Err(StageError::Interrupted);
+            }
+            self.accepted -= 1;
+            Ok(())
+        }
+    }
+
     /// A layer at rest on a flat bed (signal speed √(g h) > 0), with `second` as the
     /// pipeline's second stage after [`Grow`].
-    fn simulation(second: Refuse) -> Simulation<Granular> {
+    fn simulation(second: impl Stage<Line, LayeredState> + 'static) -> Simulation<Granular> {
         let spec = LineSpec {
             x_min: 0.0,
             x_max: 1.0,
@@ -582,5 +618,25 @@ mod tests {
             failure.to_string().contains(&format!("x = {x} m")),
             "{failure}"
         );
+    }
+
+    #[test]
+    fn a_step_given_up_on_ctrl_c_ends_the_run_at_the_last_accepted_state() {
+        let mut sim = simulation(GiveUpAfter { accepted: 3 });
+        let h0 = sim.state.h[1];
+        let mut sink = crate::output::memory::MemorySink::default();
+        let summary = sim
+            .run(&mut sink, &mut |_| {})
+            .expect("an interrupt is no failure");
+        assert_eq!(summary.status, "interrupted");
+        assert_eq!(sim.steps, 3);
+        // The growth of the abandoned attempt was undone: h grew by the three steps.
+        let dts: Vec<f64> = sink.steps.iter().map(|r| r.dt).collect();
+        assert_eq!(dts.len(), 4, "t = 0 and three steps: {dts:?}");
+        assert_eq!(sim.state.h[1], dts.iter().fold(h0, |h, dt| h + dt));
+        // The last accepted state is the last snapshot, once.
+        let t: Vec<f64> = sink.snapshots.iter().map(|s| s.t).collect();
+        assert_eq!(t, vec![0.0, sim.t]);
+        assert!(sim.t > 0.0 && sim.t < 1.0);
     }
 }

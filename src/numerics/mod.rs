@@ -5,7 +5,8 @@
 //! A stage is written for one grid type and one state type (`Stage<Line,
 //! LayeredState>`, `Stage<CurvedLine, TwoLayerState>`): its face loops are that grid's.
 //! This module imports the grid floor (`grid/`), the states (`state/`) and `physics/`,
-//! never `model/` or `scenario/`.
+//! never `model/` or `scenario/`; long inner loops also read the Ctrl-C flag
+//! ([`crate::interrupt`]) and give up the step with [`StageError::Interrupted`].
 
 pub mod banded;
 pub mod dilatant;
@@ -38,6 +39,21 @@ pub enum StageError {
         quantity: &'static str,
         value: f64,
     },
+    /// Ctrl-C or SIGTERM arrived inside a long step (e.g. thousands of stabilisation
+    /// sub-steps): the run loop restores the state of t^n and ends the run as
+    /// interrupted, without waiting for the step to finish.
+    Interrupted,
+}
+
+/// How many iterations of a long inner loop run between two looks at the Ctrl-C flag
+/// (one atomic load each time).
+pub const INTERRUPT_CHECK_EVERY: usize = 64;
+
+/// Whether a long inner loop at iteration `k` should give up its step: every
+/// [`INTERRUPT_CHECK_EVERY`] iterations, whether Ctrl-C or SIGTERM was received.
+#[inline]
+pub fn interrupted_at(k: usize) -> bool {
+    k % INTERRUPT_CHECK_EVERY == INTERRUPT_CHECK_EVERY - 1 && crate::interrupt::requested()
 }
 
 /// One sub-step of the splitting scheme, on grid `G`, acting on a model's state `S`.

@@ -690,7 +690,10 @@ impl SplitScheme {
             }
         })?;
         let r = dt / n as f64 / (dx * dx);
-        for _ in 0..n {
+        for k in 0..n {
+            if crate::numerics::interrupted_at(k) {
+                return Err(StageError::Interrupted);
+            }
             for (c, u) in [&mut *m, &mut *q, &mut *w].into_iter().enumerate() {
                 let xi = visc.xi[c];
                 if xi == 0.0 {

@@ -43,6 +43,8 @@ pub enum DilatantError {
         t: f64,
         ratio: f64,
     },
+    #[error("interrupted (Ctrl-C or SIGTERM) during the stabilisation sub-steps")]
+    Interrupted,
 }
 
 /// Which time step the dilatant model takes (`dilatancy.scheme`).
@@ -170,6 +172,9 @@ impl DilatantScheme {
         self.finite_volumes(mesh, s, dt);
         check_and_update(mesh, s, t_end, "finite-volume")?;
         let substeps = self.stabilise(mesh, s, dt).map_err(|ratio| {
+            let Some(ratio) = ratio else {
+                return DilatantError::Interrupted;
+            };
             let k = self
                 .drive
                 .iter()
@@ -232,8 +237,13 @@ impl DilatantScheme {
     }
 
     /// (3.20)–(3.22), sub-cycled; returns the number of sub-steps (0 when off), or the
-    /// stability ratio when it asks for too many.
-    fn stabilise(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<usize, f64> {
+    /// stability ratio when it asks for too many (`None`: given up on Ctrl-C).
+    fn stabilise(
+        &mut self,
+        mesh: &Line,
+        s: &mut DilatantState,
+        dt: f64,
+    ) -> Result<usize, Option<f64>> {
         let visc = self.opt.viscosity;
         if visc.is_off() {
             return Ok(0);
@@ -242,9 +252,12 @@ impl DilatantScheme {
         if drive == 0.0 {
             return Ok(0);
         }
-        let n = visc.substeps(drive, dt, mesh.dx)?;
+        let n = visc.substeps(drive, dt, mesh.dx).map_err(Some)?;
         let r = dt / n as f64 / (mesh.dx * mesh.dx);
-        for _ in 0..n {
+        for k in 0..n {
+            if crate::numerics::interrupted_at(k) {
+                return Err(None);
+            }
             for (c, u) in [&mut s.m, &mut s.q, &mut s.w].into_iter().enumerate() {
                 let xi = visc.xi[c];
                 if xi == 0.0 {
@@ -382,6 +395,7 @@ impl Stage<Line, DilatantState> for DilatantScheme {
                 quantity: "non-finite value",
                 value: f64::NAN,
             }),
+            Err(DilatantError::Interrupted) => Err(StageError::Interrupted),
             Err(DilatantError::TooManySubsteps { cell, ratio, .. }) => {
                 Err(StageError::Inadmissible {
                     cell,
