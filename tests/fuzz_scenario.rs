@@ -108,6 +108,13 @@ const NASTY: &[&str] = &[
     "[2, 2, 5]",
     "[1e-300, 1]",
     "[0.5, 0.5]",
+    "[40, 40]",
+    "[0, 40]",
+    "[100000, 100000]",
+    "[40, 40, 40]",
+    "[[0.5, 0.5], [1e300, 0]]",
+    "{ raster = \"missing.asc\" }",
+    "{ raster = \"\" }",
     "1e300",
     "1e-300",
     "1e6",
@@ -160,6 +167,8 @@ const KEYS: &[&str] = &[
     "domain.cells",
     "domain.slope_deg",
     "domain.coordinates",
+    "domain.y_min",
+    "domain.y_max",
     "bed.b",
     "material.rho_s",
     "material.phi",
@@ -172,6 +181,8 @@ const KEYS: &[&str] = &[
     "rheology.mu_2",
     "rheology.mu_2_deg",
     "rheology.i0",
+    "rheology.xi",
+    "rheology.monolayer_shear",
     "rheology.basal",
     "rheology.regularization",
     "rheology.delta",
@@ -190,6 +201,7 @@ const KEYS: &[&str] = &[
     "model.layer_fractions",
     "initial.h",
     "initial.u",
+    "initial.v",
     "initial.w",
     "initial.erodible_bed",
     "initial.eta",
@@ -204,14 +216,21 @@ const KEYS: &[&str] = &[
     "dilatancy.lambda",
     "dilatancy.xi",
     "dilatancy.scheme",
+    "dilatancy.thin_layer_grains",
     "submarine.r",
     "submarine.k",
     "submarine.lambda1",
     "submarine.lambda2",
     "submarine.k_in",
     "submarine.buoyancy",
+    "submarine.water_pressure",
+    "submarine.water_layers",
     "boundary.left",
     "boundary.right",
+    "boundary.west",
+    "boundary.east",
+    "boundary.south",
+    "boundary.north",
     "time.t_end",
     "time.cfl",
     "time.stop_at_rest",
@@ -244,7 +263,7 @@ fn exercise(text: &str, sets: &[String]) -> Result<(), TestCaseError> {
     if let Ok(scn) = loaded {
         // Setup allocates per cell and layer; validation bounds that product, but the
         // largest scenarios would take gigabytes here, which is not what is tested.
-        if scn.domain.cells * scn.model.layers <= 200_000 {
+        if scn.domain.cell_count() * scn.model.layers <= 200_000 {
             let _ = granflow::runner::check(&scn);
         }
     }
@@ -437,7 +456,7 @@ fn exercise_sweep(text: &str) -> Result<(), TestCaseError> {
                 for point in points.iter().take(4) {
                     let sets = point.overrides();
                     if let Ok(scn) = granflow::scenario::load_str(&base, &dir, &sets) {
-                        if scn.domain.cells * scn.model.layers <= 200_000 {
+                        if scn.domain.cell_count() * scn.model.layers <= 200_000 {
                             let _ = granflow::runner::check(&scn);
                         }
                     }
