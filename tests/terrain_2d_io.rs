@@ -455,6 +455,10 @@ fn voellmy_keys_are_checked_by_name() {
     // A line takes the law too, and needs no raster key for it.
     let line = "[domain]\nx_min = 0.0\nx_max = 1.0\ncells = 10\n[rheology]\nlaw = \"voellmy\"\nmu = 0.2\nxi = 500\n[initial]\nh = 0.1\n[time]\nt_end = 1.0\n";
     assert!(load(line, d).is_ok());
+    // Voellmy is a basal law of the depth-averaged flow: no multilayer column takes it.
+    let layered = line.replace("[initial]", "[model]\nlayers = 4\n[initial]");
+    let m = fails_at(&layered, d, "rheology.law");
+    assert!(m.contains("model.layers = 1"), "{m}");
 }
 
 #[test]

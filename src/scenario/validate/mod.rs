@@ -240,6 +240,18 @@ fn validate(
         );
     }
     nonhydrostatic_solver_fits(&domain, &model)?;
+    if matches!(friction, super::FrictionLaw::Voellmy { .. }) && model.layers > 1 {
+        // Its drag g|u|²/ξ is a basal law of the depth-averaged flow; inside a column
+        // of layers it has no local form.
+        return err(
+            "rheology.law",
+            format!(
+                "\"voellmy\" is a basal law of the depth-averaged (monolayer) flow; \
+                 model.layers is {}: use model.layers = 1, or law = \"coulomb\" or \"mu_i\"",
+                model.layers
+            ),
+        );
+    }
     let raw_initial = section("initial", raw.initial)?;
     let raw_w = raw_initial.w.is_some();
     plane::raster_keys(&domain, &model, &raw_initial, raw.submarine.is_some())?;
