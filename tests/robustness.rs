@@ -630,6 +630,9 @@ fn kill_9_leaves_a_readable_unfinished_file() {
     args.extend(os!["--set", "output.every=0.002", "--force"]);
     let mut rng = 0x2545_f491_4f6c_dd1du64;
     for _ in 0..6 {
+        // The file of the run before is removed, so that the wait below sees this run's
+        // file (otherwise a slow start can be killed while it creates the file anew).
+        let _ = std::fs::remove_file(&out);
         let mut child = spawn(&args, dir.path());
         assert!(wait_for(Duration::from_secs(30), || out.exists()));
         rng ^= rng << 13;
