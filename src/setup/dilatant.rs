@@ -54,7 +54,10 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
         rest_speed,
     };
     let info = run_info(scn, "hydrostatic", 1);
-    let rules = crate::stop::default_rules(super::stop_options(scn));
+    let rules = crate::stop::default_rules(super::stop_options(
+        scn,
+        mesh.z[1..=mesh.nx].iter().copied(),
+    ));
     let pipeline = Pipeline::new(vec![stage]);
     Simulation::new(mesh, model, state, pipeline, rules, run_config(scn), info)
 }

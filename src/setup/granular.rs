@@ -47,6 +47,9 @@ pub fn build(scn: &Scenario) -> Simulation<Granular> {
         Pressure::NonHydrostatic => "nonhydrostatic",
     };
     let info = run_info(scn, pressure, layers);
-    let rules = crate::stop::default_rules(super::stop_options(scn));
+    let rules = crate::stop::default_rules(super::stop_options(
+        scn,
+        mesh.z[1..=mesh.nx].iter().copied(),
+    ));
     Simulation::new(mesh, model, state, stages, rules, run_config(scn), info)
 }

@@ -61,7 +61,7 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     };
     let nx = grid.nx();
     let z = (0..grid.nx() * grid.ny()).map(|c| grid.bed()[c] - grid.x(c % nx) * tan_theta);
-    let rules = crate::stop::default_rules(super::stop_options_over(scn, z));
+    let rules = crate::stop::default_rules(super::stop_options(scn, z));
     let config = run_config(scn);
     let cells = grid.nx() * grid.ny();
     let mut sim = Simulation::new(grid, model, state, stages, rules, config, info);

@@ -122,14 +122,9 @@ pub fn scenario_line(scn: &Scenario) -> Line {
 }
 
 /// The stop rules' plain values: the optional rules of `[time]`, the run's speed bound
-/// and whether its mass is conserved (no erodible bed).
-pub fn stop_options(scn: &Scenario) -> crate::stop::StopOptions {
-    let line = scenario_line(scn);
-    stop_options_over(scn, line.z[1..=line.nx].iter().copied())
-}
-
-/// [`stop_options`] given the potential elevation z (bed and plane) at the cell centres.
-pub fn stop_options_over(scn: &Scenario, z: impl Iterator<Item = f64>) -> crate::stop::StopOptions {
+/// and whether its mass is conserved (no erodible bed). `z`: the potential elevation
+/// (bed and plane) at the centres of the grid the run was built on.
+pub fn stop_options(scn: &Scenario, z: impl Iterator<Item = f64>) -> crate::stop::StopOptions {
     let time = &scn.time;
     crate::stop::StopOptions {
         at_rest: time.stop_at_rest,

@@ -61,7 +61,10 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
     };
     // Snapshots carry the grain layer in h, u (one layer) and the water in extra fields.
     let info = run_info(scn, "hydrostatic", 1);
-    let rules = crate::stop::default_rules(super::stop_options(scn));
+    let rules = crate::stop::default_rules(super::stop_options(
+        scn,
+        grid.line.z[1..=grid.line.nx].iter().copied(),
+    ));
     Simulation::new(
         grid,
         model,
