@@ -7,7 +7,15 @@
 //!   h_f has no meaningful velocity);
 //! - `arrival_time` = the first t with h > h_f (NaN where never reached; 0 inside the
 //!   release);
-//! - `deposit` = h at the end of the run.
+//! - `deposit` = h at the end of the run;
+//! - `ppr` = max_t ρ|u|², the peak pressure (Pa) of the avalanche-hazard literature
+//!   (the dynamic pressure of the flow), ρ = φ_s ρ_s the bulk density of the material.
+//!   Since ρ is constant and |u| ≥ 0, max_t ρ|u|² = ρ (max_t |u|)² = ρ · speed_max²
+//!   cell by cell, so it costs no work per step: it is formed when the maps are
+//!   written.
+//!
+//! The maps are written with every snapshot (as they stand, `deposit` then being the
+//! snapshot's h) and once more at the end.
 //!
 //! The area reached A(t) = Δx Δy · #{cells reached by t} is a per-step series. The
 //! runout and the travel angle are measured along the main flow direction d: the unit
@@ -31,6 +39,8 @@ use crate::state::layered_2d::State2d;
 #[derive(Debug, Clone)]
 pub struct RasterMaps {
     threshold: f64,
+    /// Bulk density ρ (kg/m³) of the peak pressure.
+    density: f64,
     h_max: Vec<f64>,
     speed_max: Vec<f64>,
     arrival: Vec<f64>,
@@ -41,10 +51,12 @@ pub struct RasterMaps {
 }
 
 impl RasterMaps {
-    /// Maps for `cells` cells with the flow threshold `threshold` (m).
-    pub fn new(cells: usize, threshold: f64) -> RasterMaps {
+    /// Maps for `cells` cells with the flow threshold `threshold` (m) and the bulk
+    /// density `density` (kg/m³) of the peak pressure.
+    pub fn new(cells: usize, threshold: f64, density: f64) -> RasterMaps {
         RasterMaps {
             threshold,
+            density,
             h_max: vec![0.0; cells],
             speed_max: vec![0.0; cells],
             arrival: vec![f64::NAN; cells],
@@ -163,7 +175,43 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         state: &State2d,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
-        let maps = [
+        let ppr = self.peak_pressure();
+        let maps = self.fields(&ppr, &state.h);
+        let scalars = if self.h0.is_empty() {
+            Vec::new()
+        } else {
+            self.runout(grid, &state.h)
+        };
+        sink.maps(&RunMaps {
+            maps: &maps,
+            series: &[("area_reached", "m^2", &self.area)],
+            scalars: &scalars,
+        })
+    }
+
+    fn write_so_far(
+        &self,
+        _grid: &Raster2d,
+        state: &State2d,
+        sink: &mut dyn OutputSink,
+    ) -> Result<(), OutputError> {
+        let ppr = self.peak_pressure();
+        sink.maps_so_far(&self.fields(&ppr, &state.h))
+    }
+}
+
+impl RasterMaps {
+    /// ρ · speed_max², cell by cell (see the module docs).
+    fn peak_pressure(&self) -> Vec<f64> {
+        self.speed_max
+            .iter()
+            .map(|&s| self.density * s * s)
+            .collect()
+    }
+
+    /// The maps in their file order, `deposit` being `h`.
+    fn fields<'a>(&'a self, ppr: &'a [f64], h: &'a [f64]) -> [CellField<'a>; 5] {
+        [
             CellField {
                 name: "h_max",
                 units: "m",
@@ -175,6 +223,11 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
                 data: &self.speed_max,
             },
             CellField {
+                name: "ppr",
+                units: "Pa",
+                data: ppr,
+            },
+            CellField {
                 name: "arrival_time",
                 units: "s",
                 data: &self.arrival,
@@ -182,18 +235,8 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
             CellField {
                 name: "deposit",
                 units: "m",
-                data: &state.h,
+                data: h,
             },
-        ];
-        let scalars = if self.h0.is_empty() {
-            Vec::new()
-        } else {
-            self.runout(grid, &state.h)
-        };
-        sink.maps(&RunMaps {
-            maps: &maps,
-            series: &[("area_reached", "m^2", &self.area)],
-            scalars: &scalars,
-        })
+        ]
     }
 }

@@ -240,6 +240,12 @@ pub trait OutputSink {
     fn maps(&mut self, _maps: &RunMaps) -> Result<(), OutputError> {
         Ok(())
     }
+    /// Called with every snapshot by runs that gather maps, with the maps as they
+    /// stand (the same names and lengths every time, and as `maps` later), so that a
+    /// run that is killed keeps them. Sinks that do not record them keep this default.
+    fn maps_so_far(&mut self, _maps: &[CellField]) -> Result<(), OutputError> {
+        Ok(())
+    }
 }
 
 /// The outputs of one `granflow run`: the HDF5 file at `h5`, the front series next to

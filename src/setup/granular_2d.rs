@@ -65,6 +65,11 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let config = run_config(scn);
     let cells = grid.nx() * grid.ny();
     let mut sim = Simulation::new(grid, model, state, stages, rules, config, info);
-    sim.set_tracker(Box::new(RasterMaps::new(cells, scn.output.front_threshold)));
+    let density = scn.material.phi * scn.material.rho_s;
+    sim.set_tracker(Box::new(RasterMaps::new(
+        cells,
+        scn.output.front_threshold,
+        density,
+    )));
     sim
 }

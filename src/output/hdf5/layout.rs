@@ -179,19 +179,40 @@ fn write_raster_layout(
     step_groups(file, info, &RASTER_STEP_DATASETS)
 }
 
-/// Writes what a raster run gathered: `/maps/<name>` (ny, nx), the per-step series
-/// as `/diagnostics/<name>`, the numbers as `/summary` attributes.
-pub(super) fn write_maps(
+/// Writes the maps of a raster run, `/maps/<name>` (ny, nx): created with their units
+/// when `create`, else overwritten in place (the datasets are contiguous and keep
+/// their size, so a rewrite claims no new room).
+pub(super) fn write_map_fields(
     file: &H5File,
     (nx, ny): (usize, usize),
-    maps: &RunMaps,
+    fields: &[CellField],
+    create: bool,
 ) -> rust_hdf5::Result<()> {
-    let g = file.create_group("maps")?;
-    for field in maps.maps {
-        let ds = g.new_dataset::<f64>().shape([ny, nx]).create(field.name)?;
-        ds.write_raw(field.data)?;
-        units(&ds, field.units)?;
+    if create {
+        let g = file.create_group("maps")?;
+        for field in fields {
+            let ds = g.new_dataset::<f64>().shape([ny, nx]).create(field.name)?;
+            ds.write_raw(field.data)?;
+            units(&ds, field.units)?;
+        }
+    } else {
+        for field in fields {
+            file.dataset_writer(&format!("maps/{}", field.name))?
+                .write_raw(field.data)?;
+        }
     }
+    Ok(())
+}
+
+/// Writes what a raster run gathered at its end: the maps ([`write_map_fields`]), the
+/// per-step series as `/diagnostics/<name>`, the numbers as `/summary` attributes.
+pub(super) fn write_maps(
+    file: &H5File,
+    raster: (usize, usize),
+    maps: &RunMaps,
+    create: bool,
+) -> rust_hdf5::Result<()> {
+    write_map_fields(file, raster, maps.maps, create)?;
     let d = file.root_group().group("diagnostics")?;
     for &(name, unit, values) in maps.series {
         let ds = d.new_dataset::<f64>().shape([values.len()]).create(name)?;
