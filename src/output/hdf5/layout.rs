@@ -148,6 +148,9 @@ fn write_raster_layout(
     file.set_attr_numeric("dy", &spacing(&y))?;
     if let Some(code) = r.crs_epsg {
         file.set_attr_numeric("crs_epsg", &(code as i64))?;
+        // The same code as text, which every HDF5 reader (rust-hdf5 among them)
+        // reads back.
+        file.set_attr_string("crs", &format!("EPSG:{code}"))?;
     }
     if let Some(wkt) = &r.crs_wkt {
         file.set_attr_string("crs_wkt", wkt)?;
