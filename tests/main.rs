@@ -20,6 +20,7 @@ mod nh_multilayer;
 mod nonhydrostatic;
 mod output_hdf5;
 mod properties;
+mod results;
 mod robustness;
 mod run_loop;
 mod run_output;

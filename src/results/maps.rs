@@ -310,17 +310,17 @@ impl MapsReport {
         let h = format_float(self.threshold);
         let _ = writeln!(
             out,
-            "maps: {} runs{}, P(pft > {h} m) > 0 on {} m², ≥ 0.5 on {} m², = 1 on {} m²; \
-             written to {}",
+            "maps: {} runs{}, P(pft > {h} m) > 0 on {:.4} m², ≥ 0.5 on {:.4} m², = 1 on {:.4} \
+             m²; written to {}",
             self.runs.len(),
             if self.left_out.is_empty() {
                 String::new()
             } else {
                 format!(" ({} not done, left out)", self.left_out.len())
             },
-            format_float(self.areas[0]),
-            format_float(self.areas[1]),
-            format_float(self.areas[2]),
+            self.areas[0],
+            self.areas[1],
+            self.areas[2],
             self.dir.display()
         );
         out

@@ -74,14 +74,17 @@ pub fn write_raster(
     path: &std::path::Path,
 ) -> Result<(), ResultsError> {
     use crate::gis::geotiff::{self, Compression, SampleType, WriteOptions};
-    let mut raster = grid.same_grid(0.0);
-    raster.values = values;
+    let mut raster = crate::gis::Raster {
+        values,
+        nodata: Some(NODATA),
+        crs: grid.crs.clone(),
+        ..*grid
+    };
     for v in &mut raster.values {
         if v.is_nan() {
             *v = NODATA;
         }
     }
-    raster.nodata = Some(NODATA);
     let written = match format {
         RasterFormat::Geotiff => geotiff::write(
             &raster,
