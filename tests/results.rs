@@ -366,6 +366,44 @@ fn two_runs_give_one_half_exactly_where_one_reaches() {
     ranks.sort();
     assert_eq!(ranks, ["1", "2"]);
     assert!(table.contains("rank"), "{table}");
+
+    // A run scored against its own footprint (its pft exported as a raster, cells
+    // above 0 observed; simulated: pft above 0) is perfect and ranks first.
+    let own = out.join("mu_deg=35.h5");
+    let gis = dir.path().join("gis");
+    assert_success(&export(&[
+        own.to_str().unwrap(),
+        "--fields",
+        "pft",
+        "--format",
+        "asc",
+        "-o",
+        gis.to_str().unwrap(),
+    ]));
+    assert_success(
+        &granflow()
+            .args([
+                "maps",
+                o,
+                "--threshold",
+                "0",
+                "--format",
+                "asc",
+                "--observed",
+            ])
+            .arg(gis.join("mu_deg=35_pft.asc"))
+            .output()
+            .unwrap(),
+    );
+    let csv = fs::read_to_string(out.join("maps/runs.csv")).unwrap();
+    let own_row = csv.lines().find(|l| l.contains(",mu_deg=35,")).unwrap();
+    let fields: Vec<&str> = own_row.split(',').collect();
+    let at = |c: &str| fields[col(c)];
+    assert_eq!(
+        (at("fp_area"), at("fn_area"), at("tpr"), at("fpr")),
+        ("0", "0", "1", "0")
+    );
+    assert_eq!((at("roc_distance"), at("rank")), ("0", "1"));
 }
 
 #[test]

@@ -54,7 +54,7 @@ pub struct ExportArgs {
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     pub fields: Vec<String>,
     /// Output directory (default: the run file's directory); files are named
-    /// RUN_<field>.<ext>.
+    /// `RUN_<field>.<ext>`.
     #[arg(long, short, value_name = "DIR")]
     pub output: Option<PathBuf>,
     /// GeoTIFF samples as Float64 (the file's values exactly) instead of Float32.
