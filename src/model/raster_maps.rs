@@ -163,26 +163,33 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         state: &State2d,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
+        // Wall cells (nodata of the DEM) are NaN.
+        let (h_max, speed_max, arrival, deposit) = (
+            grid.mask_walls(&self.h_max),
+            grid.mask_walls(&self.speed_max),
+            grid.mask_walls(&self.arrival),
+            grid.mask_walls(&state.h),
+        );
         let maps = [
             CellField {
                 name: "h_max",
                 units: "m",
-                data: &self.h_max,
+                data: &h_max,
             },
             CellField {
                 name: "speed_max",
                 units: "m/s",
-                data: &self.speed_max,
+                data: &speed_max,
             },
             CellField {
                 name: "arrival_time",
                 units: "s",
-                data: &self.arrival,
+                data: &arrival,
             },
             CellField {
                 name: "deposit",
                 units: "m",
-                data: &state.h,
+                data: &deposit,
             },
         ];
         let scalars = if self.h0.is_empty() {
