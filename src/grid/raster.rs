@@ -176,11 +176,14 @@ impl Raster2d {
         }
         // The bed at the centres, as output (NaN on walls), and as the ghost-ring
         // arrays hold it (0 on walls).
-        let mut output_bed = bed.clone();
-        for k in (0..bed.len()).filter(|&k| is_wall(k)) {
-            bed[k] = 0.0;
-            output_bed[k] = f64::NAN;
-        }
+        let output_bed = (!walls.is_empty()).then(|| {
+            let mut output = bed.clone();
+            for k in (0..bed.len()).filter(|&k| is_wall(k)) {
+                bed[k] = 0.0;
+                output[k] = f64::NAN;
+            }
+            output
+        });
         let (dx, dy) = (spec.dx(), spec.dy());
         let theta = spec.slope_deg.to_radians();
         let (g_n, tan_theta) = match spec.coordinates {
@@ -236,7 +239,7 @@ impl Raster2d {
             dy,
             x,
             y,
-            b: output_bed,
+            b: output_bed.unwrap_or(bed),
             b_ghost,
             z,
             g_n,

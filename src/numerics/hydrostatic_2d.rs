@@ -400,8 +400,22 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         state: &State2d,
         limited: bool,
     ) -> (f64, usize) {
+        if raster.walls().is_empty() {
+            self.update_pass_with::<false>(raster, dt, state, limited)
+        } else {
+            self.update_pass_with::<true>(raster, dt, state, limited)
+        }
+    }
+
+    /// [`Self::update_pass`] with (`WALLS`) or without the test for wall cells.
+    fn update_pass_with<const WALLS: bool>(
+        &mut self,
+        raster: &Raster2d,
+        dt: f64,
+        state: &State2d,
+        limited: bool,
+    ) -> (f64, usize) {
         let nx = raster.nx();
-        let walls = !raster.walls().is_empty();
         let (rx, ry) = (dt / raster.dx(), dt / raster.dy());
         let ctx = Ctx {
             law: self.law,
@@ -426,12 +440,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             |k, (h_new, hu_new, hv_new), s| {
                 let offset = k * BAND_ROWS * nx;
                 let mut worst = (f64::INFINITY, 0usize);
-                let update = |i: usize,
-                              j: usize,
-                              w: &FaceFlux,
-                              e: &FaceFlux,
-                              so: &FaceFlux,
-                              no: &FaceFlux| {
+                ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
                     let cell = j * nx + i;
                     let local = cell - offset;
                     let h_old = ctx.h[cell];
@@ -452,12 +461,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
                     if hn < 0.0 {
                         h_new[local] = hn;
                     }
-                };
-                if walls {
-                    ctx.sweep::<true, _>(k, s, update);
-                } else {
-                    ctx.sweep::<false, _>(k, s, update);
-                }
+                });
                 s.worst = worst;
             },
         );
@@ -466,8 +470,16 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
 
     /// The draining factors θ = min(1, h/(outflow over the four faces)).
     fn drain_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) {
+        if raster.walls().is_empty() {
+            self.drain_pass_with::<false>(raster, dt, state);
+        } else {
+            self.drain_pass_with::<true>(raster, dt, state);
+        }
+    }
+
+    /// [`Self::drain_pass`] with (`WALLS`) or without the test for wall cells.
+    fn drain_pass_with<const WALLS: bool>(&mut self, raster: &Raster2d, dt: f64, state: &State2d) {
         let nx = raster.nx();
-        let walls = !raster.walls().is_empty();
         let (rx, ry) = (dt / raster.dx(), dt / raster.dy());
         let ctx = Ctx {
             law: self.law,
@@ -486,23 +498,13 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             &mut self.scratch,
             |k, drain, s| {
                 let offset = k * BAND_ROWS * nx;
-                let factor = |i: usize,
-                              j: usize,
-                              w: &FaceFlux,
-                              e: &FaceFlux,
-                              so: &FaceFlux,
-                              no: &FaceFlux| {
+                ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
                     let cell = j * nx + i;
                     let need = rx * (e.h.max(0.0) + (-w.h).max(0.0))
                         + ry * (no.h.max(0.0) + (-so.h).max(0.0));
                     let h = ctx.h[cell];
                     drain[cell - offset] = if need > h { h.max(0.0) / need } else { 1.0 };
-                };
-                if walls {
-                    ctx.sweep::<true, _>(k, s, factor);
-                } else {
-                    ctx.sweep::<false, _>(k, s, factor);
-                }
+                });
             },
         );
     }
