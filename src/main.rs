@@ -26,6 +26,9 @@ fn load(args: &ScenarioArgs, force: bool) -> Result<Scenario, ExitCode> {
     for note in &scn.notes {
         print_err(&format!("note: {note}\n"));
     }
+    if let Some(release) = &scn.release {
+        print_err(&format!("release: {}\n", release.describe()));
+    }
     Ok(scn)
 }
 

@@ -13,6 +13,7 @@ mod dilatant;
 mod fuzz_scenario;
 mod gauges;
 mod gis;
+mod gis_scenario;
 mod hostile;
 mod multilayer;
 mod newcomer;

@@ -29,6 +29,8 @@
 //! of d, and the travel angle α = atan((Z_top − Z_runout)/L) (Heim 1932's Fahrböschung, the angle of the line
 //! from the top of the release to the farthest point reached).
 
+use std::borrow::Cow;
+
 use crate::grid::raster::Raster2d;
 use crate::grid::{Coordinates, Grid};
 use crate::model::tracker::Tracker;
@@ -175,8 +177,8 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         state: &State2d,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
-        let ppr = self.peak_pressure();
-        let maps = self.fields(&ppr, &state.h);
+        let values = self.values(grid, &state.h);
+        let maps = Self::fields(&values);
         let scalars = if self.h0.is_empty() {
             Vec::new()
         } else {
@@ -191,12 +193,12 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
 
     fn write_so_far(
         &self,
-        _grid: &Raster2d,
+        grid: &Raster2d,
         state: &State2d,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
-        let ppr = self.peak_pressure();
-        sink.maps_so_far(&self.fields(&ppr, &state.h))
+        let values = self.values(grid, &state.h);
+        sink.maps_so_far(&Self::fields(&values))
     }
 }
 
@@ -209,34 +211,31 @@ impl RasterMaps {
             .collect()
     }
 
-    /// The maps in their file order, `deposit` being `h`.
-    fn fields<'a>(&'a self, ppr: &'a [f64], h: &'a [f64]) -> [CellField<'a>; 5] {
+    /// The maps' values in their file order, `deposit` being `h`; wall (nodata) cells
+    /// are NaN.
+    fn values<'a>(&'a self, grid: &Raster2d, h: &'a [f64]) -> [Cow<'a, [f64]>; 5] {
         [
-            CellField {
-                name: "h_max",
-                units: "m",
-                data: &self.h_max,
-            },
-            CellField {
-                name: "speed_max",
-                units: "m/s",
-                data: &self.speed_max,
-            },
-            CellField {
-                name: "ppr",
-                units: "Pa",
-                data: ppr,
-            },
-            CellField {
-                name: "arrival_time",
-                units: "s",
-                data: &self.arrival,
-            },
-            CellField {
-                name: "deposit",
-                units: "m",
-                data: h,
-            },
+            grid.mask_walls(&self.h_max),
+            grid.mask_walls(&self.speed_max),
+            Cow::Owned(grid.mask_walls(&self.peak_pressure()).into_owned()),
+            grid.mask_walls(&self.arrival),
+            grid.mask_walls(h),
         ]
+    }
+
+    /// The maps with their names and units, in file order.
+    fn fields<'a>(values: &'a [Cow<'a, [f64]>; 5]) -> [CellField<'a>; 5] {
+        const NAMES: [(&str, &str); 5] = [
+            ("h_max", "m"),
+            ("speed_max", "m/s"),
+            ("ppr", "Pa"),
+            ("arrival_time", "s"),
+            ("deposit", "m"),
+        ];
+        std::array::from_fn(|i| CellField {
+            name: NAMES[i].0,
+            units: NAMES[i].1,
+            data: &values[i],
+        })
     }
 }

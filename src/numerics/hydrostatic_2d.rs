@@ -25,7 +25,14 @@
 //!
 //! Boundaries: the edge faces see a ghost cell built from the edge cell (a wall
 //! mirrors h and reverses the normal discharge, an outflow copies the cell), over the
-//! raster's ghost bed.
+//! raster's ghost bed. Wall cells inside the raster (nodata cells of a DEM,
+//! [`crate::grid::raster`]) are handled face by face in the same way: the wall side
+//! of a face is the mirror of the flow side (h, b, z and the tangential velocity
+//! copied, the normal velocity reversed), the face's mass flux and with it the
+//! tangential flux are zero (so no mass crosses, to the bit), and a face between two
+//! walls carries nothing. A wall cell then keeps h = 0 and no discharge. The sweep
+//! is compiled twice, with and without this test, and a raster without wall cells
+//! runs the code without it.
 //!
 //! Work is done by bands of whole rows ([`crate::grid::raster`]): a band computes the
 //! y-faces under and over each of its rows (one row of halo on each side) and the
@@ -200,6 +207,21 @@ impl<L: BasalFriction> Ctx<'_, L> {
         (side, velocity(h, self.hu[cell]))
     }
 
+    /// Whether ghost-inclusive column `c` of row `j` is a wall (a ghost takes the edge
+    /// cell's kind).
+    #[inline(always)]
+    fn x_wall(&self, c: usize, j: usize) -> bool {
+        let i = c.clamp(1, self.nx) - 1;
+        self.raster.is_wall(j * self.nx + i)
+    }
+
+    /// Whether column i of ghost-inclusive row `r` is a wall.
+    #[inline(always)]
+    fn y_wall(&self, i: usize, r: usize) -> bool {
+        let j = r.clamp(1, self.ny) - 1;
+        self.raster.is_wall(j * self.nx + i)
+    }
+
     /// Draining factor of the donor of a face between ghost-inclusive cells `lo` and
     /// `hi` (`None` for a ghost), by the sign of the mass flux.
     #[inline(always)]
@@ -219,7 +241,7 @@ impl<L: BasalFriction> Ctx<'_, L> {
     }
 
     /// The y-faces between ghost-inclusive rows `r` and `r + 1` from their sides.
-    fn y_faces(
+    fn y_faces<const WALLS: bool>(
         &self,
         r: usize,
         lower: &[(Side, f64)],
@@ -229,6 +251,13 @@ impl<L: BasalFriction> Ctx<'_, L> {
         let (g_n, dy) = (self.raster.g_n, self.raster.dy());
         let cell = |r: usize, i: usize| (r >= 1 && r <= self.ny).then(|| (r - 1) * self.nx + i);
         for (i, ((f, lo), hi)) in row.iter_mut().zip(lower).zip(upper).enumerate() {
+            if WALLS {
+                let (wl, wr) = (self.y_wall(i, r), self.y_wall(i, r + 1));
+                if wl || wr {
+                    *f = wall_face(&self.law, *lo, *hi, wl, wr, g_n, dy, self.dt);
+                    continue;
+                }
+            }
             *f = face_flux(&self.law, lo.0, hi.0, lo.1, hi.1, g_n, dy, self.dt);
             if self.theta.is_some() {
                 *f = f.drained(self.donor_theta(f.h, cell(r, i), cell(r + 1, i)));
@@ -239,7 +268,10 @@ impl<L: BasalFriction> Ctx<'_, L> {
     /// Sweeps the rows of band `k`: for every cell, calls `cell(i, j, west, east,
     /// south, north)` with its four faces. `s` holds the face rows.
     #[inline(always)]
-    fn sweep<F: FnMut(usize, usize, &FaceFlux, &FaceFlux, &FaceFlux, &FaceFlux)>(
+    fn sweep<
+        const WALLS: bool,
+        F: FnMut(usize, usize, &FaceFlux, &FaceFlux, &FaceFlux, &FaceFlux),
+    >(
         &self,
         k: usize,
         s: &mut BandScratch,
@@ -249,13 +281,19 @@ impl<L: BasalFriction> Ctx<'_, L> {
         let rows = self.raster.band_rows(k);
         self.y_sides(rows.start, &mut s.lower);
         self.y_sides(rows.start + 1, &mut s.upper);
-        self.y_faces(rows.start, &s.lower, &s.upper, &mut s.below);
+        self.y_faces::<WALLS>(rows.start, &s.lower, &s.upper, &mut s.below);
         for j in rows {
             std::mem::swap(&mut s.lower, &mut s.upper);
             self.y_sides(j + 2, &mut s.upper);
-            self.y_faces(j + 1, &s.lower, &s.upper, &mut s.above);
+            self.y_faces::<WALLS>(j + 1, &s.lower, &s.upper, &mut s.above);
             let x_cell = |c: usize| (c >= 1 && c <= nx).then(|| j * nx + c - 1);
             let x_face = |left: (Side, f64), right: (Side, f64), c: usize| {
+                if WALLS {
+                    let (wl, wr) = (self.x_wall(c, j), self.x_wall(c + 1, j));
+                    if wl || wr {
+                        return wall_face(&self.law, left, right, wl, wr, g_n, dx, self.dt);
+                    }
+                }
                 let f = face_flux(
                     &self.law, left.0, right.0, left.1, right.1, g_n, dx, self.dt,
                 );
@@ -313,10 +351,64 @@ fn face_flux<L: BasalFriction>(
     }
 }
 
+/// A face with a wall on the left (`wall_l`), the right or both sides: the wall side
+/// mirrors the other (normal velocity reversed), no mass and no tangential momentum
+/// cross, and between two walls nothing does.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn wall_face<L: BasalFriction>(
+    law: &L,
+    l: (Side, f64),
+    r: (Side, f64),
+    wall_l: bool,
+    wall_r: bool,
+    g_n: f64,
+    d: f64,
+    dt: f64,
+) -> FaceFlux {
+    let mirror = |(s, t): (Side, f64)| {
+        (
+            Side {
+                u: -s.u,
+                u_base: -s.u_base,
+                ..s
+            },
+            t,
+        )
+    };
+    let (l, r) = match (wall_l, wall_r) {
+        (true, true) => return FaceFlux::default(),
+        (true, false) => (mirror(r), r),
+        (false, true) => (l, mirror(l)),
+        (false, false) => (l, r),
+    };
+    let f = face_flux(law, l.0, r.0, l.1, r.1, g_n, d, dt);
+    FaceFlux {
+        h: 0.0,
+        qt: 0.0,
+        ..f
+    }
+}
+
 impl<L: BasalFriction> HydrostaticStep2d<L> {
     /// One update pass (fluxes, limited by `theta` if given) into the new-state
     /// buffers; returns the smallest new thickness and its cell, first in cell order.
     fn update_pass(
+        &mut self,
+        raster: &Raster2d,
+        dt: f64,
+        state: &State2d,
+        limited: bool,
+    ) -> (f64, usize) {
+        if raster.walls().is_empty() {
+            self.update_pass_with::<false>(raster, dt, state, limited)
+        } else {
+            self.update_pass_with::<true>(raster, dt, state, limited)
+        }
+    }
+
+    /// [`Self::update_pass`] with (`WALLS`) or without the test for wall cells.
+    fn update_pass_with<const WALLS: bool>(
         &mut self,
         raster: &Raster2d,
         dt: f64,
@@ -348,7 +440,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             |k, (h_new, hu_new, hv_new), s| {
                 let offset = k * BAND_ROWS * nx;
                 let mut worst = (f64::INFINITY, 0usize);
-                ctx.sweep(k, s, |i, j, w, e, so, no| {
+                ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
                     let cell = j * nx + i;
                     let local = cell - offset;
                     let h_old = ctx.h[cell];
@@ -378,6 +470,15 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
 
     /// The draining factors θ = min(1, h/(outflow over the four faces)).
     fn drain_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) {
+        if raster.walls().is_empty() {
+            self.drain_pass_with::<false>(raster, dt, state);
+        } else {
+            self.drain_pass_with::<true>(raster, dt, state);
+        }
+    }
+
+    /// [`Self::drain_pass`] with (`WALLS`) or without the test for wall cells.
+    fn drain_pass_with<const WALLS: bool>(&mut self, raster: &Raster2d, dt: f64, state: &State2d) {
         let nx = raster.nx();
         let (rx, ry) = (dt / raster.dx(), dt / raster.dy());
         let ctx = Ctx {
@@ -397,7 +498,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             &mut self.scratch,
             |k, drain, s| {
                 let offset = k * BAND_ROWS * nx;
-                ctx.sweep(k, s, |i, j, w, e, so, no| {
+                ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
                     let cell = j * nx + i;
                     let need = rx * (e.h.max(0.0) + (-w.h).max(0.0))
                         + ry * (no.h.max(0.0) + (-so.h).max(0.0));

@@ -179,7 +179,14 @@ fn write_raster_layout(
     frames(&s, "h", &[ny, nx], "m", &[Dim::Y, Dim::X])?;
     frames(&s, "u", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
     frames(&s, "v", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
-    step_groups(file, info, &RASTER_STEP_DATASETS)
+    step_groups(file, info, &RASTER_STEP_DATASETS)?;
+    let summary = file.root_group().group("summary")?;
+    summary.set_attr_numeric("wall_cells", &(r.wall_cells as i64))?;
+    if let Some(release) = &r.release {
+        summary.set_attr_numeric("release_volume", &release.volume)?;
+        summary.set_attr_numeric("release_volume_on_walls", &release.volume_on_walls)?;
+    }
+    Ok(())
 }
 
 /// Writes the maps of a raster run, `/maps/<name>` (ny, nx): created with their units
