@@ -295,7 +295,8 @@ fn bad_gis_inputs_exit_2_naming_the_file_and_the_reason() {
     fs::write(d.join("s.toml"), scenario(polygon, "")).unwrap();
     let good_dem = |d: &Path| write_dem(&d.join("dem.asc"), (10, 8, 5.0), (0.0, 0.0), |_, _| 0.0);
     let inside = [[10.0, 10.0], [20.0, 10.0], [20.0, 20.0]];
-    let cases: Vec<(&str, Box<dyn Fn(&Path)>, Vec<&str>)> = vec![
+    type Case<'a> = (&'a str, Box<dyn Fn(&Path) + 'a>, Vec<&'a str>);
+    let cases: Vec<Case> = vec![
         (
             "a DEM whose header lies about its size",
             Box::new(|d: &Path| {
