@@ -560,7 +560,7 @@ fn thacker_paraboloid_converges() {
 /// Front runout and centroid travel along the slope, and area of a cap released on
 /// a plane of slope tan 30° falling towards the direction φ (radians), Coulomb
 /// μ = tan 24°, at t = 0.8 s, on an n × n raster of [−1.5, 1.5]².
-fn rotated_release(phi: f64, n: usize) -> [f64; 3] {
+fn rotated_release(phi: f64, n: usize) -> [f64; 5] {
     let s_bed = tan_deg(30.0);
     let (c, s) = (phi.cos(), phi.sin());
     let r = raster(
@@ -592,6 +592,7 @@ fn rotated_release(phi: f64, n: usize) -> [f64; 3] {
     run_until(&r, &mut st, &mut p, 0.8);
     let threshold = 1e-3;
     let (mut front, mut cells, mut mass, mut moment) = (f64::NEG_INFINITY, 0usize, 0.0, 0.0);
+    let mut thick = [0usize; 2];
     for k in 0..n * n {
         let along = (r.x(k % n) - x0) * c + (r.y(k / n) - y0) * s;
         mass += st.h[k];
@@ -600,8 +601,20 @@ fn rotated_release(phi: f64, n: usize) -> [f64; 3] {
             cells += 1;
             front = front.max(along);
         }
+        for (m, t) in [5e-3, 1e-2].iter().enumerate() {
+            if st.h[k] > *t {
+                thick[m] += 1;
+            }
+        }
     }
-    [front, moment / mass, cells as f64 * r.dx() * r.dy()]
+    let a = r.dx() * r.dy();
+    [
+        front,
+        moment / mass,
+        cells as f64 * a,
+        thick[0] as f64 * a,
+        thick[1] as f64 * a,
+    ]
 }
 
 #[test]
@@ -611,7 +624,7 @@ fn rotated_releases_agree_within_a_tolerance_that_shrinks_with_the_cell_size() {
     // runout, the centroid travel and the area.
     let mut spreads = Vec::new();
     for n in [30, 60, 120] {
-        let results: Vec<[f64; 3]> = angles
+        let results: Vec<[f64; 5]> = angles
             .iter()
             .map(|a| rotated_release(a.to_radians(), n))
             .collect();
@@ -629,8 +642,10 @@ fn rotated_releases_agree_within_a_tolerance_that_shrinks_with_the_cell_size() {
                 .map(|r| ((r[m] - r0) / r0).abs())
                 .fold(0.0, f64::max)
         };
-        let s = [spread(0), spread(1), spread(2)];
-        eprintln!("n = {n}: {results:.4?}, spreads (front, centroid, area) {s:.3?}");
+        let s = [spread(0), spread(1), spread(2), spread(3), spread(4)];
+        eprintln!(
+            "n = {n}: {results:.4?}, spreads (front, centroid, area > 1 mm, 5 mm, 1 cm) {s:.3?}"
+        );
         spreads.push(s);
     }
     for m in 0..2 {

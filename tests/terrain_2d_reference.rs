@@ -393,6 +393,59 @@ fn coulomb_cone_collapses_into_a_pile_at_its_repose_slope() {
     assert!(shapes[0][3].abs() < 0.02, "{shapes:?}");
 }
 
+#[test]
+fn a_radial_collapse_stays_symmetric_under_x_y_transposition_to_the_bit() {
+    // The cylinder of `scenarios/radial_collapse.toml` (0.5 m high, radius 0.25 m,
+    // Coulomb tan 27°) on 48 × 48 cells, while it spreads (0.25 s) and at rest
+    // (1 s): h(x, y) = h(y, x) and (hu, hv)(x, y) = (hv, hu)(y, x), exactly.
+    let n = 48;
+    let r = raster(
+        n,
+        n,
+        (-1.5, 1.5),
+        (-1.5, 1.5),
+        Sides::all(BoundaryKind::Wall),
+        Coordinates::Cartesian,
+        0.0,
+        |_, _| 0.0,
+    );
+    let h: Vec<f64> = (0..n * n)
+        .map(|k| {
+            let (x, y) = (r.x(k % n), r.y(k / n));
+            if x * x + y * y < 0.25 * 0.25 {
+                0.5
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut s = State2d::zeros(n * n);
+    s.h.clone_from(&h);
+    let law = FrictionLaw::Coulomb { mu: tan_deg(27.0) };
+    let mut p = granular_2d::pipeline(&law, &material(), &r, 1).unwrap();
+    let asymmetry = |s: &State2d| {
+        let mut a = 0.0f64;
+        for j in 0..n {
+            for i in 0..n {
+                let (k, t) = (j * n + i, i * n + j);
+                a = a
+                    .max((s.h[k] - s.h[t]).abs())
+                    .max((s.hu[k] - s.hv[t]).abs());
+            }
+        }
+        a
+    };
+    run_until(&r, &mut s, &mut p, 0.25);
+    assert!(
+        s.hu.iter().any(|&q| q != 0.0),
+        "the collapse must still move"
+    );
+    assert_eq!(asymmetry(&s), 0.0, "spreading");
+    run_until(&r, &mut s, &mut p, 0.75);
+    assert!(s.hu.iter().chain(&s.hv).all(|&q| q == 0.0), "at rest");
+    assert_eq!(asymmetry(&s), 0.0, "at rest");
+}
+
 /// A Coulomb mass released in a parabolic channel whose thalweg is a parabola ending
 /// on a flat run-out (AvaFrame's parabolic profile, Tonnel et al. 2023, at the scale
 /// of a laboratory chute), Cartesian coordinates:

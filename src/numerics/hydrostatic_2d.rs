@@ -488,7 +488,10 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
                     let cell = j * nx + i;
                     let local = cell - offset;
                     let h_old = ctx.h[cell];
-                    let hn = h_old - rx * (e.h - w.h) - ry * (no.h - so.h);
+                    // The x and y parts are summed before they are subtracted: a sum of
+                    // two terms does not depend on their order, so a state symmetric
+                    // under x ↔ y (Δx = Δy) stays symmetric to the bit.
+                    let hn = h_old - (rx * (e.h - w.h) + ry * (no.h - so.h));
                     if hn < worst.0 {
                         worst = (hn, cell);
                     }
@@ -497,8 +500,8 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
                     let drained = drained_fraction(h, h_old);
                     let source_x = e.share_l + w.share_r - (e.body_l + w.body_r) * drained;
                     let source_y = no.share_l + so.share_r - (no.body_l + so.body_r) * drained;
-                    let qu = ctx.hu[cell] - rx * (e.qn - w.qn + source_x) - ry * (no.qt - so.qt);
-                    let qv = ctx.hv[cell] - rx * (e.qt - w.qt) - ry * (no.qn - so.qn + source_y);
+                    let qu = ctx.hu[cell] - (rx * (e.qn - w.qn + source_x) + ry * (no.qt - so.qt));
+                    let qv = ctx.hv[cell] - (rx * (e.qt - w.qt) + ry * (no.qn - so.qn + source_y));
                     h_new[local] = h;
                     (hu_new[local], hv_new[local]) = if h <= H_DRY { (0.0, 0.0) } else { (qu, qv) };
                     // The unclipped value for the positivity test.
