@@ -40,6 +40,18 @@ def cargo_test(module, name):
 # ID -> the command run (shown in the docs with {tmp} as out)
 CHECKS = {
     "ritter": cargo_test("analytic", "ritter_dry_dam_break_converges"),
+    "similarity_frictionless": cargo_test(
+        "terrain_2d_reference", "frictionless_similarity_solution_on_an_inclined_plane_converges"),
+    "similarity_coulomb": cargo_test(
+        "terrain_2d_reference", "coulomb_similarity_solution_on_an_inclined_plane_converges"),
+    "coulomb_pile": cargo_test(
+        "terrain_2d_reference", "coulomb_cone_collapses_into_a_pile_at_its_repose_slope"),
+    "energy_line": cargo_test(
+        "terrain_2d_reference", "coulomb_mass_on_a_curved_thalweg_stops_on_its_energy_line"),
+    "centrifugal": cargo_test(
+        "terrain_2d_reference", "centrifugal_pressure_on_the_curved_thalweg_shortens_the_runout"),
+    "rotation": cargo_test(
+        "terrain_2d", "rotated_releases_agree_within_a_tolerance_that_shrinks_with_the_cell_size"),
     "stoker": cargo_test("analytic", "stoker_wet_dam_break_converges"),
     "dam_break_script": ["python", "scripts/compare_dam_break.py", "--out", "{tmp}/dam_break"],
     "coulomb_stop": cargo_test(

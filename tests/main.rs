@@ -32,5 +32,6 @@ mod submarine_paper;
 mod sweep;
 mod terrain_2d;
 mod terrain_2d_io;
+mod terrain_2d_reference;
 mod water_nh;
 mod well_balanced;

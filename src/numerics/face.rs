@@ -76,9 +76,33 @@ pub struct Interface {
 #[inline(always)]
 pub fn interface<M: Fn(f64, f64) -> f64>(
     mu_of: M,
+    l: Side,
+    r: Side,
+    extra: f64,
+    g_n: f64,
+    dx: f64,
+    dt: f64,
+) -> Option<(Interface, Side, Side)> {
+    interface_with_transverse_drive(mu_of, l, r, extra, (0.0, 0.0), g_n, dx, dt)
+}
+
+/// [`interface`] for a face of a raster, with the drives d_t = u_t/Δt − g_n ∂_t(h + z)
+/// along the face of its two cells (`drive_t`). The friction that ΔC treats as bed is
+/// the Coulomb force against the whole drive d = (d_n, d_t), capped at the disk
+/// |f| ≤ g_n μ, and the face takes its normal component: f_n = −d_n min(1, g_n μ/|d|),
+/// with d_t the √h-weighted mean of the sides' drives (the weights of the Roe
+/// velocity). This is the static threshold of the friction step (a disk); clamping
+/// d_n alone at g_n μ (a square) would hold, face by face, a mass that the friction
+/// step sets moving along a diagonal slope. With d_t = 0 (a line, or a flow
+/// invariant along the face) it is the clamp of the line, to the bit.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn interface_with_transverse_drive<M: Fn(f64, f64) -> f64>(
+    mu_of: M,
     mut l: Side,
     mut r: Side,
     extra: f64,
+    drive_t: (f64, f64),
     g_n: f64,
     dx: f64,
     dt: f64,
@@ -147,7 +171,21 @@ pub fn interface<M: Fn(f64, f64) -> f64>(
         (sl * l.u_base + sr * r.u_base) / (sl + sr)
     };
     let drive = u_base / dt - g_n * ((r.h + r.z) - (l.h + l.z) + extra) / dx;
-    let f = -drive.clamp(-threshold, threshold);
+    let drive_t = if drive_t == (0.0, 0.0) {
+        0.0
+    } else {
+        (sl * drive_t.0 + sr * drive_t.1) / (sl + sr)
+    };
+    let f = if drive_t == 0.0 {
+        -drive.clamp(-threshold, threshold)
+    } else {
+        let magnitude = drive.hypot(drive_t);
+        if magnitude <= threshold {
+            -drive
+        } else {
+            -drive * (threshold / magnitude)
+        }
+    };
     let dz_c = dz - f * dx / g_n;
     let hc_minus = (l.h - dz_c.max(0.0)).max(0.0);
     let hc_plus = (r.h - (-dz_c).max(0.0)).max(0.0);

@@ -47,7 +47,8 @@
 //! h ≥ 0 for CFL ≤ ½ (the limiter and the run loop's retry catch the rest).
 
 use super::face::{
-    drained_fraction, interface, layer_momentum_flux, mass_flux, transverse_flux, Side,
+    drained_fraction, interface_with_transverse_drive, layer_momentum_flux, mass_flux,
+    transverse_flux, Side,
 };
 use super::workers::Workers;
 use super::{Stage, StageError};
@@ -82,6 +83,11 @@ impl FaceFlux {
     }
 }
 
+/// A cell as a face sees it: the side along the face's normal, the tangential
+/// velocity, and the tangential drive u_t/Δt − g_n ∂_t(h + z) of the cell (for the
+/// disk threshold of ΔC, [`super::face::interface_with_transverse_drive`]).
+type FaceSide = (Side, f64, f64);
+
 /// One band's scratch: the y-faces under and over the current row, and the smallest
 /// new thickness of the band with its cell.
 #[derive(Debug, Clone)]
@@ -90,8 +96,8 @@ struct BandScratch {
     above: Vec<FaceFlux>,
     /// The sides that the y-faces see in the rows under and over them (each row's
     /// computed once per sweep).
-    lower: Vec<(Side, f64)>,
-    upper: Vec<(Side, f64)>,
+    lower: Vec<FaceSide>,
+    upper: Vec<FaceSide>,
     worst: (f64, usize),
 }
 
@@ -115,8 +121,8 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let band = BandScratch {
             below: vec![FaceFlux::default(); nx],
             above: vec![FaceFlux::default(); nx],
-            lower: vec![(Side::monolayer(0.0, 0.0, 0.0, 0.0), 0.0); nx],
-            upper: vec![(Side::monolayer(0.0, 0.0, 0.0, 0.0), 0.0); nx],
+            lower: vec![(Side::monolayer(0.0, 0.0, 0.0, 0.0), 0.0, 0.0); nx],
+            upper: vec![(Side::monolayer(0.0, 0.0, 0.0, 0.0), 0.0, 0.0); nx],
             worst: (f64::INFINITY, 0),
         };
         HydrostaticStep2d {
@@ -139,7 +145,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             .iter()
             .map(|s| {
                 (s.below.len() + s.above.len()) * std::mem::size_of::<FaceFlux>()
-                    + (s.lower.len() + s.upper.len()) * std::mem::size_of::<(Side, f64)>()
+                    + (s.lower.len() + s.upper.len()) * std::mem::size_of::<FaceSide>()
             })
             .sum();
         (4.0 * 8.0 * cells + faces as f64) / cells
@@ -161,10 +167,49 @@ struct Ctx<'a, L> {
 }
 
 impl<L: BasalFriction> Ctx<'_, L> {
-    /// The side of ghost-inclusive column `c` (0 and nx + 1 are ghosts) of row `j`
-    /// seen by an x-face, and its tangential velocity v.
+    /// The free surface h + z of cell (i, j) seen from a cell whose surface is `eta`:
+    /// a dry cell whose bed stands above it counts at `eta` (an emerging bed exerts
+    /// no drive, as in the hydrostatic reconstruction).
     #[inline(always)]
-    fn x_side(&self, c: usize, j: usize) -> (Side, f64) {
+    fn surface_seen(&self, i: usize, j: usize, eta: f64) -> f64 {
+        let (h, z) = (
+            self.h[j * self.nx + i],
+            self.raster.z[self.raster.ghost_index(i + 1, j + 1)],
+        );
+        if h > H_DRY {
+            h + z
+        } else {
+            z.min(eta)
+        }
+    }
+
+    /// The drive u_t/Δt − g_n ∂_t(h + z) along an axis of cell (i, j) with the
+    /// tangential velocity `t`: `along_x` for ∂_x (central differences over the
+    /// neighbours, one-sided at the raster's edge; 0 on a single column or row).
+    #[inline(always)]
+    fn tangential_drive(&self, i: usize, j: usize, t: f64, along_x: bool) -> f64 {
+        let eta = self.h[j * self.nx + i] + self.raster.z[self.raster.ghost_index(i + 1, j + 1)];
+        let (k, n, d) = if along_x {
+            (i, self.nx, self.raster.dx())
+        } else {
+            (j, self.ny, self.raster.dy())
+        };
+        let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
+        if lo == hi {
+            return t / self.dt;
+        }
+        let (e_lo, e_hi) = if along_x {
+            (self.surface_seen(lo, j, eta), self.surface_seen(hi, j, eta))
+        } else {
+            (self.surface_seen(i, lo, eta), self.surface_seen(i, hi, eta))
+        };
+        t / self.dt - self.raster.g_n * (e_hi - e_lo) / ((hi - lo) as f64 * d)
+    }
+
+    /// The side of ghost-inclusive column `c` (0 and nx + 1 are ghosts) of row `j`
+    /// seen by an x-face, its tangential velocity v and its drive along y.
+    #[inline(always)]
+    fn x_side(&self, c: usize, j: usize) -> FaceSide {
         let sides = self.raster.sides();
         let (cell, sign) = if c == 0 {
             (j * self.nx, sides.west.discharge_sign())
@@ -181,13 +226,14 @@ impl<L: BasalFriction> Ctx<'_, L> {
             self.raster.b_ghost[g],
             self.raster.z[g],
         );
-        (side, velocity(h, self.hv[cell]))
+        let v = velocity(h, self.hv[cell]);
+        (side, v, self.tangential_drive(cell % self.nx, j, v, false))
     }
 
     /// The side of column i, ghost-inclusive row `r` (0 and ny + 1 are ghosts), seen
-    /// by a y-face, and its tangential velocity u.
+    /// by a y-face, its tangential velocity u and its drive along x.
     #[inline(always)]
-    fn y_side(&self, i: usize, r: usize) -> (Side, f64) {
+    fn y_side(&self, i: usize, r: usize) -> FaceSide {
         let sides = self.raster.sides();
         let (cell, sign) = if r == 0 {
             (i, sides.south.discharge_sign())
@@ -204,7 +250,8 @@ impl<L: BasalFriction> Ctx<'_, L> {
             self.raster.b_ghost[g],
             self.raster.z[g],
         );
-        (side, velocity(h, self.hu[cell]))
+        let u = velocity(h, self.hu[cell]);
+        (side, u, self.tangential_drive(i, cell / self.nx, u, true))
     }
 
     /// Whether ghost-inclusive column `c` of row `j` is a wall (a ghost takes the edge
@@ -234,7 +281,7 @@ impl<L: BasalFriction> Ctx<'_, L> {
     }
 
     /// The sides of ghost-inclusive row `r` as the y-faces see them.
-    fn y_sides(&self, r: usize, row: &mut [(Side, f64)]) {
+    fn y_sides(&self, r: usize, row: &mut [FaceSide]) {
         for (i, side) in row.iter_mut().enumerate() {
             *side = self.y_side(i, r);
         }
@@ -244,8 +291,8 @@ impl<L: BasalFriction> Ctx<'_, L> {
     fn y_faces<const WALLS: bool>(
         &self,
         r: usize,
-        lower: &[(Side, f64)],
-        upper: &[(Side, f64)],
+        lower: &[FaceSide],
+        upper: &[FaceSide],
         row: &mut [FaceFlux],
     ) {
         let (g_n, dy) = (self.raster.g_n, self.raster.dy());
@@ -258,7 +305,7 @@ impl<L: BasalFriction> Ctx<'_, L> {
                     continue;
                 }
             }
-            *f = face_flux(&self.law, lo.0, hi.0, lo.1, hi.1, g_n, dy, self.dt);
+            *f = face_flux(&self.law, lo, hi, g_n, dy, self.dt);
             if self.theta.is_some() {
                 *f = f.drained(self.donor_theta(f.h, cell(r, i), cell(r + 1, i)));
             }
@@ -287,16 +334,14 @@ impl<L: BasalFriction> Ctx<'_, L> {
             self.y_sides(j + 2, &mut s.upper);
             self.y_faces::<WALLS>(j + 1, &s.lower, &s.upper, &mut s.above);
             let x_cell = |c: usize| (c >= 1 && c <= nx).then(|| j * nx + c - 1);
-            let x_face = |left: (Side, f64), right: (Side, f64), c: usize| {
+            let x_face = |left: FaceSide, right: FaceSide, c: usize| {
                 if WALLS {
                     let (wl, wr) = (self.x_wall(c, j), self.x_wall(c + 1, j));
                     if wl || wr {
                         return wall_face(&self.law, left, right, wl, wr, g_n, dx, self.dt);
                     }
                 }
-                let f = face_flux(
-                    &self.law, left.0, right.0, left.1, right.1, g_n, dx, self.dt,
-                );
+                let f = face_flux(&self.law, &left, &right, g_n, dx, self.dt);
                 if self.theta.is_none() {
                     f
                 } else {
@@ -318,22 +363,20 @@ impl<L: BasalFriction> Ctx<'_, L> {
 }
 
 /// The fluxes of one face with sides `l`, `r` along its normal (velocities normal to
-/// the face) and tangential velocities `t_l`, `t_r`; zero where nothing crosses. The
-/// 1-D monolayer face ([`super::face::monolayer_fluxes`]) plus the tangential flux.
+/// the face), their tangential velocities and drives; zero where nothing crosses. The
+/// 1-D monolayer face ([`super::face::monolayer_fluxes`]) with the disk threshold of
+/// ΔC, plus the tangential flux.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn face_flux<L: BasalFriction>(
     law: &L,
-    l: Side,
-    r: Side,
-    t_l: f64,
-    t_r: f64,
+    &(l, t_l, d_l): &FaceSide,
+    &(r, t_r, d_r): &FaceSide,
     g_n: f64,
     d: f64,
     dt: f64,
 ) -> FaceFlux {
     let mu_of = |speed: f64, h: f64| law.mu(speed, h, g_n * h);
-    match interface(mu_of, l, r, 0.0, g_n, d, dt) {
+    match interface_with_transverse_drive(mu_of, l, r, 0.0, (d_l, d_r), g_n, d, dt) {
         None => FaceFlux::default(),
         Some((c, l, r)) => {
             let t_l = if c.left_at_rest { 0.0 } else { t_l };
@@ -358,15 +401,15 @@ fn face_flux<L: BasalFriction>(
 #[allow(clippy::too_many_arguments)]
 fn wall_face<L: BasalFriction>(
     law: &L,
-    l: (Side, f64),
-    r: (Side, f64),
+    l: FaceSide,
+    r: FaceSide,
     wall_l: bool,
     wall_r: bool,
     g_n: f64,
     d: f64,
     dt: f64,
 ) -> FaceFlux {
-    let mirror = |(s, t): (Side, f64)| {
+    let mirror = |(s, t, d): FaceSide| {
         (
             Side {
                 u: -s.u,
@@ -374,6 +417,7 @@ fn wall_face<L: BasalFriction>(
                 ..s
             },
             t,
+            d,
         )
     };
     let (l, r) = match (wall_l, wall_r) {
@@ -382,7 +426,7 @@ fn wall_face<L: BasalFriction>(
         (false, true) => (l, mirror(l)),
         (false, false) => (l, r),
     };
-    let f = face_flux(law, l.0, r.0, l.1, r.1, g_n, d, dt);
+    let f = face_flux(law, &l, &r, g_n, d, dt);
     FaceFlux {
         h: 0.0,
         qt: 0.0,
@@ -444,7 +488,10 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
                     let cell = j * nx + i;
                     let local = cell - offset;
                     let h_old = ctx.h[cell];
-                    let hn = h_old - rx * (e.h - w.h) - ry * (no.h - so.h);
+                    // The x and y parts are summed before they are subtracted: a sum of
+                    // two terms does not depend on their order, so a state symmetric
+                    // under x ↔ y (Δx = Δy) stays symmetric to the bit.
+                    let hn = h_old - (rx * (e.h - w.h) + ry * (no.h - so.h));
                     if hn < worst.0 {
                         worst = (hn, cell);
                     }
@@ -453,8 +500,8 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
                     let drained = drained_fraction(h, h_old);
                     let source_x = e.share_l + w.share_r - (e.body_l + w.body_r) * drained;
                     let source_y = no.share_l + so.share_r - (no.body_l + so.body_r) * drained;
-                    let qu = ctx.hu[cell] - rx * (e.qn - w.qn + source_x) - ry * (no.qt - so.qt);
-                    let qv = ctx.hv[cell] - rx * (e.qt - w.qt) - ry * (no.qn - so.qn + source_y);
+                    let qu = ctx.hu[cell] - (rx * (e.qn - w.qn + source_x) + ry * (no.qt - so.qt));
+                    let qv = ctx.hv[cell] - (rx * (e.qt - w.qt) + ry * (no.qn - so.qn + source_y));
                     h_new[local] = h;
                     (hu_new[local], hv_new[local]) = if h <= H_DRY { (0.0, 0.0) } else { (qu, qv) };
                     // The unclipped value for the positivity test.
