@@ -185,7 +185,8 @@ impl<L: BasalFriction> Ctx<'_, L> {
 
     /// The drive u_t/Δt − g_n ∂_t(h + z) along an axis of cell (i, j) with the
     /// tangential velocity `t`: `along_x` for ∂_x (central differences over the
-    /// neighbours, one-sided at the raster's edge; 0 on a single column or row).
+    /// neighbours, one-sided at the raster's edge and beside a wall cell; 0 on a
+    /// single column or row).
     #[inline(always)]
     fn tangential_drive(&self, i: usize, j: usize, t: f64, along_x: bool) -> f64 {
         let eta = self.h[j * self.nx + i] + self.raster.z[self.raster.ghost_index(i + 1, j + 1)];
@@ -194,7 +195,22 @@ impl<L: BasalFriction> Ctx<'_, L> {
         } else {
             (j, self.ny, self.raster.dy())
         };
-        let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
+        let (mut lo, mut hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
+        // A wall neighbour (nodata) is an edge of the raster: one-sided there.
+        let wall = |m: usize| {
+            let c = if along_x {
+                j * self.nx + m
+            } else {
+                m * self.nx + i
+            };
+            self.raster.is_wall(c)
+        };
+        if wall(lo) {
+            lo = k;
+        }
+        if wall(hi) {
+            hi = k;
+        }
         if lo == hi {
             return t / self.dt;
         }
