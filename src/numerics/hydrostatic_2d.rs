@@ -32,8 +32,17 @@
 //! x-faces along them, and writes its rows of the new state into the step's own
 //! buffers, which are swapped with the state's at the end (no copy). The y-faces at the
 //! edge between two bands are computed by both, with the same operations on the same
-//! data. Memory: the new state (3 values per cell), the draining factors (1, used only
-//! when a cell would empty) and two rows of y-faces per band.
+//! data. Each cell's velocities and √h are computed once per sweep (its y-side, turned
+//! to x for the x-faces). Memory: the new state (3 values per cell), the draining
+//! factors (1) and two rows of y-faces per band.
+//!
+//! The limiter in two passes. The unlimited pass writes the new state and, from the
+//! same four faces, every cell's draining factor θ = min(1, h/(Δt outflow)). Only if
+//! some new thickness is negative, the limited pass follows: a face's fluxes times its
+//! donor's θ differ from the unlimited ones only where θ ≠ 1 (a flux times 1 is the
+//! flux), so it recomputes just the cells next to a draining cell (the cell and its
+//! four neighbours), face by face, and keeps the unlimited values elsewhere: the same
+//! bits as a full second pass, at the cost of the fronts only.
 //!
 //! The CFL step: with the per-cell signal speed s = max(|u|, |v|) + √(g_n h) and
 //! Δt = CFL · min(Δx, Δy)/s, Δt (s_x/Δx + s_y/Δy) ≤ 2 CFL; the unsplit update keeps
@@ -218,22 +227,35 @@ impl<L: BasalFriction> Ctx<'_, L> {
         }
     }
 
-    /// The y-faces between ghost-inclusive rows `r` and `r + 1` from their sides.
-    fn y_faces(
-        &self,
-        r: usize,
-        lower: &[(Side, f64)],
-        upper: &[(Side, f64)],
-        row: &mut [FaceFlux],
-    ) {
+    /// The y-faces between two ghost-inclusive rows from their sides.
+    fn y_faces(&self, lower: &[(Side, f64)], upper: &[(Side, f64)], row: &mut [FaceFlux]) {
         let (g_n, dy) = (self.raster.g_n, self.raster.dy());
-        let cell = |r: usize, i: usize| (r >= 1 && r <= self.ny).then(|| (r - 1) * self.nx + i);
-        for (i, ((f, lo), hi)) in row.iter_mut().zip(lower).zip(upper).enumerate() {
+        for ((f, lo), hi) in row.iter_mut().zip(lower).zip(upper) {
             *f = face_flux(&self.law, lo.0, hi.0, lo.1, hi.1, g_n, dy, self.dt);
-            if self.theta.is_some() {
-                *f = f.drained(self.donor_theta(f.h, cell(r, i), cell(r + 1, i)));
-            }
         }
+    }
+
+    /// The four faces (west, east, south, north) of cell (i, j), every flux scaled by
+    /// its donor's draining factor: the faces of the limited pass, one cell at a time.
+    /// The sides and fluxes are those of [`Self::sweep`] (same functions, same data).
+    #[inline(always)]
+    fn limited_faces(&self, i: usize, j: usize) -> [FaceFlux; 4] {
+        let (nx, ny, g_n) = (self.nx, self.ny, self.raster.g_n);
+        let (dx, dy) = (self.raster.dx(), self.raster.dy());
+        let x_cell = |c: usize| (c >= 1 && c <= nx).then(|| j * nx + c - 1);
+        let y_cell = |r: usize| (r >= 1 && r <= ny).then(|| (r - 1) * nx + i);
+        let x_face = |c: usize| {
+            let (l, r) = (self.x_side(c, j), self.x_side(c + 1, j));
+            let f = face_flux(&self.law, l.0, r.0, l.1, r.1, g_n, dx, self.dt);
+            f.drained(self.donor_theta(f.h, x_cell(c), x_cell(c + 1)))
+        };
+        let y_face = |r: usize| {
+            let (lo, hi) = (self.y_side(i, r), self.y_side(i, r + 1));
+            let f = face_flux(&self.law, lo.0, hi.0, lo.1, hi.1, g_n, dy, self.dt);
+            f.drained(self.donor_theta(f.h, y_cell(r), y_cell(r + 1)))
+        };
+        // Ghost-inclusive column i + 1 and row j + 1.
+        [x_face(i), x_face(i + 1), y_face(j), y_face(j + 1)]
     }
 
     /// Sweeps the rows of band `k`: for every cell, calls `cell(i, j, west, east,
@@ -249,34 +271,51 @@ impl<L: BasalFriction> Ctx<'_, L> {
         let rows = self.raster.band_rows(k);
         self.y_sides(rows.start, &mut s.lower);
         self.y_sides(rows.start + 1, &mut s.upper);
-        self.y_faces(rows.start, &s.lower, &s.upper, &mut s.below);
+        self.y_faces(&s.lower, &s.upper, &mut s.below);
         for j in rows {
             std::mem::swap(&mut s.lower, &mut s.upper);
             self.y_sides(j + 2, &mut s.upper);
-            self.y_faces(j + 1, &s.lower, &s.upper, &mut s.above);
-            let x_cell = |c: usize| (c >= 1 && c <= nx).then(|| j * nx + c - 1);
-            let x_face = |left: (Side, f64), right: (Side, f64), c: usize| {
-                let f = face_flux(
+            self.y_faces(&s.lower, &s.upper, &mut s.above);
+            let x_face = |left: (Side, f64), right: (Side, f64)| {
+                face_flux(
                     &self.law, left.0, right.0, left.1, right.1, g_n, dx, self.dt,
-                );
-                if self.theta.is_none() {
-                    f
-                } else {
-                    f.drained(self.donor_theta(f.h, x_cell(c), x_cell(c + 1)))
-                }
+                )
             };
+            // Interior columns: the row's own y-sides (`s.lower`) turned to x: the
+            // same h, velocities, √h, b and z, the roles of u and v exchanged.
+            let row = &s.lower[..nx];
             let mut left = self.x_side(0, j);
-            let mut right = self.x_side(1, j);
-            let mut west = x_face(left, right, 0);
+            let mut right = across(row[0]);
+            let mut west = x_face(left, right);
             for i in 0..nx {
-                (left, right) = (right, self.x_side(i + 2, j));
-                let east = x_face(left, right, i + 1);
+                let next = if i + 1 < nx {
+                    across(row[i + 1])
+                } else {
+                    self.x_side(nx + 1, j)
+                };
+                (left, right) = (right, next);
+                let east = x_face(left, right);
                 cell(i, j, &west, &east, &s.below[i], &s.above[i]);
                 west = east;
             }
             std::mem::swap(&mut s.below, &mut s.above);
         }
     }
+}
+
+/// The side of an interior cell as an x-face sees it, from the side a y-face sees
+/// (`Ctx::y_side`): the normal and tangential velocities exchanged. The same values as
+/// `Ctx::x_side` (its discharge sign is 1 inside the raster).
+#[inline(always)]
+fn across((side, u): (Side, f64)) -> (Side, f64) {
+    (
+        Side {
+            u,
+            u_base: u,
+            ..side
+        },
+        side.u,
+    )
 }
 
 /// The fluxes of one face with sides `l`, `r` along its normal (velocities normal to
@@ -313,73 +352,72 @@ fn face_flux<L: BasalFriction>(
     }
 }
 
-impl<L: BasalFriction> HydrostaticStep2d<L> {
-    /// One update pass (fluxes, limited by `theta` if given) into the new-state
-    /// buffers; returns the smallest new thickness and its cell, first in cell order.
-    fn update_pass(
-        &mut self,
-        raster: &Raster2d,
-        dt: f64,
-        state: &State2d,
-        limited: bool,
-    ) -> (f64, usize) {
-        let nx = raster.nx();
-        let (rx, ry) = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx {
-            law: self.law,
-            raster,
-            h: &state.h,
-            hu: &state.hu,
-            hv: &state.hv,
-            nx,
-            ny: raster.ny(),
-            dt,
-            theta: limited.then_some(self.drain.as_slice()),
-        };
-        let outputs = (
-            self.h_new.as_mut_slice(),
-            self.hu_new.as_mut_slice(),
-            self.hv_new.as_mut_slice(),
-        );
-        self.workers.bands3(
-            BAND_ROWS * nx,
-            outputs,
-            &mut self.scratch,
-            |k, (h_new, hu_new, hv_new), s| {
-                let offset = k * BAND_ROWS * nx;
-                let mut worst = (f64::INFINITY, 0usize);
-                ctx.sweep(k, s, |i, j, w, e, so, no| {
-                    let cell = j * nx + i;
-                    let local = cell - offset;
-                    let h_old = ctx.h[cell];
-                    let hn = h_old - rx * (e.h - w.h) - ry * (no.h - so.h);
-                    if hn < worst.0 {
-                        worst = (hn, cell);
-                    }
-                    // Clip round-off below zero; `f64::max` would also turn a NaN into 0.
-                    let h = if hn < 0.0 { 0.0 } else { hn };
-                    let drained = drained_fraction(h, h_old);
-                    let source_x = e.share_l + w.share_r - (e.body_l + w.body_r) * drained;
-                    let source_y = no.share_l + so.share_r - (no.body_l + so.body_r) * drained;
-                    let qu = ctx.hu[cell] - rx * (e.qn - w.qn + source_x) - ry * (no.qt - so.qt);
-                    let qv = ctx.hv[cell] - rx * (e.qt - w.qt) - ry * (no.qn - so.qn + source_y);
-                    h_new[local] = h;
-                    (hu_new[local], hv_new[local]) = if h <= H_DRY { (0.0, 0.0) } else { (qu, qv) };
-                    // The unclipped value for the positivity test.
-                    if hn < 0.0 {
-                        h_new[local] = hn;
-                    }
-                });
-                s.worst = worst;
-            },
-        );
-        self.worst()
+/// The new state of one cell from its four faces (west, east, south, north):
+/// (unclipped new thickness, clipped thickness, h u, h v).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn update_cell(
+    h_old: f64,
+    hu_old: f64,
+    hv_old: f64,
+    (rx, ry): (f64, f64),
+    w: &FaceFlux,
+    e: &FaceFlux,
+    so: &FaceFlux,
+    no: &FaceFlux,
+) -> (f64, f64, f64, f64) {
+    let hn = h_old - rx * (e.h - w.h) - ry * (no.h - so.h);
+    // Clip round-off below zero; `f64::max` would also turn a NaN into 0.
+    let h = if hn < 0.0 { 0.0 } else { hn };
+    let drained = drained_fraction(h, h_old);
+    let source_x = e.share_l + w.share_r - (e.body_l + w.body_r) * drained;
+    let source_y = no.share_l + so.share_r - (no.body_l + so.body_r) * drained;
+    let qu = hu_old - rx * (e.qn - w.qn + source_x) - ry * (no.qt - so.qt);
+    let qv = hv_old - rx * (e.qt - w.qt) - ry * (no.qn - so.qn + source_y);
+    if h <= H_DRY {
+        (hn, h, 0.0, 0.0)
+    } else {
+        (hn, h, qu, qv)
     }
+}
 
-    /// The draining factors θ = min(1, h/(outflow over the four faces)).
-    fn drain_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) {
+/// The draining factor θ = min(1, h/(outflow over the four faces)) of a cell of
+/// thickness `h` with the unlimited faces w, e, s, n.
+#[inline(always)]
+fn draining_factor(
+    h: f64,
+    (rx, ry): (f64, f64),
+    w: &FaceFlux,
+    e: &FaceFlux,
+    so: &FaceFlux,
+    no: &FaceFlux,
+) -> f64 {
+    let need = rx * (e.h.max(0.0) + (-w.h).max(0.0)) + ry * (no.h.max(0.0) + (-so.h).max(0.0));
+    if need > h {
+        h.max(0.0) / need
+    } else {
+        1.0
+    }
+}
+
+/// The smallest value of `h_new` and its index (the first in order), `offset` added.
+fn first_minimum(h_new: &[f64], offset: usize) -> (f64, usize) {
+    let mut worst = (f64::INFINITY, 0usize);
+    for (k, &h) in h_new.iter().enumerate() {
+        if h < worst.0 {
+            worst = (h, offset + k);
+        }
+    }
+    worst
+}
+
+impl<L: BasalFriction> HydrostaticStep2d<L> {
+    /// The unlimited update pass into the new-state buffers, with the draining factor
+    /// of every cell from the same faces; returns the smallest new thickness and its
+    /// cell, first in cell order. The new-state buffers hold the unclipped thickness.
+    fn update_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
         let nx = raster.nx();
-        let (rx, ry) = (dt / raster.dx(), dt / raster.dy());
+        let r = (dt / raster.dx(), dt / raster.dy());
         let ctx = Ctx {
             law: self.law,
             raster,
@@ -391,21 +429,110 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             dt,
             theta: None,
         };
-        self.workers.bands1(
+        let outputs = (
+            self.h_new.as_mut_slice(),
+            self.hu_new.as_mut_slice(),
+            self.hv_new.as_mut_slice(),
+            self.drain.as_mut_slice(),
+        );
+        self.workers.bands4(
             BAND_ROWS * nx,
-            &mut self.drain,
+            outputs,
             &mut self.scratch,
-            |k, drain, s| {
+            |k, (h_new, hu_new, hv_new, drain), s| {
                 let offset = k * BAND_ROWS * nx;
+                let mut worst = (f64::INFINITY, 0usize);
                 ctx.sweep(k, s, |i, j, w, e, so, no| {
                     let cell = j * nx + i;
-                    let need = rx * (e.h.max(0.0) + (-w.h).max(0.0))
-                        + ry * (no.h.max(0.0) + (-so.h).max(0.0));
-                    let h = ctx.h[cell];
-                    drain[cell - offset] = if need > h { h.max(0.0) / need } else { 1.0 };
+                    let local = cell - offset;
+                    let h_old = ctx.h[cell];
+                    let (hn, _, qu, qv) =
+                        update_cell(h_old, ctx.hu[cell], ctx.hv[cell], r, w, e, so, no);
+                    if hn < worst.0 {
+                        worst = (hn, cell);
+                    }
+                    // The unclipped value for the positivity test.
+                    (h_new[local], hu_new[local], hv_new[local]) = (hn, qu, qv);
+                    drain[local] = draining_factor(h_old, r, w, e, so, no);
                 });
+                s.worst = worst;
             },
         );
+        self.worst()
+    }
+
+    /// The limited pass: every flux leaving a cell scaled by the cell's draining
+    /// factor θ. Only the cells with a face whose donor has θ ≠ 1 (a draining cell and
+    /// its four neighbours) change; the others keep the values of the unlimited pass,
+    /// which are the same bits (a flux times θ = 1 is the flux). Returns the smallest
+    /// new thickness and its cell, first in cell order.
+    fn limited_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
+        let (nx, ny) = (raster.nx(), raster.ny());
+        let r = (dt / raster.dx(), dt / raster.dy());
+        let ctx = Ctx {
+            law: self.law,
+            raster,
+            h: &state.h,
+            hu: &state.hu,
+            hv: &state.hv,
+            nx,
+            ny,
+            dt,
+            theta: Some(self.drain.as_slice()),
+        };
+        let theta = self.drain.as_slice();
+        let outputs = (
+            self.h_new.as_mut_slice(),
+            self.hu_new.as_mut_slice(),
+            self.hv_new.as_mut_slice(),
+        );
+        self.workers.bands3(
+            BAND_ROWS * nx,
+            outputs,
+            &mut self.scratch,
+            |k, (h_new, hu_new, hv_new), s| {
+                let offset = k * BAND_ROWS * nx;
+                for j in raster.band_rows(k) {
+                    let row = &theta[j * nx..(j + 1) * nx];
+                    let below = (j > 0).then(|| &theta[(j - 1) * nx..j * nx]);
+                    let above = (j + 1 < ny).then(|| &theta[(j + 1) * nx..(j + 2) * nx]);
+                    if row
+                        .iter()
+                        .chain(below.into_iter().flatten())
+                        .chain(above.into_iter().flatten())
+                        .all(|&t| t == 1.0)
+                    {
+                        continue;
+                    }
+                    for i in 0..nx {
+                        let affected = row[i] != 1.0
+                            || (i > 0 && row[i - 1] != 1.0)
+                            || (i + 1 < nx && row[i + 1] != 1.0)
+                            || below.is_some_and(|b| b[i] != 1.0)
+                            || above.is_some_and(|a| a[i] != 1.0);
+                        if !affected {
+                            continue;
+                        }
+                        let [w, e, so, no] = ctx.limited_faces(i, j);
+                        let cell = j * nx + i;
+                        let local = cell - offset;
+                        let (hn, _, qu, qv) = update_cell(
+                            ctx.h[cell],
+                            ctx.hu[cell],
+                            ctx.hv[cell],
+                            r,
+                            &w,
+                            &e,
+                            &so,
+                            &no,
+                        );
+                        (h_new[local], hu_new[local], hv_new[local]) = (hn, qu, qv);
+                    }
+                }
+                s.worst = first_minimum(h_new, offset);
+            },
+        );
+        self.worst()
     }
 
     /// The smallest new thickness over the bands, combined in band order.
@@ -426,10 +553,9 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
     }
 
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
-        let mut worst = self.update_pass(raster, dt, state, false);
+        let mut worst = self.update_pass(raster, dt, state);
         if worst.0 < 0.0 {
-            self.drain_pass(raster, dt, state);
-            worst = self.update_pass(raster, dt, state, true);
+            worst = self.limited_pass(raster, dt, state);
         }
         let tolerance = -1e-14 * (1.0 + state.h[worst.1].abs());
         if worst.0 < tolerance {

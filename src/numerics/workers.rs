@@ -85,6 +85,41 @@ impl Workers {
         }
     }
 
+    /// Calls `f(k, (a_k, b_k, c_k, d_k), s_k)` for every band k (chunks of `chunk`
+    /// values, the band's scratch `s_k`).
+    pub fn bands4<S, F>(
+        &self,
+        chunk: usize,
+        (a, b, c, d): (&mut [f64], &mut [f64], &mut [f64], &mut [f64]),
+        scratch: &mut [S],
+        f: F,
+    ) where
+        S: Send,
+        F: Fn(usize, (&mut [f64], &mut [f64], &mut [f64], &mut [f64]), &mut S) + Sync + Send,
+    {
+        match &self.pool {
+            None => {
+                let chunks = a
+                    .chunks_mut(chunk)
+                    .zip(b.chunks_mut(chunk))
+                    .zip(c.chunks_mut(chunk))
+                    .zip(d.chunks_mut(chunk));
+                for (k, ((((a, b), c), d), s)) in chunks.zip(scratch.iter_mut()).enumerate() {
+                    f(k, (a, b, c, d), s);
+                }
+            }
+            Some(pool) => pool.install(|| {
+                a.par_chunks_mut(chunk)
+                    .zip(b.par_chunks_mut(chunk))
+                    .zip(c.par_chunks_mut(chunk))
+                    .zip(d.par_chunks_mut(chunk))
+                    .zip(scratch.par_iter_mut())
+                    .enumerate()
+                    .for_each(|(k, ((((a, b), c), d), s))| f(k, (a, b, c, d), s));
+            }),
+        }
+    }
+
     /// Calls `f(k, (a_k, b_k, c_k), s_k)` for every band k (chunks of `chunk` values,
     /// the band's scratch `s_k`).
     pub fn bands3<S, F>(
