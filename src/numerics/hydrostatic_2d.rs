@@ -578,3 +578,108 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{BoundaryKind, Coordinates, RasterSpec, Sides};
+    use crate::physics::rheology::Coulomb;
+
+    /// Thin fast layers next to dry cells on a bumpy plane: cells that drain in one step
+    /// in every band, at the raster's edges and at the edges between bands.
+    fn draining_case(nx: usize, ny: usize) -> (Raster2d, State2d) {
+        let spec = RasterSpec {
+            nx,
+            ny,
+            x_min: 0.0,
+            x_max: 1.0,
+            y_min: 0.0,
+            y_max: 1.0,
+            sides: Sides {
+                west: BoundaryKind::Wall,
+                east: BoundaryKind::Outflow,
+                south: BoundaryKind::Outflow,
+                north: BoundaryKind::Wall,
+            },
+            coordinates: Coordinates::Local,
+            slope_deg: 25.0,
+        };
+        let bed = (0..nx * ny)
+            .map(|k| 0.01 * ((k * 7919) % 13) as f64)
+            .collect();
+        let raster = Raster2d::new(spec, bed).unwrap();
+        let wet = |k: usize| (k * 31 + k / nx) % 5 != 0;
+        let h = (0..nx * ny)
+            .map(|k| {
+                if wet(k) {
+                    1e-3 * (1 + k % 3) as f64
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let u: Vec<f64> = (0..nx * ny).map(|k| 3.0 - (k % 7) as f64).collect();
+        let v: Vec<f64> = (0..nx * ny).map(|k| (k % 5) as f64 - 2.0).collect();
+        (raster, State2d::from_velocities(h, &u, &v))
+    }
+
+    #[test]
+    fn limited_pass_around_draining_cells_has_the_bits_of_a_full_limited_pass() {
+        let (nx, ny) = (23, 2 * BAND_ROWS + 5);
+        let (raster, state) = draining_case(nx, ny);
+        let law = Coulomb { mu: 0.3 };
+        let dt = 0.2 * raster.dx();
+        for threads in [1, 2] {
+            let workers = Workers::new(threads).unwrap();
+            let mut step = HydrostaticStep2d::new(law, &raster, workers);
+            let worst = step.update_pass(&raster, dt, &state);
+            assert!(worst.0 < 0.0, "the case drains");
+            let draining = step.drain.iter().filter(|&&t| t != 1.0).count();
+            assert!(
+                draining > 10 && draining < nx * ny / 2,
+                "{draining} draining cells"
+            );
+            let worst = step.limited_pass(&raster, dt, &state);
+            // Reference: every cell from its four limited faces.
+            let ctx = Ctx {
+                law,
+                raster: &raster,
+                h: &state.h,
+                hu: &state.hu,
+                hv: &state.hv,
+                nx,
+                ny,
+                dt,
+                theta: Some(step.drain.as_slice()),
+            };
+            let r = (dt / raster.dx(), dt / raster.dy());
+            let mut reference = (f64::INFINITY, 0usize);
+            for j in 0..ny {
+                for i in 0..nx {
+                    let [w, e, so, no] = ctx.limited_faces(i, j);
+                    let cell = j * nx + i;
+                    let (hn, _, qu, qv) = update_cell(
+                        state.h[cell],
+                        state.hu[cell],
+                        state.hv[cell],
+                        r,
+                        &w,
+                        &e,
+                        &so,
+                        &no,
+                    );
+                    let got = (step.h_new[cell], step.hu_new[cell], step.hv_new[cell]);
+                    assert_eq!(
+                        (got.0.to_bits(), got.1.to_bits(), got.2.to_bits()),
+                        (hn.to_bits(), qu.to_bits(), qv.to_bits()),
+                        "cell ({i}, {j}), {threads} thread(s)"
+                    );
+                    if hn < reference.0 {
+                        reference = (hn, cell);
+                    }
+                }
+            }
+            assert_eq!(worst, reference);
+        }
+    }
+}
