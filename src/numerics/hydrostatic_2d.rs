@@ -608,7 +608,7 @@ mod tests {
             .map(|k| 0.01 * ((k * 7919) % 13) as f64)
             .collect();
         let raster = Raster2d::new(spec, bed).unwrap();
-        let wet = |k: usize| (k * 31 + k / nx) % 5 != 0;
+        let wet = |k: usize| !(k * 31 + k / nx).is_multiple_of(5);
         let h = (0..nx * ny)
             .map(|k| {
                 if wet(k) {
