@@ -5,8 +5,10 @@
 //! A 4000 × 2500 raster (10⁷ cells, a smooth DEM-like surface with a nodata corner):
 //! wall time of writing and reading it as GeoTIFF (Float32 uncompressed, LZW and Deflate;
 //! Float64 uncompressed), as an ESRI ASCII grid, as one NetCDF frame of three fields,
-//! and of rasterising a 2000-vertex circular release on it (both rules). Target: read
-//! and write each raster under 1 s. Best of 3, files in a temporary directory.
+//! of a result map as `granflow export` and `granflow maps` write it (GeoTIFF Float32
+//! Deflate, ESRI ASCII), and of rasterising a 2000-vertex circular release on it (both
+//! rules). Target: read and write each raster under 1 s. Best of 3, files in a
+//! temporary directory.
 
 use std::path::Path;
 use std::time::Instant;
@@ -15,6 +17,7 @@ use granflow::gis::geotiff::{self, Compression, SampleType, WriteOptions};
 use granflow::gis::netcdf::{FieldSpec, NetCdfWriter};
 use granflow::gis::release::{rasterise, CoverageRule, Polygon, ReleaseAreas, ReleaseFeature};
 use granflow::gis::{asc, Crs, Raster};
+use granflow::results::{write_raster, RasterFormat};
 
 const NX: usize = 4000;
 const NY: usize = 2500;
@@ -119,6 +122,28 @@ fn main() {
         "-",
         mb(&path)
     );
+
+    // A result map as `granflow export` and `granflow maps` write it: a peak flow
+    // thickness over a fifth of the domain, zero elsewhere (NaN → nodata).
+    let mut pft = r.values.clone();
+    for (k, v) in pft.iter_mut().enumerate() {
+        let (col, row) = (k % NX, k / NX);
+        *v = if (1000..2600).contains(&col) && (500..1750).contains(&row) {
+            0.01 * ((col * 7 + row * 3) % 500) as f64
+        } else {
+            0.0
+        };
+    }
+    for (format, name) in [
+        (RasterFormat::Geotiff, "result map, GeoTIFF f32 Deflate"),
+        (RasterFormat::Asc, "result map, ESRI ASCII"),
+    ] {
+        let path = dir.path().join(format!("pft.{}", format.extension()));
+        let (tw, _) = best(3, || {
+            write_raster(&r, pft.clone(), format, false, &path).expect("write")
+        });
+        println!("{name:<28} {tw:>9.3} {:>9} {:>9.1}", "-", mb(&path));
+    }
 
     let circle: Vec<[f64; 2]> = (0..2000)
         .map(|k| {

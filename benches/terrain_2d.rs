@@ -9,14 +9,20 @@
 //! 2. Thread speed-up of the whole step at 1024² cells, 1, 2 and 4 threads.
 //! 3. Memory per cell: the state and the run loop's backup, the raster, the step's
 //!    scratch.
+//! 4. The maps tracker (largest thickness and speed, arrival time, area reached; the
+//!    peak pressure is formed only when the maps are written), one thread: its cost per
+//!    step against the whole step's, and the cost of forming the maps for a snapshot.
 
 use std::time::Instant;
 
 use granflow::grid::{BoundaryKind, Coordinates, Raster2d, RasterSpec, Sides};
 use granflow::model::granular_2d;
+use granflow::model::raster_maps::RasterMaps;
+use granflow::model::tracker::Tracker;
 use granflow::numerics::hydrostatic_2d::HydrostaticStep2d;
 use granflow::numerics::workers::Workers;
 use granflow::numerics::Stage;
+use granflow::output::memory::MemorySink;
 use granflow::physics::rheology::{Coulomb, FrictionLaw};
 use granflow::physics::Material;
 use granflow::state::State2d;
@@ -132,6 +138,40 @@ fn main() {
             "  {threads} thread(s): {:.1} ms/step, speed-up {:.2}",
             1e3 * best,
             base / best
+        );
+    }
+    println!("4. The maps tracker, one thread");
+    for n in [256, 1024] {
+        let (r, s0) = setup(n);
+        let mut pipe = granular_2d::pipeline(&friction, &material, &r, 1).unwrap();
+        let steps = if n > 512 { 5 } else { 50 };
+        let (mut t_step, mut t_maps, mut t_write) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        for _ in 0..3 {
+            let mut s = s0.clone();
+            let mut maps = RasterMaps::new(n * n, 1e-3, 1550.0);
+            maps.observe(&r, &s, 0.0);
+            let (mut step, mut observe) = (0.0, 0.0);
+            for k in 0..steps {
+                let start = Instant::now();
+                pipe.advance(&r, dt(&r), &mut s).unwrap();
+                step += start.elapsed().as_secs_f64();
+                let start = Instant::now();
+                maps.observe(&r, &s, (k + 1) as f64 * dt(&r));
+                observe += start.elapsed().as_secs_f64();
+            }
+            t_step = t_step.min(step / steps as f64);
+            t_maps = t_maps.min(observe / steps as f64);
+            let mut sink = MemorySink::default();
+            let start = Instant::now();
+            maps.write_so_far(&r, &s, &mut sink).unwrap();
+            t_write = t_write.min(start.elapsed().as_secs_f64());
+        }
+        println!(
+            "  {n}²: step {:.2} ms, tracker {:.3} ms per step ({:.2} % of the step), maps formed for a snapshot in {:.2} ms",
+            1e3 * t_step,
+            1e3 * t_maps,
+            100.0 * t_maps / t_step,
+            1e3 * t_write
         );
     }
 }

@@ -372,7 +372,7 @@ class Checker:
     def maps(self, nx, ny, h):
         """/maps of a finished raster run."""
         f = self.f
-        names = ("h_max", "speed_max", "arrival_time", "deposit")
+        names = ("h_max", "speed_max", "ppr", "arrival_time", "deposit")
         missing = [n for n in names if f"maps/{n}" not in f]
         if missing:
             self.fail(f"/maps lacks {missing}")
@@ -396,6 +396,15 @@ class Checker:
             self.fail("/maps/arrival_time leaves [0, t_end]")
         if (m["speed_max"] < 0).any() or not np.isfinite(m["speed_max"]).all():
             self.fail("/maps/speed_max is negative or not finite")
+        # ppr = rho |u|^2 with one bulk density rho: zero exactly where speed_max is,
+        # and ppr / speed_max^2 the same number elsewhere.
+        moving = m["speed_max"] > 0
+        if ((m["ppr"] > 0) != moving).any() or not np.isfinite(m["ppr"]).all():
+            self.fail("/maps/ppr is not positive exactly where speed_max is")
+        elif moving.any():
+            rho = m["ppr"][moving] / m["speed_max"][moving] ** 2
+            if np.ptp(rho) > 1e-9 * rho.max():
+                self.fail("/maps/ppr is not one density times speed_max^2")
         area = f["diagnostics/area_reached"][:] if "diagnostics/area_reached" in f else None
         if area is None or area.shape != f["diagnostics/t"].shape:
             self.fail("/diagnostics/area_reached is missing or not one value per step")

@@ -1,5 +1,5 @@
 //! Command-line interface (clap): `granflow run | check | sweep | scenarios | init |
-//! completions`.
+//! export | maps | completions`.
 
 use std::path::PathBuf;
 
@@ -24,6 +24,8 @@ Getting started:
   granflow run my_flow.toml --set domain.slope_deg=16 --output out/s16.h5
   granflow check my_flow.toml             validate without running
   granflow sweep slopes.toml --jobs 2     parameter sweep (docs/sweeps.md)
+  granflow export my_2d_run.h5            pft, pfv, ppr, … as GeoTIFF (docs/gis.md)
+  granflow maps my_sweep/                 probability maps of a sweep (docs/gis.md)
 
 Exit codes: 0 success, 1 solver or output failure (partial results are kept),
 2 bad input (the message names the key and its line).
@@ -58,6 +60,12 @@ pub enum Command {
     Scenarios(ScenariosArgs),
     /// Write a commented starter scenario, or a copy of a bundled one (--from).
     Init(InitArgs),
+    /// Export a raster run's maps (pft, pfv, ppr, deposit, arrival time) or a snapshot
+    /// as GeoTIFF, ESRI ASCII grids or CF NetCDF (docs/gis.md).
+    Export(crate::results::ExportArgs),
+    /// Maps of a sweep's ensemble: P(pft > threshold), mean and max pft and pfv, and
+    /// each run's skill against an observed footprint (docs/gis.md).
+    Maps(crate::results::MapsArgs),
     /// Print a shell completion script to stdout.
     #[command(long_about = "Print a shell completion script to stdout.\n\n\
                       bash:  granflow completions bash > ~/.local/share/bash-completion/completions/granflow\n\

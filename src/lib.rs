@@ -22,6 +22,7 @@ pub mod overwrite;
 pub mod physics;
 pub mod pipeline;
 pub mod progress;
+pub mod results;
 pub mod runner;
 pub mod scenario;
 pub mod setup;

@@ -26,6 +26,9 @@ fn load(args: &ScenarioArgs, force: bool) -> Result<Scenario, ExitCode> {
     for note in &scn.notes {
         print_err(&format!("note: {note}\n"));
     }
+    if let Some(release) = &scn.release {
+        print_err(&format!("release: {}\n", release.describe()));
+    }
     Ok(scn)
 }
 
@@ -152,6 +155,47 @@ fn run(args: &RunArgs) -> ExitCode {
     }
 }
 
+/// `granflow export`: the files written, one per line (unless `--quiet`).
+fn export(args: &granflow::results::ExportArgs) -> ExitCode {
+    match granflow::results::export::export(args) {
+        Ok(files) => {
+            if !args.quiet {
+                for f in files {
+                    print_out(&format!("{}\n", f.display()));
+                }
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            print_err(&format!("error: {e}\n"));
+            ExitCode::from(e.exit_code())
+        }
+    }
+}
+
+/// `granflow maps`: the runs (ranked against an observed footprint) and the files.
+fn maps(args: &granflow::results::MapsArgs) -> ExitCode {
+    match granflow::results::maps::maps(args) {
+        Ok(report) => {
+            if !report.left_out.is_empty() {
+                print_err(&format!(
+                    "note: {} runs not done were left out (--partial): {}\n",
+                    report.left_out.len(),
+                    report.left_out.join(", ")
+                ));
+            }
+            if !args.quiet {
+                print_out(&report.table());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            print_err(&format!("error: {e}\n"));
+            ExitCode::from(e.exit_code())
+        }
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match &cli.command {
@@ -160,6 +204,8 @@ fn main() -> ExitCode {
         Command::Sweep(args) => ExitCode::from(granflow::sweep::main(args)),
         Command::Scenarios(args) => ExitCode::from(discover::scenarios(args)),
         Command::Init(args) => ExitCode::from(discover::init(args)),
+        Command::Export(args) => export(args),
+        Command::Maps(args) => maps(args),
         Command::Completions(args) => ExitCode::from(discover::completions(args)),
     }
 }

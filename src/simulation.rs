@@ -254,7 +254,11 @@ impl<M: Model> Simulation<M> {
     }
 
     fn snapshot(&self, sink: &mut dyn OutputSink) -> Result<(), OutputError> {
-        self.model.snapshot(&self.grid, &self.state, self.t, sink)
+        self.model.snapshot(&self.grid, &self.state, self.t, sink)?;
+        match &self.tracker {
+            Some(tracker) => tracker.write_so_far(&self.grid, &self.state, sink),
+            None => Ok(()),
+        }
     }
 
     /// Runs to `t_end` (or until a stop rule ends it), writing to `sink`. The sink is

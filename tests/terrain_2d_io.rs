@@ -333,7 +333,7 @@ fn the_xdmf_file_names_the_datasets_and_their_dimensions() {
         let item = format!("Dimensions=\"5 12 24\">xdmf.h5:/snapshots/{field}</DataItem>");
         assert!(text.contains(&item), "{field}: {text}");
     }
-    for map in ["h_max", "speed_max", "arrival_time", "deposit"] {
+    for map in ["h_max", "speed_max", "ppr", "arrival_time", "deposit"] {
         assert!(text.contains(&format!("xdmf.h5:/maps/{map}<")), "{map}");
     }
     let Some(py) = python_with_h5py() else {

@@ -183,32 +183,13 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Raster> {
     let expected = nx
         .checked_mul(ny)
         .ok_or_else(|| bad(1, format!("{nx} x {ny} cells is too many")))?;
-    let mut values = Vec::with_capacity(expected.min(bytes.len() / 2 + 1));
-    for (i, line) in lines {
-        for token in line.split_ascii_whitespace() {
-            if values.len() == expected {
-                return Err(GisError::TooManyValues {
-                    path: path.to_path_buf(),
-                    expected,
-                    found: expected + 1,
-                    line: i + 1,
-                });
-            }
-            let v = token.parse::<f64>().map_err(|_| GisError::NonNumeric {
-                path: path.to_path_buf(),
-                line: i + 1,
-                token: token.chars().take(40).collect(),
-            })?;
-            values.push(v);
-        }
-    }
-    if values.len() < expected {
-        return Err(GisError::TooFewValues {
-            path: path.to_path_buf(),
-            expected,
-            found: values.len(),
-        });
-    }
+    // The values: the text from the first line after the header (its 0-based line
+    // index is `first`), parsed in chunks of whole lines in parallel.
+    let (first, data) = match lines.peek() {
+        Some(&(i, line)) => (i, &text[line.as_ptr() as usize - text.as_ptr() as usize..]),
+        None => (0, ""),
+    };
+    let values = parse_values(data, first, expected, path, CHUNK_BYTES)?;
     let x_left = if x_centre { xll - 0.5 * d } else { xll };
     let y_bottom = if y_centre { yll - 0.5 * d } else { yll };
     Ok(Raster {
@@ -221,6 +202,117 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Raster> {
         nodata: h.nodata,
         crs: Crs::default(),
     })
+}
+
+/// Bytes of values per chunk parsed on one thread (whole lines; a line longer than
+/// this is one chunk).
+const CHUNK_BYTES: usize = 1 << 20;
+
+/// One chunk's values: those parsed, and the byte offset (in the chunk) and text of
+/// the first token that is not a number.
+struct Chunk<'a> {
+    values: Vec<f64>,
+    bad: Option<(usize, &'a str)>,
+}
+
+/// The tokens of `text` with their byte offsets.
+fn tokens(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    let base = text.as_ptr() as usize;
+    text.split_ascii_whitespace()
+        .map(move |t| (t.as_ptr() as usize - base, t))
+}
+
+/// Parses the `expected` values of `data` (whose first line is line `first + 1` of
+/// the file): chunks of about `chunk_bytes` whole lines are parsed in parallel (each
+/// number by `str::parse::<f64>`, so the values are exactly those of a serial read),
+/// then checked in file order, so that the error is the one a serial read meets
+/// first: a value beyond `expected` (too many), a token that is not a number, or too
+/// few values.
+fn parse_values(
+    data: &str,
+    first: usize,
+    expected: usize,
+    path: &Path,
+    chunk_bytes: usize,
+) -> Result<Vec<f64>> {
+    use rayon::prelude::*;
+    let mut bounds = vec![0];
+    let mut start = 0;
+    while start < data.len() {
+        let mut end = (start + chunk_bytes).min(data.len());
+        end = match data.as_bytes()[end..].iter().position(|&b| b == b'\n') {
+            Some(k) => end + k + 1,
+            None => data.len(),
+        };
+        bounds.push(end);
+        start = end;
+    }
+    let chunks: Vec<Chunk> = bounds
+        .par_windows(2)
+        .map(|w| {
+            let text = &data[w[0]..w[1]];
+            let mut values = Vec::with_capacity(text.len() / 6 + 1);
+            for (offset, token) in tokens(text) {
+                match token.parse::<f64>() {
+                    Ok(v) => values.push(v),
+                    Err(_) => {
+                        return Chunk {
+                            values,
+                            bad: Some((offset, token)),
+                        }
+                    }
+                }
+            }
+            Chunk { values, bad: None }
+        })
+        .collect();
+    let line_at = |chunk: usize, offset: usize| {
+        let upto = bounds[chunk] + offset;
+        first
+            + 1
+            + data.as_bytes()[..upto]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count()
+    };
+    let too_many = |chunk: usize, index: usize| {
+        let (offset, _) = tokens(&data[bounds[chunk]..bounds[chunk + 1]])
+            .nth(index)
+            .expect("the chunk holds that token");
+        GisError::TooManyValues {
+            path: path.to_path_buf(),
+            expected,
+            found: expected + 1,
+            line: line_at(chunk, offset),
+        }
+    };
+    let mut count = 0;
+    for (c, chunk) in chunks.iter().enumerate() {
+        let parsed = chunk.values.len();
+        if count + parsed > expected || (chunk.bad.is_some() && count + parsed == expected) {
+            return Err(too_many(c, expected - count));
+        }
+        if let Some((offset, token)) = chunk.bad {
+            return Err(GisError::NonNumeric {
+                path: path.to_path_buf(),
+                line: line_at(c, offset),
+                token: token.chars().take(40).collect(),
+            });
+        }
+        count += parsed;
+    }
+    if count < expected {
+        return Err(GisError::TooFewValues {
+            path: path.to_path_buf(),
+            expected,
+            found: count,
+        });
+    }
+    let mut values = Vec::with_capacity(expected);
+    for chunk in chunks {
+        values.extend_from_slice(&chunk.values);
+    }
+    Ok(values)
 }
 
 /// The `yllcorner` to write for `raster`: among the `f64`s `c` next to
@@ -320,6 +412,35 @@ pub fn write(raster: &Raster, path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The values and errors of a chunked read are those of a read in one chunk,
+    /// whatever the chunk size (chunks of whole lines).
+    #[test]
+    fn chunked_values_are_those_of_one_chunk() {
+        let path = Path::new("t.asc");
+        let texts = [
+            "1 2.5\n3e2 -4\n\n5 6\n",
+            "1 2\n3 4 5 6\n7\n",
+            "1 2\n3\nx4 5 6\n",
+            "1 2\n3 4 5 6 x\n",
+            "1 2\n3 4 5\n",
+            "1\t2\r\n3 nan\r\n5 6",
+        ];
+        let show = |r: Result<Vec<f64>>| match r {
+            Ok(v) => format!("{v:?}"),
+            Err(e) => e.to_string(),
+        };
+        for text in texts {
+            let one = show(parse_values(text, 6, 6, path, usize::MAX / 2));
+            for chunk in 1..=12 {
+                assert_eq!(show(parse_values(text, 6, 6, path, chunk)), one, "{text:?}");
+            }
+        }
+        let e = show(parse_values("1 2\n3 4 5 6\n7\n", 6, 6, path, 1));
+        assert!(e.contains("line 9 holds value 7"), "{e}");
+        let e = show(parse_values("1 2\n3\nx4 5 6\n", 6, 6, path, 1));
+        assert!(e.contains("line 9") && e.contains("`x4`"), "{e}");
+    }
 
     #[test]
     fn yll_corner_recovers_the_decimal_that_was_read() {

@@ -11,6 +11,14 @@
 //! (j + 1)(nx + 2) + i + 1 for cell (i, j)): a wall mirrors the edge cell (no step at
 //! the wall), an outflow continues the reference plane with the edge bed, as on a line.
 //!
+//! Walls inside the raster. A cell may be a **wall** (a nodata cell of the DEM): it
+//! holds no mass, and each face between it and a cell of flow is reflective, the
+//! wall side being the mirror of the flow side (same h, b and z, the normal discharge
+//! reversed), as at a wall side of the domain. The mask ([`Raster2d::walls`]) is
+//! empty when the raster has no wall cell, and the stages then take their code path
+//! without walls. The bed of a wall cell is NaN in [`Grid::bed`] (written as such) and
+//! 0 in the ghost-ring arrays, which no face reads there.
+//!
 //! Tiles. The cells are grouped in bands of [`BAND_ROWS`] whole rows (the last band
 //! may be shorter): the unit of work of the 2-D stages, whatever the thread count, so
 //! that every per-band reduction is summed in the same order and a run gives the same
@@ -108,6 +116,8 @@ pub struct Raster2d {
     pub g_n: f64,
     /// Slope of the reference plane along x (radians).
     pub theta: f64,
+    /// Wall cells (row-major, nx·ny), or empty when there is none.
+    walls: Vec<bool>,
 }
 
 impl Raster2d {
@@ -115,7 +125,33 @@ impl Raster2d {
     /// (row-major, nx·ny values). Refuses an empty raster, an empty or inverted
     /// extent, a wrong number of bed values and a non-finite bed.
     pub fn new(spec: RasterSpec, bed: Vec<f64>) -> Result<Raster2d, String> {
+        Raster2d::with_walls(spec, bed, Vec::new())
+    }
+
+    /// [`Raster2d::new`] with wall cells: `walls` is empty (no wall) or one flag per
+    /// cell (row-major); the bed of a wall cell may be NaN. Refuses a mask of the
+    /// wrong length and a raster that is all walls.
+    pub fn with_walls(
+        spec: RasterSpec,
+        mut bed: Vec<f64>,
+        mut walls: Vec<bool>,
+    ) -> Result<Raster2d, String> {
         let (nx, ny) = (spec.nx, spec.ny);
+        if !walls.is_empty() {
+            if walls.len() != nx * ny {
+                return Err(format!(
+                    "the wall mask has {} values for {nx} × {ny} cells",
+                    walls.len()
+                ));
+            }
+            if walls.iter().all(|&w| w) {
+                return Err("every cell of the raster is a wall".into());
+            }
+            if !walls.iter().any(|&w| w) {
+                walls = Vec::new();
+            }
+        }
+        let is_wall = |k: usize| !walls.is_empty() && walls[k];
         if nx == 0 || ny == 0 {
             return Err(format!("a raster needs cells in x and y, got {nx} × {ny}"));
         }
@@ -131,13 +167,23 @@ impl Raster2d {
                 bed.len()
             ));
         }
-        if let Some(k) = bed.iter().position(|b| !b.is_finite()) {
+        if let Some(k) = (0..bed.len()).position(|k| !bed[k].is_finite() && !is_wall(k)) {
             return Err(format!(
                 "the bed is not finite at cell (i, j) = ({}, {})",
                 k % nx,
                 k / nx
             ));
         }
+        // The bed at the centres, as output (NaN on walls), and as the ghost-ring
+        // arrays hold it (0 on walls).
+        let output_bed = (!walls.is_empty()).then(|| {
+            let mut output = bed.clone();
+            for k in (0..bed.len()).filter(|&k| is_wall(k)) {
+                bed[k] = 0.0;
+                output[k] = f64::NAN;
+            }
+            output
+        });
         let (dx, dy) = (spec.dx(), spec.dy());
         let theta = spec.slope_deg.to_radians();
         let (g_n, tan_theta) = match spec.coordinates {
@@ -193,11 +239,12 @@ impl Raster2d {
             dy,
             x,
             y,
-            b: bed,
+            b: output_bed.unwrap_or(bed),
             b_ghost,
             z,
             g_n,
             theta,
+            walls,
         })
     }
 
@@ -240,6 +287,31 @@ impl Raster2d {
     #[inline(always)]
     pub fn ghost_index(&self, i_plus_1: usize, j_plus_1: usize) -> usize {
         j_plus_1 * (self.spec.nx + 2) + i_plus_1
+    }
+
+    /// The wall cells (row-major), or an empty slice when there is none.
+    pub fn walls(&self) -> &[bool] {
+        &self.walls
+    }
+
+    /// Whether cell `cell` (row-major) is a wall.
+    #[inline(always)]
+    pub fn is_wall(&self, cell: usize) -> bool {
+        !self.walls.is_empty() && self.walls[cell]
+    }
+
+    /// `values` (one per cell) with NaN on the wall cells: borrowed as they are when
+    /// the raster has no wall.
+    pub fn mask_walls<'a>(&self, values: &'a [f64]) -> std::borrow::Cow<'a, [f64]> {
+        if self.walls.is_empty() {
+            return std::borrow::Cow::Borrowed(values);
+        }
+        let masked = values
+            .iter()
+            .zip(&self.walls)
+            .map(|(&v, &w)| if w { f64::NAN } else { v })
+            .collect();
+        std::borrow::Cow::Owned(masked)
     }
 
     /// Number of bands ([`BAND_ROWS`] rows each, the last one shorter).

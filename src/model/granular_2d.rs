@@ -160,9 +160,15 @@ impl Model for Granular2d {
             .zip(&state.hv)
             .map(|(&h, &q)| velocity(h, q))
             .collect();
+        // Wall cells (nodata of the DEM) are NaN in the output.
+        let (h, u, v) = (
+            raster.mask_walls(&state.h),
+            raster.mask_walls(&u),
+            raster.mask_walls(&v),
+        );
         sink.snapshot(&SnapshotView {
             t,
-            h: &state.h,
+            h: &h,
             u: &u,
             v: Some(&v),
             shape: Some((raster.ny(), raster.nx())),

@@ -7,7 +7,15 @@
 //!   h_f has no meaningful velocity);
 //! - `arrival_time` = the first t with h > h_f (NaN where never reached; 0 inside the
 //!   release);
-//! - `deposit` = h at the end of the run.
+//! - `deposit` = h at the end of the run;
+//! - `ppr` = max_t ρ|u|², the peak pressure (Pa) of the avalanche-hazard literature
+//!   (the dynamic pressure of the flow), ρ = φ_s ρ_s the bulk density of the material.
+//!   Since ρ is constant and |u| ≥ 0, max_t ρ|u|² = ρ (max_t |u|)² = ρ · speed_max²
+//!   cell by cell, so it costs no work per step: it is formed when the maps are
+//!   written.
+//!
+//! The maps are written with every snapshot (as they stand, `deposit` then being the
+//! snapshot's h) and once more at the end.
 //!
 //! The area reached A(t) = Δx Δy · #{cells reached by t} is a per-step series. The
 //! runout and the travel angle are measured along the main flow direction d: the unit
@@ -21,6 +29,8 @@
 //! of d, and the travel angle α = atan((Z_top − Z_runout)/L) (Heim 1932's Fahrböschung, the angle of the line
 //! from the top of the release to the farthest point reached).
 
+use std::borrow::Cow;
+
 use crate::grid::raster::Raster2d;
 use crate::grid::{Coordinates, Grid};
 use crate::model::tracker::Tracker;
@@ -31,6 +41,8 @@ use crate::state::layered_2d::State2d;
 #[derive(Debug, Clone)]
 pub struct RasterMaps {
     threshold: f64,
+    /// Bulk density ρ (kg/m³) of the peak pressure.
+    density: f64,
     h_max: Vec<f64>,
     speed_max: Vec<f64>,
     arrival: Vec<f64>,
@@ -41,10 +53,12 @@ pub struct RasterMaps {
 }
 
 impl RasterMaps {
-    /// Maps for `cells` cells with the flow threshold `threshold` (m).
-    pub fn new(cells: usize, threshold: f64) -> RasterMaps {
+    /// Maps for `cells` cells with the flow threshold `threshold` (m) and the bulk
+    /// density `density` (kg/m³) of the peak pressure.
+    pub fn new(cells: usize, threshold: f64, density: f64) -> RasterMaps {
         RasterMaps {
             threshold,
+            density,
             h_max: vec![0.0; cells],
             speed_max: vec![0.0; cells],
             arrival: vec![f64::NAN; cells],
@@ -163,28 +177,8 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         state: &State2d,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
-        let maps = [
-            CellField {
-                name: "h_max",
-                units: "m",
-                data: &self.h_max,
-            },
-            CellField {
-                name: "speed_max",
-                units: "m/s",
-                data: &self.speed_max,
-            },
-            CellField {
-                name: "arrival_time",
-                units: "s",
-                data: &self.arrival,
-            },
-            CellField {
-                name: "deposit",
-                units: "m",
-                data: &state.h,
-            },
-        ];
+        let values = self.values(grid, &state.h);
+        let maps = Self::fields(&values);
         let scalars = if self.h0.is_empty() {
             Vec::new()
         } else {
@@ -194,6 +188,54 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
             maps: &maps,
             series: &[("area_reached", "m^2", &self.area)],
             scalars: &scalars,
+        })
+    }
+
+    fn write_so_far(
+        &self,
+        grid: &Raster2d,
+        state: &State2d,
+        sink: &mut dyn OutputSink,
+    ) -> Result<(), OutputError> {
+        let values = self.values(grid, &state.h);
+        sink.maps_so_far(&Self::fields(&values))
+    }
+}
+
+impl RasterMaps {
+    /// ρ · speed_max², cell by cell (see the module docs).
+    fn peak_pressure(&self) -> Vec<f64> {
+        self.speed_max
+            .iter()
+            .map(|&s| self.density * s * s)
+            .collect()
+    }
+
+    /// The maps' values in their file order, `deposit` being `h`; wall (nodata) cells
+    /// are NaN.
+    fn values<'a>(&'a self, grid: &Raster2d, h: &'a [f64]) -> [Cow<'a, [f64]>; 5] {
+        [
+            grid.mask_walls(&self.h_max),
+            grid.mask_walls(&self.speed_max),
+            Cow::Owned(grid.mask_walls(&self.peak_pressure()).into_owned()),
+            grid.mask_walls(&self.arrival),
+            grid.mask_walls(h),
+        ]
+    }
+
+    /// The maps with their names and units, in file order.
+    fn fields<'a>(values: &'a [Cow<'a, [f64]>; 5]) -> [CellField<'a>; 5] {
+        const NAMES: [(&str, &str); 5] = [
+            ("h_max", "m"),
+            ("speed_max", "m/s"),
+            ("ppr", "Pa"),
+            ("arrival_time", "s"),
+            ("deposit", "m"),
+        ];
+        std::array::from_fn(|i| CellField {
+            name: NAMES[i].0,
+            units: NAMES[i].1,
+            data: &values[i],
         })
     }
 }

@@ -2,7 +2,8 @@
 //! a raster run (largest thickness and speed, arrival time, deposit) and the numbers
 //! derived from them (area reached, runout, travel angle). The run loop hands a
 //! [`Tracker`] every accepted state and, once before the sink is finished, lets it
-//! write what it gathered ([`crate::output::RunMaps`]).
+//! write what it gathered ([`crate::output::RunMaps`]); with every snapshot it also
+//! writes the maps as they stand, so that a run killed later keeps them.
 
 use crate::output::{OutputError, OutputSink};
 
@@ -14,4 +15,14 @@ pub trait Tracker<G, S>: Send {
     /// Hands what was gathered to `sink` ([`OutputSink::maps`]); `state` is the final
     /// one (the last accepted state, as the run ended).
     fn write(&self, grid: &G, state: &S, sink: &mut dyn OutputSink) -> Result<(), OutputError>;
+    /// Hands the maps as they stand to `sink` ([`OutputSink::maps_so_far`]); called
+    /// with every snapshot, `state` being the snapshot's. The default writes nothing.
+    fn write_so_far(
+        &self,
+        _grid: &G,
+        _state: &S,
+        _sink: &mut dyn OutputSink,
+    ) -> Result<(), OutputError> {
+        Ok(())
+    }
 }

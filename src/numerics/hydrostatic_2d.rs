@@ -25,7 +25,14 @@
 //!
 //! Boundaries: the edge faces see a ghost cell built from the edge cell (a wall
 //! mirrors h and reverses the normal discharge, an outflow copies the cell), over the
-//! raster's ghost bed.
+//! raster's ghost bed. Wall cells inside the raster (nodata cells of a DEM,
+//! [`crate::grid::raster`]) are handled face by face in the same way: the wall side
+//! of a face is the mirror of the flow side (h, b, z and the tangential velocity
+//! copied, the normal velocity reversed), the face's mass flux and with it the
+//! tangential flux are zero (so no mass crosses, to the bit), and a face between two
+//! walls carries nothing. A wall cell then keeps h = 0 and no discharge. The sweep
+//! is compiled twice, with and without this test, and a raster without wall cells
+//! runs the code without it.
 //!
 //! Work is done by bands of whole rows ([`crate::grid::raster`]): a band computes the
 //! y-faces under and over each of its rows (one row of halo on each side) and the
@@ -209,6 +216,21 @@ impl<L: BasalFriction> Ctx<'_, L> {
         (side, velocity(h, self.hu[cell]))
     }
 
+    /// Whether ghost-inclusive column `c` of row `j` is a wall (a ghost takes the edge
+    /// cell's kind).
+    #[inline(always)]
+    fn x_wall(&self, c: usize, j: usize) -> bool {
+        let i = c.clamp(1, self.nx) - 1;
+        self.raster.is_wall(j * self.nx + i)
+    }
+
+    /// Whether column i of ghost-inclusive row `r` is a wall.
+    #[inline(always)]
+    fn y_wall(&self, i: usize, r: usize) -> bool {
+        let j = r.clamp(1, self.ny) - 1;
+        self.raster.is_wall(j * self.nx + i)
+    }
+
     /// Draining factor of the donor of a face between ghost-inclusive cells `lo` and
     /// `hi` (`None` for a ghost), by the sign of the mass flux.
     #[inline(always)]
@@ -227,10 +249,23 @@ impl<L: BasalFriction> Ctx<'_, L> {
         }
     }
 
-    /// The y-faces between two ghost-inclusive rows from their sides.
-    fn y_faces(&self, lower: &[(Side, f64)], upper: &[(Side, f64)], row: &mut [FaceFlux]) {
+    /// The y-faces between ghost-inclusive rows `r` and `r + 1` from their sides.
+    fn y_faces<const WALLS: bool>(
+        &self,
+        r: usize,
+        lower: &[(Side, f64)],
+        upper: &[(Side, f64)],
+        row: &mut [FaceFlux],
+    ) {
         let (g_n, dy) = (self.raster.g_n, self.raster.dy());
-        for ((f, lo), hi) in row.iter_mut().zip(lower).zip(upper) {
+        for (i, ((f, lo), hi)) in row.iter_mut().zip(lower).zip(upper).enumerate() {
+            if WALLS {
+                let (wl, wr) = (self.y_wall(i, r), self.y_wall(i, r + 1));
+                if wl || wr {
+                    *f = wall_face(&self.law, *lo, *hi, wl, wr, g_n, dy, self.dt);
+                    continue;
+                }
+            }
             *f = face_flux(&self.law, lo.0, hi.0, lo.1, hi.1, g_n, dy, self.dt);
         }
     }
@@ -246,11 +281,19 @@ impl<L: BasalFriction> Ctx<'_, L> {
         let y_cell = |r: usize| (r >= 1 && r <= ny).then(|| (r - 1) * nx + i);
         let x_face = |c: usize| {
             let (l, r) = (self.x_side(c, j), self.x_side(c + 1, j));
+            let (wl, wr) = (self.x_wall(c, j), self.x_wall(c + 1, j));
+            if wl || wr {
+                return wall_face(&self.law, l, r, wl, wr, g_n, dx, self.dt);
+            }
             let f = face_flux(&self.law, l.0, r.0, l.1, r.1, g_n, dx, self.dt);
             f.drained(self.donor_theta(f.h, x_cell(c), x_cell(c + 1)))
         };
         let y_face = |r: usize| {
             let (lo, hi) = (self.y_side(i, r), self.y_side(i, r + 1));
+            let (wl, wr) = (self.y_wall(i, r), self.y_wall(i, r + 1));
+            if wl || wr {
+                return wall_face(&self.law, lo, hi, wl, wr, g_n, dy, self.dt);
+            }
             let f = face_flux(&self.law, lo.0, hi.0, lo.1, hi.1, g_n, dy, self.dt);
             f.drained(self.donor_theta(f.h, y_cell(r), y_cell(r + 1)))
         };
@@ -261,7 +304,10 @@ impl<L: BasalFriction> Ctx<'_, L> {
     /// Sweeps the rows of band `k`: for every cell, calls `cell(i, j, west, east,
     /// south, north)` with its four faces. `s` holds the face rows.
     #[inline(always)]
-    fn sweep<F: FnMut(usize, usize, &FaceFlux, &FaceFlux, &FaceFlux, &FaceFlux)>(
+    fn sweep<
+        const WALLS: bool,
+        F: FnMut(usize, usize, &FaceFlux, &FaceFlux, &FaceFlux, &FaceFlux),
+    >(
         &self,
         k: usize,
         s: &mut BandScratch,
@@ -271,12 +317,19 @@ impl<L: BasalFriction> Ctx<'_, L> {
         let rows = self.raster.band_rows(k);
         self.y_sides(rows.start, &mut s.lower);
         self.y_sides(rows.start + 1, &mut s.upper);
-        self.y_faces(&s.lower, &s.upper, &mut s.below);
+        self.y_faces::<WALLS>(rows.start, &s.lower, &s.upper, &mut s.below);
         for j in rows {
             std::mem::swap(&mut s.lower, &mut s.upper);
             self.y_sides(j + 2, &mut s.upper);
-            self.y_faces(&s.lower, &s.upper, &mut s.above);
-            let x_face = |left: (Side, f64), right: (Side, f64)| {
+            self.y_faces::<WALLS>(j + 1, &s.lower, &s.upper, &mut s.above);
+            // The x-face between ghost-inclusive columns c and c + 1.
+            let x_face = |left: (Side, f64), right: (Side, f64), c: usize| {
+                if WALLS {
+                    let (wl, wr) = (self.x_wall(c, j), self.x_wall(c + 1, j));
+                    if wl || wr {
+                        return wall_face(&self.law, left, right, wl, wr, g_n, dx, self.dt);
+                    }
+                }
                 face_flux(
                     &self.law, left.0, right.0, left.1, right.1, g_n, dx, self.dt,
                 )
@@ -286,7 +339,7 @@ impl<L: BasalFriction> Ctx<'_, L> {
             let row = &s.lower[..nx];
             let mut left = self.x_side(0, j);
             let mut right = across(row[0]);
-            let mut west = x_face(left, right);
+            let mut west = x_face(left, right, 0);
             for i in 0..nx {
                 let next = if i + 1 < nx {
                     across(row[i + 1])
@@ -294,7 +347,7 @@ impl<L: BasalFriction> Ctx<'_, L> {
                     self.x_side(nx + 1, j)
                 };
                 (left, right) = (right, next);
-                let east = x_face(left, right);
+                let east = x_face(left, right, i + 1);
                 cell(i, j, &west, &east, &s.below[i], &s.above[i]);
                 west = east;
             }
@@ -349,6 +402,45 @@ fn face_flux<L: BasalFriction>(
                 body_r: c.body_right,
             }
         }
+    }
+}
+
+/// A face with a wall on the left (`wall_l`), the right or both sides: the wall side
+/// mirrors the other (normal velocity reversed), no mass and no tangential momentum
+/// cross, and between two walls nothing does.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn wall_face<L: BasalFriction>(
+    law: &L,
+    l: (Side, f64),
+    r: (Side, f64),
+    wall_l: bool,
+    wall_r: bool,
+    g_n: f64,
+    d: f64,
+    dt: f64,
+) -> FaceFlux {
+    let mirror = |(s, t): (Side, f64)| {
+        (
+            Side {
+                u: -s.u,
+                u_base: -s.u_base,
+                ..s
+            },
+            t,
+        )
+    };
+    let (l, r) = match (wall_l, wall_r) {
+        (true, true) => return FaceFlux::default(),
+        (true, false) => (mirror(r), r),
+        (false, true) => (l, mirror(l)),
+        (false, false) => (l, r),
+    };
+    let f = face_flux(law, l.0, r.0, l.1, r.1, g_n, d, dt);
+    FaceFlux {
+        h: 0.0,
+        qt: 0.0,
+        ..f
     }
 }
 
@@ -416,6 +508,20 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     /// of every cell from the same faces; returns the smallest new thickness and its
     /// cell, first in cell order. The new-state buffers hold the unclipped thickness.
     fn update_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
+        if raster.walls().is_empty() {
+            self.update_pass_with::<false>(raster, dt, state)
+        } else {
+            self.update_pass_with::<true>(raster, dt, state)
+        }
+    }
+
+    /// [`Self::update_pass`] with (`WALLS`) or without the test for wall cells.
+    fn update_pass_with<const WALLS: bool>(
+        &mut self,
+        raster: &Raster2d,
+        dt: f64,
+        state: &State2d,
+    ) -> (f64, usize) {
         let nx = raster.nx();
         let r = (dt / raster.dx(), dt / raster.dy());
         let ctx = Ctx {
@@ -442,7 +548,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             |k, (h_new, hu_new, hv_new, drain), s| {
                 let offset = k * BAND_ROWS * nx;
                 let mut worst = (f64::INFINITY, 0usize);
-                ctx.sweep(k, s, |i, j, w, e, so, no| {
+                ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
                     let cell = j * nx + i;
                     let local = cell - offset;
                     let h_old = ctx.h[cell];

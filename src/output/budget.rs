@@ -7,8 +7,8 @@
 //! foresees (the number of CFL steps). `--force` lifts both.
 
 use super::{
-    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary, SnapshotView,
-    StepRecord,
+    CellField, GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary,
+    SnapshotView, StepRecord,
 };
 
 /// Largest output of one run without `--force` (bytes): 1 GiB.
@@ -215,6 +215,11 @@ impl<S: OutputSink> OutputSink for Budgeted<S> {
             + maps.series.iter().map(|s| s.2.len()).sum::<usize>();
         self.spend(8 * values as u64)?;
         self.inner.maps(maps)
+    }
+
+    /// Rewritten in place at every snapshot: the bytes are counted once, by `maps`.
+    fn maps_so_far(&mut self, maps: &[CellField]) -> Result<(), OutputError> {
+        self.inner.maps_so_far(maps)
     }
 
     fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {

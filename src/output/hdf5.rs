@@ -81,8 +81,11 @@ pub struct Hdf5Sink {
     finished: bool,
     /// Times of the snapshots written (raster runs: listed in the XDMF file).
     times: Vec<f64>,
-    /// Whether `/maps` was written (raster runs).
+    /// Whether the final `/maps` were written (raster runs).
     has_maps: bool,
+    /// The names of the `/maps` datasets once created (by the first call of
+    /// `maps_so_far` or by `maps`).
+    map_names: Option<Vec<&'static str>>,
     /// Where batches claim their room ([`space`]).
     space: Box<dyn Space>,
     /// Step records and gauge rows on disk.
@@ -235,6 +238,7 @@ impl Hdf5Sink {
             finished: false,
             times: Vec::new(),
             has_maps: false,
+            map_names: None,
             space,
             steps_written: 0,
             gauge_rows_written: 0,
@@ -385,6 +389,34 @@ impl Hdf5Sink {
         super::xdmf::write(&super::xdmf::xdmf_path(&self.path), &desc)
     }
 
+    /// Checks a call that writes maps: a raster run, before the final maps, every map
+    /// one value per cell, and the same names as the maps already on disk. Returns the
+    /// raster's (nx, ny).
+    fn check_maps(&self, call: &str, maps: &[CellField]) -> Result<(usize, usize), OutputError> {
+        let shape = self.check_open(call)?;
+        let Some(raster) = shape.raster else {
+            return Err(self.err("maps of a run that is not on a raster"));
+        };
+        if self.has_maps {
+            return Err(self.err(format!("{call} after the final maps")));
+        }
+        let cells = raster.0 * raster.1;
+        if let Some(bad) = maps.iter().find(|f| f.data.len() != cells) {
+            return Err(self.err(format!(
+                "map {} has {} values, expected {cells}",
+                bad.name,
+                bad.data.len()
+            )));
+        }
+        let names: Vec<&str> = maps.iter().map(|f| f.name).collect();
+        if let Some(old) = self.map_names.as_ref().filter(|old| **old != names) {
+            return Err(self.err(format!(
+                "{call}: maps {names:?} differ from those on disk {old:?}"
+            )));
+        }
+        Ok(raster)
+    }
+
     fn check_open(&self, call: &str) -> Result<Shape, OutputError> {
         if self.finished {
             return Err(self.err(format!("{call} after finish")));
@@ -515,31 +547,33 @@ impl OutputSink for Hdf5Sink {
     }
 
     fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
-        let shape = self.check_open("maps")?;
-        let Some(raster) = shape.raster else {
-            return Err(self.err("maps of a run that is not on a raster"));
-        };
-        if self.has_maps {
-            return Err(self.err("maps written twice"));
-        }
-        let cells = raster.0 * raster.1;
-        if let Some(bad) = maps.maps.iter().find(|f| f.data.len() != cells) {
-            return Err(self.err(format!(
-                "map {} has {} values, expected {cells}",
-                bad.name,
-                bad.data.len()
-            )));
-        }
+        let raster = self.check_maps("maps", maps.maps)?;
+        let create = self.map_names.is_none();
         let values: usize = maps.maps.iter().map(|f| f.data.len()).sum();
-        self.claim(self.batch_bytes(values, false))?;
+        self.claim(self.batch_bytes(if create { values } else { 0 }, false))?;
         let written = self.open_file().and_then(|file| {
             layout::append_steps(&file, &self.pending)
-                .and_then(|()| layout::write_maps(&file, raster, maps))
+                .and_then(|()| layout::write_maps(&file, raster, maps, create))
                 .map_err(|e| self.err(e))?;
             self.close(file, false)
         });
         self.after_batch(written, true, false)?;
+        self.map_names = Some(maps.maps.iter().map(|f| f.name).collect());
         self.has_maps = true;
+        Ok(())
+    }
+
+    fn maps_so_far(&mut self, maps: &[CellField]) -> Result<(), OutputError> {
+        let raster = self.check_maps("maps_so_far", maps)?;
+        let create = self.map_names.is_none();
+        let values: usize = maps.iter().map(|f| f.data.len()).sum();
+        self.claim(self.batch_bytes(if create { values } else { 0 }, false))?;
+        let written = self.open_file().and_then(|file| {
+            layout::write_map_fields(&file, raster, maps, create).map_err(|e| self.err(e))?;
+            self.close(file, false)
+        });
+        self.after_batch(written, false, false)?;
+        self.map_names = Some(maps.iter().map(|f| f.name).collect());
         Ok(())
     }
 
@@ -815,5 +849,65 @@ mod tests {
         let h = file.dataset("gauges/h_grains").unwrap();
         assert_eq!(h.shape(), [rows + 1, 2]);
         assert_eq!(h.read_raw::<f64>().unwrap()[2 * rows..], [2.0, 3.0]);
+    }
+    #[test]
+    fn maps_are_written_with_snapshots_and_rewritten_in_place() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("maps.h5");
+        let mut sink = Hdf5Sink::create(&path).unwrap();
+        let mut raster = info(1);
+        raster.raster = Some(crate::output::RasterInfo {
+            nx: 3,
+            ny: 2,
+            crs_epsg: None,
+            crs_wkt: None,
+        });
+        let x = [0.5, 1.5, 2.5, 0.5, 1.5, 2.5];
+        let y = [0.5, 0.5, 0.5, 1.5, 1.5, 1.5];
+        sink.begin(
+            &raster,
+            &GridData {
+                x: &x,
+                y: Some(&y),
+                shape: Some((2, 3)),
+                b: &[0.0; 6],
+                h_bed: &[0.0; 6],
+            },
+        )
+        .unwrap();
+        let map = |name: &'static str, data: &'static [f64]| CellField {
+            name,
+            units: "m",
+            data,
+        };
+        let read = |name: &str| {
+            let file = H5File::open(&path).unwrap();
+            let ds = file.dataset(name).unwrap();
+            assert_eq!(ds.shape(), [2, 3]);
+            ds.read_raw::<f64>().unwrap()
+        };
+        sink.maps_so_far(&[map("h_max", &[1.0; 6]), map("deposit", &[2.0; 6])])
+            .unwrap();
+        // A file read now (a run killed after this snapshot) holds the maps.
+        assert_eq!(read("maps/h_max"), [1.0; 6]);
+        sink.maps_so_far(&[map("h_max", &[3.0; 6]), map("deposit", &[4.0; 6])])
+            .unwrap();
+        assert_eq!(read("maps/deposit"), [4.0; 6]);
+        let e = sink
+            .maps_so_far(&[map("h_max", &[3.0; 6])])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("differ from those on disk"), "{e}");
+        let last = [map("h_max", &[5.0; 6]), map("deposit", &[6.0; 6])];
+        sink.maps(&RunMaps {
+            maps: &last,
+            series: &[],
+            scalars: &[],
+        })
+        .unwrap();
+        assert_eq!(read("maps/h_max"), [5.0; 6]);
+        assert_eq!(read("maps/deposit"), [6.0; 6]);
+        let e = sink.maps_so_far(&last).unwrap_err().to_string();
+        assert!(e.contains("after the final maps"), "{e}");
     }
 }

@@ -60,6 +60,18 @@ pub struct RasterInfo {
     pub crs_epsg: Option<u32>,
     /// WKT of the input rasters (their `.prj`), when known.
     pub crs_wkt: Option<String>,
+    /// The volumes of a release polygon, when the initial thickness is one.
+    pub release: Option<ReleaseVolumes>,
+    /// Number of wall cells (nodata cells of the DEM).
+    pub wall_cells: usize,
+}
+
+/// The volumes of a rasterised release polygon (m³), `/summary` attributes
+/// `release_volume` and `release_volume_on_walls`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReleaseVolumes {
+    pub volume: f64,
+    pub volume_on_walls: f64,
 }
 
 /// Static grid data, `/grid`.
@@ -238,6 +250,12 @@ pub trait OutputSink {
     /// Called once before `finish` by runs that gather maps over the run (raster
     /// runs). Sinks that do not record them keep this default.
     fn maps(&mut self, _maps: &RunMaps) -> Result<(), OutputError> {
+        Ok(())
+    }
+    /// Called with every snapshot by runs that gather maps, with the maps as they
+    /// stand (the same names and lengths every time, and as `maps` later), so that a
+    /// run that is killed keeps them. Sinks that do not record them keep this default.
+    fn maps_so_far(&mut self, _maps: &[CellField]) -> Result<(), OutputError> {
         Ok(())
     }
 }

@@ -1,8 +1,8 @@
 //! Fan-out of one run to two sinks, e.g. the HDF5 file and the front CSV.
 
 use super::{
-    GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary, SnapshotView,
-    StepRecord,
+    CellField, GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary,
+    SnapshotView, StepRecord,
 };
 
 /// Forwards every call to `a`, then to `b`. Both are called even when `a` fails, so
@@ -58,6 +58,10 @@ impl<A: OutputSink, B: OutputSink> OutputSink for Tee<A, B> {
 
     fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
         both(self.a.maps(maps), self.b.maps(maps))
+    }
+
+    fn maps_so_far(&mut self, maps: &[CellField]) -> Result<(), OutputError> {
+        both(self.a.maps_so_far(maps), self.b.maps_so_far(maps))
     }
 
     fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {

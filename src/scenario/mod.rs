@@ -24,6 +24,7 @@ pub use validate::{load_file, load_file_within, load_str, load_str_within};
 
 use std::path::PathBuf;
 
+pub use crate::gis::release::CoverageRule;
 pub use crate::gis::Crs;
 pub use crate::grid::{BoundaryKind, Coordinates};
 pub use crate::model::dilatant::DilatantSpec;
@@ -62,6 +63,58 @@ impl Domain {
     /// Number of cells: nx on a line, nx · ny on a raster.
     pub fn cell_count(&self) -> usize {
         self.cells * self.plane.as_ref().map_or(1, |p| p.ny)
+    }
+}
+
+/// How the thickness of a release polygon is measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ThicknessIs {
+    /// Along the vertical of the domain's frame: used as it is.
+    Vertical,
+    /// Normal to the bed: divided by cos θ of the bed's local slope (docs/gis.md).
+    Normal,
+}
+
+/// A release polygon (`initial.h = { polygon = … }`) as it was rasterised onto the
+/// domain: printed when a run starts and stored in `/summary`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReleaseSummary {
+    /// The polygon file as written in the scenario.
+    pub file: PathBuf,
+    /// Features (polygons with a thickness) read from it.
+    pub features: usize,
+    /// Area of the polygons (m²).
+    pub area: f64,
+    pub rule: CoverageRule,
+    pub thickness_is: ThicknessIs,
+    /// Σ h × cell area of the vertical thickness on the cells of flow (m³): the
+    /// initial volume of the run.
+    pub volume: f64,
+    /// Volume that fell on wall (nodata) cells and was dropped (m³, the thickness as
+    /// given).
+    pub volume_on_walls: f64,
+}
+
+impl ReleaseSummary {
+    /// One line for the terminal.
+    pub fn describe(&self) -> String {
+        let rule = match self.rule {
+            CoverageRule::AreaFraction => "area fraction",
+            CoverageRule::CellCentre => "cell centre",
+        };
+        let thickness = match self.thickness_is {
+            ThicknessIs::Vertical => "vertical thickness",
+            ThicknessIs::Normal => "thickness normal to the slope, divided by cos θ",
+        };
+        format!(
+            "{}: {} polygon feature{} of {:.6e} m², released volume {:.6e} m³ ({rule} rule, {thickness}); {:.6e} m³ on wall (nodata) cells dropped",
+            self.file.display(),
+            self.features,
+            if self.features == 1 { "" } else { "s" },
+            self.area,
+            self.volume,
+            self.volume_on_walls
+        )
     }
 }
 
@@ -153,6 +206,9 @@ pub struct Sampled {
     pub eta: Option<Vec<f64>>,
     /// `initial.phi`, when given.
     pub phi: Option<Vec<f64>>,
+    /// Wall cells of a raster domain (where a raster bed has no data), row-major;
+    /// empty when there is none. Initial profiles are 0 there.
+    pub wall: Vec<bool>,
 }
 
 impl Sampled {
@@ -191,6 +247,7 @@ impl Sampled {
             eta: initial.eta.as_ref().map(&at),
             phi: initial.phi.as_ref().map(&at),
             v: Vec::new(),
+            wall: Vec::new(),
             b,
         }
     }
@@ -204,11 +261,24 @@ impl Sampled {
             .par_iter()
             .map(|&(x, y)| bed.eval_xy(x, y, 0.0))
             .collect();
+        // A raster bed without a value at a centre (a nodata cell there or among the
+        // four the interpolation reads; the raster covers the domain) makes it a wall.
+        let wall: Vec<bool> = match bed.raster() {
+            Some(_) if b.iter().any(|b| b.is_nan()) => b.iter().map(|b| b.is_nan()).collect(),
+            _ => Vec::new(),
+        };
         let at = |p: &Profile| -> Vec<f64> {
             centres
                 .par_iter()
                 .zip(&b)
-                .map(|(&(x, y), &b)| p.eval_xy(x, y, b))
+                .enumerate()
+                .map(|(k, (&(x, y), &b))| {
+                    if !wall.is_empty() && wall[k] {
+                        0.0
+                    } else {
+                        p.eval_xy(x, y, b)
+                    }
+                })
                 .collect()
         };
         Sampled {
@@ -219,6 +289,7 @@ impl Sampled {
             eta: None,
             phi: None,
             b,
+            wall,
         }
     }
 }
@@ -290,4 +361,6 @@ pub struct Scenario {
     pub submarine: Option<SubmarineSpec>,
     /// `bed` and `initial` at the cell centres of `domain`.
     pub sampled: Sampled,
+    /// The release polygon of `initial.h`, when it is one.
+    pub release: Option<ReleaseSummary>,
 }

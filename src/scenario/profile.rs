@@ -116,6 +116,24 @@ impl Profile {
         }
     }
 
+    /// A raster profile of `raster` (read from `path`, named in messages).
+    pub(crate) fn from_raster(path: &Path, raster: crate::gis::Raster) -> Profile {
+        Profile {
+            kind: Kind::Raster(Arc::new(RasterProfile {
+                path: path.to_owned(),
+                raster,
+            })),
+        }
+    }
+
+    /// The file of a raster profile, as written in the scenario.
+    pub(crate) fn raster_path(&self) -> Option<&Path> {
+        match &self.kind {
+            Kind::Raster(r) => Some(&r.path),
+            _ => None,
+        }
+    }
+
     /// `Some(v)` for a constant profile.
     pub fn as_constant(&self) -> Option<f64> {
         match self.kind {
@@ -821,6 +839,11 @@ impl Table {
 // ---------------------------------------------------------------------------------------
 // Rasters
 
+/// Largest accepted raster file (bytes): an ESRI ASCII grid of about 5·10⁷ cells, a
+/// Float32 GeoTIFF of 2.5·10⁸; a bound so that a wrong path (a disk image, `/dev/zero`)
+/// is refused at once instead of read until memory runs out.
+pub(crate) const MAX_RASTER_BYTES: u64 = 1 << 30;
+
 /// A raster file as a profile: bilinear interpolation between the cell centres,
 /// constant beyond the outer centres (up to the raster's edge), no value outside the
 /// raster or where a neighbouring cell is nodata.
@@ -836,6 +859,22 @@ impl RasterProfile {
     /// messages naming the file (the caller adds the key).
     fn load(path: &Path, base_dir: &Path) -> Result<RasterProfile, String> {
         let full = base_dir.join(path);
+        if let Ok(meta) = std::fs::metadata(&full) {
+            if !meta.is_file() {
+                return Err(format!(
+                    "raster file '{}' is not a regular file",
+                    full.display()
+                ));
+            }
+            if meta.len() > MAX_RASTER_BYTES {
+                return Err(format!(
+                    "raster file '{}' is {:.1} GiB, more than the {} GiB a raster input may be: crop it to the area of the run first (e.g. gdal_translate -projwin)",
+                    full.display(),
+                    meta.len() as f64 / (1u64 << 30) as f64,
+                    MAX_RASTER_BYTES >> 30
+                ));
+            }
+        }
         let ext = full
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase())

@@ -67,6 +67,10 @@ pub(crate) struct RawDomain {
     pub cells: Option<toml::Value>,
     pub slope_deg: Option<f64>,
     pub coordinates: Option<String>,
+    /// `[x_min, x_max, y_min, y_max]`: crop the raster bed's grid (raster domains).
+    pub crop: Option<Vec<f64>>,
+    /// Coarsen the raster bed's grid by this integer factor (raster domains).
+    pub coarsen: Option<i64>,
 }
 
 #[derive(Debug, Default, Deserialize)]

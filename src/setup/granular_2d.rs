@@ -9,13 +9,14 @@ use crate::grid::raster::{Raster2d, RasterSpec, Sides};
 use crate::grid::{Coordinates, Grid};
 use crate::model::granular_2d::{pipeline, Granular2d};
 use crate::model::raster_maps::RasterMaps;
-use crate::output::RasterInfo;
+use crate::output::{RasterInfo, ReleaseVolumes};
 use crate::scenario::Scenario;
 use crate::setup::{run_config, run_info};
 use crate::simulation::Simulation;
 use crate::state::layered_2d::State2d;
 
-/// The raster of a scenario, with its bed sampled at the cell centres.
+/// The raster of a scenario, with its bed sampled at the cell centres and its wall
+/// cells (where a raster bed has no data).
 pub fn scenario_raster(scn: &Scenario) -> Raster2d {
     let d = &scn.domain;
     let plane = d.plane.as_ref().expect("a raster domain");
@@ -35,7 +36,7 @@ pub fn scenario_raster(scn: &Scenario) -> Raster2d {
         coordinates: d.coordinates,
         slope_deg: d.slope_deg,
     };
-    Raster2d::new(spec, scn.sampled.b.clone())
+    Raster2d::with_walls(spec, scn.sampled.b.clone(), scn.sampled.wall.clone())
         .unwrap_or_else(|e| panic!("a validated raster domain was refused: {e}"))
 }
 
@@ -54,6 +55,11 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
         ny: grid.ny(),
         crs_epsg: plane.crs.epsg,
         crs_wkt: plane.crs.wkt.clone(),
+        release: scn.release.as_ref().map(|r| ReleaseVolumes {
+            volume: r.volume,
+            volume_on_walls: r.volume_on_walls,
+        }),
+        wall_cells: scn.sampled.wall.iter().filter(|&&w| w).count(),
     });
     let tan_theta = match grid.coordinates() {
         Coordinates::Local => grid.spec().slope_deg.to_radians().tan(),
@@ -65,6 +71,11 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let config = run_config(scn);
     let cells = grid.nx() * grid.ny();
     let mut sim = Simulation::new(grid, model, state, stages, rules, config, info);
-    sim.set_tracker(Box::new(RasterMaps::new(cells, scn.output.front_threshold)));
+    let density = scn.material.phi * scn.material.rho_s;
+    sim.set_tracker(Box::new(RasterMaps::new(
+        cells,
+        scn.output.front_threshold,
+        density,
+    )));
     sim
 }

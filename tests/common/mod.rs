@@ -88,6 +88,7 @@ impl Case {
                 static_threshold: 1e-3,
             },
             dilatancy: None,
+            release: None,
             initial: Initial {
                 h: Profile::function(h),
                 u: Profile::function(move |x, _| u(x)),

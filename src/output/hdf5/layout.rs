@@ -148,6 +148,9 @@ fn write_raster_layout(
     file.set_attr_numeric("dy", &spacing(&y))?;
     if let Some(code) = r.crs_epsg {
         file.set_attr_numeric("crs_epsg", &(code as i64))?;
+        // The same code as text, which every HDF5 reader (rust-hdf5 among them)
+        // reads back.
+        file.set_attr_string("crs", &format!("EPSG:{code}"))?;
     }
     if let Some(wkt) = &r.crs_wkt {
         file.set_attr_string("crs_wkt", wkt)?;
@@ -176,22 +179,50 @@ fn write_raster_layout(
     frames(&s, "h", &[ny, nx], "m", &[Dim::Y, Dim::X])?;
     frames(&s, "u", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
     frames(&s, "v", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
-    step_groups(file, info, &RASTER_STEP_DATASETS)
+    step_groups(file, info, &RASTER_STEP_DATASETS)?;
+    let summary = file.root_group().group("summary")?;
+    summary.set_attr_numeric("wall_cells", &(r.wall_cells as i64))?;
+    if let Some(release) = &r.release {
+        summary.set_attr_numeric("release_volume", &release.volume)?;
+        summary.set_attr_numeric("release_volume_on_walls", &release.volume_on_walls)?;
+    }
+    Ok(())
 }
 
-/// Writes what a raster run gathered: `/maps/<name>` (ny, nx), the per-step series
-/// as `/diagnostics/<name>`, the numbers as `/summary` attributes.
-pub(super) fn write_maps(
+/// Writes the maps of a raster run, `/maps/<name>` (ny, nx): created with their units
+/// when `create`, else overwritten in place (the datasets are contiguous and keep
+/// their size, so a rewrite claims no new room).
+pub(super) fn write_map_fields(
     file: &H5File,
     (nx, ny): (usize, usize),
-    maps: &RunMaps,
+    fields: &[CellField],
+    create: bool,
 ) -> rust_hdf5::Result<()> {
-    let g = file.create_group("maps")?;
-    for field in maps.maps {
-        let ds = g.new_dataset::<f64>().shape([ny, nx]).create(field.name)?;
-        ds.write_raw(field.data)?;
-        units(&ds, field.units)?;
+    if create {
+        let g = file.create_group("maps")?;
+        for field in fields {
+            let ds = g.new_dataset::<f64>().shape([ny, nx]).create(field.name)?;
+            ds.write_raw(field.data)?;
+            units(&ds, field.units)?;
+        }
+    } else {
+        for field in fields {
+            file.dataset_writer(&format!("maps/{}", field.name))?
+                .write_raw(field.data)?;
+        }
     }
+    Ok(())
+}
+
+/// Writes what a raster run gathered at its end: the maps ([`write_map_fields`]), the
+/// per-step series as `/diagnostics/<name>`, the numbers as `/summary` attributes.
+pub(super) fn write_maps(
+    file: &H5File,
+    raster: (usize, usize),
+    maps: &RunMaps,
+    create: bool,
+) -> rust_hdf5::Result<()> {
+    write_map_fields(file, raster, maps.maps, create)?;
     let d = file.root_group().group("diagnostics")?;
     for &(name, unit, values) in maps.series {
         let ds = d.new_dataset::<f64>().shape([values.len()]).create(name)?;

@@ -12,6 +12,8 @@ mod check;
 mod dilatant;
 mod granular;
 mod plane;
+mod release;
+mod resample;
 mod submarine;
 
 use crate::output::budget::{size, OUTPUT_LIMIT};
@@ -216,8 +218,15 @@ fn validate(
     };
     // A domain without its grid keys takes the grid of a raster bed (read first then).
     let from_bed = plane::grid_from_bed(&raw_domain, raw_bed.as_ref());
+    let resample = resample::keys(&raw_domain, from_bed)?;
+    let mut original_grid = None;
     let (mut domain, bed) = if from_bed {
-        let bed = read_bed(&raw_bed)?;
+        let mut bed = read_bed(&raw_bed)?;
+        if let Some(r) = &resample {
+            let (resampled, original) = r.bed(&bed, &mut notes)?;
+            bed = resampled;
+            original_grid = Some(original);
+        }
         (plane::domain_of_raster(raw_domain, &bed)?, bed)
     } else {
         let domain = domain(raw_domain)?;
@@ -252,13 +261,32 @@ fn validate(
             ),
         );
     }
-    let raw_initial = section("initial", raw.initial)?;
+    let mut raw_initial = section("initial", raw.initial)?;
     let raw_w = raw_initial.w.is_some();
     plane::raster_keys(&domain, &model, &raw_initial, raw.submarine.is_some())?;
-    let initial = initial(raw_initial, base_dir)?;
+    let release_keys = release::take(&mut raw_initial, domain.plane.is_some(), base_dir)?;
+    let mut initial = initial(raw_initial, base_dir)?;
+    if let (Some(r), Some(original)) = (&resample, &original_grid) {
+        r.profile("initial.h", &mut initial.h, original)?;
+        r.profile("initial.u", &mut initial.u, original)?;
+        r.profile("initial.v", &mut initial.v, original)?;
+    }
     plane::profiles_fit(&mut domain, &bed, &initial, from_bed)?;
     // Sampled once here; the checks below look at these values and setup uses them.
-    let sampled = Sampled::of(&domain, &bed, &initial);
+    let mut sampled = Sampled::of(&domain, &bed, &initial);
+    if domain.plane.is_some() {
+        plane::some_cell_has_bed(&domain, &sampled, &bed)?;
+    }
+    let release = match release_keys {
+        Some(keys) => Some(release::rasterise(
+            keys,
+            &domain,
+            &bed,
+            &mut sampled,
+            &mut initial.h,
+        )?),
+        None => None,
+    };
     let submarine = submarine::submarine(
         raw.submarine,
         &model,
@@ -319,6 +347,7 @@ fn validate(
         output,
         submarine,
         sampled,
+        release,
     })
 }
 

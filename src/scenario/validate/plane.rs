@@ -428,7 +428,26 @@ pub(super) fn gauges(v: Option<&toml::Value>, domain: &Domain) -> Res<(Vec<f64>,
     Ok((xs, ys))
 }
 
-/// Checks the sampled profiles of a raster domain: finite bed, finite non-negative
+/// Refuses a raster domain on which every cell is a wall (the raster bed has no data
+/// under the domain).
+pub(super) fn some_cell_has_bed(domain: &Domain, sampled: &Sampled, bed: &Profile) -> Res<()> {
+    if !sampled.wall.is_empty() && sampled.wall.iter().all(|&w| w) {
+        let file = bed
+            .raster_path()
+            .map_or_else(String::new, |p| format!(" '{}'", p.display()));
+        return err(
+            "bed.b",
+            format!(
+                "the raster{file} has no data (nodata) under any of the domain's {} cells",
+                domain.cell_count()
+            ),
+        );
+    }
+    Ok(())
+}
+
+/// Checks the sampled profiles of a raster domain: finite bed (but on wall cells,
+/// where a raster bed has no data), finite non-negative
 /// thickness, finite velocities; the first offending centre is reported.
 pub(super) fn check_profiles(
     domain: &Domain,
@@ -447,7 +466,8 @@ pub(super) fn check_profiles(
         ScenarioError::at(key, message)
     };
     let b = &sampled.b;
-    if let Some(i) = b.iter().position(|b| !b.is_finite()) {
+    let wall = |i: usize| !sampled.wall.is_empty() && sampled.wall[i];
+    if let Some(i) = (0..b.len()).position(|i| !b[i].is_finite() && !wall(i)) {
         return Err(not_finite("bed.b", bed, i, 0.0));
     }
     if let Some(i) = sampled.h.iter().position(|h| !(h.is_finite() && *h >= 0.0)) {

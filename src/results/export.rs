@@ -1,0 +1,316 @@
+//! `granflow export RUN.h5 --format geotiff|asc|netcdf [--time T] [--fields …]`: a
+//! raster run's maps, or one of its snapshots, as files a GIS opens, with the run's
+//! georeferencing (the grid of `/grid/x`, `/grid/y`) and CRS.
+//!
+//! The maps take the names of the avalanche-hazard literature (as in AvaFrame,
+//! Tonnel et al. 2023): `pft` the peak flow thickness (`/maps/h_max`), `pfv` the peak
+//! flow velocity (`/maps/speed_max`), `ppr` the peak pressure ρ|u|² (`/maps/ppr`),
+//! `deposit` and `arrival_time`. A snapshot gives `h`, `u`, `v` and
+//! `speed` = √(u² + v²). GeoTIFF and ESRI ASCII grids get one file per field,
+//! `RUN_<field>.tif` (a snapshot: `RUN_<field>_t<time>.tif`); NetCDF gets the
+//! snapshots as one CF time series, `RUN_snapshots.nc`, and the maps as one record at
+//! the time of the last snapshot, `RUN_maps.nc` (a chosen snapshot: `RUN_t<time>.nc`).
+
+use std::path::{Path, PathBuf};
+
+use super::args::{ExportArgs, ExportFormat, RasterFormat};
+use super::run_file::{north_up, RunFile};
+use super::{write_raster, ResultsError};
+use crate::gis::netcdf::{FieldSpec, NetCdfWriter};
+use crate::sweep::naming::format_float;
+
+/// A field that can be exported: its name, where it comes from, units, long name.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Field {
+    pub name: &'static str,
+    /// The `/maps` dataset of a map; for a snapshot field, its `/snapshots` dataset
+    /// (`speed` is computed from `u` and `v`).
+    pub source: &'static str,
+    pub units: &'static str,
+    pub long_name: &'static str,
+}
+
+/// The maps, in their default order.
+pub const MAP_FIELDS: [Field; 5] = [
+    Field {
+        name: "pft",
+        source: "h_max",
+        units: "m",
+        long_name: "peak flow thickness",
+    },
+    Field {
+        name: "pfv",
+        source: "speed_max",
+        units: "m/s",
+        long_name: "peak flow velocity",
+    },
+    Field {
+        name: "ppr",
+        source: "ppr",
+        units: "Pa",
+        long_name: "peak pressure",
+    },
+    Field {
+        name: "deposit",
+        source: "deposit",
+        units: "m",
+        long_name: "deposit thickness",
+    },
+    Field {
+        name: "arrival_time",
+        source: "arrival_time",
+        units: "s",
+        long_name: "arrival time of the flow",
+    },
+];
+
+/// The snapshot fields.
+pub const SNAPSHOT_FIELDS: [Field; 4] = [
+    Field {
+        name: "h",
+        source: "h",
+        units: "m",
+        long_name: "flow thickness",
+    },
+    Field {
+        name: "u",
+        source: "u",
+        units: "m/s",
+        long_name: "velocity along x",
+    },
+    Field {
+        name: "v",
+        source: "v",
+        units: "m/s",
+        long_name: "velocity along y",
+    },
+    Field {
+        name: "speed",
+        source: "speed",
+        units: "m/s",
+        long_name: "flow speed",
+    },
+];
+
+/// The maps and snapshot fields asked for by `--fields` (or the defaults), checked
+/// against `--time` and the format.
+pub fn choose_fields(
+    names: &[String],
+    time: bool,
+    format: ExportFormat,
+) -> Result<(Vec<Field>, Vec<Field>), ResultsError> {
+    let netcdf = format == ExportFormat::Netcdf;
+    if names.is_empty() {
+        return Ok(match (time, netcdf) {
+            (true, _) => (Vec::new(), vec![SNAPSHOT_FIELDS[0], SNAPSHOT_FIELDS[3]]),
+            (false, false) => (MAP_FIELDS.to_vec(), Vec::new()),
+            (false, true) => (MAP_FIELDS.to_vec(), SNAPSHOT_FIELDS.to_vec()),
+        });
+    }
+    let (mut maps, mut snaps) = (Vec::new(), Vec::new());
+    let all = || {
+        MAP_FIELDS
+            .iter()
+            .chain(&SNAPSHOT_FIELDS)
+            .map(|f| f.name)
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    for name in names {
+        let name = name.trim();
+        if let Some(f) = MAP_FIELDS.iter().find(|f| f.name == name) {
+            if time {
+                return Err(ResultsError::input(format!(
+                    "--fields {name}: a map over the whole run has no time; with --time \
+                     export the snapshot fields h, u, v, speed"
+                )));
+            }
+            if !maps.contains(f) {
+                maps.push(*f);
+            }
+        } else if let Some(f) = SNAPSHOT_FIELDS.iter().find(|f| f.name == name) {
+            if !time && !netcdf {
+                return Err(ResultsError::input(format!(
+                    "--fields {name}: a snapshot field needs --time T (or --format netcdf for \
+                     every snapshot)"
+                )));
+            }
+            if !snaps.contains(f) {
+                snaps.push(*f);
+            }
+        } else {
+            return Err(ResultsError::input(format!(
+                "--fields: unknown field `{name}` (fields: {})",
+                all()
+            )));
+        }
+    }
+    Ok((maps, snaps))
+}
+
+/// The index of the snapshot nearest `t` (the earlier of two equally near), or an
+/// error when `t` lies outside [t_first, t_last] (beyond a relative 10⁻⁹).
+pub fn nearest_snapshot(times: &[f64], t: f64) -> Result<usize, ResultsError> {
+    let (Some(&first), Some(&last)) = (times.first(), times.last()) else {
+        return Err(ResultsError::input("the run has no snapshot"));
+    };
+    let tol = 1e-9 * first.abs().max(last.abs()).max(1.0);
+    if !t.is_finite() || t < first - tol || t > last + tol {
+        return Err(ResultsError::input(format!(
+            "--time {t}: outside the snapshots' times [{}, {}] s ({} snapshots)",
+            format_float(first),
+            format_float(last),
+            times.len()
+        )));
+    }
+    let mut best = 0;
+    for (k, &tk) in times.iter().enumerate() {
+        if (tk - t).abs() < (times[best] - t).abs() {
+            best = k;
+        }
+    }
+    Ok(best)
+}
+
+/// A snapshot field's values at frame `k`, in the file's order.
+fn snapshot_values(run: &RunFile, field: &Field, k: usize) -> Result<Vec<f64>, ResultsError> {
+    if field.name == "speed" {
+        let u = run.frame("u", k)?;
+        let v = run.frame("v", k)?;
+        return Ok(u.iter().zip(&v).map(|(u, v)| u.hypot(*v)).collect());
+    }
+    run.frame(field.source, k)
+}
+
+/// Runs `granflow export`; returns the files written.
+pub fn export(args: &ExportArgs) -> Result<Vec<PathBuf>, ResultsError> {
+    let (maps, snaps) = choose_fields(&args.fields, args.time.is_some(), args.format)?;
+    let run = RunFile::open(&args.run)?;
+    let frame = args
+        .time
+        .map(|t| nearest_snapshot(run.times(), t))
+        .transpose()?;
+    let dir = match &args.output {
+        Some(d) => d.clone(),
+        None => args.run.parent().map(Path::to_path_buf).unwrap_or_default(),
+    };
+    if !dir.as_os_str().is_empty() {
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| ResultsError::failure(format!("cannot create {}: {e}", dir.display())))?;
+    }
+    let stem = args
+        .run
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "run".into());
+    let (nx, ny) = (run.grid().nx, run.grid().ny);
+    let time_tag = |k: usize| format!("_t{}", format_float(run.times()[k]));
+    let mut written = Vec::new();
+    let raster = match args.format {
+        ExportFormat::Geotiff => Some(RasterFormat::Geotiff),
+        ExportFormat::Asc => Some(RasterFormat::Asc),
+        ExportFormat::Netcdf => None,
+    };
+    if let Some(format) = raster {
+        let ext = format.extension();
+        for f in &maps {
+            let path = dir.join(format!("{stem}_{}.{ext}", f.name));
+            let values = north_up(&run.map(f.source)?, nx, ny);
+            write_raster(run.grid(), values, format, args.float64, &path)?;
+            written.push(path);
+        }
+        if let Some(k) = frame {
+            for f in &snaps {
+                let path = dir.join(format!("{stem}_{}{}.{ext}", f.name, time_tag(k)));
+                let values = north_up(&snapshot_values(&run, f, k)?, nx, ny);
+                write_raster(run.grid(), values, format, args.float64, &path)?;
+                written.push(path);
+            }
+        }
+        return Ok(written);
+    }
+    let title = format!("granflow run {}", args.run.display());
+    let nc_err = |e: crate::gis::GisError| ResultsError::failure(e.to_string());
+    let specs = |fields: &[Field]| -> Vec<FieldSpec> {
+        fields
+            .iter()
+            .map(|f| FieldSpec::new(f.name, f.units, f.long_name))
+            .collect()
+    };
+    if !snaps.is_empty() {
+        let (path, frames) = match frame {
+            Some(k) => (dir.join(format!("{stem}{}.nc", time_tag(k))), k..k + 1),
+            None => (
+                dir.join(format!("{stem}_snapshots.nc")),
+                0..run.times().len(),
+            ),
+        };
+        let mut nc =
+            NetCdfWriter::create(&path, run.grid(), &specs(&snaps), &title).map_err(nc_err)?;
+        for k in frames {
+            let values = snaps
+                .iter()
+                .map(|f| Ok(north_up(&snapshot_values(&run, f, k)?, nx, ny)))
+                .collect::<Result<Vec<_>, ResultsError>>()?;
+            let slabs: Vec<&[f64]> = values.iter().map(Vec::as_slice).collect();
+            nc.write_frame(run.times()[k], &slabs).map_err(nc_err)?;
+        }
+        nc.finish().map_err(nc_err)?;
+        written.push(path);
+    }
+    if !maps.is_empty() {
+        let path = dir.join(format!("{stem}_maps.nc"));
+        let mut nc =
+            NetCdfWriter::create(&path, run.grid(), &specs(&maps), &title).map_err(nc_err)?;
+        let values = maps
+            .iter()
+            .map(|f| Ok(north_up(&run.map(f.source)?, nx, ny)))
+            .collect::<Result<Vec<_>, ResultsError>>()?;
+        let slabs: Vec<&[f64]> = values.iter().map(Vec::as_slice).collect();
+        let t = run.times().last().copied().unwrap_or(0.0);
+        nc.write_frame(t, &slabs).map_err(nc_err)?;
+        nc.finish().map_err(nc_err)?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_nearest_snapshot_is_chosen_and_ties_go_to_the_earlier() {
+        let t = [0.0, 0.5, 1.0];
+        assert_eq!(nearest_snapshot(&t, 0.0).unwrap(), 0);
+        assert_eq!(nearest_snapshot(&t, 0.2).unwrap(), 0);
+        assert_eq!(nearest_snapshot(&t, 0.25).unwrap(), 0);
+        assert_eq!(nearest_snapshot(&t, 0.26).unwrap(), 1);
+        assert_eq!(nearest_snapshot(&t, 1.0).unwrap(), 2);
+        for bad in [-0.1, 1.1, f64::NAN] {
+            let e = nearest_snapshot(&t, bad).unwrap_err();
+            assert!(e.to_string().contains("outside"), "{e}");
+            assert_eq!(e.exit_code(), 2);
+        }
+    }
+
+    #[test]
+    fn fields_are_checked_against_the_time_and_the_format() {
+        let names = |s: &[&str]| s.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let (m, s) = choose_fields(&[], false, ExportFormat::Geotiff).unwrap();
+        assert_eq!((m.len(), s.len()), (5, 0));
+        let (m, s) = choose_fields(&[], true, ExportFormat::Asc).unwrap();
+        assert_eq!(m.len(), 0);
+        assert_eq!(s.iter().map(|f| f.name).collect::<Vec<_>>(), ["h", "speed"]);
+        let (m, s) = choose_fields(&names(&["pft", "h"]), false, ExportFormat::Netcdf).unwrap();
+        assert_eq!((m[0].name, s[0].name), ("pft", "h"));
+        for (fields, time, message) in [
+            (&["pft"][..], true, "has no time"),
+            (&["h"][..], false, "needs --time"),
+            (&["pfd"][..], false, "unknown field `pfd`"),
+        ] {
+            let e = choose_fields(&names(fields), time, ExportFormat::Geotiff).unwrap_err();
+            assert!(e.to_string().contains(message), "{e}");
+        }
+    }
+}

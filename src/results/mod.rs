@@ -1,0 +1,104 @@
+//! What is done with a run's results after it ran: `granflow export` (a raster run's
+//! maps and snapshots as GeoTIFF, ESRI ASCII grids or CF NetCDF, with the run's
+//! georeferencing) and `granflow maps` (the maps of a sweep's ensemble: the
+//! probability that the peak flow thickness exceeds a threshold, means and maxima,
+//! and, against an observed footprint, each run's skill). User documentation:
+//! `docs/gis.md` ("Result rasters") and `docs/sweeps.md`.
+//!
+//! - [`run_file`]: reads a raster run's HDF5 file back (grid, CRS, maps, frames);
+//! - [`export`]: `granflow export`;
+//! - [`ensemble`]: the per-cell statistics of an ensemble of runs;
+//! - [`skill`]: a run's footprint against an observed one (areas, ROC point);
+//! - [`maps`]: `granflow maps`.
+
+pub mod args;
+pub mod ensemble;
+pub mod export;
+pub mod maps;
+pub mod run_file;
+pub mod skill;
+
+pub use args::{ExportArgs, MapsArgs, RasterFormat};
+
+use crate::terminal::{EXIT_BAD_INPUT, EXIT_FAILURE};
+
+/// The value written for cells without a value (NaN in the run file, e.g. the arrival
+/// time of a cell the flow never reached) in GeoTIFF and ESRI ASCII grids; NetCDF
+/// files keep NaN (their `_FillValue`).
+pub const NODATA: f64 = -9999.0;
+
+/// An error of `export` or `maps`: bad input (exit code 2) or a failure to write
+/// (exit code 1).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ResultsError {
+    Input(String),
+    Failure(String),
+}
+
+impl ResultsError {
+    pub fn input(message: impl Into<String>) -> ResultsError {
+        ResultsError::Input(message.into())
+    }
+
+    pub fn failure(message: impl Into<String>) -> ResultsError {
+        ResultsError::Failure(message.into())
+    }
+
+    /// The process exit code.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            ResultsError::Input(_) => EXIT_BAD_INPUT,
+            ResultsError::Failure(_) => EXIT_FAILURE,
+        }
+    }
+}
+
+impl std::fmt::Display for ResultsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ResultsError::Input(m) | ResultsError::Failure(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for ResultsError {}
+
+/// Writes `values` (north row first, NaN for no value) on `grid`'s cells as a GeoTIFF
+/// (Float32, or Float64 when `float64`; Deflate) or an ESRI ASCII grid, NaN becoming
+/// [`NODATA`].
+pub fn write_raster(
+    grid: &crate::gis::Raster,
+    values: Vec<f64>,
+    format: RasterFormat,
+    float64: bool,
+    path: &std::path::Path,
+) -> Result<(), ResultsError> {
+    use crate::gis::geotiff::{self, Compression, SampleType, WriteOptions};
+    let mut raster = crate::gis::Raster {
+        values,
+        nodata: Some(NODATA),
+        crs: grid.crs.clone(),
+        ..*grid
+    };
+    for v in &mut raster.values {
+        if v.is_nan() {
+            *v = NODATA;
+        }
+    }
+    let written = match format {
+        RasterFormat::Geotiff => geotiff::write(
+            &raster,
+            path,
+            WriteOptions {
+                sample: if float64 {
+                    SampleType::F64
+                } else {
+                    SampleType::F32
+                },
+                compression: Compression::Deflate,
+            },
+        ),
+        RasterFormat::Asc => crate::gis::asc::write(&raster, path),
+    };
+    written.map_err(|e| ResultsError::failure(e.to_string()))
+}

@@ -1,0 +1,528 @@
+//! `granflow export` and `granflow maps` from the outside: the files they write read
+//! back with granflow's GIS readers (origin, cell size, CRS and values against the
+//! run's HDF5 file), their exit codes on bad input, and the probability maps of
+//! small ensembles (identical runs: 0 or 1 only; two runs: ½ exactly where one
+//! reaches).
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use assert_cmd::prelude::*;
+use granflow::gis::geotiff::{self, WriteOptions};
+use granflow::gis::{asc, Crs, Raster};
+use rust_hdf5::H5File;
+
+use crate::common::assert_success;
+
+fn granflow() -> Command {
+    Command::cargo_bin("granflow").unwrap()
+}
+
+/// A cylinder collapsing on a flat bed, 24 × 16 square cells of 0.1 m.
+const RADIAL: &str = r#"[domain]
+x_min = -1.2
+x_max = 1.2
+y_min = -0.8
+y_max = 0.8
+cells = [24, 16]
+coordinates = "cartesian"
+
+[rheology]
+law = "coulomb"
+mu_deg = 27.0
+
+[initial]
+h = "if(x^2 + y^2 < 0.3^2, 0.4, 0)"
+
+[time]
+t_end = 0.5
+
+[output]
+every = 0.1
+"#;
+
+fn run(dir: &Path, name: &str, scenario: &str, args: &[&str]) -> PathBuf {
+    let file = dir.join(format!("{name}.toml"));
+    fs::write(&file, scenario).unwrap();
+    let h5 = dir.join(format!("{name}.h5"));
+    let out = granflow()
+        .arg("run")
+        .arg(&file)
+        .args(["--quiet", "--output"])
+        .arg(&h5)
+        .args(args)
+        .output()
+        .unwrap();
+    assert_success(&out);
+    h5
+}
+
+fn read(h5: &Path, name: &str) -> (Vec<usize>, Vec<f64>) {
+    let file = H5File::open(h5).unwrap();
+    let ds = file.dataset(name).unwrap();
+    (ds.shape(), ds.read_raw::<f64>().unwrap())
+}
+
+/// A (ny, nx) field of the HDF5 file (row 0 south) as a raster's values (row 0 north).
+fn north_up(values: &[f64], nx: usize) -> Vec<f64> {
+    values.chunks(nx).rev().flatten().copied().collect()
+}
+
+fn export(args: &[&str]) -> std::process::Output {
+    granflow().arg("export").args(args).output().unwrap()
+}
+
+/// A DEM in map coordinates (UTM 32N): an inclined plane of 20 × 14 cells of 10 m,
+/// as a GeoTIFF with its EPSG code, and a scenario on its grid.
+fn georeferenced_run(dir: &Path) -> PathBuf {
+    let mut dem = Raster::filled(20, 14, 600_000.0, 5_200_140.0, 10.0, 0.0);
+    for row in 0..14 {
+        for col in 0..20 {
+            let i = dem.index(col, row);
+            dem.values[i] = 1000.0 - 4.0 * col as f64;
+        }
+    }
+    dem.crs = Crs::from_epsg(32632);
+    geotiff::write(&dem, &dir.join("dem.tif"), WriteOptions::default()).unwrap();
+    let scenario = r#"[domain]
+coordinates = "cartesian"
+
+[bed]
+b = { raster = "dem.tif" }
+
+[rheology]
+law = "coulomb"
+mu_deg = 15.0
+
+[initial]
+h = "if((x - 600045)^2 + (y - 5200070)^2 < 25^2, 3, 0)"
+
+[time]
+t_end = 4
+
+[output]
+every = 1
+"#;
+    run(dir, "slope", scenario, &[])
+}
+
+#[test]
+fn exported_maps_have_the_runs_grid_crs_and_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let h5 = georeferenced_run(d);
+    let out = d.join("out");
+    let o = out.to_str().unwrap();
+    let run = h5.to_str().unwrap();
+    let listed = assert_success(&export(&[run, "--float64", "-o", o]));
+    assert_eq!(listed.lines().count(), 5, "{listed}");
+    assert_success(&export(&[run, "--format", "asc", "-o", o]));
+    let (shape, x) = read(&h5, "grid/x");
+    assert_eq!(shape, [20]);
+    assert_eq!(x[0], 600_005.0);
+    for (field, dataset) in [
+        ("pft", "h_max"),
+        ("pfv", "speed_max"),
+        ("ppr", "ppr"),
+        ("deposit", "deposit"),
+        ("arrival_time", "arrival_time"),
+    ] {
+        let (shape, values) = read(&h5, &format!("maps/{dataset}"));
+        assert_eq!(shape, [14, 20]);
+        let want = north_up(&values, 20);
+        let tif = geotiff::read(&out.join(format!("slope_{field}.tif"))).unwrap();
+        let grid = asc::read(&out.join(format!("slope_{field}.asc"))).unwrap();
+        for r in [&tif, &grid] {
+            assert_eq!((r.nx, r.ny, r.cell_size), (20, 14, 10.0), "{field}");
+            assert_eq!((r.x_left, r.y_top), (600_000.0, 5_200_140.0), "{field}");
+            assert_eq!(r.nodata, Some(-9999.0));
+            for (k, (&got, &want)) in r.values.iter().zip(&want).enumerate() {
+                if want.is_nan() {
+                    assert_eq!(got, -9999.0, "{field} cell {k}");
+                } else {
+                    assert_eq!(got, want, "{field} cell {k}");
+                }
+            }
+        }
+        assert_eq!(tif.crs.epsg, Some(32632), "{field}");
+    }
+    // The run moved: pft is not the release alone, and ppr = ρ pfv² with ρ = φ_s ρ_s.
+    let (_, pfv) = read(&h5, "maps/speed_max");
+    let (_, ppr) = read(&h5, "maps/ppr");
+    let k = (0..pfv.len())
+        .max_by(|&a, &b| pfv[a].total_cmp(&pfv[b]))
+        .unwrap();
+    assert!(pfv[k] > 1.0, "{}", pfv[k]);
+    assert_eq!(ppr[k], 0.62 * 2500.0 * pfv[k] * pfv[k]);
+}
+
+#[test]
+fn a_snapshot_is_exported_at_the_nearest_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let h5 = run(d, "radial", RADIAL, &["--threads", "1"]);
+    let run = h5.to_str().unwrap();
+    let o = d.to_str().unwrap();
+    // Snapshots at 0, 0.1, …, 0.5: 0.23 is nearest 0.2 (frame 2).
+    let listed = assert_success(&export(&[
+        run,
+        "--time",
+        "0.23",
+        "--float64",
+        "--fields",
+        "h,u,v,speed",
+        "-o",
+        o,
+    ]));
+    assert!(listed.contains("radial_h_t0.2.tif"), "{listed}");
+    let (shape, h) = read(&h5, "snapshots/h");
+    assert_eq!(shape, [6, 16, 24]);
+    let (_, u) = read(&h5, "snapshots/u");
+    let (_, v) = read(&h5, "snapshots/v");
+    let frame = 2 * 16 * 24..3 * 16 * 24;
+    let got = |f: &str| geotiff::read(&d.join(format!("radial_{f}_t0.2.tif"))).unwrap();
+    assert_eq!(got("h").values, north_up(&h[frame.clone()], 24));
+    let speed: Vec<f64> = u[frame.clone()]
+        .iter()
+        .zip(&v[frame.clone()])
+        .map(|(u, v)| u.hypot(*v))
+        .collect();
+    assert_eq!(got("speed").values, north_up(&speed, 24));
+    assert!(speed.iter().any(|&s| s > 0.1));
+    // Every snapshot as a NetCDF time series, and the maps.
+    let listed = assert_success(&export(&[run, "--format", "netcdf", "-o", o]));
+    assert!(listed.contains("radial_snapshots.nc") && listed.contains("radial_maps.nc"));
+    let nc = fs::read(d.join("radial_snapshots.nc")).unwrap();
+    assert_eq!(&nc[..4], b"CDF\x02");
+    assert_eq!(
+        u32::from_be_bytes(nc[4..8].try_into().unwrap()),
+        6,
+        "records"
+    );
+}
+
+#[test]
+fn bad_inputs_exit_with_2_and_say_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let h5 = run(d, "radial", RADIAL, &["--threads", "1"]);
+    let run = h5.to_str().unwrap();
+    let one_d = d.join("line.h5");
+    let collapse = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/collapse.toml");
+    assert_success(
+        &granflow()
+            .arg("run")
+            .arg(&collapse)
+            .args(["--quiet", "--set", "time.t_end=0.01", "--output"])
+            .arg(&one_d)
+            .output()
+            .unwrap(),
+    );
+    let missing = d.join("missing.h5");
+    let cases: [(Vec<&str>, &str); 6] = [
+        (vec![one_d.to_str().unwrap()], "a 1-D run"),
+        (vec![missing.to_str().unwrap()], "no such file"),
+        (
+            vec![run, "--time", "0.6"],
+            "outside the snapshots' times [0, 0.5]",
+        ),
+        (vec![run, "--time=-1"], "outside"),
+        (vec![run, "--fields", "pft,pfd"], "unknown field `pfd`"),
+        (vec![run, "--fields", "h"], "needs --time"),
+    ];
+    for (args, message) in cases {
+        let out = export(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+    // Not square cells.
+    let stretched = RADIAL.replace("cells = [24, 16]", "cells = [24, 10]");
+    let h5 = self::run(d, "stretched", &stretched, &[]);
+    let out = export(&[h5.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not square"));
+}
+
+/// Runs a sweep of the radial collapse in `dir` over `axis` and maps it.
+fn sweep(dir: &Path, axis: &str) -> PathBuf {
+    let base = dir.join("radial.toml");
+    fs::write(&base, RADIAL).unwrap();
+    let file = dir.join("ensemble.toml");
+    fs::write(
+        &file,
+        format!("scenario = \"radial.toml\"\n\n[axes]\n{axis}\n"),
+    )
+    .unwrap();
+    let out = dir.join("runs");
+    assert_success(
+        &granflow()
+            .arg("sweep")
+            .arg(&file)
+            .args(["--quiet", "--jobs", "1", "--output"])
+            .arg(&out)
+            .output()
+            .unwrap(),
+    );
+    out
+}
+
+fn probability(out: &Path) -> Vec<f64> {
+    geotiff::read(&out.join("maps/pft_probability.tif"))
+        .unwrap()
+        .values
+}
+
+#[test]
+fn identical_runs_give_probabilities_zero_or_one() {
+    let dir = tempfile::tempdir().unwrap();
+    // The grain diameter plays no part in Coulomb friction: the runs are identical.
+    let out = sweep(dir.path(), "material.d_s = [1e-3, 2e-3, 3e-3]");
+    let o = out.to_str().unwrap();
+    let table = assert_success(
+        &granflow()
+            .args(["maps", o, "--threshold", "0.02"])
+            .output()
+            .unwrap(),
+    );
+    assert!(table.contains("maps: 3 runs"), "{table}");
+    let p = probability(&out);
+    let (_, pft) = read(&out.join("d_s=0.001.h5"), "maps/h_max");
+    let reached: Vec<f64> = north_up(&pft, 24)
+        .iter()
+        .map(|&h| if h > 0.02 { 1.0 } else { 0.0 })
+        .collect();
+    assert_eq!(p, reached);
+    assert!(p.contains(&0.0) && p.contains(&1.0));
+}
+
+#[test]
+fn two_runs_give_one_half_exactly_where_one_reaches() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = sweep(dir.path(), "rheology.mu_deg = [20, 35]");
+    let o = out.to_str().unwrap();
+    // The observed footprint: a disc of radius 0.5 m.
+    let ring: Vec<String> = (0..64)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / 64.0;
+            format!("[{}, {}]", 0.5 * a.cos(), 0.5 * a.sin())
+        })
+        .collect();
+    let observed = dir.path().join("observed.geojson");
+    fs::write(
+        &observed,
+        format!(
+            r#"{{"type": "Polygon", "coordinates": [[{}, {}]]}}"#,
+            ring.join(", "),
+            ring[0]
+        ),
+    )
+    .unwrap();
+    let table = assert_success(
+        &granflow()
+            .args(["maps", o, "--threshold", "0.02", "--observed"])
+            .arg(&observed)
+            .output()
+            .unwrap(),
+    );
+    let p = probability(&out);
+    let reach = |name: &str| -> Vec<bool> {
+        let (_, pft) = read(&out.join(format!("{name}.h5")), "maps/h_max");
+        north_up(&pft, 24).iter().map(|&h| h > 0.02).collect()
+    };
+    let (a, b) = (reach("mu_deg=20"), reach("mu_deg=35"));
+    let mut halves = 0;
+    for k in 0..p.len() {
+        let want = match (a[k], b[k]) {
+            (true, true) => 1.0,
+            (false, false) => 0.0,
+            _ => 0.5,
+        };
+        assert_eq!(p[k], want, "cell {k}");
+        halves += usize::from(want == 0.5);
+    }
+    assert!(halves > 0, "the two runs reach the same cells");
+    // The skill: TP + FN is the observed area for every run, and the ranks 1 and 2.
+    let csv = fs::read_to_string(out.join("maps/runs.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    assert_eq!(rows.len(), 2);
+    let num = |r: &[String], c: &str| r[col(c)].parse::<f64>().unwrap();
+    let observed_area = num(&rows[0], "tp_area") + num(&rows[0], "fn_area");
+    let total = 2.4 * 1.6;
+    for r in &rows {
+        let sum = num(r, "tp_area") + num(r, "fp_area") + num(r, "fn_area") + num(r, "tn_area");
+        assert!((sum - total).abs() < 1e-9, "{sum}");
+        assert!((num(r, "tp_area") + num(r, "fn_area") - observed_area).abs() < 1e-12);
+        let (tpr, fpr) = (num(r, "tpr"), num(r, "fpr"));
+        assert!((num(r, "roc_distance") - (1.0 - tpr).hypot(fpr)).abs() < 1e-15);
+    }
+    let mut ranks: Vec<String> = rows.iter().map(|r| r[col("rank")].clone()).collect();
+    ranks.sort();
+    assert_eq!(ranks, ["1", "2"]);
+    assert!(table.contains("rank"), "{table}");
+
+    // A run scored against its own footprint (its pft exported as a raster, cells
+    // above 0 observed; simulated: pft above 0) is perfect and ranks first.
+    let own = out.join("mu_deg=35.h5");
+    let gis = dir.path().join("gis");
+    assert_success(&export(&[
+        own.to_str().unwrap(),
+        "--fields",
+        "pft",
+        "--format",
+        "asc",
+        "-o",
+        gis.to_str().unwrap(),
+    ]));
+    assert_success(
+        &granflow()
+            .args([
+                "maps",
+                o,
+                "--threshold",
+                "0",
+                "--format",
+                "asc",
+                "--observed",
+            ])
+            .arg(gis.join("mu_deg=35_pft.asc"))
+            .output()
+            .unwrap(),
+    );
+    let csv = fs::read_to_string(out.join("maps/runs.csv")).unwrap();
+    let own_row = csv.lines().find(|l| l.contains(",mu_deg=35,")).unwrap();
+    let fields: Vec<&str> = own_row.split(',').collect();
+    let at = |c: &str| fields[col(c)];
+    assert_eq!(
+        (at("fp_area"), at("fn_area"), at("tpr"), at("fpr")),
+        ("0", "0", "1", "0")
+    );
+    assert_eq!((at("roc_distance"), at("rank")), ("0", "1"));
+}
+
+#[test]
+fn maps_refuses_a_sweep_with_runs_not_done_unless_partial() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = sweep(dir.path(), "rheology.mu_deg = [20, 35]");
+    fs::remove_file(out.join("mu_deg=35.result.toml")).unwrap();
+    let o = out.to_str().unwrap();
+    let refused = granflow().args(["maps", o]).output().unwrap();
+    assert_eq!(refused.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        err.contains("1 of 2 runs") && err.contains("--partial"),
+        "{err}"
+    );
+    let table = assert_success(&granflow().args(["maps", o, "--partial"]).output().unwrap());
+    assert!(
+        table.contains("maps: 1 runs (1 not done, left out)"),
+        "{table}"
+    );
+    let bad = granflow()
+        .args(["maps", dir.path().to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("sweep-plan.toml"));
+}
+
+/// Forwards to the HDF5 sink and aborts the process once the maps of the third
+/// snapshot are on disk, as a run killed then.
+struct AbortAfterThirdSnapshot {
+    inner: granflow::output::hdf5::Hdf5Sink,
+    snapshots: usize,
+}
+
+impl granflow::output::OutputSink for AbortAfterThirdSnapshot {
+    fn begin(
+        &mut self,
+        info: &granflow::output::RunInfo,
+        grid: &granflow::output::GridData,
+    ) -> Result<(), granflow::output::OutputError> {
+        self.inner.begin(info, grid)
+    }
+    fn snapshot(
+        &mut self,
+        snap: &granflow::output::SnapshotView,
+    ) -> Result<(), granflow::output::OutputError> {
+        self.snapshots += 1;
+        self.inner.snapshot(snap)
+    }
+    fn step(
+        &mut self,
+        rec: &granflow::output::StepRecord,
+    ) -> Result<(), granflow::output::OutputError> {
+        self.inner.step(rec)
+    }
+    fn finish(
+        &mut self,
+        summary: &granflow::output::RunSummary,
+    ) -> Result<(), granflow::output::OutputError> {
+        self.inner.finish(summary)
+    }
+    fn maps_so_far(
+        &mut self,
+        maps: &[granflow::output::CellField],
+    ) -> Result<(), granflow::output::OutputError> {
+        self.inner.maps_so_far(maps)?;
+        if self.snapshots == 3 {
+            std::process::abort();
+        }
+        Ok(())
+    }
+}
+
+#[test]
+fn a_killed_run_keeps_the_maps_of_its_last_snapshot() {
+    if let Ok(path) = std::env::var("GRANFLOW_TEST_MAPS_ABORT_CHILD") {
+        let dir = Path::new(&path).parent().unwrap();
+        let scn = granflow::scenario::load_str(RADIAL, dir, &[]).unwrap();
+        let mut run = granflow::setup::build(&scn);
+        let mut sink = AbortAfterThirdSnapshot {
+            inner: granflow::output::hdf5::Hdf5Sink::create(Path::new(&path)).unwrap(),
+            snapshots: 0,
+        };
+        let _ = run.run(&mut sink, &mut |_| {});
+        unreachable!("the sink aborts at the third snapshot");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("killed.h5");
+    let child = Command::new(std::env::current_exe().unwrap())
+        .args([
+            "--exact",
+            "results::a_killed_run_keeps_the_maps_of_its_last_snapshot",
+            "--test-threads=1",
+        ])
+        .env("GRANFLOW_TEST_MAPS_ABORT_CHILD", &path)
+        .output()
+        .unwrap();
+    assert!(!child.status.success(), "the child should have aborted");
+    let (shape, h) = read(&path, "snapshots/h");
+    assert_eq!(shape, [3, 16, 24]);
+    let (_, h_max) = read(&path, "maps/h_max");
+    let (_, deposit) = read(&path, "maps/deposit");
+    let (_, ppr) = read(&path, "maps/ppr");
+    let (_, speed) = read(&path, "maps/speed_max");
+    let cells = 16 * 24;
+    // The maps of t = 0.2 s: deposit is that snapshot's h, h_max at least every
+    // snapshot's h and above the last one somewhere (the flow thinned since).
+    assert_eq!(deposit, h[2 * cells..]);
+    for k in 0..cells {
+        for frame in 0..3 {
+            assert!(h_max[k] >= h[frame * cells + k], "cell {k}");
+        }
+        assert_eq!(ppr[k], 0.62 * 2500.0 * speed[k] * speed[k]);
+    }
+    assert!((0..cells).any(|k| h_max[k] > deposit[k]));
+    // The file is a run that did not finish, and export reads it.
+    let out = export(&[path.to_str().unwrap(), "--fields", "pft", "--float64"]);
+    assert_success(&out);
+    let pft = geotiff::read(&dir.path().join("killed_pft.tif")).unwrap();
+    assert_eq!(pft.values, north_up(&h_max, 24));
+}
