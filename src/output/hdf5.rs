@@ -861,6 +861,8 @@ mod tests {
             ny: 2,
             crs_epsg: None,
             crs_wkt: None,
+            release: None,
+            wall_cells: 0,
         });
         let x = [0.5, 1.5, 2.5, 0.5, 1.5, 2.5];
         let y = [0.5, 0.5, 0.5, 1.5, 1.5, 1.5];
