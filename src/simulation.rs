@@ -234,6 +234,9 @@ impl<M: Model> Simulation<M> {
         RunError::Solver(SolverFailure {
             reason,
             x: cell.map(|i| self.grid.centre(i).x),
+            y: cell
+                .filter(|_| self.grid.axis_names().len() > 1)
+                .map(|i| self.grid.centre(i).y),
             t: self.t,
             step: self.steps,
         })
@@ -375,6 +378,11 @@ impl<M: Model> Simulation<M> {
                 diagnostics: &d,
                 next_dt: self.cfl_dt(d.signal_speed),
                 x: self.grid.axis(0),
+                y: if self.grid.axis_names().len() > 1 {
+                    self.grid.axis(1)
+                } else {
+                    &[]
+                },
                 at_rest,
                 mass0: tally.mass0,
             };

@@ -25,6 +25,8 @@ pub struct StepContext<'a> {
     pub next_dt: f64,
     /// Position (m) of cell `i`, for messages.
     pub x: &'a [f64],
+    /// The y (m) of cell `i` on a raster (empty on a line).
+    pub y: &'a [f64],
     /// Whether the whole mass is at rest (every speed ≤ the model's rest speed).
     pub at_rest: bool,
     /// The mass of the initial state (the same measure as `diagnostics.mass`).
@@ -37,6 +39,8 @@ pub struct SolverFailure {
     pub reason: FailureReason,
     /// Position (m) of the offending cell, when there is one.
     pub x: Option<f64>,
+    /// Its y (m) on a raster.
+    pub y: Option<f64>,
     pub t: f64,
     pub step: u64,
 }
@@ -60,17 +64,22 @@ pub enum FailureReason {
 impl std::fmt::Display for SolverFailure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let x = self.x.unwrap_or(f64::NAN);
+        // The cell: x on a line, the point (x, y) on a raster.
+        let at = match self.y {
+            None => format!("x = {x} m"),
+            Some(y) => format!("(x, y) = ({x}, {y}) m"),
+        };
         let (t, step) = (self.t, self.step);
         match &self.reason {
             FailureReason::NonFinite if step == 0 => {
-                write!(f, "non-finite initial state at x = {x}")
+                write!(f, "non-finite initial state at {at}")
             }
             FailureReason::NonFinite => {
-                write!(f, "non-finite value at x = {x} m, t = {t:.6e} s (step {step})")
+                write!(f, "non-finite value at {at}, t = {t:.6e} s (step {step})")
             }
             FailureReason::NegativeThickness { h, dt } => write!(
                 f,
-                "thickness would become negative ({h:.3e} m) at x = {x} m, t = {t:.6e} s even with Δt = {dt:.3e} s"
+                "thickness would become negative ({h:.3e} m) at {at}, t = {t:.6e} s even with Δt = {dt:.3e} s"
             ),
             FailureReason::DtCollapse { dt, max_speed } => write!(
                 f,
@@ -78,7 +87,7 @@ impl std::fmt::Display for SolverFailure {
             ),
             FailureReason::Inadmissible { quantity, value } => write!(
                 f,
-                "{quantity} = {value:e} is outside its admissible range at x = {x} m, t = {t:.6e} s (step {step})"
+                "{quantity} = {value:e} is outside its admissible range at {at}, t = {t:.6e} s (step {step})"
             ),
             FailureReason::SpeedBound { speed, bound } => write!(
                 f,
@@ -123,6 +132,7 @@ impl StopRule for NonFinite {
             Some(i) => Verdict::Fail(SolverFailure {
                 reason: FailureReason::NonFinite,
                 x: ctx.x.get(i).copied(),
+                y: ctx.y.get(i).copied(),
                 t: ctx.t,
                 step: ctx.steps,
             }),
@@ -149,6 +159,7 @@ impl StopRule for DtCollapse {
                 max_speed: ctx.diagnostics.max_speed,
             },
             x: None,
+            y: None,
             t: ctx.t,
             step: ctx.steps,
         })
@@ -223,6 +234,7 @@ impl StopRule for SpeedBound {
                 bound: self.bound,
             },
             x: None,
+            y: None,
             t: ctx.t,
             step: ctx.steps,
         })
@@ -253,6 +265,7 @@ impl StopRule for MassGain {
         Verdict::Fail(SolverFailure {
             reason: FailureReason::MassGain { mass, mass0 },
             x: None,
+            y: None,
             t: ctx.t,
             step: ctx.steps,
         })
@@ -378,11 +391,62 @@ mod tests {
                     diagnostics: &d,
                     next_dt: 1.0,
                     x: &[0.0],
+                    y: &[],
                     at_rest: false,
                     mass0: 1.0,
                 })
             })
             .collect()
+    }
+
+    /// The non-finite rule's failure for cell 1 of a grid with centres `x` and `y`.
+    fn non_finite(x: &[f64], y: &[f64]) -> String {
+        let d = Diagnostics {
+            mass: f64::NAN,
+            kinetic_energy: 0.0,
+            max_speed: 0.0,
+            signal_speed: 1.0,
+            front_x: 0.0,
+            h_max: 1.0,
+            non_finite_at: Some(1),
+        };
+        let ctx = StepContext {
+            t: 0.5,
+            t_end: 1.0,
+            steps: 7,
+            diagnostics: &d,
+            next_dt: 1.0,
+            x,
+            y,
+            at_rest: false,
+            mass0: 1.0,
+        };
+        match NonFinite.check(&ctx) {
+            Verdict::Fail(failure) => failure.to_string(),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn failures_name_the_cell_by_x_on_a_line_and_by_x_and_y_on_a_raster() {
+        let line = non_finite(&[0.5, 1.5], &[]);
+        assert!(line.contains("at x = 1.5 m, t = "), "{line}");
+        let raster = non_finite(&[0.5, 1.5], &[-2.25, -2.25]);
+        assert!(
+            raster.contains("at (x, y) = (1.5, -2.25) m, t = "),
+            "{raster}"
+        );
+        let failure = SolverFailure {
+            reason: FailureReason::NegativeThickness { h: -1.0, dt: 0.1 },
+            x: Some(3.0),
+            y: Some(4.0),
+            t: 1.0,
+            step: 2,
+        };
+        assert!(
+            failure.to_string().contains("at (x, y) = (3, 4) m"),
+            "{failure}"
+        );
     }
 
     #[test]

@@ -8,6 +8,7 @@
 //! `--set key=value` overrides are applied to the document before deserialising
 //! (`overrides`), so a sweep is a list of override sets over one base file.
 
+mod compiled;
 mod document;
 mod error;
 mod overrides;

@@ -19,6 +19,7 @@ use evalexpr::{
     Operator, Value,
 };
 
+use super::compiled::Compiled;
 use super::error::ScenarioError;
 
 /// Function names an expression may call.
@@ -270,6 +271,9 @@ impl Profile {
 struct Expression {
     source: String,
     node: Node<DefaultNumericTypes>,
+    /// The typed tree evaluated per point, when the expression has one
+    /// ([`super::compiled`]); `evalexpr` evaluates the others.
+    compiled: Option<Compiled>,
     allow_b: bool,
     /// Whether it reads `y`.
     uses_y: bool,
@@ -334,6 +338,7 @@ impl Expression {
         }
         let expr = Expression {
             source: source.to_owned(),
+            compiled: Compiled::new(&node, allow_b),
             node,
             allow_b,
             uses_y,
@@ -357,6 +362,16 @@ impl Expression {
     }
 
     fn eval(&self, x: f64, y: f64, b: f64) -> Result<f64, String> {
+        if let Some(c) = &self.compiled {
+            return c
+                .eval(x, y, b)
+                .map_err(|m| format!("expression \"{}\" fails: {m}", self.source));
+        }
+        self.eval_tree(x, y, b)
+    }
+
+    /// The value by `evalexpr`'s evaluation of the operator tree.
+    fn eval_tree(&self, x: f64, y: f64, b: f64) -> Result<f64, String> {
         match self
             .node
             .eval_with_context(&ExprContext::new(x, y, b, self.allow_b))
@@ -940,6 +955,67 @@ mod tests {
 
     fn expr(s: &str) -> Profile {
         Profile::expression(s).unwrap_or_else(|e| panic!("{s}: {e}"))
+    }
+
+    /// The bits of the compiled evaluation and of `evalexpr`'s, or both errors' texts.
+    fn both_ways(
+        e: &Expression,
+        x: f64,
+        y: f64,
+        b: f64,
+    ) -> (Result<u64, String>, Result<u64, String>) {
+        let compiled = e.eval(x, y, b).map(f64::to_bits);
+        let tree = e.eval_tree(x, y, b).map(f64::to_bits);
+        (compiled, tree)
+    }
+
+    #[test]
+    fn compiled_expressions_give_the_bits_of_the_operator_tree() {
+        let sources = [
+            "if(x < 3210.9, 2200 - tan(34*deg)*x, if(x < 3322.8, 200 - sqrt(max(0, 200^2 - (x - 3322.8)^2)), 0)) + 100*min((y/200)^2, 1)",
+            "if(((x - 500)/200)^2 + (y/120)^2 < 1, 2, 0)",
+            "0.5*exp(-((x - 1)^2 + y^2)/0.1) - b % 0.3 + ln(abs(x) + 1) * log10(2 + y*y)",
+            "atan2(y, x) + pow(abs(x), 1/3) + floor(x) - ceil(y) + round(x*y) + -x",
+            "sin(x)*cos(y)*tan(0.1*x) + asin(0.5) + acos(0.1) + atan(x) + sinh(0.1*y) + cosh(0.2) + tanh(x)",
+            "min(x, y, 1, -2*b) + max(x) + if(x >= 1 && !(y <= 0) || x == y, 1, 0) + if(x != 0 == true, 2, 3)",
+            "noise(x, 7) + noise(y, -3)",
+            "noise(x, x)",
+            "1/x + x/0 - 0/0",
+        ];
+        let points = [
+            -2.5,
+            -1.0,
+            -0.0,
+            0.0,
+            0.3,
+            1.0,
+            1.5,
+            600.0,
+            3300.0,
+            1e9,
+            f64::NAN,
+        ];
+        for source in sources {
+            let e = Expression::compile(source, true).unwrap_or_else(|m| panic!("{m}"));
+            assert!(e.compiled.is_some(), "{source} has a compiled form");
+            for &x in &points {
+                for &y in &points {
+                    for b in [0.0, 0.7] {
+                        let (compiled, tree) = both_ways(&e, x, y, b);
+                        assert_eq!(compiled, tree, "{source} at ({x}, {y}, {b})");
+                    }
+                }
+            }
+        }
+        // A failing noise seed fails both ways with the same message.
+        let e = Expression::compile("noise(x, x)", false).unwrap();
+        assert!(e.eval(0.5, 0.0, 0.0).is_err());
+        // What does not type-check as a number keeps the operator tree.
+        for source in ["x; 2", "if(x < 1, x < 2, 3) * 0 + 1"] {
+            if let Ok(e) = Expression::compile(source, false) {
+                assert!(e.compiled.is_none(), "{source}");
+            }
+        }
     }
 
     #[test]
