@@ -53,10 +53,13 @@
 //! the velocities U₁ of the two-layer model (docs/numerics.md); on a flat bed it is the
 //! multilayer system exactly.
 
+pub mod grains;
+
 use super::banded::BandedCholesky;
 use super::projection::multilayer::MultilayerOperator;
 use super::projection::{PressureSolver, ProjectionOperator};
 use super::{Stage, StageError};
+use grains::{push_grains, CoupledRows};
 use crate::grid::CurvedLine;
 use crate::physics::two_layer::H_DRY_TWO_LAYER;
 use crate::state::layered::{fill_tracer_ghosts, LayeredState, Tracer, HW};
@@ -78,6 +81,11 @@ pub struct WaterProjection {
     zb: Vec<f64>,
     /// ż_b per cell (with ghosts).
     zb_rate: Vec<f64>,
+    /// r A₁: the weight of the interface pressure in the grains' momentum
+    /// ([`grains`]; 0: the grains do not feel the non-hydrostatic pressure).
+    coupling: f64,
+    /// κ_i of the grains that take part in the projection, per cell with ghosts.
+    kappa: Vec<f64>,
 }
 
 /// z_b = b + H₂cos²θ per cell with ghosts.
@@ -88,7 +96,10 @@ fn bottom(g: &CurvedLine, s: &TwoLayerState, zb: &mut [f64]) {
 }
 
 impl WaterProjection {
-    pub fn new(g: &CurvedLine, layers: usize) -> Self {
+    /// The projection of `layers` water layers on `g`, the grains feeling the
+    /// interface pressure with the weight `coupling` = r A₁ of the two-layer model
+    /// ([`grains`]; 0 leaves the grains out: the one-way coupling, for comparison).
+    pub fn new(g: &CurvedLine, layers: usize, coupling: f64) -> Self {
         assert!(layers >= 1);
         let nx = g.line.nx;
         let l = vec![1.0 / layers as f64; layers];
@@ -104,6 +115,8 @@ impl WaterProjection {
             zb_old: vec![0.0; nx + 2],
             zb: vec![0.0; nx + 2],
             zb_rate: vec![0.0; nx + 2],
+            coupling,
+            kappa: vec![0.0; nx + 2],
         }
     }
 
@@ -179,11 +192,33 @@ impl WaterProjection {
         // Ghosts: h as the state's, hu copied or reversed.
         self.column.fill_ghosts(&g.line);
         self.op.update(&g.line, &self.column);
+        let coupled = self.grain_weights(g, &s.h2, &s.q2);
         {
-            let rows = self.op.rows(&self.column);
-            self.solver.solve(&rows, &mut self.pi);
+            let water = self.op.rows(&self.column);
+            if coupled {
+                let rows = CoupledRows {
+                    water,
+                    op: &self.op,
+                    kappa: &self.kappa,
+                };
+                self.solver.solve(&rows, &mut self.pi);
+            } else {
+                self.solver.solve(&water, &mut self.pi);
+            }
         }
         self.op.correct(&g.line, &mut self.column, &self.pi, dt);
+        if coupled {
+            push_grains(
+                &self.kappa,
+                &self.pi,
+                n,
+                self.coupling,
+                &s.h2,
+                &g.cos,
+                g.line.dx,
+                &mut s.q2,
+            );
+        }
         let (h, hu, hw) = (&self.column.h, &self.column.hu, self.column.hw());
         for i in 1..=nx {
             let (h1, d) = (s.h1[i], h[i]);
@@ -214,6 +249,33 @@ impl WaterProjection {
             g.line.left.discharge_sign(),
             g.line.right.discharge_sign(),
         );
+    }
+}
+
+impl WaterProjection {
+    /// κ_i = r A₁ cos⁴θ_i H₂,i/Δx² of the cells whose grains move (Q₂ ≠ 0 after the
+    /// two-layer step) next to a face with unknowns, 0 elsewhere (held or absent
+    /// grains, ghosts, the edge cell of a merged outflow face): [`grains`]. Returns
+    /// whether any is positive (else the projection is the water's alone, bit for bit).
+    fn grain_weights(&mut self, g: &CurvedLine, h2: &[f64], q2: &[f64]) -> bool {
+        let nx = g.line.nx;
+        self.kappa.fill(0.0);
+        if self.coupling <= 0.0 {
+            return false;
+        }
+        let scale = self.coupling / (g.line.dx * g.line.dx);
+        let (merged_left, merged_right) = self.op.merged_edges();
+        let mut any = false;
+        for i in 1..=nx {
+            let wet = self.op.carries_unknowns(i - 1) || self.op.carries_unknowns(i);
+            let edge = (merged_left && i == 1) || (merged_right && i == nx);
+            if wet && !edge && q2[i] != 0.0 && h2[i] > H_DRY_TWO_LAYER {
+                let c2 = g.cos2[i];
+                self.kappa[i] = scale * c2 * c2 * h2[i];
+                any = true;
+            }
+        }
+        any
     }
 }
 
