@@ -35,7 +35,11 @@
 //! Cells whose grains the step left at rest (Q₂ = 0: held by the Coulomb rule, or not
 //! set in motion) are a fixed bottom for the projection (κ_i = 0, m_i = ∞): the static
 //! friction takes the non-hydrostatic force there, so a deposit held by friction stays
-//! exactly at rest. At an outflow boundary the edge face's pressure is its
+//! exactly at rest. Grain films of vertical thickness below the water operator's wet
+//! threshold take no part either (as the water's own films): the rate the two-layer
+//! step gives a draining film (limited fluxes, desingularised velocity) is not the
+//! rate (G2) expects of it, and the pressure answering the difference accelerated
+//! such films without bound (docs/numerics.md). At an outflow boundary the edge face's pressure is its
 //! neighbour's ([`MultilayerOperator`]), so the edge cell feels no pressure difference
 //! and takes no part (κ = 0).
 

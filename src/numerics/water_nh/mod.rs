@@ -36,18 +36,19 @@
 //! 3. the projection on the water column: with the state
 //!    (d, d u_α, d (w_α − ż_b)) and the bed z_b^{n+1}, the impulses Π = Δt p^{n+1} solve
 //!    A Π = −𝒞 (A = 𝒯ᵀM⁻¹𝒯, banded Cholesky, exact), the correction 𝒯Π is added, and
-//!    U₁, u'_α, w_α = w̃_α + ż_b are read back: Q₁ ← Q₁ + H₁ Σ l_α δu_α. H₁ and H₂ are
-//!    not touched, so both volumes stay exactly those of step 1.
+//!    U₁, u'_α, w_α = w̃_α + ż_b are read back: Q₁ ← Q₁ + H₁ Σ l_α δu_α, and the moving
+//!    grains' Q₂ ← Q₂ + δQ₂ ([`grains`]). H₁ and H₂ are not touched, so both volumes
+//!    stay exactly those of step 1.
 //!
-//! **Grains.** The coupling is one way: the grains move the water through the
-//! kinematic condition of the moving bottom (ż_b above), and feel the water's
-//! hydrostatic pressure in the two-layer step; the water's non-hydrostatic pressure
-//! does not act on the grains. Its share, −r H₂ ∂_x p_{1/2} per unit grain density,
-//! added explicitly (with p_{1/2} of the last projection, before the Coulomb rule) is
-//! unstable: the pressure at the interface answers the bottom's acceleration (the
-//! water's added mass), and a lagged added-mass force grows from step to step once the
-//! added mass of the water column exceeds that of the grains (docs/numerics.md). The
-//! coupling both ways needs the grain discharge corrected inside the projection.
+//! **Grains.** The coupling goes both ways: the grains move the water through the
+//! kinematic condition of the moving bottom (ż_b above) and feel the water's
+//! hydrostatic pressure in the two-layer step; the moving grains take part in the
+//! projection ([`grains`]): the interface pressure p_{1/2} pushes them,
+//! δQ₂ = −r A₁ H₂ cos θ ∂_x Π, and the rate of that push enters the bottom constraint,
+//! so the water's added mass is implicit (an explicit, lagged force is unstable once
+//! the added mass exceeds the grains', docs/numerics.md). The coupled system keeps
+//! A's band. Grains held by the Coulomb rule, and grain films thinner than the water
+//! operator's wet threshold, are a fixed bottom.
 //!
 //! On a sloping bed the projection is written with the vertical depths d = H₁cos²θ and
 //! the velocities U₁ of the two-layer model (docs/numerics.md); on a flat bed it is the
@@ -56,6 +57,7 @@
 pub mod grains;
 
 use super::banded::BandedCholesky;
+use super::projection::monolayer::wet_threshold;
 use super::projection::multilayer::MultilayerOperator;
 use super::projection::{PressureSolver, ProjectionOperator};
 use super::{Stage, StageError};
@@ -86,6 +88,9 @@ pub struct WaterProjection {
     coupling: f64,
     /// κ_i of the grains that take part in the projection, per cell with ghosts.
     kappa: Vec<f64>,
+    /// Grain layers of vertical thickness below this take no part (the water
+    /// operator's wet threshold, [`wet_threshold`]).
+    film: f64,
 }
 
 /// z_b = b + H₂cos²θ per cell with ghosts.
@@ -117,6 +122,7 @@ impl WaterProjection {
             zb_rate: vec![0.0; nx + 2],
             coupling,
             kappa: vec![0.0; nx + 2],
+            film: wet_threshold(g.line.dx),
         }
     }
 
@@ -269,7 +275,7 @@ impl WaterProjection {
         for i in 1..=nx {
             let wet = self.op.carries_unknowns(i - 1) || self.op.carries_unknowns(i);
             let edge = (merged_left && i == 1) || (merged_right && i == nx);
-            if wet && !edge && q2[i] != 0.0 && h2[i] > H_DRY_TWO_LAYER {
+            if wet && !edge && q2[i] != 0.0 && h2[i] * g.cos2[i] > self.film {
                 let c2 = g.cos2[i];
                 self.kappa[i] = scale * c2 * c2 * h2[i];
                 any = true;
