@@ -50,20 +50,32 @@ use crate::numerics::linalg::{BandReady, PressureRows};
 use crate::numerics::projection::multilayer::{MultilayerOperator, MultilayerRows};
 
 /// The rows of the coupled system (A + G m⁻¹ Gᵀ) Π = −𝒞: the water's rows of
-/// [`MultilayerRows`] with the grains' terms κ added to the bottom unknowns
-/// (module documentation). `kappa` has one value per cell with ghosts (0 for the
-/// ghosts and the cells that take no part).
+/// [`MultilayerRows`] with the grains' terms added to the bottom unknowns (module
+/// documentation). `kappa` has one value per cell with ghosts (0 for the ghosts and
+/// the cells that take no part); `diag` and `lower` one per face: κ_f + κ_{f+1} on the
+/// diagonal of face f's bottom unknown and −κ_{f+1} between it and face f + 1's, 0
+/// where either face carries no unknown ([`CoupledRows::face_terms`]).
 pub struct CoupledRows<'a> {
     pub water: MultilayerRows<'a>,
     pub op: &'a MultilayerOperator,
-    pub kappa: &'a [f64],
+    pub diag: &'a [f64],
+    pub lower: &'a [f64],
 }
 
 impl CoupledRows<'_> {
-    /// Whether face f + 1 exists and carries unknowns.
-    #[inline(always)]
-    fn next_carries(&self, f: usize) -> bool {
-        f + 2 < self.kappa.len() && self.op.carries_unknowns(f + 1)
+    /// The per-face terms `diag`, `lower` (nx + 1 each) from κ per cell (nx + 2) and
+    /// the faces with unknowns of `op`.
+    pub fn face_terms(op: &MultilayerOperator, kappa: &[f64], diag: &mut [f64], lower: &mut [f64]) {
+        let faces = kappa.len() - 1;
+        for f in 0..faces {
+            let here = op.carries_unknowns(f);
+            diag[f] = if here { kappa[f] + kappa[f + 1] } else { 0.0 };
+            lower[f] = if here && f + 1 < faces && op.carries_unknowns(f + 1) {
+                kappa[f + 1]
+            } else {
+                0.0
+            };
+        }
     }
 }
 
@@ -81,13 +93,11 @@ impl PressureRows for CoupledRows<'_> {
         if j != 0 || !self.op.carries_unknowns(f) {
             return row;
         }
-        row.coef[1][1] += self.kappa[f] + self.kappa[f + 1];
-        if f >= 1 && self.op.carries_unknowns(f - 1) {
-            row.coef[0][1] -= self.kappa[f];
+        row.coef[1][1] += self.diag[f];
+        if f >= 1 {
+            row.coef[0][1] -= self.lower[f - 1];
         }
-        if self.next_carries(f) {
-            row.coef[2][1] -= self.kappa[f + 1];
-        }
+        row.coef[2][1] -= self.lower[f];
         row
     }
 
@@ -105,22 +115,19 @@ impl PressureRows for CoupledRows<'_> {
     ) -> bool {
         let n = self.op.layers();
         let active = self.water.active();
-        let (s, len) = (active.start, active.len());
-        debug_assert_eq!(s % n, 0);
-        let mut done: usize = 0; // columns before this one have their grain terms
+        let (f0, faces) = (active.start / n, active.len() / n);
+        debug_assert_eq!(active.start % n, 0);
+        let (diag, lower) = (&self.diag[f0..f0 + faces], &self.lower[f0..f0 + faces]);
+        let mut done = 0; // faces before this one have their grain terms
         let mut add = |band: &mut [f64], end: usize| {
-            let mut c = done.div_ceil(n) * n;
-            while c < end {
-                let f = (s + c) / n;
-                if self.op.carries_unknowns(f) {
-                    band[c * stride] += self.kappa[f] + self.kappa[f + 1];
-                    if c + n < len && self.next_carries(f) {
-                        band[c * stride + n] -= self.kappa[f + 1];
-                    }
-                }
-                c += n;
+            // Faces whose bottom column (f·n) is final.
+            let end = end.div_ceil(n).min(faces);
+            for f in done..end {
+                let col = &mut band[f * n * stride..][..n + 1];
+                col[0] += diag[f];
+                col[n] -= lower[f];
             }
-            done = end;
+            done = done.max(end);
         };
         self.water
             .assemble_band(band, rhs, p, stride, &mut |band, rhs, c| {

@@ -88,6 +88,9 @@ pub struct WaterProjection {
     coupling: f64,
     /// κ_i of the grains that take part in the projection, per cell with ghosts.
     kappa: Vec<f64>,
+    /// The grains' terms of the system per face ([`CoupledRows::face_terms`]).
+    diag: Vec<f64>,
+    lower: Vec<f64>,
     /// Grain layers of vertical thickness below this take no part (the water
     /// operator's wet threshold, [`wet_threshold`]).
     film: f64,
@@ -122,6 +125,8 @@ impl WaterProjection {
             zb_rate: vec![0.0; nx + 2],
             coupling,
             kappa: vec![0.0; nx + 2],
+            diag: vec![0.0; nx + 1],
+            lower: vec![0.0; nx + 1],
             film: wet_threshold(g.line.dx),
         }
     }
@@ -205,7 +210,8 @@ impl WaterProjection {
                 let rows = CoupledRows {
                     water,
                     op: &self.op,
-                    kappa: &self.kappa,
+                    diag: &self.diag,
+                    lower: &self.lower,
                 };
                 self.solver.solve(&rows, &mut self.pi);
             } else {
@@ -280,6 +286,9 @@ impl WaterProjection {
                 self.kappa[i] = scale * c2 * c2 * h2[i];
                 any = true;
             }
+        }
+        if any {
+            CoupledRows::face_terms(&self.op, &self.kappa, &mut self.diag, &mut self.lower);
         }
         any
     }
