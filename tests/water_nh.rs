@@ -290,7 +290,10 @@ fn grains_under_waves_feel_the_non_hydrostatic_pressure() {
                 }
                 let [one_way, coupled] = errors;
                 let bound = if layers == 1 { 0.015 } else { 0.006 };
-                assert!(coupled < bound, "kd1 = {kd1}, mode {mode}, M = {layers}: {errors:?}");
+                assert!(
+                    coupled < bound,
+                    "kd1 = {kd1}, mode {mode}, M = {layers}: {errors:?}"
+                );
                 if mode == 0 {
                     assert!(one_way > coupled, "kd1 = {kd1}, M = {layers}: {errors:?}");
                     if layers >= 2 {
@@ -303,7 +306,10 @@ fn grains_under_waves_feel_the_non_hydrostatic_pressure() {
                 two_way.push(coupled);
             }
             if mode == 0 {
-                assert!(two_way[2] < two_way[1] && two_way[1] < two_way[0], "{two_way:?}");
+                assert!(
+                    two_way[2] < two_way[1] && two_way[1] < two_way[0],
+                    "{two_way:?}"
+                );
             }
         }
     }

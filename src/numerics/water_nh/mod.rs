@@ -61,11 +61,11 @@ use super::projection::monolayer::wet_threshold;
 use super::projection::multilayer::MultilayerOperator;
 use super::projection::{PressureSolver, ProjectionOperator};
 use super::{Stage, StageError};
-use grains::{push_grains, CoupledRows};
 use crate::grid::CurvedLine;
 use crate::physics::two_layer::H_DRY_TWO_LAYER;
 use crate::state::layered::{fill_tracer_ghosts, LayeredState, Tracer, HW};
 use crate::state::{TwoLayerState, WaterColumn};
+use grains::{push_grains, CoupledRows};
 
 /// The projection of the water column, with its operator, solver and scratch column.
 #[derive(Debug)]
