@@ -48,7 +48,7 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
     // Non-hydrostatic water: its layers at rest, and the projection after the
     // two-layer step. Hydrostatic water builds none of it.
     if let WaterPressure::NonHydrostatic { layers } = spec.water {
-        let projection = WaterProjection::new(&grid, layers);
+        let projection = WaterProjection::new(&grid, layers, params.r * params.a1);
         state.water = Some(projection.water_at_rest(nx));
         stages.push(Box::new(WaterProjectionStage { projection }));
     }

@@ -166,6 +166,19 @@ impl MultilayerOperator {
         self.h_last.clear();
     }
 
+    /// Whether face f carries unknowns at the last [`update`](Self::update) (a wet
+    /// face, not merged into its neighbour at an outflow boundary).
+    #[inline(always)]
+    pub fn carries_unknowns(&self, f: usize) -> bool {
+        self.wet[f]
+    }
+
+    /// Whether the left and the right edge faces are merged into their inner
+    /// neighbours (outflow boundaries with water) at the last update.
+    pub fn merged_edges(&self) -> (bool, bool) {
+        (self.merged_left, self.merged_right)
+    }
+
     /// Faces that carry unknowns, as a range of scalar unknowns (face-major).
     fn active_unknowns(&self) -> Range<usize> {
         self.span.start * self.layers..self.span.end * self.layers

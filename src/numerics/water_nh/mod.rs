@@ -36,24 +36,28 @@
 //! 3. the projection on the water column: with the state
 //!    (d, d u_α, d (w_α − ż_b)) and the bed z_b^{n+1}, the impulses Π = Δt p^{n+1} solve
 //!    A Π = −𝒞 (A = 𝒯ᵀM⁻¹𝒯, banded Cholesky, exact), the correction 𝒯Π is added, and
-//!    U₁, u'_α, w_α = w̃_α + ż_b are read back: Q₁ ← Q₁ + H₁ Σ l_α δu_α. H₁ and H₂ are
-//!    not touched, so both volumes stay exactly those of step 1.
+//!    U₁, u'_α, w_α = w̃_α + ż_b are read back: Q₁ ← Q₁ + H₁ Σ l_α δu_α, and the moving
+//!    grains' Q₂ ← Q₂ + δQ₂ ([`grains`]). H₁ and H₂ are not touched, so both volumes
+//!    stay exactly those of step 1.
 //!
-//! **Grains.** The coupling is one way: the grains move the water through the
-//! kinematic condition of the moving bottom (ż_b above), and feel the water's
-//! hydrostatic pressure in the two-layer step; the water's non-hydrostatic pressure
-//! does not act on the grains. Its share, −r H₂ ∂_x p_{1/2} per unit grain density,
-//! added explicitly (with p_{1/2} of the last projection, before the Coulomb rule) is
-//! unstable: the pressure at the interface answers the bottom's acceleration (the
-//! water's added mass), and a lagged added-mass force grows from step to step once the
-//! added mass of the water column exceeds that of the grains (docs/numerics.md). The
-//! coupling both ways needs the grain discharge corrected inside the projection.
+//! **Grains.** The coupling goes both ways: the grains move the water through the
+//! kinematic condition of the moving bottom (ż_b above) and feel the water's
+//! hydrostatic pressure in the two-layer step; the moving grains take part in the
+//! projection ([`grains`]): the interface pressure p_{1/2} pushes them,
+//! δQ₂ = −r A₁ H₂ cos θ ∂_x Π, and the rate of that push enters the bottom constraint,
+//! so the water's added mass is implicit (an explicit, lagged force is unstable once
+//! the added mass exceeds the grains', docs/numerics.md). The coupled system keeps
+//! A's band. Grains held by the Coulomb rule, and grain films thinner than the water
+//! operator's wet threshold, are a fixed bottom.
 //!
 //! On a sloping bed the projection is written with the vertical depths d = H₁cos²θ and
 //! the velocities U₁ of the two-layer model (docs/numerics.md); on a flat bed it is the
 //! multilayer system exactly.
 
+pub mod grains;
+
 use super::banded::BandedCholesky;
+use super::projection::monolayer::wet_threshold;
 use super::projection::multilayer::MultilayerOperator;
 use super::projection::{PressureSolver, ProjectionOperator};
 use super::{Stage, StageError};
@@ -61,6 +65,7 @@ use crate::grid::CurvedLine;
 use crate::physics::two_layer::H_DRY_TWO_LAYER;
 use crate::state::layered::{fill_tracer_ghosts, LayeredState, Tracer, HW};
 use crate::state::{TwoLayerState, WaterColumn};
+use grains::{push_grains, CoupledRows};
 
 /// The projection of the water column, with its operator, solver and scratch column.
 #[derive(Debug)]
@@ -78,6 +83,17 @@ pub struct WaterProjection {
     zb: Vec<f64>,
     /// ż_b per cell (with ghosts).
     zb_rate: Vec<f64>,
+    /// r A₁: the weight of the interface pressure in the grains' momentum
+    /// ([`grains`]; 0: the grains do not feel the non-hydrostatic pressure).
+    coupling: f64,
+    /// κ_i of the grains that take part in the projection, per cell with ghosts.
+    kappa: Vec<f64>,
+    /// The grains' terms of the system per face ([`CoupledRows::face_terms`]).
+    diag: Vec<f64>,
+    lower: Vec<f64>,
+    /// Grain layers of vertical thickness below this take no part (the water
+    /// operator's wet threshold, [`wet_threshold`]).
+    film: f64,
 }
 
 /// z_b = b + H₂cos²θ per cell with ghosts.
@@ -88,7 +104,10 @@ fn bottom(g: &CurvedLine, s: &TwoLayerState, zb: &mut [f64]) {
 }
 
 impl WaterProjection {
-    pub fn new(g: &CurvedLine, layers: usize) -> Self {
+    /// The projection of `layers` water layers on `g`, the grains feeling the
+    /// interface pressure with the weight `coupling` = r A₁ of the two-layer model
+    /// ([`grains`]; 0 leaves the grains out: the one-way coupling, for comparison).
+    pub fn new(g: &CurvedLine, layers: usize, coupling: f64) -> Self {
         assert!(layers >= 1);
         let nx = g.line.nx;
         let l = vec![1.0 / layers as f64; layers];
@@ -104,6 +123,11 @@ impl WaterProjection {
             zb_old: vec![0.0; nx + 2],
             zb: vec![0.0; nx + 2],
             zb_rate: vec![0.0; nx + 2],
+            coupling,
+            kappa: vec![0.0; nx + 2],
+            diag: vec![0.0; nx + 1],
+            lower: vec![0.0; nx + 1],
+            film: wet_threshold(g.line.dx),
         }
     }
 
@@ -179,11 +203,34 @@ impl WaterProjection {
         // Ghosts: h as the state's, hu copied or reversed.
         self.column.fill_ghosts(&g.line);
         self.op.update(&g.line, &self.column);
+        let coupled = self.grain_weights(g, &s.h2, &s.q2);
         {
-            let rows = self.op.rows(&self.column);
-            self.solver.solve(&rows, &mut self.pi);
+            let water = self.op.rows(&self.column);
+            if coupled {
+                let rows = CoupledRows {
+                    water,
+                    op: &self.op,
+                    diag: &self.diag,
+                    lower: &self.lower,
+                };
+                self.solver.solve(&rows, &mut self.pi);
+            } else {
+                self.solver.solve(&water, &mut self.pi);
+            }
         }
         self.op.correct(&g.line, &mut self.column, &self.pi, dt);
+        if coupled {
+            push_grains(
+                &self.kappa,
+                &self.pi,
+                n,
+                self.coupling,
+                &s.h2,
+                &g.cos,
+                g.line.dx,
+                &mut s.q2,
+            );
+        }
         let (h, hu, hw) = (&self.column.h, &self.column.hu, self.column.hw());
         for i in 1..=nx {
             let (h1, d) = (s.h1[i], h[i]);
@@ -214,6 +261,36 @@ impl WaterProjection {
             g.line.left.discharge_sign(),
             g.line.right.discharge_sign(),
         );
+    }
+}
+
+impl WaterProjection {
+    /// κ_i = r A₁ cos⁴θ_i H₂,i/Δx² of the cells whose grains move (Q₂ ≠ 0 after the
+    /// two-layer step) next to a face with unknowns, 0 elsewhere (held or absent
+    /// grains, ghosts, the edge cell of a merged outflow face): [`grains`]. Returns
+    /// whether any is positive (else the projection is the water's alone, bit for bit).
+    fn grain_weights(&mut self, g: &CurvedLine, h2: &[f64], q2: &[f64]) -> bool {
+        let nx = g.line.nx;
+        self.kappa.fill(0.0);
+        if self.coupling <= 0.0 {
+            return false;
+        }
+        let scale = self.coupling / (g.line.dx * g.line.dx);
+        let (merged_left, merged_right) = self.op.merged_edges();
+        let mut any = false;
+        for i in 1..=nx {
+            let wet = self.op.carries_unknowns(i - 1) || self.op.carries_unknowns(i);
+            let edge = (merged_left && i == 1) || (merged_right && i == nx);
+            if wet && !edge && q2[i] != 0.0 && h2[i] * g.cos2[i] > self.film {
+                let c2 = g.cos2[i];
+                self.kappa[i] = scale * c2 * c2 * h2[i];
+                any = true;
+            }
+        }
+        if any {
+            CoupledRows::face_terms(&self.op, &self.kappa, &mut self.diag, &mut self.lower);
+        }
+        any
     }
 }
 
