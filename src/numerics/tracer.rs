@@ -461,7 +461,9 @@ mod tests {
         let mut t = TracerTransport::default();
         t.before_step(&h, n, &tracers);
         t.after_step(&flux, Some((&departure, &l)), &h, r, n, &mut tracers);
-        let c: Vec<f64> = (n..(nx + 1) * n).map(|k| tracers[0].q[k] / h[k / n]).collect();
+        let c: Vec<f64> = (n..(nx + 1) * n)
+            .map(|k| tracers[0].q[k] / h[k / n])
+            .collect();
         println!("cell 2 after the step: {:?}", &c[n..2 * n]);
         for (k, v) in c.iter().enumerate() {
             assert!(
