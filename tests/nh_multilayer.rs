@@ -569,8 +569,9 @@ fn implicit_viscosity_makes_the_in_depth_profile_first_order_in_time_at_the_scen
 
 /// (h, hu, hw) fingerprint of the §5.2 run at (400, 8): the scenario's "frozen" is the
 /// paper's step 2, bit for bit; "lagged" (the default) and "implicit" are other
-/// schemes.
-const CONVERGENCE_FINGERPRINT: u64 = 0x9a09_e6d1_7135_2603;
+/// schemes. (Changed deliberately with the tracers' implicit exchange between layers
+/// and thinner-side face departures, `src/numerics/tracer.rs`: hw moves differently.)
+const CONVERGENCE_FINGERPRINT: u64 = 0x9d16_87a9_9dbd_ed5d;
 
 #[test]
 fn frozen_viscosity_is_the_paper_step_bit_for_bit() {

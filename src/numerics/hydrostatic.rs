@@ -400,12 +400,15 @@ impl<L: BasalFriction> HydrostaticStep<L> {
                 fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur);
             }
             if !self.layer_flux.is_empty() {
-                // d_α = h(u_α − ū) of each side as the fluxes see it (0 at rest).
+                // d_α = h_f ½((u_α − ū)_L + (u_α − ū)_R) with the velocities as the
+                // fluxes see them (0 at rest) and the thinner side's depth h_f
+                // (module documentation of `tracer.rs`).
                 let (ml, mr) = (l.u, r.u);
+                let h_f = l.h.min(r.h);
                 let out = &mut self.layer_flux[k * n..(k + 1) * n];
                 for a in 0..n {
                     let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
-                    out[a] = 0.5 * (l.h * (ul - ml) + r.h * (ur - mr));
+                    out[a] = 0.5 * h_f * ((ul - ml) + (ur - mr));
                 }
             }
             left = right;
