@@ -102,7 +102,7 @@ use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
 use crate::physics::rheology::{
-    inertial_number, BasalFriction, MonolayerShear, MuI, STATIC_ROUNDOFF,
+    depth_weighted_mu, inertial_number, BasalFriction, MonolayerShear, MuI, STATIC_ROUNDOFF,
 };
 use crate::physics::shallow::H_DRY;
 use crate::state::DilatantState;
@@ -202,6 +202,20 @@ impl FaceFriction for IncompressibleFaces<'_> {
         BasalFriction::mu(self.law, speed, h, p_over_rho)
     }
 
+    /// The Savage–Hutter face: the cells' own μ(I), depth-weighted (as the monolayer).
+    #[inline(always)]
+    fn face_mu(
+        &self,
+        _face: usize,
+        left: (f64, f64),
+        right: (f64, f64),
+        speed: f64,
+        h: f64,
+        g_n: f64,
+    ) -> f64 {
+        BasalFriction::face_mu(self.law, left, right, speed, h, g_n)
+    }
+
     #[inline(always)]
     fn potential_jump(&self, face: usize) -> f64 {
         fraction_potential_jump(self.h, self.phi, face)
@@ -217,15 +231,7 @@ impl FaceFriction for DilatantFaces<'_> {
     #[inline(always)]
     fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
         let law = self.law;
-        let (hl, hr) = (self.h[face].max(0.0), self.h[face + 1].max(0.0));
-        let (pl, pr) = (self.phi[face], self.phi[face + 1]);
-        let phi = if hl > 0.0 && hr > 0.0 {
-            pl.min(pr)
-        } else if hl > 0.0 {
-            pl
-        } else {
-            pr
-        };
+        let phi = self.face_fraction(face);
         if h < self.h_thin {
             return law.mu_of_i(inertial_number(law.d, phi, speed, h, p_over_rho)) + wall(law, h);
         }
@@ -233,15 +239,72 @@ impl FaceFriction for DilatantFaces<'_> {
             let mu = law.mu_1 + wall(law, h);
             return mu + law.tan_psi(phi, law.phi_stat).max(-mu);
         }
-        moving_face(law, speed, h, p_over_rho, phi)
+        mu_eff(law, speed, h, p_over_rho, phi).0
+    }
+
+    /// At Roe speed 0, [`Self::mu`] (the static threshold); moving, the cells' own
+    /// μ_eff (or μ(I) + μ_w h/W below `h_thin`) at their speeds and depths with the
+    /// face's φ, depth-weighted (`physics::rheology::depth_weighted_mu`, as the
+    /// Savage–Hutter face).
+    #[inline(always)]
+    fn face_mu(
+        &self,
+        face: usize,
+        left: (f64, f64),
+        right: (f64, f64),
+        speed: f64,
+        h: f64,
+        g_n: f64,
+    ) -> f64 {
+        if speed == 0.0 {
+            return self.mu(face, speed, h, g_n * h);
+        }
+        moving_face(
+            self.law,
+            left,
+            right,
+            g_n,
+            self.face_fraction(face),
+            h < self.h_thin,
+        )
     }
 }
 
-/// μ_eff of a moving face, out of line: the face function stays small enough to be
-/// inlined into the hyperbolic step's loop.
+impl DilatantFaces<'_> {
+    /// φ of a face: the smaller of its two cells' (a dry side counts with the other's).
+    #[inline(always)]
+    fn face_fraction(&self, face: usize) -> f64 {
+        let (hl, hr) = (self.h[face].max(0.0), self.h[face + 1].max(0.0));
+        let (pl, pr) = (self.phi[face], self.phi[face + 1]);
+        if hl > 0.0 && hr > 0.0 {
+            pl.min(pr)
+        } else if hl > 0.0 {
+            pl
+        } else {
+            pr
+        }
+    }
+}
+
+/// μ_eff of a moving face (without tan ψ if `thin`): the cells' own, depth-weighted.
+/// Out of line: the face function stays small enough to be inlined into the
+/// hyperbolic step's loop.
 #[inline(never)]
-fn moving_face(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) -> f64 {
-    mu_eff(law, speed, h, p_over_rho, phi).0
+fn moving_face(
+    law: &DilatantLaw,
+    left: (f64, f64),
+    right: (f64, f64),
+    g_n: f64,
+    phi: f64,
+    thin: bool,
+) -> f64 {
+    depth_weighted_mu(left, right, |speed, h| {
+        if thin {
+            law.mu_of_i(inertial_number(law.d, phi, speed, h, g_n * h)) + wall(law, h)
+        } else {
+            mu_eff(law, speed, h, g_n * h, phi).0
+        }
+    })
 }
 
 /// G(I) = μ(I) + μ_w h/W + K(φ − φ_eq(I)) (Bouchut et al. 2021, eq. 2.8, 2.13–2.14, 4.1; `wall`
