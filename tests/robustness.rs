@@ -958,6 +958,31 @@ fn collapse_settled_time_and_runout_converge_and_the_mu_i_creep_is_the_late_stop
     }
 }
 
+/// The creep of the μ(I) deposit front decays: the 22° collapse (640 cells, run to
+/// 40 s without the settled stop) moves at under 1e-6 m/s at the end (measured 8.8e-8;
+/// 1.8e-5 at 20 s, 4.3e-10 at 60 s). With the face friction of the Coulomb-aware
+/// reconstruction at the face's Roe speed and mean depth it kept 2.2e-3 m/s from 10 s
+/// on: the front cell, steeper than repose, kept the speed at which μ(I) of the cell
+/// balanced its drive while its faces, seeing a layer half as thick (I ≈ 2.5 times
+/// the cell's), carried no mass (`numerics::hydrostatic`, "The state of a face's
+/// friction"). The run then never stops, whatever the time.
+#[test]
+fn mu_i_deposit_front_creep_decays() {
+    let run = collapse_run(
+        640,
+        &[
+            "time.stop_when_settled=false",
+            "time.t_end=40",
+            "output.every=40",
+        ],
+    );
+    eprintln!(
+        "μ(I) collapse, 40 s: largest speed {:e} m/s, runout {} m",
+        run.max_speed_final, run.runout
+    );
+    assert!(run.max_speed_final < 1e-6, "{}", run.max_speed_final);
+}
+
 /// A uniform μ(I) layer (glass beads of Garres-Díaz et al. 2021, Table 1, μ_s = tan 25.5°, μ_2 = tan 36°,
 /// I_0 = 0.279, d_s = 0.7 mm, φ = 0.62) 1.2 mm thick on a 30° plane, released from rest:
 /// the speed at the middle of a 10 m plane at t = 4 s (`cells` cells).

@@ -130,9 +130,9 @@
 //! μ_s = 0.48 kept 1.27 mm/s at its front after 20 s). A monolayer face now takes the
 //! cells' own μ weighted by their depths, the weights of the own-depth split below
 //! ([`BasalFriction::face_mu`], `physics::rheology::depth_weighted_mu`), and μ_s at
-//! Roe speed 0 as before (so masses at rest are untouched to the bit); laws that see
-//! neither speed nor depth are unchanged (`docs/validation.md`, dil-rest). The N > 1
-//! and 2-D faces keep the Roe state.
+//! Roe speed 0 as before (so masses at rest are untouched to the bit); the other laws
+//! (Coulomb, Voellmy: [`BasalFriction::face_mu`]'s default) and the N > 1 and 2-D faces
+//! keep the Roe state (`docs/validation.md`, dil-stop).
 //!
 //! Per-face friction: the threshold μ of ΔC comes from a [`FaceFriction`], by default
 //! the step's own law (which ignores the face, so the default step is unchanged to the

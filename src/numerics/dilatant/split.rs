@@ -30,8 +30,9 @@
 //!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. For
 //!    K = 0 its ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`). For K > 0 it
 //!    takes the threshold per face ([`HydrostaticStep::apply_with_friction`]):
-//!    μ_eff = μ(I) + μ_w h/W + tan ψ at the face's Roe speed and mean depth, with the
-//!    smaller φ of the two cells at t^n (the weaker cell's threshold: a face holds only
+//!    μ_eff = μ(I) + μ_w h/W + tan ψ of each cell at its own speed and depth, weighted
+//!    by the depths (`physics::rheology::depth_weighted_mu`, as the Savage–Hutter
+//!    face; the static threshold at Roe speed 0), with the smaller φ of the two cells at t^n (the weaker cell's threshold: a face holds only
 //!    what both its cells would hold; with the mass-weighted φ a dilated cell beside a
 //!    denser one kept moving while its faces, stronger than the cell, held its mass),
 //!    and without tan ψ where the mean depth is below the thickness threshold
@@ -157,7 +158,8 @@ pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) 
 }
 
 /// The friction threshold of the hyperbolic step's Coulomb-aware reconstruction for
-/// K > 0: μ_eff (2.13–2.14) at the face's Roe speed and mean depth with the
+/// K > 0: μ_eff (2.13–2.14) of the two cells at their own speeds and depths,
+/// depth-weighted ([`FaceFriction::face_mu`]; the mean depth decides `h_thin`), with the
 /// smaller φ of its two cells at t^n (a dry side counts with the other's φ; both
 /// dry, the face is never asked), so that the reconstruction holds exactly what the
 /// cell friction holds (a mass at rest with a surface slope below μ_1 + K(φ − φ_stat))

@@ -40,9 +40,13 @@ pub fn coulomb_update(q: f64, dt_sigma: f64) -> f64 {
 /// times the cell's): the face held back more than the friction step held its cell,
 /// so the front cell of a deposit whose surface was steeper than μ_s kept a speed
 /// (μ(I_cell) = its drive) while its faces carried no mass, for ever: collapses on
-/// 10°–22° never came to rest (docs/validation.md, dil-rest).
+/// 10°–22° never came to rest (docs/validation.md, dil-stop).
 #[inline(always)]
-pub fn depth_weighted_mu<M: Fn(f64, f64) -> f64>(left: (f64, f64), right: (f64, f64), mu: M) -> f64 {
+pub fn depth_weighted_mu<M: Fn(f64, f64) -> f64>(
+    left: (f64, f64),
+    right: (f64, f64),
+    mu: M,
+) -> f64 {
     use crate::physics::shallow::H_DRY;
     let weight = |h: f64| if h > H_DRY { h } else { 0.0 };
     let (wl, wr) = (weight(left.1), weight(right.1));
