@@ -50,7 +50,8 @@
 //!    which is the conservative upwind update of φh (h^{n+1} = h − Δt/Δx (𝓕_{i+1/2} −
 //!    𝓕_{i−1/2})) rearranged: ∫φh is conserved to round-off, φ_i^{n+1} is a convex
 //!    combination of φ_{i−1}, φ_i, φ_{i+1} while the outflow of a cell does not exceed
-//!    its content, and a uniform φ stays uniform bit for bit (every difference is 0).
+//!    its content (a cell whose outflow exceeds it gives its faces the φ of all it held
+//!    during the step, [`SplitScheme`]'s transport), and a uniform φ stays uniform bit for bit (every difference is 0).
 //!    Cells left with h = 0 keep their φ (Bouchut et al. 2021, eq. 3.14 is not needed: the
 //!    hyperbolic step never asks a dry cell for φ).
 //! 3. **cell pass**: the friction step of
@@ -117,6 +118,8 @@ pub struct SplitScheme {
     hyperbolic: HydrostaticStep<MuI>,
     /// φ after the transport (nx + 2).
     phi_new: Vec<f64>,
+    /// φ that each cell's outgoing mass carries in the transport (nx + 2).
+    phi_donor: Vec<f64>,
     /// (h, hv) at t^n, restored when a later sub-step fails.
     backup: [Vec<f64>; 2],
     /// Stabilisation (K > 0, ξ ≠ 0): per face drive max(0, vΔz), set on the active
@@ -448,6 +451,7 @@ impl SplitScheme {
             opt,
             hyperbolic: HydrostaticStep::new(reconstruction_law(&law, phi_ref), nx),
             phi_new: vec![0.0; nx + 2],
+            phi_donor: vec![0.0; nx + 2],
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
             active: Vec::with_capacity(nx + 1),
@@ -511,7 +515,11 @@ impl SplitScheme {
         };
         let last = nx - 1 - h.iter().rev().position(|&h| h > 0.0).unwrap_or(0);
         let wet = first + 1..=last + 1;
-        self.transport(&s.h, &s.phi, r, wet.clone())?;
+        // h^n (backup[0]) lent to the transport without a copy.
+        let h_old = std::mem::take(&mut self.backup[0]);
+        let moved = self.transport(&h_old, &s.h, &s.phi, r, wet.clone());
+        self.backup[0] = h_old;
+        moved?;
         fill_fraction_ghosts(&mut self.phi_new);
         self.cells(mesh, dt, &mut s.h, &mut s.hu, wet.clone())?;
         s.fill_thickness_ghosts(mesh);
@@ -522,9 +530,20 @@ impl SplitScheme {
         Ok(())
     }
 
-    /// Step 2: φ^{n+1} from the mass fluxes of the hyperbolic step.
+    /// Step 2: φ^{n+1} from the mass fluxes of the hyperbolic step (`h_old` = h^n, `h`
+    /// = h^{n+1}).
+    ///
+    /// Each face carries the φ of its donor cell, except that a cell whose outflow
+    /// exceeds its content h^n (mass that enters and leaves within the step: the
+    /// hyperbolic step only limits fluxes that would make h negative) gives its faces
+    /// the φ of everything it held during the step, (φ h^n + inflow φ)/(h^n + inflow):
+    /// with its own φ the weights of the update were no longer a convex combination
+    /// (a cell of 0.45 beside one of 0.60 reached φ = 1.96, `split_scheme::
+    /// random_states_stay_admissible`). Such a cell ends with exactly that φ; the others
+    /// are updated as before, bit for bit.
     fn transport(
         &mut self,
+        h_old: &[f64],
         h: &[f64],
         phi: &[f64],
         r: f64,
@@ -533,9 +552,25 @@ impl SplitScheme {
         let (lo, end) = (*wet.start(), *wet.end() + 1);
         let flux = self.hyperbolic.mass_flux();
         let out = &mut self.phi_new;
+        let donor = &mut self.phi_donor;
         // Faces lo − 1..end, cells lo − 1..=end: checked once, not per cell.
         assert!(lo >= 1 && end < phi.len() && end <= flux.len());
-        assert!(phi.len() == h.len() && h.len() == out.len());
+        assert!(phi.len() == h.len() && h.len() == out.len() && h_old.len() == h.len());
+        assert!(donor.len() == h.len());
+        donor[lo - 1] = phi[lo - 1];
+        donor[end] = phi[end];
+        for j in lo..end {
+            let (f_in, f_out) = (flux[j - 1], flux[j]);
+            let leaving = r * (f_out.max(0.0) + (-f_in).max(0.0));
+            donor[j] = if leaving > h_old[j].max(0.0) {
+                let (from_left, from_right) = (r * f_in.max(0.0), r * (-f_out).max(0.0));
+                let content = h_old[j].max(0.0);
+                (phi[j] * content + from_left * phi[j - 1] + from_right * phi[j + 1])
+                    / (content + from_left + from_right)
+            } else {
+                phi[j]
+            };
+        }
         for j in lo..end {
             let (hj, f_in, f_out) = (h[j], flux[j - 1], flux[j]);
             if hj <= 0.0 || (f_in == 0.0 && f_out == 0.0) {
@@ -543,8 +578,8 @@ impl SplitScheme {
                 continue;
             }
             let p = phi[j];
-            let up_out = if f_out > 0.0 { p } else { phi[j + 1] };
-            let up_in = if f_in > 0.0 { phi[j - 1] } else { p };
+            let up_out = if f_out > 0.0 { donor[j] } else { donor[j + 1] };
+            let up_in = if f_in > 0.0 { donor[j - 1] } else { donor[j] };
             let change = f_out * (up_out - p) - f_in * (up_in - p);
             let value = p - r * change / hj;
             if !(value > 0.0 && value < 1.0) {
