@@ -131,8 +131,9 @@
 //! cells' own μ weighted by their depths, the weights of the own-depth split below
 //! ([`BasalFriction::face_mu`], `physics::rheology::depth_weighted_mu`), and μ_s at
 //! Roe speed 0 as before (so masses at rest are untouched to the bit); the other laws
-//! (Coulomb, Voellmy: [`BasalFriction::face_mu`]'s default) and the N > 1 and 2-D faces
-//! keep the Roe state (`docs/validation.md`, dil-stop).
+//! (Coulomb, Voellmy: [`BasalFriction::face_mu`]'s default) and the N > 1 faces
+//! keep the Roe state (`docs/validation.md`, dil-stop). The 2-D faces
+//! (`hydrostatic_2d.rs`) take the same threshold with the cells' speeds |(u, v)|.
 //!
 //! Per-face friction: the threshold μ of ΔC comes from a [`FaceFriction`], by default
 //! the step's own law (which ignores the face, so the default step is unchanged to the
