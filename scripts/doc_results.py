@@ -104,6 +104,8 @@ CHECKS = {
     "dil_rest_10": cargo_test("dilatant", "split_scheme::dense_collapse_at_10_degrees_comes_to_rest"),
     "dil_thin": cargo_test("dilatant", "split_scheme::layers_thinner_than_the_threshold_do_not_dilate"),
     "dil_slopes": cargo_test("dilatant", "fig_9a_front_order_on_the_five_slopes"),
+    "dil_settle": cargo_test("dilatant", "collapses_come_to_rest_and_settle_at_converging_times"),
+    "dil_contraction": cargo_test("dilatant", "front_contraction_and_peak_velocity_at_0_degrees"),
     "collapse_pins": cargo_test("scenarios", "collapse_regression_norms"),
     "frozen_hashes": cargo_test("multilayer", "monolayer_numbers_are_frozen"),
     "film_speed": cargo_test("properties", "thin_cell_next_to_a_bed_step_keeps_a_bounded_speed"),

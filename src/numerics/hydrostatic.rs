@@ -120,6 +120,21 @@
 //! Wet/dry fronts: an emerging bed (h_L > 0, h_R dry, h_L + b_L < b_R, and its mirror)
 //! is seen with the wet state's velocities set to zero (Escalante et al. 2023, Remark 2).
 //!
+//! The state of a face's friction (N = 1): μ(I) grows with I ∝ |u|/h^{3/2}, and the
+//! printed scheme leaves open at which state of the face it is taken. At the Roe speed
+//! and mean depth, the face between the front cell of a deposit and the dry (or film)
+//! cell ahead of it saw a layer half as thick as the cell, I ≈ 2.5 times the cell's,
+//! and held back more than the friction step held the cell: a front cell whose surface
+//! was steeper than μ_s kept the speed at which μ(I_cell) equals its drive while its
+//! faces carried no mass, for ever (a Savage–Hutter μ(I) collapse on 22° with
+//! μ_s = 0.48 kept 1.27 mm/s at its front after 20 s). A monolayer face now takes the
+//! cells' own μ weighted by their depths, the weights of the own-depth split below
+//! ([`BasalFriction::face_mu`], `physics::rheology::depth_weighted_mu`), and μ_s at
+//! Roe speed 0 as before (so masses at rest are untouched to the bit); the other laws
+//! (Coulomb, Voellmy: [`BasalFriction::face_mu`]'s default) and the N > 1 faces
+//! keep the Roe state (`docs/validation.md`, dil-stop). The 2-D faces
+//! (`hydrostatic_2d.rs`) take the same threshold with the cells' speeds |(u, v)|.
+//!
 //! Per-face friction: the threshold μ of ΔC comes from a [`FaceFriction`], by default
 //! the step's own law (which ignores the face, so the default step is unchanged to the
 //! bit). The dilatant model (Bouchut et al. 2021) passes μ_eff = μ(I) + tan ψ with the volume
@@ -149,6 +164,23 @@ use crate::state::layered::LayeredState;
 pub trait FaceFriction {
     fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64;
 
+    /// The threshold of a monolayer face between cells with (|u_L|, h_L) and
+    /// (|u_R|, h_R), of Roe speed `speed` and mean depth `h` (p_b/ρ = g_n h). By default
+    /// [`Self::mu`] at the Roe state; a friction law answers with
+    /// [`BasalFriction::face_mu`] (μ(I): the cells' own μ, depth-weighted).
+    #[inline(always)]
+    fn face_mu(
+        &self,
+        face: usize,
+        _left: (f64, f64),
+        _right: (f64, f64),
+        speed: f64,
+        h: f64,
+        g_n: f64,
+    ) -> f64 {
+        self.mu(face, speed, h, g_n * h)
+    }
+
     /// An extra jump of the potential across `face` (m), added to Δz = z_R − z_L where
     /// the face's pressure source 𝓢 and its Coulomb-aware reconstruction (ΔC) see it:
     /// a force −g_n h ∂_X ζ that is not a bed, such as the volume-fraction pressure of
@@ -164,6 +196,19 @@ impl<L: BasalFriction> FaceFriction for L {
     #[inline(always)]
     fn mu(&self, _face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
         BasalFriction::mu(self, speed, h, p_over_rho)
+    }
+
+    #[inline(always)]
+    fn face_mu(
+        &self,
+        _face: usize,
+        left: (f64, f64),
+        right: (f64, f64),
+        speed: f64,
+        h: f64,
+        g_n: f64,
+    ) -> f64 {
+        BasalFriction::face_mu(self, left, right, speed, h, g_n)
     }
 }
 
@@ -443,7 +488,8 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         let h_new = &mut self.h_new[..nx + 2];
         let side = |j: usize| Side::monolayer(h[j], hu[j], b[j], z[j]);
         let fluxes = |k: usize, l: Side, r: Side| {
-            let mu_of = |speed: f64, h: f64| faces.mu(k, speed, h, g_n * h);
+            let (cell_l, cell_r) = ((l.u.abs(), l.h), (r.u.abs(), r.h));
+            let mu_of = |speed: f64, h: f64| faces.face_mu(k, cell_l, cell_r, speed, h, g_n);
             monolayer_fluxes(mu_of, l, r, faces.potential_jump(k), g_n, dx, dt)
         };
         let mut worst = (f64::INFINITY, 1usize);

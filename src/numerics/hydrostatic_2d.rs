@@ -391,7 +391,11 @@ fn face_flux<L: BasalFriction>(
     d: f64,
     dt: f64,
 ) -> FaceFlux {
-    let mu_of = |speed: f64, h: f64| law.mu(speed, h, g_n * h);
+    // The threshold of the line's faces (`BasalFriction::face_mu`: μ(I) from the cells'
+    // own speeds |(u, v)| and depths), so that a run invariant along one axis is the
+    // line's bit for bit (hypot(u, 0) = |u|).
+    let (cell_l, cell_r) = ((l.u.hypot(t_l), l.h), (r.u.hypot(t_r), r.h));
+    let mu_of = |speed: f64, h: f64| law.face_mu(cell_l, cell_r, speed, h, g_n);
     match interface_with_transverse_drive(mu_of, l, r, 0.0, (d_l, d_r), g_n, d, dt) {
         None => FaceFlux::default(),
         Some((c, l, r)) => {

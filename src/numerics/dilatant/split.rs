@@ -30,8 +30,9 @@
 //!    hydrostatic reconstruction, Coulomb-aware ΔC) on (h, hv), called, not copied. For
 //!    K = 0 its ΔC uses the Savage–Hutter μ(I) law (φ = `material.phi`). For K > 0 it
 //!    takes the threshold per face ([`HydrostaticStep::apply_with_friction`]):
-//!    μ_eff = μ(I) + μ_w h/W + tan ψ at the face's Roe speed and mean depth, with the
-//!    smaller φ of the two cells at t^n (the weaker cell's threshold: a face holds only
+//!    μ_eff = μ(I) + μ_w h/W + tan ψ of each cell at its own speed and depth, weighted
+//!    by the depths (`physics::rheology::depth_weighted_mu`, as the Savage–Hutter
+//!    face; the static threshold at Roe speed 0), with the smaller φ of the two cells at t^n (the weaker cell's threshold: a face holds only
 //!    what both its cells would hold; with the mass-weighted φ a dilated cell beside a
 //!    denser one kept moving while its faces, stronger than the cell, held its mass),
 //!    and without tan ψ where the mean depth is below the thickness threshold
@@ -49,7 +50,8 @@
 //!    which is the conservative upwind update of φh (h^{n+1} = h − Δt/Δx (𝓕_{i+1/2} −
 //!    𝓕_{i−1/2})) rearranged: ∫φh is conserved to round-off, φ_i^{n+1} is a convex
 //!    combination of φ_{i−1}, φ_i, φ_{i+1} while the outflow of a cell does not exceed
-//!    its content, and a uniform φ stays uniform bit for bit (every difference is 0).
+//!    its content (a cell whose outflow exceeds it gives its faces the φ of all it held
+//!    during the step, [`SplitScheme`]'s transport), and a uniform φ stays uniform bit for bit (every difference is 0).
 //!    Cells left with h = 0 keep their φ (Bouchut et al. 2021, eq. 3.14 is not needed: the
 //!    hyperbolic step never asks a dry cell for φ).
 //! 3. **cell pass**: the friction step of
@@ -102,7 +104,7 @@ use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::{Stage, StageError};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
 use crate::physics::rheology::{
-    inertial_number, BasalFriction, MonolayerShear, MuI, STATIC_ROUNDOFF,
+    depth_weighted_mu, inertial_number, BasalFriction, MonolayerShear, MuI, STATIC_ROUNDOFF,
 };
 use crate::physics::shallow::H_DRY;
 use crate::state::DilatantState;
@@ -116,6 +118,8 @@ pub struct SplitScheme {
     hyperbolic: HydrostaticStep<MuI>,
     /// φ after the transport (nx + 2).
     phi_new: Vec<f64>,
+    /// φ that each cell's outgoing mass carries in the transport (nx + 2).
+    phi_donor: Vec<f64>,
     /// (h, hv) at t^n, restored when a later sub-step fails.
     backup: [Vec<f64>; 2],
     /// Stabilisation (K > 0, ξ ≠ 0): per face drive max(0, vΔz), set on the active
@@ -157,7 +161,8 @@ pub fn mu_eff(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) 
 }
 
 /// The friction threshold of the hyperbolic step's Coulomb-aware reconstruction for
-/// K > 0: μ_eff (2.13–2.14) at the face's Roe speed and mean depth with the
+/// K > 0: μ_eff (2.13–2.14) of the two cells at their own speeds and depths,
+/// depth-weighted ([`FaceFriction::face_mu`]; the mean depth decides `h_thin`), with the
 /// smaller φ of its two cells at t^n (a dry side counts with the other's φ; both
 /// dry, the face is never asked), so that the reconstruction holds exactly what the
 /// cell friction holds (a mass at rest with a surface slope below μ_1 + K(φ − φ_stat))
@@ -202,6 +207,20 @@ impl FaceFriction for IncompressibleFaces<'_> {
         BasalFriction::mu(self.law, speed, h, p_over_rho)
     }
 
+    /// The Savage–Hutter face: the cells' own μ(I), depth-weighted (as the monolayer).
+    #[inline(always)]
+    fn face_mu(
+        &self,
+        _face: usize,
+        left: (f64, f64),
+        right: (f64, f64),
+        speed: f64,
+        h: f64,
+        g_n: f64,
+    ) -> f64 {
+        BasalFriction::face_mu(self.law, left, right, speed, h, g_n)
+    }
+
     #[inline(always)]
     fn potential_jump(&self, face: usize) -> f64 {
         fraction_potential_jump(self.h, self.phi, face)
@@ -217,15 +236,7 @@ impl FaceFriction for DilatantFaces<'_> {
     #[inline(always)]
     fn mu(&self, face: usize, speed: f64, h: f64, p_over_rho: f64) -> f64 {
         let law = self.law;
-        let (hl, hr) = (self.h[face].max(0.0), self.h[face + 1].max(0.0));
-        let (pl, pr) = (self.phi[face], self.phi[face + 1]);
-        let phi = if hl > 0.0 && hr > 0.0 {
-            pl.min(pr)
-        } else if hl > 0.0 {
-            pl
-        } else {
-            pr
-        };
+        let phi = self.face_fraction(face);
         if h < self.h_thin {
             return law.mu_of_i(inertial_number(law.d, phi, speed, h, p_over_rho)) + wall(law, h);
         }
@@ -233,15 +244,72 @@ impl FaceFriction for DilatantFaces<'_> {
             let mu = law.mu_1 + wall(law, h);
             return mu + law.tan_psi(phi, law.phi_stat).max(-mu);
         }
-        moving_face(law, speed, h, p_over_rho, phi)
+        mu_eff(law, speed, h, p_over_rho, phi).0
+    }
+
+    /// At Roe speed 0, [`Self::mu`] (the static threshold); moving, the cells' own
+    /// μ_eff (or μ(I) + μ_w h/W below `h_thin`) at their speeds and depths with the
+    /// face's φ, depth-weighted (`physics::rheology::depth_weighted_mu`, as the
+    /// Savage–Hutter face).
+    #[inline(always)]
+    fn face_mu(
+        &self,
+        face: usize,
+        left: (f64, f64),
+        right: (f64, f64),
+        speed: f64,
+        h: f64,
+        g_n: f64,
+    ) -> f64 {
+        if speed == 0.0 {
+            return self.mu(face, speed, h, g_n * h);
+        }
+        moving_face(
+            self.law,
+            left,
+            right,
+            g_n,
+            self.face_fraction(face),
+            h < self.h_thin,
+        )
     }
 }
 
-/// μ_eff of a moving face, out of line: the face function stays small enough to be
-/// inlined into the hyperbolic step's loop.
+impl DilatantFaces<'_> {
+    /// φ of a face: the smaller of its two cells' (a dry side counts with the other's).
+    #[inline(always)]
+    fn face_fraction(&self, face: usize) -> f64 {
+        let (hl, hr) = (self.h[face].max(0.0), self.h[face + 1].max(0.0));
+        let (pl, pr) = (self.phi[face], self.phi[face + 1]);
+        if hl > 0.0 && hr > 0.0 {
+            pl.min(pr)
+        } else if hl > 0.0 {
+            pl
+        } else {
+            pr
+        }
+    }
+}
+
+/// μ_eff of a moving face (without tan ψ if `thin`): the cells' own, depth-weighted.
+/// Out of line: the face function stays small enough to be inlined into the
+/// hyperbolic step's loop.
 #[inline(never)]
-fn moving_face(law: &DilatantLaw, speed: f64, h: f64, p_over_rho: f64, phi: f64) -> f64 {
-    mu_eff(law, speed, h, p_over_rho, phi).0
+fn moving_face(
+    law: &DilatantLaw,
+    left: (f64, f64),
+    right: (f64, f64),
+    g_n: f64,
+    phi: f64,
+    thin: bool,
+) -> f64 {
+    depth_weighted_mu(left, right, |speed, h| {
+        if thin {
+            law.mu_of_i(inertial_number(law.d, phi, speed, h, g_n * h)) + wall(law, h)
+        } else {
+            mu_eff(law, speed, h, g_n * h, phi).0
+        }
+    })
 }
 
 /// G(I) = μ(I) + μ_w h/W + K(φ − φ_eq(I)) (Bouchut et al. 2021, eq. 2.8, 2.13–2.14, 4.1; `wall`
@@ -383,6 +451,7 @@ impl SplitScheme {
             opt,
             hyperbolic: HydrostaticStep::new(reconstruction_law(&law, phi_ref), nx),
             phi_new: vec![0.0; nx + 2],
+            phi_donor: vec![0.0; nx + 2],
             backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
             active: Vec::with_capacity(nx + 1),
@@ -446,7 +515,11 @@ impl SplitScheme {
         };
         let last = nx - 1 - h.iter().rev().position(|&h| h > 0.0).unwrap_or(0);
         let wet = first + 1..=last + 1;
-        self.transport(&s.h, &s.phi, r, wet.clone())?;
+        // h^n (backup[0]) lent to the transport without a copy.
+        let h_old = std::mem::take(&mut self.backup[0]);
+        let moved = self.transport(&h_old, &s.h, &s.phi, r, wet.clone());
+        self.backup[0] = h_old;
+        moved?;
         fill_fraction_ghosts(&mut self.phi_new);
         self.cells(mesh, dt, &mut s.h, &mut s.hu, wet.clone())?;
         s.fill_thickness_ghosts(mesh);
@@ -457,9 +530,20 @@ impl SplitScheme {
         Ok(())
     }
 
-    /// Step 2: φ^{n+1} from the mass fluxes of the hyperbolic step.
+    /// Step 2: φ^{n+1} from the mass fluxes of the hyperbolic step (`h_old` = h^n, `h`
+    /// = h^{n+1}).
+    ///
+    /// Each face carries the φ of its donor cell, except that a cell whose outflow
+    /// exceeds its content h^n (mass that enters and leaves within the step: the
+    /// hyperbolic step only limits fluxes that would make h negative) gives its faces
+    /// the φ of everything it held during the step, (φ h^n + inflow φ)/(h^n + inflow):
+    /// with its own φ the weights of the update were no longer a convex combination
+    /// (a cell of 0.45 beside one of 0.60 reached φ = 1.96, `split_scheme::
+    /// random_states_stay_admissible`). Such a cell ends with exactly that φ; the others
+    /// are updated as before, bit for bit.
     fn transport(
         &mut self,
+        h_old: &[f64],
         h: &[f64],
         phi: &[f64],
         r: f64,
@@ -468,9 +552,25 @@ impl SplitScheme {
         let (lo, end) = (*wet.start(), *wet.end() + 1);
         let flux = self.hyperbolic.mass_flux();
         let out = &mut self.phi_new;
+        let donor = &mut self.phi_donor;
         // Faces lo − 1..end, cells lo − 1..=end: checked once, not per cell.
         assert!(lo >= 1 && end < phi.len() && end <= flux.len());
-        assert!(phi.len() == h.len() && h.len() == out.len());
+        assert!(phi.len() == h.len() && h.len() == out.len() && h_old.len() == h.len());
+        assert!(donor.len() == h.len());
+        donor[lo - 1] = phi[lo - 1];
+        donor[end] = phi[end];
+        for j in lo..end {
+            let (f_in, f_out) = (flux[j - 1], flux[j]);
+            let leaving = r * (f_out.max(0.0) + (-f_in).max(0.0));
+            donor[j] = if leaving > h_old[j].max(0.0) {
+                let (from_left, from_right) = (r * f_in.max(0.0), r * (-f_out).max(0.0));
+                let content = h_old[j].max(0.0);
+                (phi[j] * content + from_left * phi[j - 1] + from_right * phi[j + 1])
+                    / (content + from_left + from_right)
+            } else {
+                phi[j]
+            };
+        }
         for j in lo..end {
             let (hj, f_in, f_out) = (h[j], flux[j - 1], flux[j]);
             if hj <= 0.0 || (f_in == 0.0 && f_out == 0.0) {
@@ -478,8 +578,8 @@ impl SplitScheme {
                 continue;
             }
             let p = phi[j];
-            let up_out = if f_out > 0.0 { p } else { phi[j + 1] };
-            let up_in = if f_in > 0.0 { phi[j - 1] } else { p };
+            let up_out = if f_out > 0.0 { donor[j] } else { donor[j + 1] };
+            let up_in = if f_in > 0.0 { donor[j - 1] } else { donor[j] };
             let change = f_out * (up_out - p) - f_in * (up_in - p);
             let value = p - r * change / hj;
             if !(value > 0.0 && value < 1.0) {

@@ -28,6 +28,32 @@ pub fn coulomb_update(q: f64, dt_sigma: f64) -> f64 {
     }
 }
 
+/// The friction coefficient of a face as the cells see it: the mean of the cells' own
+/// coefficients μ(|u_j|, h_j) weighted by their depths, (h_L μ_L + h_R μ_R)/(h_L + h_R)
+/// (a dry side, h ≤ `H_DRY`, weighs nothing), the weights with which the face's
+/// pressure source is split between its cells (`numerics::hydrostatic`, own-depth
+/// split). `left`, `right` are (|u|, h); the face has at least one wet side.
+///
+/// A μ that grows with I ∝ |u|/h^{3/2} taken at the face's Roe speed and mean depth
+/// instead (Garres-Díaz et al. 2021, eq. 22–24 leave the state of the face open) is
+/// the friction of a layer half as thick as the front cell next to a dry one (I ≈ 2.5
+/// times the cell's): the face held back more than the friction step held its cell,
+/// so the front cell of a deposit whose surface was steeper than μ_s kept a speed
+/// (μ(I_cell) = its drive) while its faces carried no mass, for ever: collapses on
+/// 10°–22° never came to rest (docs/validation.md, dil-stop).
+#[inline(always)]
+pub fn depth_weighted_mu<M: Fn(f64, f64) -> f64>(
+    left: (f64, f64),
+    right: (f64, f64),
+    mu: M,
+) -> f64 {
+    use crate::physics::shallow::H_DRY;
+    let weight = |h: f64| if h > H_DRY { h } else { 0.0 };
+    let (wl, wr) = (weight(left.1), weight(right.1));
+    let part = |w: f64, (speed, h): (f64, f64)| if w > 0.0 { w * mu(speed, h) } else { 0.0 };
+    (part(wl, left) + part(wr, right)) / (wl + wr)
+}
+
 /// Basal friction law (Garres-Díaz et al. 2021, eq. 6).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FrictionLaw {
@@ -50,6 +76,16 @@ pub trait BasalFriction: Copy + Send + Sync + std::fmt::Debug {
     /// Friction coefficient for depth-averaged speed |u| (m/s), thickness h (m) and
     /// basal pressure over density p_b/ρ (m²/s², g_n h for a hydrostatic layer).
     fn mu(&self, speed: f64, h: f64, p_over_rho: f64) -> f64;
+
+    /// The threshold of the Coulomb-aware reconstruction (ΔC) of a hydrostatic monolayer
+    /// face between cells with (|u_L|, h_L) and (|u_R|, h_R), of Roe speed `speed` and
+    /// mean depth `h`, under p_b/ρ = g_n h. By default μ at the Roe speed and mean
+    /// depth (exact for a law that sees neither); a law whose μ depends on the state of
+    /// the layer overrides it with the cells' own μ ([`MuI`], [`depth_weighted_mu`]).
+    #[inline(always)]
+    fn face_mu(&self, _left: (f64, f64), _right: (f64, f64), speed: f64, h: f64, g_n: f64) -> f64 {
+        self.mu(speed, h, g_n * h)
+    }
 
     /// The discharge after the friction step of a hydrostatic monolayer (Garres-Díaz et al. 2021, §3
     /// step 2, `numerics::friction`) from the discharge `q` the other steps left, for

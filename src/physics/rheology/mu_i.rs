@@ -190,6 +190,16 @@ impl BasalFriction for MuI {
         ))
     }
 
+    /// The cells' own μ(I), depth-weighted ([`super::depth_weighted_mu`]); μ_s at a face
+    /// of Roe speed 0 (a mass at rest, or against an emerging bed), as before.
+    #[inline(always)]
+    fn face_mu(&self, left: (f64, f64), right: (f64, f64), speed: f64, h: f64, g_n: f64) -> f64 {
+        if speed == 0.0 {
+            return self.mu(0.0, h, g_n * h);
+        }
+        super::depth_weighted_mu(left, right, |u, h| self.mu(u, h, g_n * h))
+    }
+
     /// Backward Euler in the speed ([`backward_euler_speed`], c = Δt g_n).
     #[inline(always)]
     fn friction_update(&self, q: f64, h: f64, dt: f64, g_n: f64) -> f64 {
