@@ -46,6 +46,14 @@ pub const BUNDLED: &[Bundled] = &[
     bundled!("collapse_nh_gate"),
     bundled!("dam_break_dry"),
     bundled!("dam_break_wet"),
+    bundled!(
+        "dem_release",
+        [
+            "data/synthetic_dem.asc",
+            "data/synthetic_dem.prj",
+            "data/synthetic_release.geojson"
+        ]
+    ),
     bundled!("dilatancy_dense"),
     bundled!("dilatancy_dense_walls"),
     bundled!("dilatancy_loose"),
