@@ -185,24 +185,10 @@ impl Builder {
             )),
             _ => None,
         };
+        if let Some(f) = super::profile::unary_function(name) {
+            return unary(f);
+        }
         match name {
-            "exp" => unary(f64::exp),
-            "ln" => unary(f64::ln),
-            "log10" => unary(f64::log10),
-            "sqrt" => unary(f64::sqrt),
-            "abs" => unary(f64::abs),
-            "sin" => unary(f64::sin),
-            "cos" => unary(f64::cos),
-            "tan" => unary(f64::tan),
-            "asin" => unary(f64::asin),
-            "acos" => unary(f64::acos),
-            "atan" => unary(f64::atan),
-            "sinh" => unary(f64::sinh),
-            "cosh" => unary(f64::cosh),
-            "tanh" => unary(f64::tanh),
-            "floor" => unary(f64::floor),
-            "ceil" => unary(f64::ceil),
-            "round" => unary(f64::round),
             "pow" => binary(Binary::Pow),
             "atan2" => binary(Binary::Atan2),
             "noise" => binary(Binary::Noise),

@@ -572,6 +572,31 @@ fn numbers<const N: usize>(
     Ok(out)
 }
 
+/// The one-argument functions of profile expressions (shared by the evaluation here
+/// and the compiled tree of `compiled.rs`, so that both give the same bits).
+pub(super) fn unary_function(name: &str) -> Option<fn(f64) -> f64> {
+    Some(match name {
+        "exp" => f64::exp,
+        "ln" => f64::ln,
+        "log10" => f64::log10,
+        "sqrt" => f64::sqrt,
+        "abs" => f64::abs,
+        "sin" => f64::sin,
+        "cos" => f64::cos,
+        "tan" => f64::tan,
+        "asin" => f64::asin,
+        "acos" => f64::acos,
+        "atan" => f64::atan,
+        "sinh" => f64::sinh,
+        "cosh" => f64::cosh,
+        "tanh" => f64::tanh,
+        "floor" => f64::floor,
+        "ceil" => f64::ceil,
+        "round" => f64::round,
+        _ => return None,
+    })
+}
+
 fn call_function(
     name: &str,
     argument: &Value<DefaultNumericTypes>,
@@ -580,24 +605,10 @@ fn call_function(
         let [a] = numbers::<1>(name, argument)?;
         Ok(Value::Float(f(a)))
     };
+    if let Some(f) = unary_function(name) {
+        return unary(f);
+    }
     match name {
-        "exp" => unary(f64::exp),
-        "ln" => unary(f64::ln),
-        "log10" => unary(f64::log10),
-        "sqrt" => unary(f64::sqrt),
-        "abs" => unary(f64::abs),
-        "sin" => unary(f64::sin),
-        "cos" => unary(f64::cos),
-        "tan" => unary(f64::tan),
-        "asin" => unary(f64::asin),
-        "acos" => unary(f64::acos),
-        "atan" => unary(f64::atan),
-        "sinh" => unary(f64::sinh),
-        "cosh" => unary(f64::cosh),
-        "tanh" => unary(f64::tanh),
-        "floor" => unary(f64::floor),
-        "ceil" => unary(f64::ceil),
-        "round" => unary(f64::round),
         "pow" => {
             let [a, p] = numbers::<2>(name, argument)?;
             Ok(Value::Float(a.powf(p)))
