@@ -166,7 +166,29 @@ struct Ctx<'a, L> {
     theta: Option<&'a [f64]>,
 }
 
-impl<L: BasalFriction> Ctx<'_, L> {
+impl<'a, L: BasalFriction> Ctx<'a, L> {
+    /// The context of one pass over `state` on `raster` with step `dt`, reading the
+    /// draining factors `theta` in the limited pass.
+    fn new(
+        law: L,
+        raster: &'a Raster2d,
+        state: &'a State2d,
+        dt: f64,
+        theta: Option<&'a [f64]>,
+    ) -> Self {
+        Ctx {
+            law,
+            raster,
+            h: &state.h,
+            hu: &state.hu,
+            hv: &state.hv,
+            nx: raster.nx(),
+            ny: raster.ny(),
+            dt,
+            theta,
+        }
+    }
+
     /// The free surface h + z of cell (i, j) seen from a cell whose surface is `eta`:
     /// a dry cell whose bed stands above it counts at `eta` (an emerging bed exerts
     /// no drive, as in the hydrostatic reconstruction).
@@ -481,17 +503,13 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     ) -> (f64, usize) {
         let nx = raster.nx();
         let (rx, ry) = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx {
-            law: self.law,
+        let ctx = Ctx::new(
+            self.law,
             raster,
-            h: &state.h,
-            hu: &state.hu,
-            hv: &state.hv,
-            nx,
-            ny: raster.ny(),
+            state,
             dt,
-            theta: limited.then_some(self.drain.as_slice()),
-        };
+            limited.then_some(self.drain.as_slice()),
+        );
         let outputs = (
             self.h_new.as_mut_slice(),
             self.hu_new.as_mut_slice(),
@@ -548,17 +566,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     fn drain_pass_with<const WALLS: bool>(&mut self, raster: &Raster2d, dt: f64, state: &State2d) {
         let nx = raster.nx();
         let (rx, ry) = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx {
-            law: self.law,
-            raster,
-            h: &state.h,
-            hu: &state.hu,
-            hv: &state.hv,
-            nx,
-            ny: raster.ny(),
-            dt,
-            theta: None,
-        };
+        let ctx = Ctx::new(self.law, raster, state, dt, None);
         self.workers.bands1(
             BAND_ROWS * nx,
             &mut self.drain,
