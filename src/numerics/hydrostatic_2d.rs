@@ -39,8 +39,19 @@
 //! x-faces along them, and writes its rows of the new state into the step's own
 //! buffers, which are swapped with the state's at the end (no copy). The y-faces at the
 //! edge between two bands are computed by both, with the same operations on the same
-//! data. Memory: the new state (3 values per cell), the draining factors (1, used only
-//! when a cell would empty) and two rows of y-faces per band.
+//! data. Each cell is seen by its four faces through one view computed once per sweep
+//! (velocities, √h, bed, potential, its drives along x and y and its speed): a y-face
+//! reads the views of the rows under and over it, an x-face those of its row.
+//! Memory: the new state (3 values per cell), the draining factors (1) and, per band,
+//! two rows of y-faces and two rows of cell views.
+//!
+//! The limiter in two passes. The unlimited pass writes the new state and, from the
+//! same four faces, every cell's draining factor θ = min(1, h/(Δt outflow)). Only if
+//! some new thickness is negative, the limited pass follows: a face's fluxes times its
+//! donor's θ differ from the unlimited ones only where θ ≠ 1 (a flux times 1 is the
+//! flux), so it recomputes just the cells next to a draining cell (the cell and its
+//! four neighbours), face by face, and keeps the unlimited values elsewhere: the same
+//! bits as a full second pass, at the cost of the fronts only.
 //!
 //! The CFL step: with the per-cell signal speed s = max(|u|, |v|) + √(g_n h) and
 //! Δt = CFL · min(Δx, Δy)/s, Δt (s_x/Δx + s_y/Δy) ≤ 2 CFL; the unsplit update keeps
@@ -84,20 +95,94 @@ impl FaceFlux {
 }
 
 /// A cell as a face sees it: the side along the face's normal, the tangential
-/// velocity, and the tangential drive u_t/Δt − g_n ∂_t(h + z) of the cell (for the
-/// disk threshold of ΔC, [`super::face::interface_with_transverse_drive`]).
-type FaceSide = (Side, f64, f64);
+/// velocity `t`, the tangential drive u_t/Δt − g_n ∂_t(h + z) of the cell (for the
+/// disk threshold of ΔC, [`super::face::interface_with_transverse_drive`]) and the
+/// cell's speed |(u, v)| (for a friction law whose face threshold takes the cells'
+/// own speeds, [`BasalFriction::face_mu`]).
+#[derive(Debug, Clone, Copy)]
+struct FaceSide {
+    side: Side,
+    t: f64,
+    drive: f64,
+    speed: f64,
+}
 
-/// One band's scratch: the y-faces under and over the current row, and the smallest
-/// new thickness of the band with its cell.
+/// A cell as its four faces see it, computed once per sweep: thickness, the
+/// velocities u = hu/h and v = hv/h, √h, bed and potential, the drives along x
+/// (u/Δt − g_n ∂_x(h + z), tangential to the y-faces) and along y (v/Δt − g_n ∂_y(h + z),
+/// tangential to the x-faces) and the speed |(u, v)|. A view of a ghost row (under or
+/// over the raster) is the edge cell with the ghost's bed and potential and the
+/// boundary's sign on v; only its y-side is read.
+#[derive(Debug, Clone, Copy, Default)]
+struct CellView {
+    h: f64,
+    u: f64,
+    v: f64,
+    sqrt_h: f64,
+    b: f64,
+    z: f64,
+    drive_x: f64,
+    drive_y: f64,
+    speed: f64,
+}
+
+impl CellView {
+    /// The cell as an x-face sees it (normal velocity u).
+    #[inline(always)]
+    fn x_side(&self) -> FaceSide {
+        FaceSide {
+            side: self.side(self.u),
+            t: self.v,
+            drive: self.drive_y,
+            speed: self.speed,
+        }
+    }
+
+    /// The cell as a y-face sees it (normal velocity v).
+    #[inline(always)]
+    fn y_side(&self) -> FaceSide {
+        FaceSide {
+            side: self.side(self.v),
+            t: self.u,
+            drive: self.drive_x,
+            speed: self.speed,
+        }
+    }
+
+    /// The monolayer side with normal velocity `normal` ([`Side::monolayer`]).
+    #[inline(always)]
+    fn side(&self, normal: f64) -> Side {
+        Side {
+            h: self.h,
+            u: normal,
+            b: self.b,
+            z: self.z,
+            shear: 0.0,
+            u_base: normal,
+            sqrt_h: self.sqrt_h,
+        }
+    }
+}
+
+/// The speed |(u, v)| of a cell with velocity components `u` along x and `v` along y
+/// (the same argument order wherever it is computed, so that both faces of a cell
+/// see the same bits).
+#[inline(always)]
+fn cell_speed(u: f64, v: f64) -> f64 {
+    u.hypot(v)
+}
+
+/// One band's scratch: the y-faces under and over the current row, the views of
+/// the rows under and over them, and the smallest new thickness of the band with
+/// its cell.
 #[derive(Debug, Clone)]
 struct BandScratch {
     below: Vec<FaceFlux>,
     above: Vec<FaceFlux>,
-    /// The sides that the y-faces see in the rows under and over them (each row's
-    /// computed once per sweep).
-    lower: Vec<FaceSide>,
-    upper: Vec<FaceSide>,
+    /// The views of the ghost-inclusive rows under and over the y-faces `above`
+    /// (each row's computed once per sweep).
+    lower: Vec<CellView>,
+    upper: Vec<CellView>,
     worst: (f64, usize),
 }
 
@@ -109,7 +194,7 @@ pub struct HydrostaticStep2d<L: BasalFriction> {
     h_new: Vec<f64>,
     hu_new: Vec<f64>,
     hv_new: Vec<f64>,
-    /// Draining factors per cell, written only when a cell would empty.
+    /// Draining factors per cell, from the unlimited pass's faces.
     drain: Vec<f64>,
     scratch: Vec<BandScratch>,
 }
@@ -121,8 +206,8 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let band = BandScratch {
             below: vec![FaceFlux::default(); nx],
             above: vec![FaceFlux::default(); nx],
-            lower: vec![(Side::monolayer(0.0, 0.0, 0.0, 0.0), 0.0, 0.0); nx],
-            upper: vec![(Side::monolayer(0.0, 0.0, 0.0, 0.0), 0.0, 0.0); nx],
+            lower: vec![CellView::default(); nx],
+            upper: vec![CellView::default(); nx],
             worst: (f64::INFINITY, 0),
         };
         HydrostaticStep2d {
@@ -137,18 +222,18 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     }
 
     /// Bytes of scratch per cell that the step holds (new state, draining factors,
-    /// face rows), for the memory budget of `docs/performance.md`.
+    /// face and view rows), for the memory budget of `docs/performance.md`.
     pub fn bytes_per_cell(&self) -> f64 {
         let cells = self.h_new.len() as f64;
-        let faces: usize = self
+        let rows: usize = self
             .scratch
             .iter()
             .map(|s| {
                 (s.below.len() + s.above.len()) * std::mem::size_of::<FaceFlux>()
-                    + (s.lower.len() + s.upper.len()) * std::mem::size_of::<FaceSide>()
+                    + (s.lower.len() + s.upper.len()) * std::mem::size_of::<CellView>()
             })
             .sum();
-        (4.0 * 8.0 * cells + faces as f64) / cells
+        (4.0 * 8.0 * cells + rows as f64) / cells
     }
 }
 
@@ -162,20 +247,11 @@ struct Ctx<'a, L> {
     nx: usize,
     ny: usize,
     dt: f64,
-    /// Draining factors of the donors (limited pass only).
-    theta: Option<&'a [f64]>,
 }
 
 impl<'a, L: BasalFriction> Ctx<'a, L> {
-    /// The context of one pass over `state` on `raster` with step `dt`, reading the
-    /// draining factors `theta` in the limited pass.
-    fn new(
-        law: L,
-        raster: &'a Raster2d,
-        state: &'a State2d,
-        dt: f64,
-        theta: Option<&'a [f64]>,
-    ) -> Self {
+    /// The context of one pass over `state` on `raster` with step `dt`.
+    fn new(law: L, raster: &'a Raster2d, state: &'a State2d, dt: f64) -> Self {
         Ctx {
             law,
             raster,
@@ -185,8 +261,18 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             nx: raster.nx(),
             ny: raster.ny(),
             dt,
-            theta,
         }
+    }
+
+    /// The friction coefficient of ΔC at a face between the cells seen as `l` and `r`,
+    /// at the face's Roe speed `speed` and mean depth `h`: the one place where the
+    /// step reads the friction law ([`BasalFriction::face_mu`], from the cells' own
+    /// speeds |(u, v)| and depths, so that a run invariant along one axis is the
+    /// line's bit for bit).
+    #[inline(always)]
+    fn face_mu(&self, l: &FaceSide, r: &FaceSide, speed: f64, h: f64) -> f64 {
+        let (cell_l, cell_r) = ((l.speed, l.side.h), (r.speed, r.side.h));
+        self.law.face_mu(cell_l, cell_r, speed, h, self.raster.g_n)
     }
 
     /// The free surface h + z of cell (i, j) seen from a cell whose surface is `eta`:
@@ -244,6 +330,52 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         t / self.dt - self.raster.g_n * (e_hi - e_lo) / ((hi - lo) as f64 * d)
     }
 
+    /// The view of interior cell (i, j): the same values as [`Self::x_side`] and
+    /// [`Self::y_side`] give for it.
+    #[inline(always)]
+    fn view(&self, i: usize, j: usize) -> CellView {
+        let cell = j * self.nx + i;
+        let g = self.raster.ghost_index(i + 1, j + 1);
+        let h = self.h[cell];
+        let (u, v) = (velocity(h, self.hu[cell]), velocity(h, self.hv[cell]));
+        CellView {
+            h,
+            u,
+            v,
+            sqrt_h: h.max(0.0).sqrt(),
+            b: self.raster.b_ghost[g],
+            z: self.raster.z[g],
+            drive_x: self.tangential_drive(i, j, u, true),
+            drive_y: self.tangential_drive(i, j, v, false),
+            speed: cell_speed(u, v),
+        }
+    }
+
+    /// The views of ghost-inclusive row `r` (0 and ny + 1 are ghosts: their y-sides
+    /// are those of [`Self::y_side`]).
+    fn views(&self, r: usize, row: &mut [CellView]) {
+        if r >= 1 && r <= self.ny {
+            for (i, view) in row.iter_mut().enumerate() {
+                *view = self.view(i, r - 1);
+            }
+        } else {
+            for (i, view) in row.iter_mut().enumerate() {
+                let y = self.y_side(i, r);
+                *view = CellView {
+                    h: y.side.h,
+                    u: y.t,
+                    v: y.side.u,
+                    sqrt_h: y.side.sqrt_h,
+                    b: y.side.b,
+                    z: y.side.z,
+                    drive_x: y.drive,
+                    drive_y: 0.0,
+                    speed: y.speed,
+                };
+            }
+        }
+    }
+
     /// The side of ghost-inclusive column `c` (0 and nx + 1 are ghosts) of row `j`
     /// seen by an x-face, its tangential velocity v and its drive along y.
     #[inline(always)]
@@ -265,7 +397,12 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             self.raster.z[g],
         );
         let v = velocity(h, self.hv[cell]);
-        (side, v, self.tangential_drive(cell % self.nx, j, v, false))
+        FaceSide {
+            side,
+            t: v,
+            drive: self.tangential_drive(cell % self.nx, j, v, false),
+            speed: cell_speed(side.u, v),
+        }
     }
 
     /// The side of column i, ghost-inclusive row `r` (0 and ny + 1 are ghosts), seen
@@ -289,7 +426,12 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             self.raster.z[g],
         );
         let u = velocity(h, self.hu[cell]);
-        (side, u, self.tangential_drive(i, cell / self.nx, u, true))
+        FaceSide {
+            side,
+            t: u,
+            drive: self.tangential_drive(i, cell / self.nx, u, true),
+            speed: cell_speed(u, side.u),
+        }
     }
 
     /// Whether ghost-inclusive column `c` of row `j` is a wall (a ghost takes the edge
@@ -307,51 +449,99 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         self.raster.is_wall(j * self.nx + i)
     }
 
-    /// Draining factor of the donor of a face between ghost-inclusive cells `lo` and
-    /// `hi` (`None` for a ghost), by the sign of the mass flux.
+    /// The fluxes of one face with sides `l`, `r` along its normal (velocities normal
+    /// to the face); zero where nothing crosses. The 1-D monolayer face
+    /// ([`super::face::monolayer_fluxes`]) with the disk threshold of ΔC, plus the
+    /// tangential flux. `d` is the cell width across the face.
     #[inline(always)]
-    fn donor_theta(&self, flux: f64, lo: Option<usize>, hi: Option<usize>) -> f64 {
-        let Some(theta) = self.theta else {
-            return 1.0;
-        };
-        let donor = if flux > 0.0 { lo } else { hi };
-        donor.map_or(1.0, |c| theta[c])
-    }
-
-    /// The sides of ghost-inclusive row `r` as the y-faces see them.
-    fn y_sides(&self, r: usize, row: &mut [FaceSide]) {
-        for (i, side) in row.iter_mut().enumerate() {
-            *side = self.y_side(i, r);
+    fn face_flux(&self, l: &FaceSide, r: &FaceSide, d: f64) -> FaceFlux {
+        let mu_of = |speed: f64, h: f64| self.face_mu(l, r, speed, h);
+        let (g_n, dt) = (self.raster.g_n, self.dt);
+        let drives = (l.drive, r.drive);
+        match interface_with_transverse_drive(mu_of, l.side, r.side, 0.0, drives, g_n, d, dt) {
+            None => FaceFlux::default(),
+            Some((c, sl, sr)) => {
+                let t_l = if c.left_at_rest { 0.0 } else { l.t };
+                let t_r = if c.right_at_rest { 0.0 } else { r.t };
+                FaceFlux {
+                    h: mass_flux(&c, sl, sr),
+                    qn: layer_momentum_flux(&c, c.h_minus, c.h_plus, sl.u, sr.u),
+                    qt: transverse_flux(&c, sl, sr, t_l, t_r),
+                    share_l: c.share_left,
+                    share_r: c.share_right,
+                    body_l: c.body_left,
+                    body_r: c.body_right,
+                }
+            }
         }
     }
 
-    /// The y-faces between ghost-inclusive rows `r` and `r + 1` from their sides.
+    /// A face with a wall on the left (`wall_l`), the right or both sides: the wall
+    /// side mirrors the other (normal velocity reversed), no mass and no tangential
+    /// momentum cross, and between two walls nothing does.
+    #[inline(never)]
+    fn wall_face(&self, l: FaceSide, r: FaceSide, wall_l: bool, wall_r: bool, d: f64) -> FaceFlux {
+        let mirror = |s: FaceSide| FaceSide {
+            side: Side {
+                u: -s.side.u,
+                u_base: -s.side.u_base,
+                ..s.side
+            },
+            ..s
+        };
+        let (l, r) = match (wall_l, wall_r) {
+            (true, true) => return FaceFlux::default(),
+            (true, false) => (mirror(r), r),
+            (false, true) => (l, mirror(l)),
+            (false, false) => (l, r),
+        };
+        let f = self.face_flux(&l, &r, d);
+        FaceFlux {
+            h: 0.0,
+            qt: 0.0,
+            ..f
+        }
+    }
+
+    /// The face between sides `l` and `r`, with (`WALLS`) the wall kinds `walls` of
+    /// its two cells.
+    #[inline(always)]
+    fn face<const WALLS: bool>(
+        &self,
+        l: FaceSide,
+        r: FaceSide,
+        (wl, wr): (bool, bool),
+        d: f64,
+    ) -> FaceFlux {
+        if WALLS && (wl || wr) {
+            self.wall_face(l, r, wl, wr, d)
+        } else {
+            self.face_flux(&l, &r, d)
+        }
+    }
+
+    /// The y-faces between two ghost-inclusive rows, the upper one `r + 1`, from
+    /// their views.
     fn y_faces<const WALLS: bool>(
         &self,
         r: usize,
-        lower: &[FaceSide],
-        upper: &[FaceSide],
+        lower: &[CellView],
+        upper: &[CellView],
         row: &mut [FaceFlux],
     ) {
-        let (g_n, dy) = (self.raster.g_n, self.raster.dy());
-        let cell = |r: usize, i: usize| (r >= 1 && r <= self.ny).then(|| (r - 1) * self.nx + i);
+        let dy = self.raster.dy();
         for (i, ((f, lo), hi)) in row.iter_mut().zip(lower).zip(upper).enumerate() {
-            if WALLS {
-                let (wl, wr) = (self.y_wall(i, r), self.y_wall(i, r + 1));
-                if wl || wr {
-                    *f = wall_face(&self.law, *lo, *hi, wl, wr, g_n, dy, self.dt);
-                    continue;
-                }
-            }
-            *f = face_flux(&self.law, lo, hi, g_n, dy, self.dt);
-            if self.theta.is_some() {
-                *f = f.drained(self.donor_theta(f.h, cell(r, i), cell(r + 1, i)));
-            }
+            let walls = if WALLS {
+                (self.y_wall(i, r), self.y_wall(i, r + 1))
+            } else {
+                (false, false)
+            };
+            *f = self.face::<WALLS>(lo.y_side(), hi.y_side(), walls, dy);
         }
     }
 
     /// Sweeps the rows of band `k`: for every cell, calls `cell(i, j, west, east,
-    /// south, north)` with its four faces. `s` holds the face rows.
+    /// south, north)` with its four faces. `s` holds the face and view rows.
     #[inline(always)]
     fn sweep<
         const WALLS: bool,
@@ -362,35 +552,36 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         s: &mut BandScratch,
         mut cell: F,
     ) {
-        let (nx, g_n, dx) = (self.nx, self.raster.g_n, self.raster.dx());
+        let (nx, dx) = (self.nx, self.raster.dx());
         let rows = self.raster.band_rows(k);
-        self.y_sides(rows.start, &mut s.lower);
-        self.y_sides(rows.start + 1, &mut s.upper);
+        self.views(rows.start, &mut s.lower);
+        self.views(rows.start + 1, &mut s.upper);
         self.y_faces::<WALLS>(rows.start, &s.lower, &s.upper, &mut s.below);
         for j in rows {
             std::mem::swap(&mut s.lower, &mut s.upper);
-            self.y_sides(j + 2, &mut s.upper);
+            self.views(j + 2, &mut s.upper);
             self.y_faces::<WALLS>(j + 1, &s.lower, &s.upper, &mut s.above);
-            let x_cell = |c: usize| (c >= 1 && c <= nx).then(|| j * nx + c - 1);
+            // The row's own views (`s.lower`, ghost-inclusive row j + 1) for its
+            // interior columns, the edge ghosts from [`Self::x_side`].
+            let row = &s.lower;
             let x_face = |left: FaceSide, right: FaceSide, c: usize| {
-                if WALLS {
-                    let (wl, wr) = (self.x_wall(c, j), self.x_wall(c + 1, j));
-                    if wl || wr {
-                        return wall_face(&self.law, left, right, wl, wr, g_n, dx, self.dt);
-                    }
-                }
-                let f = face_flux(&self.law, &left, &right, g_n, dx, self.dt);
-                if self.theta.is_none() {
-                    f
+                let walls = if WALLS {
+                    (self.x_wall(c, j), self.x_wall(c + 1, j))
                 } else {
-                    f.drained(self.donor_theta(f.h, x_cell(c), x_cell(c + 1)))
-                }
+                    (false, false)
+                };
+                self.face::<WALLS>(left, right, walls, dx)
             };
             let mut left = self.x_side(0, j);
-            let mut right = self.x_side(1, j);
+            let mut right = row[0].x_side();
             let mut west = x_face(left, right, 0);
             for i in 0..nx {
-                (left, right) = (right, self.x_side(i + 2, j));
+                let next = if i + 1 < nx {
+                    row[i + 1].x_side()
+                } else {
+                    self.x_side(nx + 1, j)
+                };
+                (left, right) = (right, next);
                 let east = x_face(left, right, i + 1);
                 cell(i, j, &west, &east, &s.below[i], &s.above[i]);
                 west = east;
@@ -398,98 +589,113 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             std::mem::swap(&mut s.below, &mut s.above);
         }
     }
+
+    /// The four faces (west, east, south, north) of cell (i, j) of the limited pass,
+    /// every flux scaled by its donor's draining factor in `theta` (a ghost donor
+    /// has 1; a face beside a wall carries no mass and is not scaled). The sides and
+    /// fluxes are those of [`Self::sweep`] (the same operations on the same data).
+    #[inline(always)]
+    fn limited_faces<const WALLS: bool>(&self, theta: &[f64], i: usize, j: usize) -> [FaceFlux; 4] {
+        let (nx, ny) = (self.nx, self.ny);
+        let (dx, dy) = (self.raster.dx(), self.raster.dy());
+        let x_theta = |c: usize| {
+            if c >= 1 && c <= nx {
+                theta[j * nx + c - 1]
+            } else {
+                1.0
+            }
+        };
+        let y_theta = |r: usize| {
+            if r >= 1 && r <= ny {
+                theta[(r - 1) * nx + i]
+            } else {
+                1.0
+            }
+        };
+        let donor = |f: FaceFlux, lo: f64, hi: f64| f.drained(if f.h > 0.0 { lo } else { hi });
+        let x_face = |c: usize| {
+            let (l, r) = (self.x_side(c, j), self.x_side(c + 1, j));
+            if WALLS {
+                let (wl, wr) = (self.x_wall(c, j), self.x_wall(c + 1, j));
+                if wl || wr {
+                    return self.wall_face(l, r, wl, wr, dx);
+                }
+            }
+            donor(self.face_flux(&l, &r, dx), x_theta(c), x_theta(c + 1))
+        };
+        let y_face = |r: usize| {
+            let (lo, hi) = (self.y_side(i, r), self.y_side(i, r + 1));
+            if WALLS {
+                let (wl, wr) = (self.y_wall(i, r), self.y_wall(i, r + 1));
+                if wl || wr {
+                    return self.wall_face(lo, hi, wl, wr, dy);
+                }
+            }
+            donor(self.face_flux(&lo, &hi, dy), y_theta(r), y_theta(r + 1))
+        };
+        // Ghost-inclusive column i + 1 and row j + 1.
+        [x_face(i), x_face(i + 1), y_face(j), y_face(j + 1)]
+    }
 }
 
-/// The fluxes of one face with sides `l`, `r` along its normal (velocities normal to
-/// the face), their tangential velocities and drives; zero where nothing crosses. The
-/// 1-D monolayer face ([`super::face::monolayer_fluxes`]) with the disk threshold of
-/// ΔC, plus the tangential flux.
+/// The new state of one cell from its old state and its four faces (west, east,
+/// south, north), `r` = (Δt/Δx, Δt/Δy): (unclipped new thickness, h u, h v).
 #[inline(always)]
-fn face_flux<L: BasalFriction>(
-    law: &L,
-    &(l, t_l, d_l): &FaceSide,
-    &(r, t_r, d_r): &FaceSide,
-    g_n: f64,
-    d: f64,
-    dt: f64,
-) -> FaceFlux {
-    // The threshold of the line's faces (`BasalFriction::face_mu`: μ(I) from the cells'
-    // own speeds |(u, v)| and depths), so that a run invariant along one axis is the
-    // line's bit for bit (hypot(u, 0) = |u|).
-    let (cell_l, cell_r) = ((l.u.hypot(t_l), l.h), (r.u.hypot(t_r), r.h));
-    let mu_of = |speed: f64, h: f64| law.face_mu(cell_l, cell_r, speed, h, g_n);
-    match interface_with_transverse_drive(mu_of, l, r, 0.0, (d_l, d_r), g_n, d, dt) {
-        None => FaceFlux::default(),
-        Some((c, l, r)) => {
-            let t_l = if c.left_at_rest { 0.0 } else { t_l };
-            let t_r = if c.right_at_rest { 0.0 } else { t_r };
-            FaceFlux {
-                h: mass_flux(&c, l, r),
-                qn: layer_momentum_flux(&c, c.h_minus, c.h_plus, l.u, r.u),
-                qt: transverse_flux(&c, l, r, t_l, t_r),
-                share_l: c.share_left,
-                share_r: c.share_right,
-                body_l: c.body_left,
-                body_r: c.body_right,
-            }
+fn update_cell(
+    (h_old, hu_old, hv_old): (f64, f64, f64),
+    (rx, ry): (f64, f64),
+    [w, e, so, no]: [&FaceFlux; 4],
+) -> (f64, f64, f64) {
+    // The x and y parts are summed before they are subtracted: a sum of two terms does
+    // not depend on their order, so a state symmetric under x ↔ y (Δx = Δy) stays
+    // symmetric to the bit.
+    let hn = h_old - (rx * (e.h - w.h) + ry * (no.h - so.h));
+    // Clip round-off below zero; `f64::max` would also turn a NaN into 0.
+    let h = if hn < 0.0 { 0.0 } else { hn };
+    let drained = drained_fraction(h, h_old);
+    let source_x = e.share_l + w.share_r - (e.body_l + w.body_r) * drained;
+    let source_y = no.share_l + so.share_r - (no.body_l + so.body_r) * drained;
+    let qu = hu_old - (rx * (e.qn - w.qn + source_x) + ry * (no.qt - so.qt));
+    let qv = hv_old - (rx * (e.qt - w.qt) + ry * (no.qn - so.qn + source_y));
+    if h <= H_DRY {
+        (hn, 0.0, 0.0)
+    } else {
+        (hn, qu, qv)
+    }
+}
+
+/// The draining factor θ = min(1, h/(Δt outflow over the four faces)) of a cell of
+/// thickness `h` with the unlimited faces w, e, s, n (Bollermann et al. 2013).
+#[inline(always)]
+fn draining_factor(h: f64, (rx, ry): (f64, f64), [w, e, so, no]: [&FaceFlux; 4]) -> f64 {
+    let need = rx * (e.h.max(0.0) + (-w.h).max(0.0)) + ry * (no.h.max(0.0) + (-so.h).max(0.0));
+    if need > h {
+        h.max(0.0) / need
+    } else {
+        1.0
+    }
+}
+
+/// The smallest value of `h_new` and its index (the first in order), `offset` added.
+fn first_minimum(h_new: &[f64], offset: usize) -> (f64, usize) {
+    let mut worst = (f64::INFINITY, 0usize);
+    for (k, &h) in h_new.iter().enumerate() {
+        if h < worst.0 {
+            worst = (h, offset + k);
         }
     }
-}
-
-/// A face with a wall on the left (`wall_l`), the right or both sides: the wall side
-/// mirrors the other (normal velocity reversed), no mass and no tangential momentum
-/// cross, and between two walls nothing does.
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-fn wall_face<L: BasalFriction>(
-    law: &L,
-    l: FaceSide,
-    r: FaceSide,
-    wall_l: bool,
-    wall_r: bool,
-    g_n: f64,
-    d: f64,
-    dt: f64,
-) -> FaceFlux {
-    let mirror = |(s, t, d): FaceSide| {
-        (
-            Side {
-                u: -s.u,
-                u_base: -s.u_base,
-                ..s
-            },
-            t,
-            d,
-        )
-    };
-    let (l, r) = match (wall_l, wall_r) {
-        (true, true) => return FaceFlux::default(),
-        (true, false) => (mirror(r), r),
-        (false, true) => (l, mirror(l)),
-        (false, false) => (l, r),
-    };
-    let f = face_flux(law, &l, &r, g_n, d, dt);
-    FaceFlux {
-        h: 0.0,
-        qt: 0.0,
-        ..f
-    }
+    worst
 }
 
 impl<L: BasalFriction> HydrostaticStep2d<L> {
-    /// One update pass (fluxes, limited by `theta` if given) into the new-state
-    /// buffers; returns the smallest new thickness and its cell, first in cell order.
-    fn update_pass(
-        &mut self,
-        raster: &Raster2d,
-        dt: f64,
-        state: &State2d,
-        limited: bool,
-    ) -> (f64, usize) {
+    /// The unlimited update pass into the new-state buffers (the thickness
+    /// unclipped), with every cell's draining factor from the same faces; returns the
+    /// smallest new thickness and its cell, first in cell order.
+    fn update_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
         if raster.walls().is_empty() {
-            self.update_pass_with::<false>(raster, dt, state, limited)
+            self.update_pass_with::<false>(raster, dt, state)
         } else {
-            self.update_pass_with::<true>(raster, dt, state, limited)
+            self.update_pass_with::<true>(raster, dt, state)
         }
     }
 
@@ -499,17 +705,64 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         raster: &Raster2d,
         dt: f64,
         state: &State2d,
-        limited: bool,
     ) -> (f64, usize) {
         let nx = raster.nx();
-        let (rx, ry) = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx::new(
-            self.law,
-            raster,
-            state,
-            dt,
-            limited.then_some(self.drain.as_slice()),
+        let r = (dt / raster.dx(), dt / raster.dy());
+        let ctx = Ctx::new(self.law, raster, state, dt);
+        let outputs = (
+            self.h_new.as_mut_slice(),
+            self.hu_new.as_mut_slice(),
+            self.hv_new.as_mut_slice(),
+            self.drain.as_mut_slice(),
         );
+        self.workers.bands4(
+            BAND_ROWS * nx,
+            outputs,
+            &mut self.scratch,
+            |k, (h_new, hu_new, hv_new, drain), s| {
+                let offset = k * BAND_ROWS * nx;
+                let mut worst = (f64::INFINITY, 0usize);
+                ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
+                    let cell = j * nx + i;
+                    let local = cell - offset;
+                    let old = (ctx.h[cell], ctx.hu[cell], ctx.hv[cell]);
+                    let (hn, qu, qv) = update_cell(old, r, [w, e, so, no]);
+                    if hn < worst.0 {
+                        worst = (hn, cell);
+                    }
+                    (h_new[local], hu_new[local], hv_new[local]) = (hn, qu, qv);
+                    drain[local] = draining_factor(old.0, r, [w, e, so, no]);
+                });
+                s.worst = worst;
+            },
+        );
+        self.worst()
+    }
+
+    /// The limited pass: every flux leaving a cell scaled by the cell's draining
+    /// factor θ. Only the cells with a face whose donor has θ ≠ 1 (a draining cell and
+    /// its four neighbours) change; the others keep the values of the unlimited pass,
+    /// which are the same bits (a flux times θ = 1 is the flux). Returns the smallest
+    /// new thickness and its cell, first in cell order.
+    fn limited_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
+        if raster.walls().is_empty() {
+            self.limited_pass_with::<false>(raster, dt, state)
+        } else {
+            self.limited_pass_with::<true>(raster, dt, state)
+        }
+    }
+
+    /// [`Self::limited_pass`] with (`WALLS`) or without the test for wall cells.
+    fn limited_pass_with<const WALLS: bool>(
+        &mut self,
+        raster: &Raster2d,
+        dt: f64,
+        state: &State2d,
+    ) -> (f64, usize) {
+        let (nx, ny) = (raster.nx(), raster.ny());
+        let r = (dt / raster.dx(), dt / raster.dy());
+        let ctx = Ctx::new(self.law, raster, state, dt);
+        let theta = self.drain.as_slice();
         let outputs = (
             self.h_new.as_mut_slice(),
             self.hu_new.as_mut_slice(),
@@ -521,67 +774,38 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             &mut self.scratch,
             |k, (h_new, hu_new, hv_new), s| {
                 let offset = k * BAND_ROWS * nx;
-                let mut worst = (f64::INFINITY, 0usize);
-                ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
-                    let cell = j * nx + i;
-                    let local = cell - offset;
-                    let h_old = ctx.h[cell];
-                    // The x and y parts are summed before they are subtracted: a sum of
-                    // two terms does not depend on their order, so a state symmetric
-                    // under x ↔ y (Δx = Δy) stays symmetric to the bit.
-                    let hn = h_old - (rx * (e.h - w.h) + ry * (no.h - so.h));
-                    if hn < worst.0 {
-                        worst = (hn, cell);
+                for j in raster.band_rows(k) {
+                    let row = &theta[j * nx..(j + 1) * nx];
+                    let below = (j > 0).then(|| &theta[(j - 1) * nx..j * nx]);
+                    let above = (j + 1 < ny).then(|| &theta[(j + 1) * nx..(j + 2) * nx]);
+                    let draining = |t: &[f64]| t.iter().any(|&t| t != 1.0);
+                    if !(draining(row)
+                        || below.is_some_and(draining)
+                        || above.is_some_and(draining))
+                    {
+                        continue;
                     }
-                    // Clip round-off below zero; `f64::max` would also turn a NaN into 0.
-                    let h = if hn < 0.0 { 0.0 } else { hn };
-                    let drained = drained_fraction(h, h_old);
-                    let source_x = e.share_l + w.share_r - (e.body_l + w.body_r) * drained;
-                    let source_y = no.share_l + so.share_r - (no.body_l + so.body_r) * drained;
-                    let qu = ctx.hu[cell] - (rx * (e.qn - w.qn + source_x) + ry * (no.qt - so.qt));
-                    let qv = ctx.hv[cell] - (rx * (e.qt - w.qt) + ry * (no.qn - so.qn + source_y));
-                    h_new[local] = h;
-                    (hu_new[local], hv_new[local]) = if h <= H_DRY { (0.0, 0.0) } else { (qu, qv) };
-                    // The unclipped value for the positivity test.
-                    if hn < 0.0 {
-                        h_new[local] = hn;
+                    for i in 0..nx {
+                        let affected = row[i] != 1.0
+                            || (i > 0 && row[i - 1] != 1.0)
+                            || (i + 1 < nx && row[i + 1] != 1.0)
+                            || below.is_some_and(|b| b[i] != 1.0)
+                            || above.is_some_and(|a| a[i] != 1.0);
+                        if !affected {
+                            continue;
+                        }
+                        let [w, e, so, no] = ctx.limited_faces::<WALLS>(theta, i, j);
+                        let cell = j * nx + i;
+                        let local = cell - offset;
+                        let old = (ctx.h[cell], ctx.hu[cell], ctx.hv[cell]);
+                        let (hn, qu, qv) = update_cell(old, r, [&w, &e, &so, &no]);
+                        (h_new[local], hu_new[local], hv_new[local]) = (hn, qu, qv);
                     }
-                });
-                s.worst = worst;
+                }
+                s.worst = first_minimum(h_new, offset);
             },
         );
         self.worst()
-    }
-
-    /// The draining factors θ = min(1, h/(outflow over the four faces)).
-    fn drain_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) {
-        if raster.walls().is_empty() {
-            self.drain_pass_with::<false>(raster, dt, state);
-        } else {
-            self.drain_pass_with::<true>(raster, dt, state);
-        }
-    }
-
-    /// [`Self::drain_pass`] with (`WALLS`) or without the test for wall cells.
-    fn drain_pass_with<const WALLS: bool>(&mut self, raster: &Raster2d, dt: f64, state: &State2d) {
-        let nx = raster.nx();
-        let (rx, ry) = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx::new(self.law, raster, state, dt, None);
-        self.workers.bands1(
-            BAND_ROWS * nx,
-            &mut self.drain,
-            &mut self.scratch,
-            |k, drain, s| {
-                let offset = k * BAND_ROWS * nx;
-                ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
-                    let cell = j * nx + i;
-                    let need = rx * (e.h.max(0.0) + (-w.h).max(0.0))
-                        + ry * (no.h.max(0.0) + (-so.h).max(0.0));
-                    let h = ctx.h[cell];
-                    drain[cell - offset] = if need > h { h.max(0.0) / need } else { 1.0 };
-                });
-            },
-        );
     }
 
     /// The smallest new thickness over the bands, combined in band order.
@@ -602,10 +826,9 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
     }
 
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
-        let mut worst = self.update_pass(raster, dt, state, false);
+        let mut worst = self.update_pass(raster, dt, state);
         if worst.0 < 0.0 {
-            self.drain_pass(raster, dt, state);
-            worst = self.update_pass(raster, dt, state, true);
+            worst = self.limited_pass(raster, dt, state);
         }
         let tolerance = -1e-14 * (1.0 + state.h[worst.1].abs());
         if worst.0 < tolerance {

@@ -43,28 +43,6 @@ impl Workers {
         self.pool.as_ref().map_or(1, |p| p.current_num_threads())
     }
 
-    /// Calls `f(k, a_k, s_k)` for every band k, with `a_k` the k-th chunk of `chunk`
-    /// values of `a` and `s_k` the band's scratch.
-    pub fn bands1<S, F>(&self, chunk: usize, a: &mut [f64], scratch: &mut [S], f: F)
-    where
-        S: Send,
-        F: Fn(usize, &mut [f64], &mut S) + Sync + Send,
-    {
-        match &self.pool {
-            None => {
-                for (k, (a, s)) in a.chunks_mut(chunk).zip(scratch.iter_mut()).enumerate() {
-                    f(k, a, s);
-                }
-            }
-            Some(pool) => pool.install(|| {
-                a.par_chunks_mut(chunk)
-                    .zip(scratch.par_iter_mut())
-                    .enumerate()
-                    .for_each(|(k, (a, s))| f(k, a, s));
-            }),
-        }
-    }
-
     /// Calls `f(k, a_k, b_k)` for every band k (chunks of `chunk` values).
     pub fn bands2<F>(&self, chunk: usize, a: &mut [f64], b: &mut [f64], f: F)
     where
@@ -114,6 +92,41 @@ impl Workers {
                     .zip(scratch.par_iter_mut())
                     .enumerate()
                     .for_each(|(k, (((a, b), c), s))| f(k, (a, b, c), s));
+            }),
+        }
+    }
+
+    /// Calls `f(k, (a_k, b_k, c_k, d_k), s_k)` for every band k (chunks of `chunk`
+    /// values, the band's scratch `s_k`).
+    pub fn bands4<S, F>(
+        &self,
+        chunk: usize,
+        (a, b, c, d): (&mut [f64], &mut [f64], &mut [f64], &mut [f64]),
+        scratch: &mut [S],
+        f: F,
+    ) where
+        S: Send,
+        F: Fn(usize, (&mut [f64], &mut [f64], &mut [f64], &mut [f64]), &mut S) + Sync + Send,
+    {
+        match &self.pool {
+            None => {
+                let chunks = a
+                    .chunks_mut(chunk)
+                    .zip(b.chunks_mut(chunk))
+                    .zip(c.chunks_mut(chunk))
+                    .zip(d.chunks_mut(chunk));
+                for (k, ((((a, b), c), d), s)) in chunks.zip(scratch.iter_mut()).enumerate() {
+                    f(k, (a, b, c, d), s);
+                }
+            }
+            Some(pool) => pool.install(|| {
+                a.par_chunks_mut(chunk)
+                    .zip(b.par_chunks_mut(chunk))
+                    .zip(c.par_chunks_mut(chunk))
+                    .zip(d.par_chunks_mut(chunk))
+                    .zip(scratch.par_iter_mut())
+                    .enumerate()
+                    .for_each(|(k, ((((a, b), c), d), s))| f(k, (a, b, c, d), s));
             }),
         }
     }
