@@ -103,6 +103,8 @@ CHECKS = {
         "dilatant", "split_scheme::an_odd_even_fraction_pattern_on_a_flat_layer_is_no_equilibrium"),
     "dil_rest_10": cargo_test("dilatant", "split_scheme::dense_collapse_at_10_degrees_comes_to_rest"),
     "dil_thin": cargo_test("dilatant", "split_scheme::layers_thinner_than_the_threshold_do_not_dilate"),
+    "dil_thin_convergence": cargo_test(
+        "dilatant", "early_front_and_peak_dilation_converge_with_the_thickness_threshold"),
     "dil_slopes": cargo_test("dilatant", "fig_9a_front_order_on_the_five_slopes"),
     "dil_settle": cargo_test("dilatant", "collapses_come_to_rest_and_settle_at_converging_times"),
     "dil_contraction": cargo_test("dilatant", "front_contraction_and_peak_velocity_at_0_degrees"),
