@@ -1029,62 +1029,160 @@ fn front_contraction_and_peak_velocity_at_0_degrees() {
     }
 }
 
+/// The snapshots `(t, dense − loose)` where the loose front leads, as runs of successive
+/// 0.06 s snapshots ("0.84–1.80 s") with the largest lead, or "never".
+fn lead_windows(ahead: &[(f64, f64)]) -> String {
+    if ahead.is_empty() {
+        return "never".to_string();
+    }
+    let mut runs: Vec<(f64, f64)> = Vec::new();
+    for &(t, _) in ahead {
+        match runs.last_mut() {
+            Some(run) if t - run.1 < 0.06 + 1e-6 => run.1 = t,
+            _ => runs.push((t, t)),
+        }
+    }
+    let shown: Vec<String> = runs
+        .iter()
+        .map(|&(a, b)| {
+            if b > a {
+                format!("{a:.2}–{b:.2}")
+            } else {
+                format!("{a:.2}")
+            }
+        })
+        .collect();
+    let most = ahead.iter().map(|a| -a.1).fold(0.0, f64::max);
+    format!("{} s (up to {most:.1} mm)", shown.join(", "))
+}
+
+/// Every snapshot of a shipped dilatant scenario run with `sets`: (t, front holding 99 %
+/// of the grains ∫φh, h = h_thin = 7 mm contour).
+fn grain_fronts(file: &str, sets: &[String]) -> Vec<(f64, f64, f64)> {
+    use granflow::output::memory::MemorySink;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scn = granflow::scenario::load_file(&dir.join("scenarios").join(file), sets).unwrap();
+    let mut sim = granflow::setup::build_dilatant(&scn);
+    let (x, dx) = (sim.grid.x.clone(), sim.grid.dx);
+    let mut sink = MemorySink::default();
+    sim.run(&mut sink, &mut |_| {}).unwrap();
+    sink.snapshots
+        .iter()
+        .map(|s| {
+            let phi = s.field("phi").unwrap();
+            (
+                s.t,
+                grain_quantile(&x, dx, &s.h, phi, 0.99),
+                contour(&x, &s.h, 7e-3),
+            )
+        })
+        .collect()
+}
+
 #[test]
 fn fig_9a_front_order_on_the_five_slopes() {
-    // Bouchut et al. 2021, §4.3.1 and Fig. 9a: "for all slopes" the dense front is ahead of the
-    // loose one. The shipped scenarios (Δx = 5 mm) on 0°, 10°, 16°, 19°, 22°, fronts
-    // (h > 1 mm) every 0.06 s to 1.8 s: dense ≥ loose except in the listed windows,
-    // which are asserted as they are (loose ahead exactly there), so that a change of
-    // the numerics shows here. Under refinement (docs/validation.md, dil-slopes) the 16°
-    // window goes away, the 19° (from ≈ 1 s, 2.5 mm in the deposit) and 22° (0.9–1.26
-    // s, ≈ 2 cm) ones stay: measured departures from the paper's figure. They are the
-    // lead of the contracting loose body (tan ψ < 0, smaller μ_eff), ahead at h > 14 mm
-    // from 0.36 s on 22°, reaching the 1 mm front later (dil-slopes, table by level).
-    let windows: [(f64, f64, f64); 5] = [
-        (0.0, f64::NAN, f64::NAN),
-        (10.0, f64::NAN, f64::NAN),
-        (16.0, 0.96, 1.02),
-        (19.0, 0.84, 1.8),
-        (22.0, 0.72, 1.26),
+    // Bouchut et al. 2021, §4.3.1 and Fig. 9a: "for all slopes" the dense front is ahead of
+    // the loose one. The shipped scenarios on 0°, 10°, 16°, 19°, 22° to 1.8 s, snapshots
+    // every 0.06 s, dense − loose with two fronts that converge from Δx = 5 mm
+    // (docs/validation.md, dil-thin-layer): the front holding 99 % of the grains ∫φh
+    // (asserted) and the h_thin = 7 mm contour (printed; irregular on 0° and 10°).
+    // Asserted for the 99 % front at three Δx (5, 2.5, 1.25 mm; on 16°, where 5 and 2.5 mm
+    // have the other sign, 2.5, 1.25, 0.625 mm):
+    // - dense − loose in the deposit (last snapshot) changes monotonically with a
+    //   shrinking difference and has one sign on the two finer grids: dense ahead on 0°,
+    //   10°, 16°, 22°, loose ahead on 19° (a converged departure from the paper: −5.7,
+    //   −5.4, −5.3 mm at 1.25, 0.625, 0.3125 mm, dil-slopes);
+    // - on 0°, 10°, 16° the dense front leads at every snapshot from 0.12 s on, on the two
+    //   finer grids (at 0.06 s the loose one leads by 0.5, 0.2, 0.1 mm: printed).
+    // With the h_thin contour the 19° deposits tie in the limit: |dense − loose| shrinks
+    // by ≥ 1.4 per refinement (asserted). The windows where the loose front leads on 19°
+    // (from ≈ 1 s) and 22° (≈ 0.7–1.26 s) are printed: they persist to 0.3125 mm and
+    // converge only there (dil-slopes), not at these Δx.
+    let slopes: [(f64, [usize; 3]); 5] = [
+        (0.0, [640, 1280, 2560]),
+        (10.0, [640, 1280, 2560]),
+        (16.0, [1280, 2560, 5120]),
+        (19.0, [640, 1280, 2560]),
+        (22.0, [640, 1280, 2560]),
     ];
-    for (slope, from, to) in windows {
-        let sets = vec![
-            format!("domain.slope_deg={slope}"),
-            "time.t_end=1.8".to_string(),
-            "output.every=0.06".to_string(),
-        ];
-        let (dense, _) = scenario_series("dilatancy_dense.toml", &sets);
-        let (loose, _) = scenario_series("dilatancy_loose.toml", &sets);
-        // A run at rest before 1.8 s has fewer snapshots (the last at its stop time):
-        // after it its front is final.
-        let at = |series: &[Row], t: f64| {
-            *series
-                .iter()
-                .find(|r| (r.0 - t).abs() < 1e-6)
-                .unwrap_or_else(|| series.last().unwrap())
-        };
-        let times: Vec<f64> = (1..=30).map(|k| k as f64 * 0.06).collect();
-        let mut ahead = Vec::new();
-        for &t in &times {
-            if at(&dense, t).1 < at(&loose, t).1 {
-                ahead.push(t);
+    let times: Vec<f64> = (1..=30).map(|k| k as f64 * 0.06).collect();
+    for (slope, grids) in slopes {
+        let mut deposit = Vec::new();
+        let mut deposit_thin = Vec::new();
+        for (g, cells) in grids.iter().enumerate() {
+            let sets = vec![
+                format!("domain.slope_deg={slope}"),
+                format!("domain.cells={cells}"),
+                "time.t_end=1.8".to_string(),
+                "output.every=0.06".to_string(),
+            ];
+            let dense = grain_fronts("dilatancy_dense.toml", &sets);
+            let loose = grain_fronts("dilatancy_loose.toml", &sets);
+            // A run at rest before 1.8 s has fewer snapshots (the last at its stop time):
+            // after it its fronts are final.
+            let at = |series: &[(f64, f64, f64)], t: f64| {
+                *series
+                    .iter()
+                    .find(|r| (r.0 - t).abs() < 1e-6)
+                    .unwrap_or_else(|| series.last().unwrap())
+            };
+            let mut ahead = Vec::new();
+            let mut ahead_thin = Vec::new();
+            for &t in &times {
+                let (d, l) = (at(&dense, t), at(&loose, t));
+                if d.1 < l.1 {
+                    ahead.push((t, (d.1 - l.1) * 1e3));
+                }
+                if d.2 < l.2 {
+                    ahead_thin.push((t, (d.2 - l.2) * 1e3));
+                }
+            }
+            let (d, l) = (dense.last().unwrap(), loose.last().unwrap());
+            deposit.push((d.1 - l.1) * 1e3);
+            deposit_thin.push((d.2 - l.2) * 1e3);
+            let (d48, l48) = (at(&dense, 0.48), at(&loose, 0.48));
+            println!(
+                "θ = {slope}°, Δx = {:.3} mm: dense − loose at 0.48 s {:+.1} mm (h_thin {:+.1}), at the end {:+.1} mm (h_thin {:+.1}); loose ahead at {} (h_thin: {})",
+                3.2e3 / *cells as f64,
+                (d48.1 - l48.1) * 1e3,
+                (d48.2 - l48.2) * 1e3,
+                deposit[g],
+                deposit_thin[g],
+                lead_windows(&ahead),
+                lead_windows(&ahead_thin)
+            );
+            // From 0.12 s on, the dense front leads on 0°, 10°, 16° on the two finer grids.
+            if g > 0 && slope < 17.0 {
+                let late = times
+                    .iter()
+                    .skip(1)
+                    .find(|&&t| at(&dense, t).1 < at(&loose, t).1);
+                assert!(
+                    late.is_none(),
+                    "θ {slope}, {cells} cells: loose ahead at {late:?} s"
+                );
             }
         }
-        let (d_end, l_end) = (dense.last().unwrap().1, loose.last().unwrap().1);
+        let d: Vec<f64> = deposit.windows(2).map(|w| w[1] - w[0]).collect();
         println!(
-            "θ = {slope}°: dense − loose at the end {:+.1} mm, loose ahead at {ahead:?} s",
-            (d_end - l_end) * 1e3
+            "θ = {slope}°: deposit dense − loose {deposit:.2?} mm, differences {d:.2?} mm, ratio {:.2}",
+            d[0] / d[1]
         );
-        for &t in &ahead {
+        assert!(
+            d[0] * d[1] > 0.0 && d[1].abs() < d[0].abs(),
+            "θ {slope}: {deposit:?}"
+        );
+        let sign = if slope == 19.0 { -1.0 } else { 1.0 };
+        assert!(
+            deposit[1] * sign > 0.0 && deposit[2] * sign > 0.0,
+            "θ {slope}: {deposit:?}"
+        );
+        if slope == 19.0 {
+            let m: Vec<f64> = deposit_thin.iter().map(|v| v.abs()).collect();
             assert!(
-                t >= from - 1e-9 && t <= to + 1e-9,
-                "θ {slope}: loose ahead at {t} s"
+                m[0] >= 1.4 * m[1] && m[1] >= 1.4 * m[2],
+                "θ 19, h_thin: {deposit_thin:?}"
             );
-        }
-        if from.is_finite() {
-            let inside = |t: &&f64| **t >= from - 1e-9 && **t <= to + 1e-9;
-            let expected: Vec<f64> = times.iter().filter(inside).cloned().collect();
-            assert_eq!(ahead, expected, "θ {slope}: the window changed");
         }
     }
 }
