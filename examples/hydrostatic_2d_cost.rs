@@ -5,7 +5,9 @@
 //!
 //!   cargo run --release --example hydrostatic_2d_cost -- 64 5
 //!
-//! Arguments: `n` (n × n cells), `steps`, and the set-up:
+//! Arguments: `n` (n × n cells), `steps`, the set-up, the number of threads (default 1)
+//! and the stages (`hyperbolic`, the default, or `both`: the whole step of a run, the
+//! hyperbolic and the friction stage of `model::granular_2d::pipeline`). The set-ups:
 //! - `cartesian` (default): the side-by-side case with Basilisk's `saint-venant.h`
 //!   (`benches/basilisk/saint_venant_cone.c`): Cartesian coordinates on
 //!   [0, 4] × [−2, 2], the bed b = 0.05 sin(2x) cos(y), a cone of thickness
@@ -18,10 +20,12 @@
 //! counts and difference the totals. The last line is an FNV-1a hash of the final
 //! state, to check that a change of the step keeps the results bit for bit.
 use granflow::grid::{BoundaryKind, Coordinates, Raster2d, RasterSpec, Sides};
+use granflow::model::granular_2d;
 use granflow::numerics::hydrostatic_2d::HydrostaticStep2d;
 use granflow::numerics::workers::Workers;
 use granflow::numerics::Stage;
-use granflow::physics::rheology::Coulomb;
+use granflow::physics::rheology::{Coulomb, FrictionLaw};
+use granflow::physics::Material;
 use granflow::state::State2d;
 
 fn main() {
@@ -30,6 +34,7 @@ fn main() {
     let steps: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(10);
     let local = args.get(3).is_some_and(|s| s == "local");
     let threads: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(1);
+    let both = args.get(5).is_some_and(|s| s == "both");
     // The bench's cone touches the west edge; the side-by-side one is inside.
     let (x_min, y_min, centre) = (0.0, -2.0, if local { 1.5 } else { 2.0 });
     let spec = RasterSpec {
@@ -63,8 +68,17 @@ fn main() {
     let zeros = vec![0.0; n * n];
     let mut state = State2d::from_velocities(h, &zeros, &zeros);
     let mu = if local { 24f64.to_radians().tan() } else { 0.0 };
-    let workers = Workers::new(threads).expect("threads");
-    let mut step = HydrostaticStep2d::new(Coulomb { mu }, &raster, workers);
+    let workers = Workers::new(if both { 1 } else { threads }).expect("threads");
+    let mut hyperbolic = HydrostaticStep2d::new(Coulomb { mu }, &raster, workers);
+    let material = Material {
+        rho_s: 2500.0,
+        phi: 0.62,
+        d_s: 0.7e-3,
+    };
+    let mut pipeline = both.then(|| {
+        granular_2d::pipeline(&FrictionLaw::Coulomb { mu }, &material, &raster, threads)
+            .expect("threads")
+    });
     let g_n = raster.g_n;
     let length = raster.dx().min(raster.dy());
     let mut t = 0.0;
@@ -79,7 +93,11 @@ fn main() {
             signal = signal.max(u.abs().max(v.abs()) + (g_n * h.max(0.0)).sqrt());
         }
         let dt = 0.5 * length / signal;
-        step.apply(&raster, dt, &mut state).expect("step");
+        if let Some(pipeline) = pipeline.as_mut() {
+            pipeline.advance(&raster, dt, &mut state).expect("step");
+        } else {
+            hyperbolic.apply(&raster, dt, &mut state).expect("step");
+        }
         t += dt;
     }
     let mass: f64 = state.h.iter().sum::<f64>() * raster.cell_area();

@@ -229,14 +229,31 @@ impl<M: Model> Simulation<M> {
         Err(self.failure(FailureReason::NegativeThickness { h, dt }, Some(cell)))
     }
 
+    /// A failure of the speed bound (whose rule sees the diagnostics, not the state)
+    /// placed at the centre of the fastest cell, when the model names it; any other
+    /// failure as it is.
+    fn placed(&self, mut failure: SolverFailure) -> SolverFailure {
+        if matches!(failure.reason, FailureReason::SpeedBound { .. }) && failure.x.is_none() {
+            if let Some(cell) = self.model.fastest_cell(&self.grid, &self.state) {
+                (failure.x, failure.y) = self.centre(cell);
+            }
+        }
+        failure
+    }
+
+    /// The centre of physical cell `cell` (0-based) for a failure: x, and y on a raster.
+    fn centre(&self, cell: usize) -> (Option<f64>, Option<f64>) {
+        let c = self.grid.centre(cell);
+        (Some(c.x), (self.grid.axis_names().len() > 1).then_some(c.y))
+    }
+
     /// The failure `reason` in physical cell `cell` (0-based), placed at its centre.
     fn failure(&self, reason: FailureReason, cell: Option<usize>) -> RunError {
+        let (x, y) = cell.map_or((None, None), |i| self.centre(i));
         RunError::Solver(SolverFailure {
             reason,
-            x: cell.map(|i| self.grid.centre(i).x),
-            y: cell
-                .filter(|_| self.grid.axis_names().len() > 1)
-                .map(|i| self.grid.centre(i).y),
+            x,
+            y,
             t: self.t,
             step: self.steps,
         })
@@ -393,7 +410,7 @@ impl<M: Model> Simulation<M> {
                     Verdict::Stop(status) => {
                         stop.get_or_insert(status);
                     }
-                    Verdict::Fail(failure) => return Err(RunError::Solver(failure)),
+                    Verdict::Fail(failure) => return Err(RunError::Solver(self.placed(failure))),
                 }
             }
             sink.step(&self.record(&d, dt))?;

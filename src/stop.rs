@@ -91,10 +91,15 @@ impl std::fmt::Display for SolverFailure {
             ),
             FailureReason::SpeedBound { speed, bound } => write!(
                 f,
-                "the largest speed {speed:.3e} m/s exceeds the physical bound {bound:.3e} m/s \
+                "the largest speed {speed:.3e} m/s{} exceeds the physical bound {bound:.3e} m/s \
                  ({SPEED_BOUND_FACTOR} × the speed of free fall over the bed's relief and the \
                  initial thickness, from the initial speed) at t = {t:.6e} s (step {step}): \
-                 the scheme is unstable for these parameters"
+                 the scheme is unstable for these parameters",
+                if self.x.is_some() {
+                    format!(", at {at},")
+                } else {
+                    String::new()
+                }
             ),
             FailureReason::MassGain { mass, mass0 } => write!(
                 f,

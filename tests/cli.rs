@@ -171,6 +171,8 @@ fn solver_blow_up_exits_1_naming_when_and_keeps_the_file() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("exceeds the physical bound"), "{stderr}");
+    // The fastest cell is named by its x.
+    assert!(stderr.contains(", at x = "), "{stderr}");
     assert!(
         stderr.contains("at t = ") && stderr.contains("(step 1)"),
         "{stderr}"

@@ -90,3 +90,24 @@ fn a_stop_rule_ends_the_run_with_its_status() {
     // The state at the stop is written as a snapshot.
     assert_eq!(sink.snapshots.last().unwrap().t, summary.t_end);
 }
+
+/// A run that fails its speed bound names the fastest cell by its x (the rule sees
+/// only the largest speed).
+#[test]
+fn a_speed_bound_failure_names_the_fastest_cell() {
+    let mut sim = collapse();
+    sim.add_rule(Box::new(granflow::stop::SpeedBound { bound: 0.05 }));
+    let mut sink = granflow::output::memory::MemorySink::default();
+    let Err(RunError::Solver(failure)) = sim.run(&mut sink, &mut |_| {}) else {
+        panic!("the run fails its speed bound");
+    };
+    let s = &sim.state;
+    let speed = |i: usize| granflow::physics::shallow::velocity(s.h[i + 1], s.hu[i + 1]).abs();
+    // The first cell of the largest speed.
+    let fastest = (0..s.nx).fold(0, |m, i| if speed(i) > speed(m) { i } else { m });
+    assert!(speed(fastest) > 0.05);
+    let x = sim.grid.x[fastest];
+    assert_eq!((failure.x, failure.y), (Some(x), None), "{failure}");
+    let message = failure.to_string();
+    assert!(message.contains(&format!("at x = {x} m")), "{message}");
+}

@@ -12,7 +12,7 @@
 
 use crate::grid::Raster2d;
 use crate::model::granular::pipeline::{with_law, WithLaw};
-use crate::model::{Diagnostics, Model};
+use crate::model::{first_maximum, Diagnostics, Model};
 use crate::numerics::friction_2d::FrictionStep2d;
 use crate::numerics::hydrostatic_2d::HydrostaticStep2d;
 use crate::numerics::workers::Workers;
@@ -128,6 +128,16 @@ impl Model for Granular2d {
             h_max,
             non_finite_at,
         }
+    }
+
+    /// The first cell with the largest u² + v² (the speed of [`Self::diagnose`]).
+    fn fastest_cell(&self, _raster: &Raster2d, state: &State2d) -> Option<usize> {
+        let speed2 = |k: usize| {
+            let h = state.h[k];
+            let (u, v) = (velocity(h, state.hu[k]), velocity(h, state.hv[k]));
+            u * u + v * v
+        };
+        first_maximum((0..state.h.len()).map(speed2))
     }
 
     fn bed_layer(&self) -> &[f64] {

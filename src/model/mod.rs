@@ -106,6 +106,14 @@ pub trait Model: Send + 'static {
         None
     }
 
+    /// The cell (physical index, the first in cell order) where the speed counted in
+    /// [`Diagnostics::max_speed`] is largest, or `None` (the default: the model does
+    /// not say). Asked only when a run fails its speed bound
+    /// ([`crate::stop::SpeedBound`]), to name the cell in the failure.
+    fn fastest_cell(&self, _grid: &Self::Grid, _state: &Self::State) -> Option<usize> {
+        None
+    }
+
     /// For models with a water surface: the largest |η − η₀| over the cells wet now and
     /// at t = 0 (m), η₀ the initial surface. The run loop reports its maximum over time
     /// as the summary's `max_wave_amplitude`. `None` (the default): no water surface.
@@ -121,4 +129,16 @@ pub trait Model: Send + 'static {
         t: f64,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError>;
+}
+
+/// The index of the first largest of `values` (NaN never counts), `None` when there
+/// is none: the cell of [`Model::fastest_cell`].
+pub fn first_maximum(values: impl Iterator<Item = f64>) -> Option<usize> {
+    let mut best: Option<(usize, f64)> = None;
+    for (k, v) in values.enumerate() {
+        if best.is_none_or(|(_, b)| v > b) && !v.is_nan() {
+            best = Some((k, v));
+        }
+    }
+    best.map(|(k, _)| k)
 }

@@ -96,6 +96,25 @@ pub fn diagnose(
     }
 }
 
+/// The first cell with the largest speed of [`diagnose`] (|u| of the monolayer, the
+/// largest |u_α| of a column of layers).
+pub fn fastest_cell(state: &LayeredState) -> Option<usize> {
+    let n = state.layers;
+    let nx = state.nx;
+    let h = &state.h[1..=nx];
+    let hu = &state.hu[n..(nx + 1) * n];
+    let speed = |(&h, q): (&f64, &[f64])| {
+        if n == 1 {
+            velocity(h, q[0]).abs()
+        } else if h > H_DRY {
+            q.iter().fold(0.0f64, |m, q| m.max(q.abs())) * (1.0 / h)
+        } else {
+            0.0
+        }
+    };
+    crate::model::first_maximum(h.iter().zip(hu.chunks_exact(n)).map(speed))
+}
+
 /// Mean velocity ū = Σ l_α u_α and shear term 3 Σ l_α (u_α − ū)² of a column with layer
 /// discharges `q` and 1/h = `inv_h`.
 #[inline(always)]

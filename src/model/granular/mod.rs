@@ -58,6 +58,10 @@ impl Model for Granular {
         self.rest_speed
     }
 
+    fn fastest_cell(&self, _mesh: &Line, state: &LayeredState) -> Option<usize> {
+        diagnostics::fastest_cell(state)
+    }
+
     fn bed_layer(&self) -> &[f64] {
         &self.h_bed
     }

@@ -96,6 +96,16 @@ impl Model for Submarine {
         d
     }
 
+    /// The first cell with the largest max(|u₁|, |u₂|), from the views of
+    /// [`Self::diagnose`].
+    fn fastest_cell(&self, g: &CurvedLine, s: &TwoLayerState) -> Option<usize> {
+        let mut speeds = vec![0.0; g.line.nx];
+        sweep_speeds(&self.params, g, s, |i, c| {
+            speeds[i - 1] = max_num(c.u1.abs(), c.u2.abs());
+        });
+        crate::model::first_maximum(speeds.into_iter())
+    }
+
     fn bed_layer(&self) -> &[f64] {
         &self.h_bed
     }
