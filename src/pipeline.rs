@@ -30,8 +30,22 @@ impl<G, S> Pipeline<G, S> {
     /// (the stages before the failing one have been applied): the caller restores its
     /// copy of the state at t^n ([`crate::simulation::Simulation::step`] does).
     pub fn advance(&mut self, grid: &G, dt: f64, state: &mut S) -> Result<(), StageError> {
+        self.advance_shortened(grid, dt, dt, state)
+    }
+
+    /// [`advance`](Self::advance) by `dt` ≤ `dt_full`, the step the stability condition
+    /// allows, shortened to land on an output time: every stage learns `dt_full`
+    /// ([`Stage::full_step`]) before its `prepare`.
+    pub fn advance_shortened(
+        &mut self,
+        grid: &G,
+        dt: f64,
+        dt_full: f64,
+        state: &mut S,
+    ) -> Result<(), StageError> {
         for (stage, time) in self.stages.iter_mut().zip(&mut self.times) {
             let start = Instant::now();
+            stage.full_step(dt_full);
             stage.prepare(grid, state);
             *time += start.elapsed();
         }

@@ -196,11 +196,18 @@ impl<M: Model> Simulation<M> {
             Some(s) => s,
             None => self.diagnostics().signal_speed,
         };
-        let mut dt = self.cfl_dt(s).min(dt_max);
+        // The step the stability condition allows, and the step taken: shorter when it
+        // lands on an output time (stages that turn an increment into a rate use the
+        // former, `Stage::full_step`).
+        let mut dt_full = self.cfl_dt(s);
+        let mut dt = dt_full.min(dt_max);
         let mut last_failure = None;
         self.backup.clone_from(&self.state);
         for _ in 0..=MAX_RETRIES {
-            match self.pipeline.advance(&self.grid, dt, &mut self.state) {
+            let attempt = self
+                .pipeline
+                .advance_shortened(&self.grid, dt, dt_full, &mut self.state);
+            match attempt {
                 Ok(()) => {
                     self.steps += 1;
                     return Ok(dt);
@@ -209,6 +216,7 @@ impl<M: Model> Simulation<M> {
                     self.state.clone_from(&self.backup);
                     last_failure = Some((cell, h, dt));
                     dt *= 0.5;
+                    dt_full *= 0.5;
                 }
                 Err(StageError::Inadmissible {
                     cell,

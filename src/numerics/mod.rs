@@ -64,6 +64,12 @@ pub trait Stage<G, S>: Send {
     /// (again when a step is retried). Stages whose coefficients are frozen at t^n
     /// (the multilayer viscous step) compute them here; the default does nothing.
     fn prepare(&mut self, _grid: &G, _state: &S) {}
+    /// Called once per step attempt, before [`prepare`](Self::prepare), with the step
+    /// `dt_full` that the stability condition allows: the step applied is shorter when it
+    /// was shortened to land on an output time (`dt_full` = the applied step otherwise).
+    /// A stage that turns an increment of the step into a rate uses it (the projection's
+    /// pressure, [`projection::ProjectionStage`]); the default ignores it.
+    fn full_step(&mut self, _dt_full: f64) {}
     /// Advances `state` by `dt`. On error the state may be left part-way: the run loop
     /// restores the state of t^n before it retries or fails.
     fn apply(&mut self, grid: &G, dt: f64, state: &mut S) -> Result<(), StageError>;

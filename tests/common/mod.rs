@@ -275,3 +275,52 @@ h = "if(x <= 0, 0.14, 0)"
 [time]
 t_end = 0.05
 "#;
+
+/// What a run with many snapshots needs to keep: the largest |p_nh| over all its
+/// snapshots, the last snapshot's h, and the number of snapshots (a sink that does not
+/// keep every frame in memory).
+#[derive(Debug, Default)]
+pub struct PressureWatch {
+    pub max_p: f64,
+    pub last_h: Vec<f64>,
+    pub snapshots: usize,
+}
+
+impl granflow::output::OutputSink for PressureWatch {
+    fn begin(
+        &mut self,
+        _info: &granflow::output::RunInfo,
+        _grid: &granflow::output::GridData,
+    ) -> Result<(), granflow::output::OutputError> {
+        Ok(())
+    }
+
+    fn snapshot(
+        &mut self,
+        snap: &granflow::output::SnapshotView,
+    ) -> Result<(), granflow::output::OutputError> {
+        let p = snap.p_nh.expect("a non-hydrostatic run");
+        self.max_p = p.iter().fold(self.max_p, |m, p| m.max(p.abs()));
+        self.last_h.clear();
+        self.last_h.extend_from_slice(snap.h);
+        self.snapshots += 1;
+        Ok(())
+    }
+
+    fn step(
+        &mut self,
+        _rec: &granflow::output::StepRecord,
+    ) -> Result<(), granflow::output::OutputError> {
+        Ok(())
+    }
+
+    fn finish(&mut self, _summary: &RunSummary) -> Result<(), granflow::output::OutputError> {
+        Ok(())
+    }
+}
+
+/// Relative L1 distance Σ|a − b| / Σ|a|.
+pub fn relative_l1(a: &[f64], b: &[f64]) -> f64 {
+    let d: f64 = a.iter().zip(b).map(|(a, b)| (a - b).abs()).sum();
+    d / a.iter().map(|a| a.abs()).sum::<f64>()
+}

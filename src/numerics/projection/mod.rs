@@ -20,6 +20,23 @@
 //!   the same trait for N×N blocks (it may store the rows first, e.g. in a
 //!   [`BlockTridiagonal`](super::linalg::BlockTridiagonal), to sweep them repeatedly).
 //!
+//! **Shortened steps.** The impulse Π is not O(Δt) in general: the step before the
+//! projection changes the discharges by amounts that do not shrink with Δt (the
+//! implicit μ(I) viscous step of the multilayer model removes, whatever Δt, the shear
+//! that the previous projection gave a column held by its friction; the friction step
+//! of the monolayer stops cells and zeroes their hw), and the projection answers with
+//! an impulse of the same size. Over steps of one length the stored p^{n+1} = p^n + Π/Δt
+//! is the paper's; but a step shortened by 10³ to land on an output time turned that
+//! impulse into a pressure 10³ times too large, which the next (full) step applied
+//! explicitly, Δt p^{n+1}, and through the friction: the 10-layer run of Escalante et
+//! al. 2023, §5.4 with snapshots every 4 ms failed after a step of 3.4 µs (Π/Δt = 39
+//! where |p| ≤ 0.35 m²/s² elsewhere). So the pressure of a shortened step is p^n +
+//! Π/Δt_full, with Δt_full the step the CFL condition allowed
+//! ([`Stage::full_step`]): it is the paper's for a step of full length, and a step
+//! shortened towards 0 leaves the pressure as it was. A pressure that evolves smoothly
+//! then lags by at most one step's increment, which the next projection restores
+//! (the increment is incremental), an O(Δt) error as the splitting's own.
+//!
 //! A is assembled as the product of the discrete constraint and the discrete correction
 //! ("discrete projection"), so after the correction the discrete constraint holds to
 //! round-off — see `docs/numerics.md` for how this relates to the printed stencil of
@@ -78,8 +95,10 @@ pub trait ProjectionOperator: Send + std::fmt::Debug {
 
     /// Applies the correction of the impulses `pi` to the discharges (hu, hw) of
     /// `state` (h has not changed since [`solve`](Self::solve)), and advances the
-    /// pressure, p ← p + Π/Δt, resetting it to 0 on faces without a constraint.
-    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt: f64);
+    /// pressure, p ← p + Π/Δt_p, resetting it to 0 on faces without a constraint.
+    /// `dt_p` is the step of the rate ([`ProjectionStage`]: the step taken, or the full
+    /// step when the step taken was shortened to land on an output time).
+    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt_p: f64);
 }
 
 /// The "projection" stage: form and solve the pressure system, correct.
@@ -88,6 +107,8 @@ pub struct ProjectionStage<O: ProjectionOperator, S: PressureSolver<Row = O::Row
     operator: O,
     solver: S,
     pi: Vec<f64>,
+    /// The full step of the current attempt ([`Stage::full_step`]); 0 when not given.
+    dt_full: f64,
 }
 
 impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> ProjectionStage<O, S> {
@@ -97,6 +118,7 @@ impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> ProjectionStage<O, 
             operator,
             solver,
             pi: vec![0.0; (nx + 1) * m],
+            dt_full: 0.0,
         }
     }
 
@@ -113,10 +135,23 @@ impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> Stage<Line, Layered
         "projection"
     }
 
+    fn full_step(&mut self, dt_full: f64) {
+        self.dt_full = dt_full;
+    }
+
     fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         self.operator
             .solve(mesh, state, &mut self.solver, &mut self.pi);
-        self.operator.correct(mesh, state, &self.pi, dt);
+        // A step shortened to land on an output time stores the pressure of the full
+        // step (module documentation, "Shortened steps"); an infinite full step (a
+        // mass at rest) is no step to take a rate over.
+        let dt_p = if self.dt_full > dt && self.dt_full.is_finite() {
+            self.dt_full
+        } else {
+            dt
+        };
+        self.dt_full = 0.0;
+        self.operator.correct(mesh, state, &self.pi, dt_p);
         Ok(())
     }
 }

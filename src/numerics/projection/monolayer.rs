@@ -292,7 +292,7 @@ impl ProjectionOperator for MonolayerOperator {
         solver.solve(&rows, pi);
     }
 
-    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt: f64) {
+    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt_p: f64) {
         let nx = mesh.nx;
         let LayeredState {
             h, hu, tracers, nh, ..
@@ -317,7 +317,7 @@ impl ProjectionOperator for MonolayerOperator {
                 hu[i] += a * pl + b * pr;
                 hw[i] += 0.5 * (pl + pr);
             }
-            let inv_dt = 1.0 / dt;
+            let inv_dt = 1.0 / dt_p;
             let (p, hl, hr) = (
                 &mut nh.p[span.clone()],
                 &h[span.clone()],

@@ -937,11 +937,11 @@ impl ProjectionOperator for MultilayerOperator {
         solver.solve(&rows, pi);
     }
 
-    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt: f64) {
+    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt_p: f64) {
         let (nx, n) = (self.nx, self.layers);
         self.apply_impulses(state, pi);
         let nh = state.nh.as_mut().expect("a non-hydrostatic state");
-        let inv_dt = 1.0 / dt;
+        let inv_dt = 1.0 / dt_p;
         for f in 0..=nx {
             let p = &mut nh.p[f * n..(f + 1) * n];
             if self.wet[f] {
@@ -996,8 +996,8 @@ impl ProjectionOperator for SharedOperator {
         self.lock().solve(mesh, state, solver, pi);
     }
 
-    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt: f64) {
-        self.lock().correct(mesh, state, pi, dt);
+    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt_p: f64) {
+        self.lock().correct(mesh, state, pi, dt_p);
     }
 }
 
