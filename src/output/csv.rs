@@ -11,11 +11,7 @@ use super::{GridData, OutputError, OutputSink, RunInfo, RunSummary, SnapshotView
 
 /// `<dir>/<stem>_front.csv` next to the HDF5 file `h5`.
 pub fn front_csv_path(h5: &Path) -> PathBuf {
-    let stem = h5.file_stem().map_or_else(
-        || "granflow".to_string(),
-        |s| s.to_string_lossy().into_owned(),
-    );
-    h5.with_file_name(format!("{stem}_front.csv"))
+    super::companion_path(h5, "_front.csv")
 }
 
 /// Writes the `t,x` front series of a run.
@@ -116,6 +112,23 @@ mod tests {
         assert_eq!(
             front_csv_path(Path::new("run")),
             PathBuf::from("run_front.csv")
+        );
+        assert_eq!(
+            front_csv_path(Path::new("out/run.HDF5")),
+            PathBuf::from("out/run_front.csv")
+        );
+    }
+
+    #[test]
+    fn runs_named_after_a_dot_keep_their_own_csv() {
+        // `file_stem` would cut both at the dot: `x_0_front.csv` for each.
+        let a = front_csv_path(Path::new("/tmp/x_0.0046"));
+        let b = front_csv_path(Path::new("/tmp/x_0.00182"));
+        assert_eq!(a, PathBuf::from("/tmp/x_0.0046_front.csv"));
+        assert_eq!(b, PathBuf::from("/tmp/x_0.00182_front.csv"));
+        assert_eq!(
+            front_csv_path(Path::new("/tmp/x_0.0046.h5")),
+            PathBuf::from("/tmp/x_0.0046_front.csv")
         );
     }
 }

@@ -23,11 +23,7 @@ use super::{
 
 /// `<dir>/<stem>_gauges.csv` next to the HDF5 file `h5`.
 pub fn gauge_csv_path(h5: &Path) -> PathBuf {
-    let stem = h5.file_stem().map_or_else(
-        || "granflow".to_string(),
-        |s| s.to_string_lossy().into_owned(),
-    );
-    h5.with_file_name(format!("{stem}_gauges.csv"))
+    super::companion_path(h5, "_gauges.csv")
 }
 
 /// Writes the gauge series of a run, if it has gauges.

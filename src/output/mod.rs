@@ -13,7 +13,7 @@ pub mod memory;
 pub mod tee;
 pub mod xdmf;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
@@ -21,6 +21,34 @@ pub use csv::{front_csv_path, FrontCsvSink};
 pub use gauges::{gauge_csv_path, GaugeCsvSink};
 pub use hdf5::Hdf5Sink;
 pub use tee::Tee;
+
+/// The name of a run's files: the HDF5 file's name without an HDF5 extension (`.h5`,
+/// `.hdf5`, `.hdf`, any case). Only that extension is taken off, so `out/mu_0.0046`
+/// is `mu_0.0046` and two runs whose names differ after a dot keep their own
+/// companion files.
+pub fn run_stem(h5: &Path) -> String {
+    let name = h5.file_name().map_or_else(
+        || "granflow".to_string(),
+        |s| s.to_string_lossy().into_owned(),
+    );
+    match name.rsplit_once('.') {
+        Some((stem, ext))
+            if !stem.is_empty()
+                && ["h5", "hdf5", "hdf"]
+                    .iter()
+                    .any(|e| ext.eq_ignore_ascii_case(e)) =>
+        {
+            stem.to_string()
+        }
+        _ => name,
+    }
+}
+
+/// The file beside the HDF5 file `h5` named by its [`run_stem`] and `suffix`:
+/// `out/run.h5` and `_front.csv` give `out/run_front.csv`.
+pub fn companion_path(h5: &Path, suffix: &str) -> PathBuf {
+    h5.with_file_name(format!("{}{suffix}", run_stem(h5)))
+}
 
 /// Version of the HDF5 layout; bump on any rename.
 pub const FORMAT_VERSION: i64 = 1;

@@ -43,7 +43,7 @@ pub struct XdmfRun<'a> {
 
 /// `run.xmf` for `run.h5`.
 pub fn xdmf_path(h5: &Path) -> PathBuf {
-    h5.with_extension("xmf")
+    super::companion_path(h5, ".xmf")
 }
 
 /// Writes the description of `run` to `path` (atomically: temporary file, rename).

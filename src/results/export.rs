@@ -198,11 +198,7 @@ pub fn export(args: &ExportArgs) -> Result<Vec<PathBuf>, ResultsError> {
         std::fs::create_dir_all(&dir)
             .map_err(|e| ResultsError::failure(format!("cannot create {}: {e}", dir.display())))?;
     }
-    let stem = args
-        .run
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "run".into());
+    let stem = crate::output::run_stem(&args.run);
     let (nx, ny) = (run.grid().nx, run.grid().ny);
     let time_tag = |k: usize| format!("_t{}", format_float(run.times()[k]));
     let mut written = Vec::new();
