@@ -91,6 +91,8 @@ pub struct WaterProjection {
     /// The grains' terms of the system per face ([`CoupledRows::face_terms`]).
     diag: Vec<f64>,
     lower: Vec<f64>,
+    /// The faces outside which `diag` and `lower` are 0.
+    grain_faces: std::ops::Range<usize>,
     /// Grain layers of vertical thickness below this take no part (the water
     /// operator's wet threshold, [`wet_threshold`]).
     film: f64,
@@ -127,6 +129,7 @@ impl WaterProjection {
             kappa: vec![0.0; nx + 2],
             diag: vec![0.0; nx + 1],
             lower: vec![0.0; nx + 1],
+            grain_faces: 0..0,
             film: wet_threshold(g.line.dx),
         }
     }
@@ -207,6 +210,7 @@ impl WaterProjection {
                     op: &self.op,
                     diag: &self.diag,
                     lower: &self.lower,
+                    terms: self.grain_faces.clone(),
                 };
                 self.solver.solve(&rows, &mut self.pi);
             } else {
@@ -265,18 +269,35 @@ impl WaterProjection {
         }
         let scale = self.coupling / (g.line.dx * g.line.dx);
         let (merged_left, merged_right) = self.op.merged_edges();
-        let mut any = false;
-        for i in 1..=nx {
+        let (mut first, mut last) = (usize::MAX, 0);
+        let cells = self.kappa[1..=nx]
+            .iter_mut()
+            .zip(&h2[1..=nx])
+            .zip(&q2[1..=nx])
+            .zip(&g.cos2[1..=nx]);
+        for (i, (((kappa, &h2), &q2), &c2)) in (1..).zip(cells) {
+            // Moving grains first (the cheap test that fails in most cells).
+            let thick = h2 * c2 > self.film;
+            if q2 == 0.0 || !thick {
+                continue;
+            }
             let wet = self.op.carries_unknowns(i - 1) || self.op.carries_unknowns(i);
             let edge = (merged_left && i == 1) || (merged_right && i == nx);
-            if wet && !edge && q2[i] != 0.0 && h2[i] * g.cos2[i] > self.film {
-                let c2 = g.cos2[i];
-                self.kappa[i] = scale * c2 * c2 * h2[i];
-                any = true;
+            if wet && !edge {
+                *kappa = scale * c2 * c2 * h2;
+                first = first.min(i);
+                last = i;
             }
         }
+        let any = first <= last;
         if any {
-            CoupledRows::face_terms(&self.op, &self.kappa, &mut self.diag, &mut self.lower);
+            self.grain_faces = CoupledRows::face_terms(
+                &self.op,
+                &self.kappa,
+                first..last + 1,
+                &mut self.diag,
+                &mut self.lower,
+            );
         }
         any
     }
