@@ -50,7 +50,7 @@ fn thread_cpu_time() -> Option<f64> {
     };
     // SAFETY: `t` is a valid timespec for the call to write.
     let ok = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) } == 0;
-    ok.then(|| t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64)
+    ok.then_some(t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64)
 }
 
 #[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
