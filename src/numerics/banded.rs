@@ -27,7 +27,8 @@
 //! factor is bit for bit that of the textbook algorithm (and of the earlier
 //! right-looking panel kernel); the tests compare the bits at N = 1 … 48 with dry
 //! faces. The backward substitution goes by columns in the order of the
-//! row-oriented version, the products four at a time. The kernels are written once
+//! row-oriented version, the products four at a time (for p ≤ 3, one or two layers
+//! per face, the last p unknowns carried in registers instead). The kernels are written once
 //! over 4-lane vectors, as AVX intrinsics in the AVX2 build (chosen at run time)
 //! and as plain arrays in the portable one: the same IEEE operations (no fused
 //! multiply-add), so the same bits. Storage is the band of L (n (p + 4 … p + 7)
@@ -561,7 +562,8 @@ unsafe fn factor_to_avx2(band: &mut [f64], y: &mut [f64], p: usize, k: &mut usiz
 /// of rows c + 5 … c + 4⌊p/4⌋ four at a time (one vector product, the four lanes then
 /// subtracted one by one, highest row first), and the last four terms from x_{c+1}
 /// … x_{c+4} kept in registers (just computed: a vector load of them would wait for
-/// their stores).
+/// their stores). With p ≤ 3 the columns with all p terms keep x_{c+1} … x_{c+p} in
+/// registers ([`back_narrow`]).
 #[inline(always)]
 fn back_substitute<V: Lanes>(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) {
     let n = y.len();
