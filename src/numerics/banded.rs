@@ -27,7 +27,8 @@
 //! factor is bit for bit that of the textbook algorithm (and of the earlier
 //! right-looking panel kernel); the tests compare the bits at N = 1 … 48 with dry
 //! faces. The backward substitution goes by columns in the order of the
-//! row-oriented version, the products four at a time. The kernels are written once
+//! row-oriented version, the products four at a time (for p ≤ 3, one or two layers
+//! per face, the last p unknowns carried in registers instead). The kernels are written once
 //! over 4-lane vectors, as AVX intrinsics in the AVX2 build (chosen at run time)
 //! and as plain arrays in the portable one: the same IEEE operations (no fused
 //! multiply-add), so the same bits. Storage is the band of L (n (p + 4 … p + 7)
@@ -561,7 +562,8 @@ unsafe fn factor_to_avx2(band: &mut [f64], y: &mut [f64], p: usize, k: &mut usiz
 /// of rows c + 5 … c + 4⌊p/4⌋ four at a time (one vector product, the four lanes then
 /// subtracted one by one, highest row first), and the last four terms from x_{c+1}
 /// … x_{c+4} kept in registers (just computed: a vector load of them would wait for
-/// their stores).
+/// their stores). With p ≤ 3 the columns with all p terms keep x_{c+1} … x_{c+p} in
+/// registers ([`back_narrow`]).
 #[inline(always)]
 fn back_substitute<V: Lanes>(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) {
     let n = y.len();
@@ -576,6 +578,18 @@ fn back_substitute<V: Lanes>(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) 
         }
         xs[c] = s / band[c * w];
     };
+    if p < 4 && n > p {
+        // The last p columns (fewer than p terms), then the columns with p terms.
+        for c in (n - p..n).rev() {
+            scalar(xs, c);
+        }
+        match p {
+            1 => back_narrow::<1>(band, y, xs, w),
+            2 => back_narrow::<2>(band, y, xs, w),
+            _ => back_narrow::<3>(band, y, xs, w),
+        }
+        return;
+    }
     if p < 4 || n <= p + 4 {
         for c in (0..n).rev() {
             scalar(xs, c);
@@ -598,6 +612,38 @@ fn back_substitute<V: Lanes>(band: &[f64], y: &[f64], xs: &mut [f64], p: usize) 
             };
         }
         chunks!(1 2 3 4 5 6 7 8 9 10 11 12);
+    }
+}
+
+/// The columns c = n − 1 − P … 0 of [`back_substitute`] for a narrow band (P = p ≤ 3:
+/// one or two layers per face), x_{c+1} … x_{c+P} carried in registers from column to
+/// column: the products of the scalar loop, subtracted in
+/// its order (row c + P first), and the same division, so the same bits.
+#[inline(always)]
+fn back_narrow<const P: usize>(band: &[f64], y: &[f64], xs: &mut [f64], w: usize) {
+    let n = y.len();
+    debug_assert!(n > P && w > P);
+    // x[q] = x_{c+1+q} for the column c being solved.
+    let mut x = [0.0; P];
+    x.copy_from_slice(&xs[n - P..]);
+    let m = n - P;
+    for ((col, &yc), xc) in band[..m * w]
+        .chunks_exact(w)
+        .zip(&y[..m])
+        .zip(&mut xs[..m])
+        .rev()
+    {
+        let col = &col[..=P];
+        let mut s = yc;
+        for q in (0..P).rev() {
+            s -= col[q + 1] * x[q];
+        }
+        let v = s / col[0];
+        *xc = v;
+        for q in (1..P).rev() {
+            x[q] = x[q - 1];
+        }
+        x[0] = v;
     }
 }
 

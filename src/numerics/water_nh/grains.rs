@@ -54,28 +54,41 @@ use crate::numerics::projection::multilayer::{MultilayerOperator, MultilayerRows
 /// documentation). `kappa` has one value per cell with ghosts (0 for the ghosts and
 /// the cells that take no part); `diag` and `lower` one per face: κ_f + κ_{f+1} on the
 /// diagonal of face f's bottom unknown and −κ_{f+1} between it and face f + 1's, 0
-/// where either face carries no unknown ([`CoupledRows::face_terms`]).
+/// where either face carries no unknown ([`CoupledRows::face_terms`]); `terms` the
+/// faces outside which both are 0.
 pub struct CoupledRows<'a> {
     pub water: MultilayerRows<'a>,
     pub op: &'a MultilayerOperator,
     pub diag: &'a [f64],
     pub lower: &'a [f64],
+    pub terms: Range<usize>,
 }
 
 impl CoupledRows<'_> {
     /// The per-face terms `diag`, `lower` (nx + 1 each) from κ per cell (nx + 2) and
-    /// the faces with unknowns of `op`.
-    pub fn face_terms(op: &MultilayerOperator, kappa: &[f64], diag: &mut [f64], lower: &mut [f64]) {
+    /// the faces with unknowns of `op`; returns the faces outside which both are 0
+    /// (those of the cells `cells` with κ > 0, `cells` spanning them).
+    pub fn face_terms(
+        op: &MultilayerOperator,
+        kappa: &[f64],
+        cells: Range<usize>,
+        diag: &mut [f64],
+        lower: &mut [f64],
+    ) -> Range<usize> {
         let faces = kappa.len() - 1;
-        for f in 0..faces {
-            let here = op.carries_unknowns(f);
-            diag[f] = if here { kappa[f] + kappa[f + 1] } else { 0.0 };
-            lower[f] = if here && f + 1 < faces && op.carries_unknowns(f + 1) {
-                kappa[f + 1]
-            } else {
-                0.0
-            };
+        let mut here = op.carries_unknowns(0);
+        let terms = diag[..faces]
+            .iter_mut()
+            .zip(&mut lower[..faces])
+            .zip(kappa.windows(2));
+        for (f, ((diag, lower), k)) in terms.enumerate() {
+            let next = f + 1 < faces && op.carries_unknowns(f + 1);
+            *diag = if here { k[0] + k[1] } else { 0.0 };
+            *lower = if here && next { k[1] } else { 0.0 };
+            here = next;
         }
+        // Face f holds cells f and f + 1.
+        cells.start.saturating_sub(1).min(faces)..cells.end.min(faces)
     }
 }
 
@@ -118,10 +131,14 @@ impl PressureRows for CoupledRows<'_> {
         let (f0, faces) = (active.start / n, active.len() / n);
         debug_assert_eq!(active.start % n, 0);
         let (diag, lower) = (&self.diag[f0..f0 + faces], &self.lower[f0..f0 + faces]);
-        let mut done = 0; // faces before this one have their grain terms
+        // The faces with grain terms, relative to f0 (the others add exact zeros: the
+        // diagonal is positive, x − 0 = x).
+        let from = self.terms.start.saturating_sub(f0).min(faces);
+        let to = self.terms.end.saturating_sub(f0).min(faces).max(from);
+        let mut done = from; // faces before this one have their grain terms
         let mut add = |band: &mut [f64], end: usize| {
             // Faces whose bottom column (f·n) is final.
-            let end = end.div_ceil(n).min(faces);
+            let end = end.div_ceil(n).min(to);
             for f in done..end {
                 let col = &mut band[f * n * stride..][..n + 1];
                 col[0] += diag[f];

@@ -28,7 +28,7 @@
 //! **Time step** (a non-incremental projection, Chorin's; the pressure is implicit):
 //! 1. the two-layer step advances H₁, Q₁ (the depth mean U₁ = Σ l_α u_α), H₂, Q₂ with
 //!    the hydrostatic pressures; the layer deviations u'_α = u_α − U₁ and w_α are advected by U₁
-//!    (first-order upwind, `advect_cell`; the other transport terms of the deviations,
+//!    (first-order upwind, `advect`; the other transport terms of the deviations,
 //!    u'_α ∂_x u'_α and the exchange through the layer interfaces, are neglected:
 //!    quadratic in the deviations, they vanish for linear waves, docs/numerics.md);
 //! 2. the discrete bottom rate ż_b = (z_b^{n+1} − z_b^n)/Δt from the grain thicknesses
@@ -91,6 +91,8 @@ pub struct WaterProjection {
     /// The grains' terms of the system per face ([`CoupledRows::face_terms`]).
     diag: Vec<f64>,
     lower: Vec<f64>,
+    /// The faces outside which `diag` and `lower` are 0.
+    grain_faces: std::ops::Range<usize>,
     /// Grain layers of vertical thickness below this take no part (the water
     /// operator's wet threshold, [`wet_threshold`]).
     film: f64,
@@ -127,6 +129,7 @@ impl WaterProjection {
             kappa: vec![0.0; nx + 2],
             diag: vec![0.0; nx + 1],
             lower: vec![0.0; nx + 1],
+            grain_faces: 0..0,
             film: wet_threshold(g.line.dx),
         }
     }
@@ -147,7 +150,6 @@ impl WaterProjection {
 
     /// The projection of the water of `s` over the bottom recorded by
     /// [`record_bottom`](Self::record_bottom) before this step of length `dt`.
-    #[allow(clippy::needless_range_loop)] // cell i indexes the state, column and layers
     pub fn project(&mut self, g: &CurvedLine, s: &mut TwoLayerState, dt: f64) {
         let n = self.layers;
         let nx = g.line.nx;
@@ -162,7 +164,7 @@ impl WaterProjection {
             .as_mut()
             .expect("a non-hydrostatic water carries its column");
         // The column in the multilayer variables, h = d, hu_α = d u_α, hw_α = d w̃_α,
-        // with u'_α and w_α advected by U₁ on the way (`advect_cell`).
+        // with u'_α and w_α advected by U₁ on the way (`advect`).
         let lam = dt / g.line.dx;
         {
             let LayeredState {
@@ -173,24 +175,20 @@ impl WaterProjection {
                 .find(|t: &&mut Tracer| t.name == HW)
                 .expect("the column carries hw")
                 .q;
-            let m = (nx + 2) * n;
-            let (hu, hw, du, w) = (&mut hu[..m], &mut hw[..m], &water.du[..m], &water.w[..m]);
-            let (h1, q1, cos2) = (&s.h1[..nx + 2], &s.q1[..nx + 2], &g.cos2[..nx + 2]);
-            let rate = &self.zb_rate[..nx + 2];
-            for i in 1..=nx {
-                let d = h1[i] * cos2[i];
-                h[i] = d;
-                let u1 = if h1[i] > H_DRY_TWO_LAYER {
-                    q1[i] / h1[i]
-                } else {
-                    0.0
-                };
-                let (c_up, c_down) = (lam * u1.max(0.0), lam * u1.min(0.0));
-                for k in i * n..(i + 1) * n {
-                    hu[k] = d * (u1 + advect_cell(du, k, n, c_up, c_down));
-                    hw[k] = d * (advect_cell(w, k, n, c_up, c_down) - rate[i]);
-                }
+            let cells = Cells {
+                h1: &s.h1[1..=nx],
+                rate: &self.zb_rate[1..=nx],
+            };
+            let (q1, cos2) = (&s.q1[1..=nx], &g.cos2[1..=nx]);
+            let (du, w) = (&water.du[..], &water.w[..]);
+            // The layer count as a constant for the common few (loops unrolled).
+            match n {
+                1 => load_column::<1>(n, lam, &cells, q1, cos2, du, w, h, hu, hw),
+                2 => load_column::<2>(n, lam, &cells, q1, cos2, du, w, h, hu, hw),
+                3 => load_column::<3>(n, lam, &cells, q1, cos2, du, w, h, hu, hw),
+                _ => load_column::<0>(n, lam, &cells, q1, cos2, du, w, h, hu, hw),
             }
+            let (h1, cos2) = (&s.h1[..nx + 2], &g.cos2[..nx + 2]);
             h[0] = h1[0] * cos2[0];
             h[nx + 1] = h1[nx + 1] * cos2[nx + 1];
             // Non-incremental: the correction's pressure is the whole p^{n+1}.
@@ -212,6 +210,7 @@ impl WaterProjection {
                     op: &self.op,
                     diag: &self.diag,
                     lower: &self.lower,
+                    terms: self.grain_faces.clone(),
                 };
                 self.solver.solve(&rows, &mut self.pi);
             } else {
@@ -231,26 +230,19 @@ impl WaterProjection {
                 &mut s.q2,
             );
         }
-        let (h, hu, hw) = (&self.column.h, &self.column.hu, self.column.hw());
-        for i in 1..=nx {
-            let (h1, d) = (s.h1[i], h[i]);
-            let cells = i * n..(i + 1) * n;
-            if h1 <= H_DRY_TWO_LAYER || d <= 0.0 {
-                water.du[cells.clone()].fill(0.0);
-                water.w[cells].fill(0.0);
-                continue;
-            }
-            let inv_d = 1.0 / d;
-            let mut mean = 0.0;
-            for (a, k) in cells.clone().enumerate() {
-                mean += self.l[a] * hu[k] * inv_d;
-            }
-            s.q1[i] = h1 * mean;
-            let rate = self.zb_rate[i];
-            for k in cells {
-                water.du[k] = hu[k] * inv_d - mean;
-                water.w[k] = hw[k] * inv_d + rate;
-            }
+        let (h, hu, hw) = (&self.column.h[..], &self.column.hu[..], self.column.hw());
+        let cells = Cells {
+            h1: &s.h1[1..=nx],
+            rate: &self.zb_rate[1..=nx],
+        };
+        let d = &h[1..=nx];
+        let (q1, l) = (&mut s.q1[1..=nx], &self.l[..]);
+        let (du, w) = (&mut water.du[..], &mut water.w[..]);
+        match n {
+            1 => read_column::<1>(n, l, &cells, d, hu, hw, q1, du, w),
+            2 => read_column::<2>(n, l, &cells, d, hu, hw, q1, du, w),
+            3 => read_column::<3>(n, l, &cells, d, hu, hw, q1, du, w),
+            _ => read_column::<0>(n, l, &cells, d, hu, hw, q1, du, w),
         }
         water
             .p
@@ -277,30 +269,158 @@ impl WaterProjection {
         }
         let scale = self.coupling / (g.line.dx * g.line.dx);
         let (merged_left, merged_right) = self.op.merged_edges();
-        let mut any = false;
-        for i in 1..=nx {
+        let (mut first, mut last) = (usize::MAX, 0);
+        let cells = self.kappa[1..=nx]
+            .iter_mut()
+            .zip(&h2[1..=nx])
+            .zip(&q2[1..=nx])
+            .zip(&g.cos2[1..=nx]);
+        for (i, (((kappa, &h2), &q2), &c2)) in (1..).zip(cells) {
+            // Moving grains first (the cheap test that fails in most cells).
+            let thick = h2 * c2 > self.film;
+            if q2 == 0.0 || !thick {
+                continue;
+            }
             let wet = self.op.carries_unknowns(i - 1) || self.op.carries_unknowns(i);
             let edge = (merged_left && i == 1) || (merged_right && i == nx);
-            if wet && !edge && q2[i] != 0.0 && h2[i] * g.cos2[i] > self.film {
-                let c2 = g.cos2[i];
-                self.kappa[i] = scale * c2 * c2 * h2[i];
-                any = true;
+            if wet && !edge {
+                *kappa = scale * c2 * c2 * h2;
+                first = first.min(i);
+                last = i;
             }
         }
+        let any = first <= last;
         if any {
-            CoupledRows::face_terms(&self.op, &self.kappa, &mut self.diag, &mut self.lower);
+            self.grain_faces = CoupledRows::face_terms(
+                &self.op,
+                &self.kappa,
+                first..last + 1,
+                &mut self.diag,
+                &mut self.lower,
+            );
         }
         any
     }
 }
 
-/// First-order upwind advection ∂_t f + U₁ ∂_x f = 0 of a per-layer field `f` (cell-major
-/// with ghosts, `n` layers) at index k, with the Courant numbers c_up = λ max(U₁, 0) and
-/// c_down = λ min(U₁, 0) of the cell (λ = Δt/Δx; |U₁| λ ≤ 1 by the CFL condition of
-/// the two-layer step, whose speed bounds contain U₁).
+/// Per-cell values of the physical cells 1..=nx (no ghosts) for [`load_column`] and
+/// [`read_column`].
+struct Cells<'a> {
+    /// H₁.
+    h1: &'a [f64],
+    /// ż_b.
+    rate: &'a [f64],
+}
+
+/// The water column of the physical cells in the multilayer variables: h = d =
+/// H₁cos²θ, hu_α = d (U₁ + u'_α), hw_α = d (w_α − ż_b), with u'_α (`du`) and w_α (`w`,
+/// cell-major with ghosts) advected by U₁ ([`advect`]), Q₁ and cos²θ per physical cell. `h`,
+/// `hu`, `hw` with ghosts
+/// (left as they are). `N` is the layer count n, or 0 for any n (read at run time).
+#[allow(clippy::too_many_arguments, clippy::needless_range_loop)] // layer a indexes the cell's slices
 #[inline(always)]
-fn advect_cell(f: &[f64], k: usize, n: usize, c_up: f64, c_down: f64) -> f64 {
-    f[k] - c_up * (f[k] - f[k - n]) - c_down * (f[k + n] - f[k])
+fn load_column<const N: usize>(
+    n: usize,
+    lam: f64,
+    c: &Cells,
+    q1: &[f64],
+    cos2: &[f64],
+    du: &[f64],
+    w: &[f64],
+    h: &mut [f64],
+    hu: &mut [f64],
+    hw: &mut [f64],
+) {
+    let n = if N == 0 { n } else { N };
+    let nx = c.h1.len();
+    let m = (nx + 2) * n;
+    let (du, w) = (&du[..m], &w[..m]);
+    let cells = h[1..=nx].iter_mut().zip(c.h1).zip(q1).zip(cos2).zip(c.rate);
+    // Per cell: its n values of hu, hw and those of u', w in it and its two neighbours.
+    let columns = hu[n..m - n]
+        .chunks_exact_mut(n)
+        .zip(hw[n..m - n].chunks_exact_mut(n))
+        .zip(
+            du.chunks_exact(n)
+                .zip(du[n..].chunks_exact(n))
+                .zip(du[2 * n..].chunks_exact(n)),
+        )
+        .zip(
+            w.chunks_exact(n)
+                .zip(w[n..].chunks_exact(n))
+                .zip(w[2 * n..].chunks_exact(n)),
+        );
+    for (((((h, &h1), &q1), &cos2), &rate), (((hu, hw), ((dl, dc), dr)), ((wl, wc), wr))) in
+        cells.zip(columns)
+    {
+        let d = h1 * cos2;
+        *h = d;
+        let u1 = if h1 > H_DRY_TWO_LAYER { q1 / h1 } else { 0.0 };
+        let (c_up, c_down) = (lam * u1.max(0.0), lam * u1.min(0.0));
+        let (hu, hw, dl, dc, dr) = (&mut hu[..n], &mut hw[..n], &dl[..n], &dc[..n], &dr[..n]);
+        let (wl, wc, wr) = (&wl[..n], &wc[..n], &wr[..n]);
+        for a in 0..n {
+            hu[a] = d * (u1 + advect(dl[a], dc[a], dr[a], c_up, c_down));
+            hw[a] = d * (advect(wl[a], wc[a], wr[a], c_up, c_down) - rate);
+        }
+    }
+}
+
+/// The state's water from the projected column (the inverse of [`load_column`]):
+/// Q₁ = H₁ Σ l_α u_α, u'_α = u_α − Σ l_β u_β, w_α = w̃_α + ż_b with u_α = hu_α/d,
+/// w̃_α = hw_α/d, d per physical cell; u' = w = 0 (and Q₁ unchanged) in dry cells.
+/// `hu`, `hw`, `du`, `w` with ghosts (the ghosts left as they are).
+#[allow(clippy::too_many_arguments, clippy::needless_range_loop)] // layer a indexes the cell's slices
+#[inline(always)]
+fn read_column<const N: usize>(
+    n: usize,
+    l: &[f64],
+    c: &Cells,
+    d: &[f64],
+    hu: &[f64],
+    hw: &[f64],
+    q1: &mut [f64],
+    du: &mut [f64],
+    w: &mut [f64],
+) {
+    let n = if N == 0 { n } else { N };
+    let nx = c.h1.len();
+    let m = (nx + 2) * n;
+    let l = &l[..n];
+    let cells = q1.iter_mut().zip(c.h1).zip(d).zip(c.rate);
+    let columns = hu[n..m - n]
+        .chunks_exact(n)
+        .zip(hw[n..m - n].chunks_exact(n))
+        .zip(du[n..m - n].chunks_exact_mut(n))
+        .zip(w[n..m - n].chunks_exact_mut(n));
+    for ((((q1, &h1), &d), &rate), (((hu, hw), du), w)) in cells.zip(columns) {
+        let (hu, hw, du, w) = (&hu[..n], &hw[..n], &mut du[..n], &mut w[..n]);
+        if h1 <= H_DRY_TWO_LAYER || d <= 0.0 {
+            du.fill(0.0);
+            w.fill(0.0);
+            continue;
+        }
+        let inv_d = 1.0 / d;
+        let mut mean = 0.0;
+        for a in 0..n {
+            mean += l[a] * hu[a] * inv_d;
+        }
+        *q1 = h1 * mean;
+        for a in 0..n {
+            du[a] = hu[a] * inv_d - mean;
+            w[a] = hw[a] * inv_d + rate;
+        }
+    }
+}
+
+/// First-order upwind advection ∂_t f + U₁ ∂_x f = 0 of a per-layer value f of a cell,
+/// from its values `left`, `here`, `right` in the cell and its two neighbours, with the
+/// Courant numbers c_up = λ max(U₁, 0) and c_down = λ min(U₁, 0) of the cell
+/// (λ = Δt/Δx; |U₁| λ ≤ 1 by the CFL condition of the two-layer step, whose speed
+/// bounds contain U₁).
+#[inline(always)]
+fn advect(left: f64, here: f64, right: f64, c_up: f64, c_down: f64) -> f64 {
+    here - c_up * (here - left) - c_down * (right - here)
 }
 
 /// The projection as the second stage of a submarine run with non-hydrostatic water.
