@@ -75,12 +75,12 @@ fn stages<L: BasalFriction + 'static>(
     workers: Workers,
 ) -> Vec<Box<dyn Stage<Raster2d, State2d>>> {
     vec![
-        Box::new(HydrostaticStep2d::new(
-            friction.at(0), // TEMPORARY until the step takes the cells' friction
+        Box::new(HydrostaticStep2d::with_friction(
+            friction.clone(),
             raster,
             workers.clone(),
         )),
-        Box::new(FrictionStep2d::new(friction, workers)),
+        Box::new(FrictionStep2d::with_friction(friction, workers)),
     ]
 }
 

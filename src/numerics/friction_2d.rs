@@ -53,7 +53,13 @@ pub struct FrictionStep2d<L: BasalFriction> {
 }
 
 impl<L: BasalFriction> FrictionStep2d<L> {
-    pub fn new(friction: CellFriction<L>, workers: Workers) -> Self {
+    /// The step with one friction law `law`.
+    pub fn new(law: L, workers: Workers) -> Self {
+        Self::with_friction(CellFriction::Uniform(law), workers)
+    }
+
+    /// The step with the friction of every cell (friction zones).
+    pub fn with_friction(friction: CellFriction<L>, workers: Workers) -> Self {
         FrictionStep2d { friction, workers }
     }
 }
