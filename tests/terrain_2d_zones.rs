@@ -74,9 +74,10 @@ t_end = 2.0
     )
 }
 
-/// Two cones of slope 0.3 and height 0.1 on the plane, one in each half.
+/// Two cones of slope 0.3 and height 0.1 on the plane, one in each half; the first
+/// reaches down to x = 1.983, its last wet cells against the line x = 2.
 const TWO_CONES: &str =
-    "h = \"max(0, 0.1 - 0.3 * sqrt((x - 1)^2 + (y - 0.5)^2)) + max(0, 0.1 - 0.3 * sqrt((x - 3)^2 + (y - 0.5)^2))\"";
+    "h = \"max(0, 0.1 - 0.3 * sqrt((x - 1.65)^2 + (y - 0.5)^2)) + max(0, 0.1 - 0.3 * sqrt((x - 3)^2 + (y - 0.5)^2))\"";
 
 /// Steps both runs `steps` times and asserts that their states are the same bits.
 fn same_bits(a: &Scenario, b: &Scenario, steps: usize) {
@@ -115,7 +116,10 @@ fn a_uniform_friction_raster_gives_the_bits_of_the_number() {
 }
 
 /// Two friction zones on the plane of slope 0.2: μ = 0.8 for x < 2 holds the cone
-/// there (surface slopes at most 0.5), μ = 0.1 for x > 2 lets the other one slide.
+/// there (surface slopes at most 0.5), μ = 0.1 for x > 2 lets the other one slide. The
+/// held cone's downhill rim lies against the zones' edge: the faces there hold its
+/// mass with its own cells' μ (the μ of the cell the drive empties), not the μ of the
+/// dry cells it would flow into.
 #[test]
 fn two_friction_zones_hold_one_mass_and_release_the_other() {
     let dir = tempfile::tempdir().unwrap();
@@ -167,8 +171,10 @@ fn two_friction_zones_hold_one_mass_and_release_the_other() {
         for _ in 0..300 {
             sim.step(f64::INFINITY).unwrap();
         }
-        let moved = centre(&sim.state.h, false) - centre(&h0, false);
-        assert_eq!(moved > 0.3, left_moves, "μ = {mu}: the left cone moved {moved} m");
+        let moved = (0..h0.len())
+            .filter(|k| k % 80 < 40)
+            .fold(0.0f64, |m, k| m.max((sim.state.h[k] - h0[k]).abs()));
+        assert_eq!(moved > 1e-3, left_moves, "μ = {mu}: the left cone moved {moved} m");
     }
 }
 

@@ -23,6 +23,12 @@
 //! state that does not depend on y, every y-face carries exactly nothing and each row
 //! is the 1-D step to the bit (`tests/terrain_2d.rs`).
 //!
+//! Friction zones ([`CellFriction::PerCell`]): the ΔC threshold of a face is the μ of
+//! the cell that the face's normal drive pushes mass out of (d_n > 0: the lower-index
+//! cell), whose friction holds that mass; where both cells have the same law this is
+//! the uniform face to the bit. A ghost takes its edge cell's law, a wall side the
+//! flow side's.
+//!
 //! Boundaries: the edge faces see a ghost cell built from the edge cell (a wall
 //! mirrors h and reverses the normal discharge, an outflow copies the cell), over the
 //! raster's ghost bed. Wall cells inside the raster (nodata cells of a DEM,
