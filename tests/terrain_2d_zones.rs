@@ -83,7 +83,10 @@ const TWO_CONES: &str =
 fn same_bits(a: &Scenario, b: &Scenario, steps: usize) {
     let (mut a, mut b) = (build_granular_2d(a, 1), build_granular_2d(b, 1));
     for step in 0..steps {
-        let (dt_a, dt_b) = (a.step(f64::INFINITY).unwrap(), b.step(f64::INFINITY).unwrap());
+        let (dt_a, dt_b) = (
+            a.step(f64::INFINITY).unwrap(),
+            b.step(f64::INFINITY).unwrap(),
+        );
         assert_eq!(dt_a, dt_b, "step {step}");
         assert_eq!(a.state.h, b.state.h, "h, step {step}");
         assert_eq!(a.state.hu, b.state.hu, "hu, step {step}");
@@ -105,10 +108,18 @@ fn a_uniform_friction_raster_gives_the_bits_of_the_number() {
     let raster = load(&coulomb("{ raster = \"mu.asc\" }"), d).unwrap();
     assert!(raster.friction_zones.is_some());
     same_bits(&number, &raster, 60);
-    let voellmy =
-        |mu: &str, xi: &str| plane(&format!("law = \"voellmy\"\nmu = {mu}\nxi = {xi}"), TWO_CONES);
+    let voellmy = |mu: &str, xi: &str| {
+        plane(
+            &format!("law = \"voellmy\"\nmu = {mu}\nxi = {xi}"),
+            TWO_CONES,
+        )
+    };
     let number = load(&voellmy("0.15", "400"), d).unwrap();
-    let raster = load(&voellmy("{ raster = \"mu.asc\" }", "{ raster = \"xi.asc\" }"), d).unwrap();
+    let raster = load(
+        &voellmy("{ raster = \"mu.asc\" }", "{ raster = \"xi.asc\" }"),
+        d,
+    )
+    .unwrap();
     same_bits(&number, &raster, 60);
     // An expression of one value is a field too.
     let expression = load(&voellmy("\"0.15 + 0*x\"", "400"), d).unwrap();
@@ -131,12 +142,12 @@ fn two_friction_zones_hold_one_mass_and_release_the_other() {
             0.1
         }
     });
-    let text = plane(
-        "law = \"coulomb\"\nmu = { raster = \"mu.asc\" }",
-        TWO_CONES,
-    );
+    let text = plane("law = \"coulomb\"\nmu = { raster = \"mu.asc\" }", TWO_CONES);
     let scn = load(&text, d).unwrap();
-    assert_eq!(scn.friction, granflow::scenario::FrictionLaw::Coulomb { mu: 0.1 });
+    assert_eq!(
+        scn.friction,
+        granflow::scenario::FrictionLaw::Coulomb { mu: 0.1 }
+    );
     let mut sim = build_granular_2d(&scn, 1);
     let h0 = sim.state.h.clone();
     let centre = |h: &[f64], right: bool| {
@@ -161,9 +172,15 @@ fn two_friction_zones_hold_one_mass_and_release_the_other() {
         dq = dq.max(sim.state.hu[k].hypot(sim.state.hv[k]));
     }
     eprintln!("held cone: max |h - h0| = {dh:e} m, max |q| = {dq:e} m²/s");
-    assert!(dh < 1e-15 && dq < 1e-15, "the held cone moved: {dh:e} m, {dq:e} m²/s");
+    assert!(
+        dh < 1e-15 && dq < 1e-15,
+        "the held cone moved: {dh:e} m, {dq:e} m²/s"
+    );
     let slid = centre(&sim.state.h, true) - centre(&h0, true);
-    assert!(slid > 0.3, "the cone on μ = 0.1 moved its centre by {slid} m only");
+    assert!(
+        slid > 0.3,
+        "the cone on μ = 0.1 moved its centre by {slid} m only"
+    );
     // Both on μ = 0.1 or both on μ = 0.8: the zones are what tells them apart.
     for (mu, left_moves) in [("0.1", true), ("0.8", false)] {
         let text = plane(&format!("law = \"coulomb\"\nmu = {mu}"), TWO_CONES);
@@ -174,7 +191,11 @@ fn two_friction_zones_hold_one_mass_and_release_the_other() {
         let moved = (0..h0.len())
             .filter(|k| k % 80 < 40)
             .fold(0.0f64, |m, k| m.max((sim.state.h[k] - h0[k]).abs()));
-        assert_eq!(moved > 1e-3, left_moves, "μ = {mu}: the left cone moved {moved} m");
+        assert_eq!(
+            moved > 1e-3,
+            left_moves,
+            "μ = {mu}: the left cone moved {moved} m"
+        );
     }
 }
 
@@ -204,7 +225,11 @@ fn xi_zones_change_the_voellmy_runout_in_the_expected_direction() {
         low < zoned && zoned <= high,
         "fronts: ξ = 50 {low}, zones {zoned}, ξ = 5000 {high}"
     );
-    assert!(zoned - low > 0.1, "the zone changed the front by {} m", zoned - low);
+    assert!(
+        zoned - low > 0.1,
+        "the zone changed the front by {} m",
+        zoned - low
+    );
 }
 
 /// Bad friction fields are refused naming the key and the file: a raster of another
@@ -233,7 +258,15 @@ fn bad_friction_fields_are_refused_naming_the_key_and_the_file() {
         ),
         (
             "a negative μ",
-            |d| write_asc(&d.join("mu.asc"), (20, 10, 0.1), |x, _| if x > 1.0 { -0.1 } else { 0.3 }),
+            |d| {
+                write_asc(&d.join("mu.asc"), (20, 10, 0.1), |x, _| {
+                    if x > 1.0 {
+                        -0.1
+                    } else {
+                        0.3
+                    }
+                })
+            },
             "rheology.mu",
             vec!["mu.asc", "-0.1", "≥ 0"],
         ),
@@ -268,14 +301,25 @@ fn bad_friction_fields_are_refused_naming_the_key_and_the_file() {
                 .unwrap();
             let stderr = String::from_utf8_lossy(&out.stderr);
             assert_eq!(out.status.code(), Some(2), "{what} ({command}): {stderr}");
-            assert!(stderr.contains(key) && stderr.contains("mu.asc"), "{stderr}");
+            assert!(
+                stderr.contains(key) && stderr.contains("mu.asc"),
+                "{stderr}"
+            );
             assert!(!stderr.contains("panicked"), "{stderr}");
         }
     }
     write_asc(&d.join("mu.asc"), (20, 10, 0.1), |_, _| 0.3);
-    let m = fails_at(&text(mu).replace("xi = 500", "xi = \"100 - 100 * x\""), d, "rheology.xi");
+    let m = fails_at(
+        &text(mu).replace("xi = 500", "xi = \"100 - 100 * x\""),
+        d,
+        "rheology.xi",
+    );
     assert!(m.contains("> 0"), "{m}");
-    let m = fails_at(&text("\"88 + 2 * x\"").replace("mu = ", "mu_deg = "), d, "rheology.mu_deg");
+    let m = fails_at(
+        &text("\"88 + 2 * x\"").replace("mu = ", "mu_deg = "),
+        d,
+        "rheology.mu_deg",
+    );
     assert!(m.contains("[0, 90)"), "{m}");
     assert!(load(&text("\"30 - x\"").replace("mu = ", "mu_deg = "), d).is_ok());
     // A line has one law: a field is refused there.
@@ -321,7 +365,10 @@ t_end = 8.0
 "#;
     let raster = line
         .replace("cells = 160", "cells = [160, 3]\ny_min = 0.0\ny_max = 0.03")
-        .replace("left = \"wall\"\nright = \"outflow\"", "west = \"wall\"\neast = \"outflow\"");
+        .replace(
+            "left = \"wall\"\nright = \"outflow\"",
+            "west = \"wall\"\neast = \"outflow\"",
+        );
     let (a, b) = (
         load(line, dir.path()).unwrap(),
         load(&raster, dir.path()).unwrap(),
@@ -334,8 +381,16 @@ t_end = 8.0
         let dt = one.step(f64::INFINITY).unwrap();
         assert_eq!(two.step(f64::INFINITY).unwrap(), dt, "step {step}");
         for k in 0..3 * nx {
-            assert_eq!(two.state.h[k], one.state.h[k % nx + 1], "step {step}, cell {k}");
-            assert_eq!(two.state.hu[k], one.state.hu[k % nx + 1], "step {step}, cell {k}");
+            assert_eq!(
+                two.state.h[k],
+                one.state.h[k % nx + 1],
+                "step {step}, cell {k}"
+            );
+            assert_eq!(
+                two.state.hu[k],
+                one.state.hu[k % nx + 1],
+                "step {step}, cell {k}"
+            );
         }
     }
     // The bed layer was mobilised ahead of the column: the front (counted above the
@@ -362,10 +417,23 @@ fn an_erodible_layer_below_repose_stays_at_rest_and_its_maps_stay_zero() {
     sim.run(&mut sink, &mut |_| {}).unwrap();
     // At rest up to round-off (1e-13 of the 1 cm layer; the reconstruction's flat
     // surface of a state at rest is exact to a few ulps per face): no flow, no creep.
-    let dh = sim.state.h.iter().zip(&h0).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-    let dq = sim.state.hu.iter().zip(&sim.state.hv).fold(0.0f64, |m, (a, b)| m.max(a.hypot(*b)));
+    let dh = sim
+        .state
+        .h
+        .iter()
+        .zip(&h0)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let dq = sim
+        .state
+        .hu
+        .iter()
+        .zip(&sim.state.hv)
+        .fold(0.0f64, |m, (a, b)| m.max(a.hypot(*b)));
     eprintln!("erodible layer: max |h - h0| = {dh:e} m, max |q| = {dq:e} m²/s");
-    assert!(dh < 1e-15 && dq < 1e-15, "the layer moved: {dh:e} m, {dq:e} m²/s");
+    assert!(
+        dh < 1e-15 && dq < 1e-15,
+        "the layer moved: {dh:e} m, {dq:e} m²/s"
+    );
     assert_eq!(sink.h_bed, h0, "/grid/h_bed is the layer");
     let map = |name: &str| {
         &sink
@@ -384,8 +452,16 @@ fn an_erodible_layer_below_repose_stays_at_rest_and_its_maps_stay_zero() {
         assert!(largest < 1e-15, "{name}: {largest:e}");
     }
     assert!(map("arrival_time").iter().all(|v| v.is_nan()));
-    assert!(sink.steps.iter().all(|s| s.front_x.is_nan()), "a front in a bed at rest");
-    let area = sink.map_scalars.iter().find(|(n, _)| n == "area_reached").unwrap().1;
+    assert!(
+        sink.steps.iter().all(|s| s.front_x.is_nan()),
+        "a front in a bed at rest"
+    );
+    let area = sink
+        .map_scalars
+        .iter()
+        .find(|(n, _)| n == "area_reached")
+        .unwrap()
+        .1;
     assert_eq!(area, 0.0);
 }
 
@@ -428,7 +504,10 @@ fn a_release_entrains_a_raster_erodible_zone() {
     let without = moving_peak("");
     let with = moving_peak("erodible_bed = { raster = \"bed_layer.asc\" }");
     eprintln!("mass in motion: {without} m³ without the zone, {with} m³ with it");
-    assert!(without <= released * (1.0 + 1e-12), "{without} > {released}");
+    assert!(
+        without <= released * (1.0 + 1e-12),
+        "{without} > {released}"
+    );
     assert!(
         with - released > 0.2 * zone && with <= released + zone,
         "mass in motion {with} m³, released {released} m³, zone {zone} m³"
@@ -455,7 +534,10 @@ fn a_gauge_on_a_wall_cell_is_refused() {
     };
     assert!(load(&text("[[3.5, 3.5], [15.5, 5.5]]"), d).is_ok());
     let m = fails_at(&text("[[3.5, 3.5], [11.5, 5.5]]"), d, "output.gauges");
-    assert!(m.contains("gauge 2 at [11.5, 5.5]") && m.contains("wall"), "{m}");
+    assert!(
+        m.contains("gauge 2 at [11.5, 5.5]") && m.contains("wall"),
+        "{m}"
+    );
     // Beside the hole, the bilinear stencil reaches into it.
     let m = fails_at(&text("[[9.8, 5.5]]"), d, "output.gauges");
     assert!(m.contains("gauge 1") && m.contains("(10.5, 5.5)"), "{m}");

@@ -161,7 +161,12 @@ impl Model for Granular2d {
         let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
         let mut front = f64::NEG_INFINITY;
         let nx = raster.nx();
-        let cells = state.h.iter().zip(&state.hu).zip(&state.hv).zip(&self.h_bed);
+        let cells = state
+            .h
+            .iter()
+            .zip(&state.hu)
+            .zip(&state.hv)
+            .zip(&self.h_bed);
         for (k, (((&h, &qx), &qy), &h_bed)) in cells.enumerate() {
             mass += h;
             q_sum += qx + qy;

@@ -264,7 +264,12 @@ struct Ctx<'a, L: BasalFriction> {
 
 impl<'a, L: BasalFriction> Ctx<'a, L> {
     /// The context of one pass over `state` on `raster` with step `dt`.
-    fn new(friction: &'a CellFriction<L>, raster: &'a Raster2d, state: &'a State2d, dt: f64) -> Self {
+    fn new(
+        friction: &'a CellFriction<L>,
+        raster: &'a Raster2d,
+        state: &'a State2d,
+        dt: f64,
+    ) -> Self {
         Ctx {
             friction,
             raster,
@@ -674,7 +679,11 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
                     return self.wall_face(l, r, (wl, wr), dx, cells);
                 }
             }
-            donor(self.face_flux(&l, &r, dx, cells), x_theta(c), x_theta(c + 1))
+            donor(
+                self.face_flux(&l, &r, dx, cells),
+                x_theta(c),
+                x_theta(c + 1),
+            )
         };
         let y_face = |r: usize| {
             let (lo, hi, cells) = (self.y_side(i, r), self.y_side(i, r + 1), self.y_cells(i, r));
@@ -684,7 +693,11 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
                     return self.wall_face(lo, hi, (wl, wr), dy, cells);
                 }
             }
-            donor(self.face_flux(&lo, &hi, dy, cells), y_theta(r), y_theta(r + 1))
+            donor(
+                self.face_flux(&lo, &hi, dy, cells),
+                y_theta(r),
+                y_theta(r + 1),
+            )
         };
         // Ghost-inclusive column i + 1 and row j + 1.
         [x_face(i), x_face(i + 1), y_face(j), y_face(j + 1)]

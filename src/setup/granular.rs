@@ -16,7 +16,13 @@ use crate::state::layered::LayeredState;
 pub fn build(scn: &Scenario) -> Simulation<Granular> {
     let mesh = scenario_line(scn);
     let h_bed = &scn.sampled.h_bed;
-    let h: Vec<f64> = scn.sampled.h.iter().zip(h_bed).map(|(&h, &h_i)| h + h_i).collect();
+    let h: Vec<f64> = scn
+        .sampled
+        .h
+        .iter()
+        .zip(h_bed)
+        .map(|(&h, &h_i)| h + h_i)
+        .collect();
     let u = &scn.sampled.u;
     let mut state = LayeredState::from_profiles(&mesh, &scn.multilayer.layer_fractions, &h, u);
     if scn.model.pressure == Pressure::NonHydrostatic {

@@ -122,12 +122,13 @@ pub(super) fn rheology(
     }
     match law {
         Law::Coulomb => {
-            let (mu, _) = coefficient("mu", number(&r.mu), number(&r.mu_deg))?.ok_or_else(|| {
-                ScenarioError::at(
-                    "rheology.mu",
-                    "missing required key (law = \"coulomb\" needs mu or mu_deg)",
-                )
-            })?;
+            let (mu, _) =
+                coefficient("mu", number(&r.mu), number(&r.mu_deg))?.ok_or_else(|| {
+                    ScenarioError::at(
+                        "rheology.mu",
+                        "missing required key (law = \"coulomb\" needs mu or mu_deg)",
+                    )
+                })?;
             Ok(FrictionLaw::Coulomb { mu })
         }
         Law::MuI => {
@@ -164,12 +165,13 @@ pub(super) fn rheology(
             })
         }
         Law::Voellmy => {
-            let (mu, _) = coefficient("mu", number(&r.mu), number(&r.mu_deg))?.ok_or_else(|| {
-                ScenarioError::at(
-                    "rheology.mu",
-                    "missing required key (law = \"voellmy\" needs mu or mu_deg)",
-                )
-            })?;
+            let (mu, _) =
+                coefficient("mu", number(&r.mu), number(&r.mu_deg))?.ok_or_else(|| {
+                    ScenarioError::at(
+                        "rheology.mu",
+                        "missing required key (law = \"voellmy\" needs mu or mu_deg)",
+                    )
+                })?;
             let xi = positive("rheology.xi", required("rheology.xi", number(&r.xi))?)?;
             Ok(FrictionLaw::Voellmy { mu, xi })
         }

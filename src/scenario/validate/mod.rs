@@ -696,7 +696,12 @@ fn check_profiles(
                 "initial.erodible_bed",
                 format!("negative thickness {h} at x = {x}"),
             ),
-            _ => Err(not_finite("initial.erodible_bed", &initial.erodible_bed, x, b)),
+            _ => Err(not_finite(
+                "initial.erodible_bed",
+                &initial.erodible_bed,
+                x,
+                b,
+            )),
         };
     }
     if let Some(i) = first_bad(&sampled.u, &|u| !u.is_finite()) {

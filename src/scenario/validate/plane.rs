@@ -8,8 +8,8 @@
 use super::super::error::ScenarioError;
 use super::super::raw::{RawBoundary, RawDomain, RawInitial};
 use super::super::{
-    raster_centres, OutputSpec, Boundaries, BoundaryKind, Domain, Initial, ModelKind, ModelSpec, Plane,
-    Pressure, Profile, Sampled,
+    raster_centres, Boundaries, BoundaryKind, Domain, Initial, ModelKind, ModelSpec, OutputSpec,
+    Plane, Pressure, Profile, Sampled,
 };
 use super::check::*;
 use super::zones::Field;
@@ -531,7 +531,11 @@ pub(super) fn check_profiles(
             _ => Err(not_finite("initial.h", &initial.h, i, b[i])),
         };
     }
-    if let Some(i) = sampled.h_bed.iter().position(|h| !(h.is_finite() && *h >= 0.0)) {
+    if let Some(i) = sampled
+        .h_bed
+        .iter()
+        .position(|h| !(h.is_finite() && *h >= 0.0))
+    {
         let (x, y) = centres[i];
         return match initial.erodible_bed.try_eval_xy(x, y, b[i]) {
             Ok(h) if h.is_finite() => err(
