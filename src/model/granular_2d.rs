@@ -49,6 +49,8 @@ pub struct Granular2d {
     /// The erodible bed h_i per cell (Fernández-Nieto et al. 2016, §4.2; zeros without
     /// one), for `/grid/h_bed` and the front.
     pub h_bed: Vec<f64>,
+    /// Whether `h_bed` is an erodible bed (not the zeros of a run without one).
+    erodible: bool,
 }
 
 impl Granular2d {
@@ -57,6 +59,7 @@ impl Granular2d {
         Granular2d {
             front_threshold,
             h_bed: vec![0.0; raster.nx() * raster.ny()],
+            erodible: false,
         }
     }
 
@@ -64,6 +67,7 @@ impl Granular2d {
     pub fn with_erodible_bed(mut self, h_bed: Vec<f64>) -> Granular2d {
         assert_eq!(h_bed.len(), self.h_bed.len(), "one erodible bed per cell");
         self.h_bed = h_bed;
+        self.erodible = true;
         self
     }
 }
@@ -161,13 +165,7 @@ impl Model for Granular2d {
         let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
         let mut front = f64::NEG_INFINITY;
         let nx = raster.nx();
-        let cells = state
-            .h
-            .iter()
-            .zip(&state.hu)
-            .zip(&state.hv)
-            .zip(&self.h_bed);
-        for (k, (((&h, &qx), &qy), &h_bed)) in cells.enumerate() {
+        for (k, ((&h, &qx), &qy)) in state.h.iter().zip(&state.hu).zip(&state.hv).enumerate() {
             mass += h;
             q_sum += qx + qy;
             h_max = h_max.max(h);
@@ -176,7 +174,10 @@ impl Model for Granular2d {
             ke += h * speed2;
             max_speed = max_speed.max(speed2);
             signal = signal.max(u.abs().max(v.abs()) + celerity(g_n, h));
-            if h - h_bed > self.front_threshold {
+            // h − h_i ≤ h: without an erodible bed the first test decides.
+            if h > self.front_threshold
+                && (!self.erodible || h - self.h_bed[k] > self.front_threshold)
+            {
                 front = front.max(raster.x(k % nx));
             }
         }

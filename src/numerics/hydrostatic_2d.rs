@@ -297,11 +297,14 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         speed: f64,
         h: f64,
         drive: f64,
-        (lo, hi): (usize, usize),
+        cells: impl Fn() -> (usize, usize),
     ) -> f64 {
         let law = match self.friction {
             CellFriction::Uniform(law) => *law,
-            CellFriction::PerCell(laws) => laws[if drive > 0.0 { lo } else { hi }],
+            CellFriction::PerCell(laws) => {
+                let (lo, hi) = cells();
+                laws[if drive > 0.0 { lo } else { hi }]
+            }
         };
         let (cell_l, cell_r) = ((l.speed, l.side.h), (r.speed, r.side.h));
         law.face_mu(cell_l, cell_r, speed, h, self.raster.g_n)
@@ -502,7 +505,13 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
     /// ([`super::face::monolayer_fluxes`]) with the disk threshold of ΔC, plus the
     /// tangential flux. `d` is the cell width across the face, `cells` its cells.
     #[inline(always)]
-    fn face_flux(&self, l: &FaceSide, r: &FaceSide, d: f64, cells: (usize, usize)) -> FaceFlux {
+    fn face_flux<C: Fn() -> (usize, usize) + Copy>(
+        &self,
+        l: &FaceSide,
+        r: &FaceSide,
+        d: f64,
+        cells: C,
+    ) -> FaceFlux {
         let mu_of = |speed: f64, h: f64, drive: f64| self.face_mu(l, r, speed, h, drive, cells);
         let (g_n, dt) = (self.raster.g_n, self.dt);
         let drives = (l.drive, r.drive);
@@ -552,7 +561,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             (false, true) => (l, mirror(l), (lo, lo)),
             (false, false) => (l, r, (lo, hi)),
         };
-        let f = self.face_flux(&l, &r, d, cells);
+        let f = self.face_flux(&l, &r, d, move || cells);
         FaceFlux {
             h: 0.0,
             qt: 0.0,
@@ -563,16 +572,16 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
     /// The face between sides `l` and `r` of the cells `cells`, with (`WALLS`) their
     /// wall kinds `walls`.
     #[inline(always)]
-    fn face<const WALLS: bool>(
+    fn face<const WALLS: bool, C: Fn() -> (usize, usize) + Copy>(
         &self,
         l: FaceSide,
         r: FaceSide,
         (wl, wr): (bool, bool),
         d: f64,
-        cells: (usize, usize),
+        cells: C,
     ) -> FaceFlux {
         if WALLS && (wl || wr) {
-            self.wall_face(l, r, (wl, wr), d, cells)
+            self.wall_face(l, r, (wl, wr), d, cells())
         } else {
             self.face_flux(&l, &r, d, cells)
         }
@@ -594,7 +603,8 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             } else {
                 (false, false)
             };
-            *f = self.face::<WALLS>(lo.y_side(), hi.y_side(), walls, dy, self.y_cells(i, r));
+            let cells = || self.y_cells(i, r);
+            *f = self.face::<WALLS, _>(lo.y_side(), hi.y_side(), walls, dy, cells);
         }
     }
 
@@ -628,7 +638,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
                 } else {
                     (false, false)
                 };
-                self.face::<WALLS>(left, right, walls, dx, self.x_cells(c, j))
+                self.face::<WALLS, _>(left, right, walls, dx, || self.x_cells(c, j))
             };
             let mut left = self.x_side(0, j);
             let mut right = row[0].x_side();
@@ -672,11 +682,13 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         };
         let donor = |f: FaceFlux, lo: f64, hi: f64| f.drained(if f.h > 0.0 { lo } else { hi });
         let x_face = |c: usize| {
-            let (l, r, cells) = (self.x_side(c, j), self.x_side(c + 1, j), self.x_cells(c, j));
+            let (l, r, cells) = (self.x_side(c, j), self.x_side(c + 1, j), || {
+                self.x_cells(c, j)
+            });
             if WALLS {
                 let (wl, wr) = (self.x_wall(c, j), self.x_wall(c + 1, j));
                 if wl || wr {
-                    return self.wall_face(l, r, (wl, wr), dx, cells);
+                    return self.wall_face(l, r, (wl, wr), dx, cells());
                 }
             }
             donor(
@@ -686,11 +698,13 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             )
         };
         let y_face = |r: usize| {
-            let (lo, hi, cells) = (self.y_side(i, r), self.y_side(i, r + 1), self.y_cells(i, r));
+            let (lo, hi, cells) = (self.y_side(i, r), self.y_side(i, r + 1), || {
+                self.y_cells(i, r)
+            });
             if WALLS {
                 let (wl, wr) = (self.y_wall(i, r), self.y_wall(i, r + 1));
                 if wl || wr {
-                    return self.wall_face(lo, hi, (wl, wr), dy, cells);
+                    return self.wall_face(lo, hi, (wl, wr), dy, cells());
                 }
             }
             donor(
