@@ -33,5 +33,6 @@ mod sweep;
 mod terrain_2d;
 mod terrain_2d_io;
 mod terrain_2d_reference;
+mod terrain_2d_zones;
 mod water_nh;
 mod well_balanced;

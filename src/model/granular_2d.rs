@@ -8,29 +8,49 @@
 //! Diagnostics: mass ∫ h dx dy, kinetic energy ∫ ½ h (u² + v²) dx dy, the largest
 //! speed √(u² + v²), the signal speed max(|u|, |v|) + √(g_n h) per cell (with the
 //! raster's `cfl_length` = min(Δx, Δy), the CFL bound of `numerics::hydrostatic_2d`),
-//! and the front: the largest x of a cell thicker than the threshold.
+//! and the front: the largest x of a cell thicker than the threshold above the erodible
+//! bed.
+//!
+//! The erodible bed (Fernández-Nieto et al. 2016, §4.2; `initial.erodible_bed`, as on a
+//! line) is a layer of the same grains at rest on the bed, added to the initial
+//! thickness: h = h_flow + h_i. The friction law mobilises it or leaves it at rest;
+//! no other term sees it. The front, the maps ([`crate::model::raster_maps`]) and
+//! `/grid/h_bed` count h − h_i.
 
 use crate::grid::Raster2d;
 use crate::model::granular::pipeline::{with_law, WithLaw};
 use crate::model::{first_maximum, Diagnostics, Model};
-use crate::numerics::friction_2d::FrictionStep2d;
+use crate::numerics::friction_2d::{CellFriction, FrictionStep2d};
 use crate::numerics::hydrostatic_2d::HydrostaticStep2d;
 use crate::numerics::workers::Workers;
 use crate::numerics::Stage;
 use crate::output::{OutputError, OutputSink, SnapshotView};
-use crate::physics::rheology::{BasalFriction, FrictionLaw, LocalFriction};
+use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, Voellmy};
 use crate::physics::shallow::{celerity, velocity};
 use crate::physics::Material;
 use crate::pipeline::Pipeline;
 use crate::state::State2d;
+
+/// Per-cell friction coefficients of a raster run (row-major, one per cell), where the
+/// scenario gives them as fields (friction zones); `None`: the law's own number.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FrictionZones {
+    /// The Coulomb coefficient μ (Coulomb and Voellmy laws).
+    pub mu: Option<Vec<f64>>,
+    /// Voellmy's turbulence coefficient ξ (m/s²).
+    pub xi: Option<Vec<f64>>,
+}
 
 /// The 2-D granular model's run-time parameters.
 #[derive(Debug, Clone)]
 pub struct Granular2d {
     /// Thickness from which a cell counts for the front (m).
     pub front_threshold: f64,
-    /// Zeros (no erodible bed on a raster), one per cell, for `/grid/h_bed`.
+    /// The erodible bed h_i per cell (Fernández-Nieto et al. 2016, §4.2; zeros without
+    /// one), for `/grid/h_bed` and the front.
     pub h_bed: Vec<f64>,
+    /// Whether `h_bed` is an erodible bed (not the zeros of a run without one).
+    erodible: bool,
 }
 
 impl Granular2d {
@@ -39,11 +59,36 @@ impl Granular2d {
         Granular2d {
             front_threshold,
             h_bed: vec![0.0; raster.nx() * raster.ny()],
+            erodible: false,
         }
+    }
+
+    /// The model over the erodible bed `h_bed` (one per cell, row-major).
+    pub fn with_erodible_bed(mut self, h_bed: Vec<f64>) -> Granular2d {
+        assert_eq!(h_bed.len(), self.h_bed.len(), "one erodible bed per cell");
+        self.h_bed = h_bed;
+        self.erodible = true;
+        self
     }
 }
 
-/// The stages of a 2-D run for one friction law.
+/// The stages of a 2-D run for the friction of its cells.
+fn stages<L: BasalFriction + 'static>(
+    friction: CellFriction<L>,
+    raster: &Raster2d,
+    workers: Workers,
+) -> Vec<Box<dyn Stage<Raster2d, State2d>>> {
+    vec![
+        Box::new(HydrostaticStep2d::with_friction(
+            friction.clone(),
+            raster,
+            workers.clone(),
+        )),
+        Box::new(FrictionStep2d::with_friction(friction, workers)),
+    ]
+}
+
+/// The stages of a 2-D run for one friction law, uniform over the raster.
 struct Stages2d<'a> {
     raster: &'a Raster2d,
     workers: Workers,
@@ -53,14 +98,7 @@ impl WithLaw for Stages2d<'_> {
     type Out = Vec<Box<dyn Stage<Raster2d, State2d>>>;
 
     fn with<L: BasalFriction + LocalFriction + 'static>(self, law: L) -> Self::Out {
-        vec![
-            Box::new(HydrostaticStep2d::new(
-                law,
-                self.raster,
-                self.workers.clone(),
-            )),
-            Box::new(FrictionStep2d::new(law, self.workers)),
-        ]
+        stages(CellFriction::Uniform(law), self.raster, self.workers)
     }
 }
 
@@ -80,6 +118,37 @@ pub fn pipeline(
         material,
         Stages2d { raster, workers },
     )))
+}
+
+/// [`pipeline`] with friction zones: the Coulomb or Voellmy law of every cell takes
+/// the cell's μ and ξ where `zones` gives them (the law's own number elsewhere); μ(I)
+/// has no zones (refused by validation).
+pub fn pipeline_with_zones(
+    law: &FrictionLaw,
+    raster: &Raster2d,
+    threads: usize,
+    zones: &FrictionZones,
+) -> Result<Pipeline<Raster2d, State2d>, String> {
+    let workers = Workers::new(threads)?;
+    let cells = raster.nx() * raster.ny();
+    let field = |f: &Option<Vec<f64>>, uniform: f64, k: usize| f.as_ref().map_or(uniform, |v| v[k]);
+    let stages = match *law {
+        FrictionLaw::Coulomb { mu } => {
+            let laws = (0..cells).map(|k| Coulomb {
+                mu: field(&zones.mu, mu, k),
+            });
+            stages(CellFriction::PerCell(laws.collect()), raster, workers)
+        }
+        FrictionLaw::Voellmy { mu, xi } => {
+            let laws = (0..cells).map(|k| Voellmy {
+                mu: field(&zones.mu, mu, k),
+                xi: field(&zones.xi, xi, k),
+            });
+            stages(CellFriction::PerCell(laws.collect()), raster, workers)
+        }
+        FrictionLaw::MuI { .. } => return Err("the μ(I) law has no friction zones".into()),
+    };
+    Ok(Pipeline::new(stages))
 }
 
 impl Model for Granular2d {
@@ -105,7 +174,10 @@ impl Model for Granular2d {
             ke += h * speed2;
             max_speed = max_speed.max(speed2);
             signal = signal.max(u.abs().max(v.abs()) + celerity(g_n, h));
-            if h > self.front_threshold {
+            // h − h_i ≤ h: without an erodible bed the first test decides.
+            if h > self.front_threshold
+                && (!self.erodible || h - self.h_bed[k] > self.front_threshold)
+            {
                 front = front.max(raster.x(k % nx));
             }
         }

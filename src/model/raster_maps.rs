@@ -14,6 +14,11 @@
 //!   cell by cell, so it costs no work per step: it is formed when the maps are
 //!   written.
 //!
+//! Over an erodible bed h_i (`initial.erodible_bed`, grains at rest on the bed), h
+//! above stands for the thickness above it, h − h_i, as for the front of a line: a bed
+//! at rest is no flow (its maps stay 0), and the deposit is negative where the flow
+//! eroded the bed.
+//!
 //! The maps are written with every snapshot (as they stand, `deposit` then being the
 //! snapshot's h) and once more at the end.
 //!
@@ -48,6 +53,8 @@ pub struct RasterMaps {
     arrival: Vec<f64>,
     /// The initial thickness (the release), kept for the runout.
     h0: Vec<f64>,
+    /// The erodible bed h_i per cell; empty without one.
+    h_bed: Vec<f64>,
     reached: usize,
     area: Vec<f64>,
 }
@@ -63,8 +70,25 @@ impl RasterMaps {
             speed_max: vec![0.0; cells],
             arrival: vec![f64::NAN; cells],
             h0: Vec::new(),
+            h_bed: Vec::new(),
             reached: 0,
             area: Vec::new(),
+        }
+    }
+
+    /// The maps over the erodible bed `h_bed` (one per cell): they count the thickness
+    /// above it.
+    pub fn with_erodible_bed(mut self, h_bed: Vec<f64>) -> RasterMaps {
+        self.h_bed = h_bed;
+        self
+    }
+
+    /// The thickness above the erodible bed, h − h_i (h itself without one).
+    fn above<'a>(&self, h: &'a [f64]) -> Cow<'a, [f64]> {
+        if self.h_bed.is_empty() {
+            Cow::Borrowed(h)
+        } else {
+            Cow::Owned(h.iter().zip(&self.h_bed).map(|(h, b)| h - b).collect())
         }
     }
 
@@ -149,15 +173,20 @@ impl RasterMaps {
 impl Tracker<Raster2d, State2d> for RasterMaps {
     fn observe(&mut self, grid: &Raster2d, state: &State2d, t: f64) {
         if self.h0.is_empty() {
-            self.h0.clone_from(&state.h);
+            self.h0 = self.above(&state.h).into_owned();
         }
         let thr = self.threshold;
         for k in 0..state.h.len() {
             let h = state.h[k];
-            if h > self.h_max[k] {
-                self.h_max[k] = h;
+            let above = if self.h_bed.is_empty() {
+                h
+            } else {
+                h - self.h_bed[k]
+            };
+            if above > self.h_max[k] {
+                self.h_max[k] = above;
             }
-            if h > thr {
+            if above > thr {
                 let speed = state.hu[k].hypot(state.hv[k]) / h;
                 if speed > self.speed_max[k] {
                     self.speed_max[k] = speed;
@@ -177,12 +206,13 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         state: &State2d,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
-        let values = self.values(grid, &state.h);
+        let above = self.above(&state.h);
+        let values = self.values(grid, &above);
         let maps = Self::fields(&values);
         let scalars = if self.h0.is_empty() {
             Vec::new()
         } else {
-            self.runout(grid, &state.h)
+            self.runout(grid, &above)
         };
         sink.maps(&RunMaps {
             maps: &maps,
@@ -197,7 +227,8 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         state: &State2d,
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
-        let values = self.values(grid, &state.h);
+        let above = self.above(&state.h);
+        let values = self.values(grid, &above);
         sink.maps_so_far(&Self::fields(&values))
     }
 }
@@ -211,7 +242,8 @@ impl RasterMaps {
             .collect()
     }
 
-    /// The maps' values in their file order, `deposit` being `h`; wall (nodata) cells
+    /// The maps' values in their file order, `deposit` being `h` (above the erodible
+    /// bed); wall (nodata) cells
     /// are NaN.
     fn values<'a>(&'a self, grid: &Raster2d, h: &'a [f64]) -> [Cow<'a, [f64]>; 5] {
         [

@@ -83,7 +83,8 @@ pub fn interface<M: Fn(f64, f64) -> f64>(
     dx: f64,
     dt: f64,
 ) -> Option<(Interface, Side, Side)> {
-    interface_with_transverse_drive(mu_of, l, r, extra, (0.0, 0.0), g_n, dx, dt)
+    let mu_of = |speed: f64, h: f64, _drive: f64| mu_of(speed, h);
+    interface_with_zoned_transverse_drive(mu_of, l, r, extra, (0.0, 0.0), g_n, dx, dt)
 }
 
 /// [`interface`] for a face of a raster, with the drives d_t = u_t/Δt − g_n ∂_t(h + z)
@@ -98,6 +99,26 @@ pub fn interface<M: Fn(f64, f64) -> f64>(
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn interface_with_transverse_drive<M: Fn(f64, f64) -> f64>(
+    mu_of: M,
+    l: Side,
+    r: Side,
+    extra: f64,
+    drive_t: (f64, f64),
+    g_n: f64,
+    dx: f64,
+    dt: f64,
+) -> Option<(Interface, Side, Side)> {
+    let mu_of = |speed: f64, h: f64, _drive: f64| mu_of(speed, h);
+    interface_with_zoned_transverse_drive(mu_of, l, r, extra, drive_t, g_n, dx, dt)
+}
+
+/// [`interface_with_transverse_drive`] with `mu_of(speed, h, d_n)`: the face's μ at
+/// the Roe speed and mean depth also sees the normal drive d_n, whose sign tells the
+/// cell the drive pushes mass out of (d_n > 0: the left one), the cell whose friction
+/// holds that mass where the two cells' μ differ (friction zones).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn interface_with_zoned_transverse_drive<M: Fn(f64, f64, f64) -> f64>(
     mu_of: M,
     mut l: Side,
     mut r: Side,
@@ -158,8 +179,6 @@ pub fn interface_with_transverse_drive<M: Fn(f64, f64) -> f64>(
     let alpha1 = (s_right.abs() - s_left.abs()) / spread;
 
     // Coulomb-aware reconstruction (ΔC): friction up to its threshold acts as bed.
-    let mu = mu_of(u_roe.abs(), h_roe);
-    let threshold = g_n * mu;
     // The friction acts on the bottom layer (Fernández-Nieto et al. 2016, eq. 28): its velocity u_1 enters
     // the drive (Escalante et al. 2023 prints ū). Over a bottom layer that the viscous step has
     // stopped, the regularised creep of the upper layers divided by Δt would exceed the
@@ -171,6 +190,8 @@ pub fn interface_with_transverse_drive<M: Fn(f64, f64) -> f64>(
         (sl * l.u_base + sr * r.u_base) / (sl + sr)
     };
     let drive = u_base / dt - g_n * ((r.h + r.z) - (l.h + l.z) + extra) / dx;
+    let mu = mu_of(u_roe.abs(), h_roe, drive);
+    let threshold = g_n * mu;
     let drive_t = if drive_t == (0.0, 0.0) {
         0.0
     } else {

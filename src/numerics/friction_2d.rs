@@ -12,6 +12,10 @@
 //! must move (|∇z| = √2 a > μ), and does. Where one component is zero the scalar rule
 //! acts on the other (the same operations as the 1-D step, so a flow invariant in y
 //! reproduces the line to the bit).
+//!
+//! Friction zones ([`CellFriction`]): where the scenario gives μ (or Voellmy's ξ) as a
+//! field, every cell carries its own law and the rule above uses the cell's; a
+//! uniform law is stored once and the loop is the one without zones.
 
 use super::workers::Workers;
 use super::{Stage, StageError};
@@ -20,17 +24,43 @@ use crate::grid::Raster2d;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
 use crate::state::State2d;
+use std::sync::Arc;
+
+/// The basal friction law of every cell of a raster: one law for all (`Uniform`), or
+/// one per cell (`PerCell`, row-major, friction zones), shared by the stages.
+#[derive(Debug, Clone)]
+pub enum CellFriction<L: BasalFriction> {
+    Uniform(L),
+    PerCell(Arc<[L]>),
+}
+
+impl<L: BasalFriction> CellFriction<L> {
+    /// The law of cell `cell` (row-major).
+    #[inline(always)]
+    pub fn at(&self, cell: usize) -> L {
+        match self {
+            CellFriction::Uniform(law) => *law,
+            CellFriction::PerCell(laws) => laws[cell],
+        }
+    }
+}
 
 /// The vector friction step of the 2-D monolayer.
 #[derive(Debug)]
 pub struct FrictionStep2d<L: BasalFriction> {
-    law: L,
+    friction: CellFriction<L>,
     workers: Workers,
 }
 
 impl<L: BasalFriction> FrictionStep2d<L> {
+    /// The step with one friction law `law`.
     pub fn new(law: L, workers: Workers) -> Self {
-        FrictionStep2d { law, workers }
+        Self::with_friction(CellFriction::Uniform(law), workers)
+    }
+
+    /// The step with the friction of every cell (friction zones).
+    pub fn with_friction(friction: CellFriction<L>, workers: Workers) -> Self {
+        FrictionStep2d { friction, workers }
     }
 }
 
@@ -69,14 +99,31 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
 
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
         let (g_n, chunk) = (raster.g_n, BAND_ROWS * raster.nx());
-        let (law, h) = (self.law, &state.h);
-        self.workers
-            .bands2(chunk, &mut state.hu, &mut state.hv, |k, hu, hv| {
-                let h = &h[k * chunk..k * chunk + hu.len()];
-                for ((qx, qy), &h) in hu.iter_mut().zip(hv.iter_mut()).zip(h) {
-                    (*qx, *qy) = vector_friction(&law, *qx, *qy, h, dt, g_n);
-                }
-            });
+        let h = &state.h;
+        match &self.friction {
+            CellFriction::Uniform(law) => {
+                let law = *law;
+                self.workers
+                    .bands2(chunk, &mut state.hu, &mut state.hv, |k, hu, hv| {
+                        let h = &h[k * chunk..k * chunk + hu.len()];
+                        for ((qx, qy), &h) in hu.iter_mut().zip(hv.iter_mut()).zip(h) {
+                            (*qx, *qy) = vector_friction(&law, *qx, *qy, h, dt, g_n);
+                        }
+                    });
+            }
+            CellFriction::PerCell(laws) => {
+                self.workers
+                    .bands2(chunk, &mut state.hu, &mut state.hv, |k, hu, hv| {
+                        let cells = k * chunk..k * chunk + hu.len();
+                        let (h, laws) = (&h[cells.clone()], &laws[cells]);
+                        for (((qx, qy), &h), law) in
+                            hu.iter_mut().zip(hv.iter_mut()).zip(h).zip(laws)
+                        {
+                            (*qx, *qy) = vector_friction(law, *qx, *qy, h, dt, g_n);
+                        }
+                    });
+            }
+        }
         Ok(())
     }
 }

@@ -23,6 +23,12 @@
 //! state that does not depend on y, every y-face carries exactly nothing and each row
 //! is the 1-D step to the bit (`tests/terrain_2d.rs`).
 //!
+//! Friction zones ([`CellFriction::PerCell`]): the ΔC threshold of a face is the μ of
+//! the cell that the face's normal drive pushes mass out of (d_n > 0: the lower-index
+//! cell), whose friction holds that mass; where both cells have the same law this is
+//! the uniform face to the bit. A ghost takes its edge cell's law, a wall side the
+//! flow side's.
+//!
 //! Boundaries: the edge faces see a ghost cell built from the edge cell (a wall
 //! mirrors h and reverses the normal discharge, an outflow copies the cell), over the
 //! raster's ghost bed. Wall cells inside the raster (nodata cells of a DEM,
@@ -58,9 +64,10 @@
 //! h ≥ 0 for CFL ≤ ½ (the limiter and the run loop's retry catch the rest).
 
 use super::face::{
-    drained_fraction, interface_with_transverse_drive, layer_momentum_flux, mass_flux,
+    drained_fraction, interface_with_zoned_transverse_drive, layer_momentum_flux, mass_flux,
     transverse_flux, Side,
 };
+use super::friction_2d::CellFriction;
 use super::workers::Workers;
 use super::{Stage, StageError};
 use crate::grid::raster::BAND_ROWS;
@@ -189,7 +196,7 @@ struct BandScratch {
 /// The 2-D hydrostatic step, generic over the basal friction law (used in ΔC).
 #[derive(Debug)]
 pub struct HydrostaticStep2d<L: BasalFriction> {
-    law: L,
+    friction: CellFriction<L>,
     workers: Workers,
     h_new: Vec<f64>,
     hu_new: Vec<f64>,
@@ -200,8 +207,14 @@ pub struct HydrostaticStep2d<L: BasalFriction> {
 }
 
 impl<L: BasalFriction> HydrostaticStep2d<L> {
-    /// The step on `raster`, its bands run by `workers`.
+    /// The step on `raster` with one friction law `law`, its bands run by `workers`.
     pub fn new(law: L, raster: &Raster2d, workers: Workers) -> Self {
+        Self::with_friction(CellFriction::Uniform(law), raster, workers)
+    }
+
+    /// The step on `raster` with the friction of its cells (friction zones), its bands
+    /// run by `workers`.
+    pub fn with_friction(friction: CellFriction<L>, raster: &Raster2d, workers: Workers) -> Self {
         let (nx, cells) = (raster.nx(), raster.nx() * raster.ny());
         let band = BandScratch {
             below: vec![FaceFlux::default(); nx],
@@ -211,7 +224,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             worst: (f64::INFINITY, 0),
         };
         HydrostaticStep2d {
-            law,
+            friction,
             workers,
             h_new: vec![0.0; cells],
             hu_new: vec![0.0; cells],
@@ -238,8 +251,8 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
 }
 
 /// The read-only data of one step.
-struct Ctx<'a, L> {
-    law: L,
+struct Ctx<'a, L: BasalFriction> {
+    friction: &'a CellFriction<L>,
     raster: &'a Raster2d,
     h: &'a [f64],
     hu: &'a [f64],
@@ -251,9 +264,14 @@ struct Ctx<'a, L> {
 
 impl<'a, L: BasalFriction> Ctx<'a, L> {
     /// The context of one pass over `state` on `raster` with step `dt`.
-    fn new(law: L, raster: &'a Raster2d, state: &'a State2d, dt: f64) -> Self {
+    fn new(
+        friction: &'a CellFriction<L>,
+        raster: &'a Raster2d,
+        state: &'a State2d,
+        dt: f64,
+    ) -> Self {
         Ctx {
-            law,
+            friction,
             raster,
             h: &state.h,
             hu: &state.hu,
@@ -268,11 +286,44 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
     /// at the face's Roe speed `speed` and mean depth `h`: the one place where the
     /// step reads the friction law ([`BasalFriction::face_mu`], from the cells' own
     /// speeds |(u, v)| and depths, so that a run invariant along one axis is the
-    /// line's bit for bit).
+    /// line's bit for bit). With friction zones, the law of the face's cell (`cells`,
+    /// lower and higher index) that the normal drive `drive` pushes mass out of: the
+    /// cell whose friction holds that mass.
     #[inline(always)]
-    fn face_mu(&self, l: &FaceSide, r: &FaceSide, speed: f64, h: f64) -> f64 {
+    fn face_mu(
+        &self,
+        l: &FaceSide,
+        r: &FaceSide,
+        speed: f64,
+        h: f64,
+        drive: f64,
+        cells: impl Fn() -> (usize, usize),
+    ) -> f64 {
+        let law = match self.friction {
+            CellFriction::Uniform(law) => *law,
+            CellFriction::PerCell(laws) => {
+                let (lo, hi) = cells();
+                laws[if drive > 0.0 { lo } else { hi }]
+            }
+        };
         let (cell_l, cell_r) = ((l.speed, l.side.h), (r.speed, r.side.h));
-        self.law.face_mu(cell_l, cell_r, speed, h, self.raster.g_n)
+        law.face_mu(cell_l, cell_r, speed, h, self.raster.g_n)
+    }
+
+    /// The cells (row-major) of the x-face between ghost-inclusive columns `c` and
+    /// `c + 1` of row `j` (a ghost takes its edge cell).
+    #[inline(always)]
+    fn x_cells(&self, c: usize, j: usize) -> (usize, usize) {
+        let cell = |c: usize| j * self.nx + c.clamp(1, self.nx) - 1;
+        (cell(c), cell(c + 1))
+    }
+
+    /// The cells of the y-face between ghost-inclusive rows `r` and `r + 1` of
+    /// column i.
+    #[inline(always)]
+    fn y_cells(&self, i: usize, r: usize) -> (usize, usize) {
+        let cell = |r: usize| (r.clamp(1, self.ny) - 1) * self.nx + i;
+        (cell(r), cell(r + 1))
     }
 
     /// The free surface h + z of cell (i, j) seen from a cell whose surface is `eta`:
@@ -452,13 +503,20 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
     /// The fluxes of one face with sides `l`, `r` along its normal (velocities normal
     /// to the face); zero where nothing crosses. The 1-D monolayer face
     /// ([`super::face::monolayer_fluxes`]) with the disk threshold of ΔC, plus the
-    /// tangential flux. `d` is the cell width across the face.
+    /// tangential flux. `d` is the cell width across the face, `cells` its cells.
     #[inline(always)]
-    fn face_flux(&self, l: &FaceSide, r: &FaceSide, d: f64) -> FaceFlux {
-        let mu_of = |speed: f64, h: f64| self.face_mu(l, r, speed, h);
+    fn face_flux<C: Fn() -> (usize, usize) + Copy>(
+        &self,
+        l: &FaceSide,
+        r: &FaceSide,
+        d: f64,
+        cells: C,
+    ) -> FaceFlux {
+        let mu_of = |speed: f64, h: f64, drive: f64| self.face_mu(l, r, speed, h, drive, cells);
         let (g_n, dt) = (self.raster.g_n, self.dt);
         let drives = (l.drive, r.drive);
-        match interface_with_transverse_drive(mu_of, l.side, r.side, 0.0, drives, g_n, d, dt) {
+        let (ls, rs) = (l.side, r.side);
+        match interface_with_zoned_transverse_drive(mu_of, ls, rs, 0.0, drives, g_n, d, dt) {
             None => FaceFlux::default(),
             Some((c, sl, sr)) => {
                 let t_l = if c.left_at_rest { 0.0 } else { l.t };
@@ -478,9 +536,17 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
 
     /// A face with a wall on the left (`wall_l`), the right or both sides: the wall
     /// side mirrors the other (normal velocity reversed), no mass and no tangential
-    /// momentum cross, and between two walls nothing does.
+    /// momentum cross, and between two walls nothing does. The wall side takes the
+    /// friction of the flow side's cell.
     #[inline(never)]
-    fn wall_face(&self, l: FaceSide, r: FaceSide, wall_l: bool, wall_r: bool, d: f64) -> FaceFlux {
+    fn wall_face(
+        &self,
+        l: FaceSide,
+        r: FaceSide,
+        (wall_l, wall_r): (bool, bool),
+        d: f64,
+        (lo, hi): (usize, usize),
+    ) -> FaceFlux {
         let mirror = |s: FaceSide| FaceSide {
             side: Side {
                 u: -s.side.u,
@@ -489,13 +555,13 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             },
             ..s
         };
-        let (l, r) = match (wall_l, wall_r) {
+        let (l, r, cells) = match (wall_l, wall_r) {
             (true, true) => return FaceFlux::default(),
-            (true, false) => (mirror(r), r),
-            (false, true) => (l, mirror(l)),
-            (false, false) => (l, r),
+            (true, false) => (mirror(r), r, (hi, hi)),
+            (false, true) => (l, mirror(l), (lo, lo)),
+            (false, false) => (l, r, (lo, hi)),
         };
-        let f = self.face_flux(&l, &r, d);
+        let f = self.face_flux(&l, &r, d, move || cells);
         FaceFlux {
             h: 0.0,
             qt: 0.0,
@@ -503,20 +569,21 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         }
     }
 
-    /// The face between sides `l` and `r`, with (`WALLS`) the wall kinds `walls` of
-    /// its two cells.
+    /// The face between sides `l` and `r` of the cells `cells`, with (`WALLS`) their
+    /// wall kinds `walls`.
     #[inline(always)]
-    fn face<const WALLS: bool>(
+    fn face<const WALLS: bool, C: Fn() -> (usize, usize) + Copy>(
         &self,
         l: FaceSide,
         r: FaceSide,
         (wl, wr): (bool, bool),
         d: f64,
+        cells: C,
     ) -> FaceFlux {
         if WALLS && (wl || wr) {
-            self.wall_face(l, r, wl, wr, d)
+            self.wall_face(l, r, (wl, wr), d, cells())
         } else {
-            self.face_flux(&l, &r, d)
+            self.face_flux(&l, &r, d, cells)
         }
     }
 
@@ -536,7 +603,8 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             } else {
                 (false, false)
             };
-            *f = self.face::<WALLS>(lo.y_side(), hi.y_side(), walls, dy);
+            let cells = || self.y_cells(i, r);
+            *f = self.face::<WALLS, _>(lo.y_side(), hi.y_side(), walls, dy, cells);
         }
     }
 
@@ -570,7 +638,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
                 } else {
                     (false, false)
                 };
-                self.face::<WALLS>(left, right, walls, dx)
+                self.face::<WALLS, _>(left, right, walls, dx, || self.x_cells(c, j))
             };
             let mut left = self.x_side(0, j);
             let mut right = row[0].x_side();
@@ -614,24 +682,36 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         };
         let donor = |f: FaceFlux, lo: f64, hi: f64| f.drained(if f.h > 0.0 { lo } else { hi });
         let x_face = |c: usize| {
-            let (l, r) = (self.x_side(c, j), self.x_side(c + 1, j));
+            let (l, r, cells) = (self.x_side(c, j), self.x_side(c + 1, j), || {
+                self.x_cells(c, j)
+            });
             if WALLS {
                 let (wl, wr) = (self.x_wall(c, j), self.x_wall(c + 1, j));
                 if wl || wr {
-                    return self.wall_face(l, r, wl, wr, dx);
+                    return self.wall_face(l, r, (wl, wr), dx, cells());
                 }
             }
-            donor(self.face_flux(&l, &r, dx), x_theta(c), x_theta(c + 1))
+            donor(
+                self.face_flux(&l, &r, dx, cells),
+                x_theta(c),
+                x_theta(c + 1),
+            )
         };
         let y_face = |r: usize| {
-            let (lo, hi) = (self.y_side(i, r), self.y_side(i, r + 1));
+            let (lo, hi, cells) = (self.y_side(i, r), self.y_side(i, r + 1), || {
+                self.y_cells(i, r)
+            });
             if WALLS {
                 let (wl, wr) = (self.y_wall(i, r), self.y_wall(i, r + 1));
                 if wl || wr {
-                    return self.wall_face(lo, hi, wl, wr, dy);
+                    return self.wall_face(lo, hi, (wl, wr), dy, cells());
                 }
             }
-            donor(self.face_flux(&lo, &hi, dy), y_theta(r), y_theta(r + 1))
+            donor(
+                self.face_flux(&lo, &hi, dy, cells),
+                y_theta(r),
+                y_theta(r + 1),
+            )
         };
         // Ghost-inclusive column i + 1 and row j + 1.
         [x_face(i), x_face(i + 1), y_face(j), y_face(j + 1)]
@@ -708,7 +788,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     ) -> (f64, usize) {
         let nx = raster.nx();
         let r = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx::new(self.law, raster, state, dt);
+        let ctx = Ctx::new(&self.friction, raster, state, dt);
         let outputs = (
             self.h_new.as_mut_slice(),
             self.hu_new.as_mut_slice(),
@@ -761,7 +841,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     ) -> (f64, usize) {
         let (nx, ny) = (raster.nx(), raster.ny());
         let r = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx::new(self.law, raster, state, dt);
+        let ctx = Ctx::new(&self.friction, raster, state, dt);
         let theta = self.drain.as_slice();
         let outputs = (
             self.h_new.as_mut_slice(),

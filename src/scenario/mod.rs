@@ -29,6 +29,7 @@ pub use crate::gis::Crs;
 pub use crate::grid::{BoundaryKind, Coordinates};
 pub use crate::model::dilatant::DilatantSpec;
 pub use crate::model::granular::config::{MultilayerSpec, Pressure};
+pub use crate::model::granular_2d::FrictionZones;
 pub use crate::model::submarine::SubmarineSpec;
 pub use crate::model::ModelKind;
 pub use crate::numerics::viscous::{
@@ -135,13 +136,22 @@ pub struct Initial {
     pub v: Profile,
     /// Normal velocity w(x) (non-hydrostatic model only; Garres-Díaz et al. 2021, eq. 30).
     pub w: Profile,
-    /// Uniform erodible-bed thickness h_i ≥ 0 (Fernández-Nieto et al. 2016, §4.2).
-    pub erodible_bed: f64,
+    /// Erodible-bed thickness h_i ≥ 0 (Fernández-Nieto et al. 2016, §4.2): a layer of
+    /// the same grains at rest added on top of the bed (a number, or a profile in x,
+    /// and y on a raster domain).
+    pub erodible_bed: Profile,
     /// Water free-surface elevation η(x) of the submarine model (no water if absent);
     /// its `initial.h` is then the grains' vertical thickness H₂cos²θ.
     pub eta: Option<Profile>,
     /// Solid volume fraction φ(x) of the dilatant model (Bouchut et al. 2021), in (0, 1).
     pub phi: Option<Profile>,
+}
+
+impl Initial {
+    /// Whether an erodible bed is given (anything but the number 0).
+    pub fn has_erodible_bed(&self) -> bool {
+        self.erodible_bed.as_constant() != Some(0.0)
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -196,6 +206,8 @@ pub struct Sampled {
     pub b: Vec<f64>,
     /// `initial.h` (without `initial.erodible_bed`).
     pub h: Vec<f64>,
+    /// `initial.erodible_bed` (0 on the wall cells of a raster domain).
+    pub h_bed: Vec<f64>,
     /// `initial.u`.
     pub u: Vec<f64>,
     /// `initial.v` (raster domains; empty on a line).
@@ -242,6 +254,7 @@ impl Sampled {
         };
         Sampled {
             h: at(&initial.h),
+            h_bed: at(&initial.erodible_bed),
             u: at(&initial.u),
             w: at(&initial.w),
             eta: initial.eta.as_ref().map(&at),
@@ -283,6 +296,7 @@ impl Sampled {
         };
         Sampled {
             h: at(&initial.h),
+            h_bed: at(&initial.erodible_bed),
             u: at(&initial.u),
             v: at(&initial.v),
             w: Vec::new(),
@@ -347,7 +361,12 @@ pub struct Scenario {
     /// Bed elevation b(x) over the reference plane.
     pub bed: Profile,
     pub material: Material,
+    /// The friction law; where a coefficient is a field (`friction_zones`), its
+    /// smallest value over the domain's cells.
     pub friction: FrictionLaw,
+    /// The per-cell friction coefficients of a raster domain whose `rheology.mu`
+    /// (`mu_deg`) or `rheology.xi` is a field; `None` where every coefficient is a number.
+    pub friction_zones: Option<FrictionZones>,
     pub model: ModelSpec,
     /// Layer fractions and viscous options of the multilayer model.
     pub multilayer: MultilayerSpec,

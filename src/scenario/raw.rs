@@ -91,8 +91,9 @@ pub(crate) struct RawMaterial {
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawRheology {
     pub law: Option<String>,
-    pub mu: Option<f64>,
-    pub mu_deg: Option<f64>,
+    /// A number, or on a raster domain a field (expression in x, y or raster file).
+    pub mu: Option<RawProfile>,
+    pub mu_deg: Option<RawProfile>,
     pub mu_s: Option<f64>,
     pub mu_s_deg: Option<f64>,
     pub mu_2: Option<f64>,
@@ -105,7 +106,7 @@ pub(crate) struct RawRheology {
     pub mu_w: Option<f64>,
     pub mu_w_deg: Option<f64>,
     pub channel_width: Option<f64>,
-    pub xi: Option<f64>,
+    pub xi: Option<RawProfile>,
     pub sidewall: Option<String>,
     pub c_msm: Option<bool>,
     pub viscosity: Option<String>,
@@ -130,7 +131,7 @@ pub(crate) struct RawInitial {
     pub v: Option<RawProfile>,
     pub w: Option<RawProfile>,
     pub phi: Option<RawProfile>,
-    pub erodible_bed: Option<f64>,
+    pub erodible_bed: Option<RawProfile>,
     pub eta: Option<RawProfile>,
 }
 

@@ -1,6 +1,6 @@
 //! From a validated [`Scenario`] to a ready granular [`Simulation`]: samples the
 //! profiles on the mesh, adds the erodible bed (Fernández-Nieto et al. 2016, §4.2, Escalante et al. 2023, eq. 34: the
-//! column sits on a uniform layer h_i of the same material, so h = initial.h + h_i),
+//! column sits on a layer h_i of the same material, so h = initial.h + h_i),
 //! and builds the pipeline of the chosen model (every layer starts with the velocity
 //! `initial.u`; a non-hydrostatic run also with the normal velocity `initial.w`).
 //! Everything that can be wrong with the scenario was refused by its validation.
@@ -15,8 +15,14 @@ use crate::state::layered::LayeredState;
 
 pub fn build(scn: &Scenario) -> Simulation<Granular> {
     let mesh = scenario_line(scn);
-    let h_i = scn.initial.erodible_bed;
-    let h: Vec<f64> = scn.sampled.h.iter().map(|&h| h + h_i).collect();
+    let h_bed = &scn.sampled.h_bed;
+    let h: Vec<f64> = scn
+        .sampled
+        .h
+        .iter()
+        .zip(h_bed)
+        .map(|(&h, &h_i)| h + h_i)
+        .collect();
     let u = &scn.sampled.u;
     let mut state = LayeredState::from_profiles(&mesh, &scn.multilayer.layer_fractions, &h, u);
     if scn.model.pressure == Pressure::NonHydrostatic {
@@ -33,7 +39,7 @@ pub fn build(scn: &Scenario) -> Simulation<Granular> {
     );
     let layers = scn.model.layers;
     let model = Granular {
-        h_bed: vec![h_i; mesh.nx],
+        h_bed: h_bed.clone(),
         front_threshold: scn.output.front_threshold,
         static_threshold: scn.multilayer.static_threshold,
         rest_speed: if layers > 1 {

@@ -7,7 +7,7 @@
 
 use crate::grid::raster::{Raster2d, RasterSpec, Sides};
 use crate::grid::{Coordinates, Grid};
-use crate::model::granular_2d::{pipeline, Granular2d};
+use crate::model::granular_2d::{pipeline, pipeline_with_zones, Granular2d};
 use crate::model::raster_maps::RasterMaps;
 use crate::output::{RasterInfo, ReleaseVolumes};
 use crate::scenario::Scenario;
@@ -43,11 +43,27 @@ pub fn scenario_raster(scn: &Scenario) -> Raster2d {
 pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let grid = scenario_raster(scn);
     let plane = scn.domain.plane.as_ref().expect("a raster domain");
-    let state = State2d::from_velocities(scn.sampled.h.clone(), &scn.sampled.u, &scn.sampled.v);
+    let s = &scn.sampled;
+    // The erodible bed is grains at rest added under the flow (h = initial.h + h_i).
+    let h: Vec<f64> = if scn.initial.has_erodible_bed() {
+        s.h.iter().zip(&s.h_bed).map(|(&h, &h_i)| h + h_i).collect()
+    } else {
+        s.h.clone()
+    };
+    let state = State2d::from_velocities(h, &s.u, &s.v);
     let model = Granular2d::new(&grid, scn.output.front_threshold);
+    let (model, erodible) = if scn.initial.has_erodible_bed() {
+        (model.with_erodible_bed(s.h_bed.clone()), s.h_bed.clone())
+    } else {
+        (model, Vec::new())
+    };
     // A pool that cannot be started falls back to one thread: the same bits, slower.
-    let stages = pipeline(&scn.friction, &scn.material, &grid, threads)
-        .or_else(|_| pipeline(&scn.friction, &scn.material, &grid, 1))
+    let build = |threads| match &scn.friction_zones {
+        None => pipeline(&scn.friction, &scn.material, &grid, threads),
+        Some(zones) => pipeline_with_zones(&scn.friction, &grid, threads, zones),
+    };
+    let stages = build(threads)
+        .or_else(|_| build(1))
         .expect("a serial pipeline starts no thread");
     let mut info = run_info(scn, "hydrostatic", 1);
     info.raster = Some(RasterInfo {
@@ -72,10 +88,8 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let cells = grid.nx() * grid.ny();
     let mut sim = Simulation::new(grid, model, state, stages, rules, config, info);
     let density = scn.material.phi * scn.material.rho_s;
-    sim.set_tracker(Box::new(RasterMaps::new(
-        cells,
-        scn.output.front_threshold,
-        density,
-    )));
+    sim.set_tracker(Box::new(
+        RasterMaps::new(cells, scn.output.front_threshold, density).with_erodible_bed(erodible),
+    ));
     sim
 }

@@ -130,7 +130,7 @@ pub fn stop_options(scn: &Scenario, z: impl Iterator<Item = f64>) -> crate::stop
         at_rest: time.stop_at_rest,
         settled_fraction: time.stop_when_settled.then_some(time.settle_fraction),
         speed_bound: speed_bound(scn, z),
-        mass_conserved: scn.initial.erodible_bed == 0.0,
+        mass_conserved: !scn.initial.has_erodible_bed(),
     }
 }
 
@@ -144,7 +144,7 @@ pub fn speed_bound(scn: &Scenario, z: impl Iterator<Item = f64>) -> f64 {
     });
     let s = &scn.sampled;
     let largest = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let mut h0 = largest(&s.h) + scn.initial.erodible_bed;
+    let mut h0 = largest(&s.h) + largest(&s.h_bed);
     if let Some(eta) = &s.eta {
         let depth = eta.iter().zip(&s.b).fold(0.0f64, |m, (e, b)| m.max(e - b));
         h0 = h0.max(depth);

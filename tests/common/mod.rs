@@ -73,6 +73,7 @@ impl Case {
             bed: Profile::function(move |x, _| b(x)),
             material: Self::beads_material(),
             friction: self.law,
+            friction_zones: None,
             model: ModelSpec {
                 kind: ModelKind::Granular,
                 pressure: Pressure::Hydrostatic,
@@ -94,7 +95,7 @@ impl Case {
                 u: Profile::function(move |x, _| u(x)),
                 v: Profile::constant(0.0),
                 w: Profile::constant(0.0),
-                erodible_bed: 0.0,
+                erodible_bed: Profile::constant(0.0),
                 eta: None,
                 phi: None,
             },

@@ -65,7 +65,7 @@ pub(super) fn dilatancy(
     if initial.phi.is_none() {
         return err("initial.phi", "required by model.kind = \"dilatant\"");
     }
-    if initial.erodible_bed > 0.0 {
+    if initial.has_erodible_bed() {
         return err(
             "initial.erodible_bed",
             "not available in the dilatant model",

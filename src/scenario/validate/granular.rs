@@ -10,6 +10,7 @@ use super::super::{
     Regularization, Sidewall, SidewallForm, ViscosityTime,
 };
 use super::check::*;
+use super::zones::number;
 use super::MAX_LAYERS;
 
 /// A friction coefficient given either plainly (`mu`) or as an angle (`mu_deg`).
@@ -121,12 +122,13 @@ pub(super) fn rheology(
     }
     match law {
         Law::Coulomb => {
-            let (mu, _) = coefficient("mu", r.mu, r.mu_deg)?.ok_or_else(|| {
-                ScenarioError::at(
-                    "rheology.mu",
-                    "missing required key (law = \"coulomb\" needs mu or mu_deg)",
-                )
-            })?;
+            let (mu, _) =
+                coefficient("mu", number(&r.mu), number(&r.mu_deg))?.ok_or_else(|| {
+                    ScenarioError::at(
+                        "rheology.mu",
+                        "missing required key (law = \"coulomb\" needs mu or mu_deg)",
+                    )
+                })?;
             Ok(FrictionLaw::Coulomb { mu })
         }
         Law::MuI => {
@@ -163,13 +165,14 @@ pub(super) fn rheology(
             })
         }
         Law::Voellmy => {
-            let (mu, _) = coefficient("mu", r.mu, r.mu_deg)?.ok_or_else(|| {
-                ScenarioError::at(
-                    "rheology.mu",
-                    "missing required key (law = \"voellmy\" needs mu or mu_deg)",
-                )
-            })?;
-            let xi = positive("rheology.xi", required("rheology.xi", r.xi)?)?;
+            let (mu, _) =
+                coefficient("mu", number(&r.mu), number(&r.mu_deg))?.ok_or_else(|| {
+                    ScenarioError::at(
+                        "rheology.mu",
+                        "missing required key (law = \"voellmy\" needs mu or mu_deg)",
+                    )
+                })?;
+            let xi = positive("rheology.xi", required("rheology.xi", number(&r.xi))?)?;
             Ok(FrictionLaw::Voellmy { mu, xi })
         }
     }

@@ -15,6 +15,7 @@ mod plane;
 mod release;
 mod resample;
 mod submarine;
+mod zones;
 
 use crate::output::budget::{size, OUTPUT_LIMIT};
 
@@ -233,8 +234,10 @@ fn validate(
         (domain, read_bed(&raw_bed)?)
     };
     let material = material(raw.material.unwrap_or_default())?;
-    let raw_rheology = section("rheology", raw.rheology)?;
-    let friction = rheology(&raw_rheology, law_overridden, &mut notes)?;
+    let mut raw_rheology = section("rheology", raw.rheology)?;
+    let fields = zones::take(&mut raw_rheology, base_dir)?;
+    let mut friction = rheology(&raw_rheology, law_overridden, &mut notes)?;
+    let mut fields = zones::used(fields, &friction, &domain)?;
     let raw_model = raw.model.unwrap_or_default();
     let model = model(&raw_model)?;
     if domain.cells.saturating_mul(model.layers) > MAX_CELLS as usize {
@@ -270,13 +273,18 @@ fn validate(
         r.profile("initial.h", &mut initial.h, original)?;
         r.profile("initial.u", &mut initial.u, original)?;
         r.profile("initial.v", &mut initial.v, original)?;
+        r.profile("initial.erodible_bed", &mut initial.erodible_bed, original)?;
+        for (name, p) in &mut fields {
+            r.profile(&format!("rheology.{name}"), p, original)?;
+        }
     }
-    plane::profiles_fit(&mut domain, &bed, &initial, from_bed)?;
+    plane::profiles_fit(&mut domain, &bed, &initial, &fields, from_bed)?;
     // Sampled once here; the checks below look at these values and setup uses them.
     let mut sampled = Sampled::of(&domain, &bed, &initial);
     if domain.plane.is_some() {
         plane::some_cell_has_bed(&domain, &sampled, &bed)?;
     }
+    let friction_zones = zones::sample(&fields, &mut friction, &domain, &sampled)?;
     let release = match release_keys {
         Some(keys) => Some(release::rasterise(
             keys,
@@ -300,6 +308,7 @@ fn validate(
     let time = time(section("time", raw.time)?)?;
     let raw_output = raw.output.unwrap_or_default();
     let output = output(&raw_output, &time, &domain, default_output)?;
+    plane::gauges_off_walls(&output, &domain, &sampled)?;
     let dilatancy = dilatancy(
         raw.dilatancy.as_ref(),
         &raw_rheology,
@@ -338,6 +347,7 @@ fn validate(
         bed,
         material,
         friction,
+        friction_zones,
         model,
         multilayer,
         dilatancy,
@@ -495,14 +505,20 @@ fn initial(i: RawInitial, base_dir: &Path) -> Res<Initial> {
         Some(v) => Profile::from_toml("initial.w", &v, base_dir, true)?,
         None => Profile::constant(0.0),
     };
-    let erodible_bed = non_negative("initial.erodible_bed", i.erodible_bed.unwrap_or(0.0))?;
-    magnitude_at_most(
-        "initial.erodible_bed",
-        erodible_bed,
-        MAX_THICKNESS,
-        "m",
-        THICKNESS_WHY,
-    )?;
+    let erodible_bed = match i.erodible_bed {
+        Some(v) => Profile::from_toml("initial.erodible_bed", &v, base_dir, true)?,
+        None => Profile::constant(0.0),
+    };
+    if let Some(h_i) = erodible_bed.as_constant() {
+        non_negative("initial.erodible_bed", h_i)?;
+        magnitude_at_most(
+            "initial.erodible_bed",
+            h_i,
+            MAX_THICKNESS,
+            "m",
+            THICKNESS_WHY,
+        )?;
+    }
     let eta = match i.eta {
         Some(v) => Some(Profile::from_toml("initial.eta", &v, base_dir, true)?),
         None => None,
@@ -673,6 +689,21 @@ fn check_profiles(
             _ => Err(not_finite("initial.h", &initial.h, x, b)),
         };
     }
+    if let Some(i) = first_bad(&sampled.h_bed, &|h| !(h.is_finite() && h >= 0.0)) {
+        let (x, b) = (centre(i), b[i]);
+        return match initial.erodible_bed.try_eval(x, b) {
+            Ok(h) if h.is_finite() => err(
+                "initial.erodible_bed",
+                format!("negative thickness {h} at x = {x}"),
+            ),
+            _ => Err(not_finite(
+                "initial.erodible_bed",
+                &initial.erodible_bed,
+                x,
+                b,
+            )),
+        };
+    }
     if let Some(i) = first_bad(&sampled.u, &|u| !u.is_finite()) {
         return Err(not_finite("initial.u", &initial.u, centre(i), b[i]));
     }
@@ -692,6 +723,13 @@ fn check_profiles(
     };
     beyond("bed.b", b, MAX_ELEVATION, "m", ELEVATION_WHY)?;
     beyond("initial.h", &sampled.h, MAX_THICKNESS, "m", THICKNESS_WHY)?;
+    beyond(
+        "initial.erodible_bed",
+        &sampled.h_bed,
+        MAX_THICKNESS,
+        "m",
+        THICKNESS_WHY,
+    )?;
     beyond("initial.u", &sampled.u, MAX_SPEED, "m/s", SPEED_WHY)?;
     beyond("initial.w", &sampled.w, MAX_SPEED, "m/s", SPEED_WHY)?;
     if let Some(eta) = &sampled.eta {
@@ -812,7 +850,7 @@ t_end = 2.0
         );
         assert_eq!(s.initial.h.as_constant(), Some(0.1));
         assert_eq!(s.initial.u.as_constant(), Some(0.0));
-        assert_eq!(s.initial.erodible_bed, 0.0);
+        assert_eq!(s.initial.erodible_bed.as_constant(), Some(0.0));
         assert_eq!(
             s.boundary,
             Boundaries {
@@ -909,7 +947,7 @@ front_threshold = 2e-3
         assert_eq!(s.initial.h.eval(-0.5, 0.0), 0.14);
         assert_eq!(s.initial.h.eval(0.5, 0.0), 0.0);
         assert_eq!(s.initial.u.as_constant(), Some(-0.5));
-        assert_eq!(s.initial.erodible_bed, 0.01);
+        assert_eq!(s.initial.erodible_bed.as_constant(), Some(0.01));
         assert_eq!(s.boundary.right, BoundaryKind::Outflow);
         assert!(s.time.stop_at_rest);
         assert_eq!(s.time.settle_fraction, 1e-4);
@@ -1284,7 +1322,7 @@ front_threshold = 2e-3
         );
         assert!(s.source_toml.starts_with("[domain]\nx_min = 0.0\n"));
         let s = load_set(MINIMAL, &["initial.erodible_bed=0.02", "time.t_end=4"]).unwrap();
-        assert_eq!(s.initial.erodible_bed, 0.02);
+        assert_eq!(s.initial.erodible_bed.as_constant(), Some(0.02));
         assert_eq!(s.time.t_end, 4.0);
         assert_eq!(s.output.every, 0.2);
         let s = load_set(MINIMAL, &["initial.h=\"max(0, 0.14 - x)\""]).unwrap();

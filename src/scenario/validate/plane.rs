@@ -8,10 +8,11 @@
 use super::super::error::ScenarioError;
 use super::super::raw::{RawBoundary, RawDomain, RawInitial};
 use super::super::{
-    raster_centres, Boundaries, BoundaryKind, Domain, Initial, ModelKind, ModelSpec, Plane,
-    Pressure, Profile, Sampled,
+    raster_centres, Boundaries, BoundaryKind, Domain, Initial, ModelKind, ModelSpec, OutputSpec,
+    Plane, Pressure, Profile, Sampled,
 };
 use super::check::*;
+use super::zones::Field;
 use super::{frame, line_boundary, line_gauges, MAX_CELLS, MIN_RELATIVE_DX};
 use crate::gis::Crs;
 
@@ -226,7 +227,6 @@ pub(super) fn raster_keys(
         ("initial.w", initial.w.is_some()),
         ("initial.eta", initial.eta.is_some()),
         ("initial.phi", initial.phi.is_some()),
-        ("initial.erodible_bed", initial.erodible_bed.is_some()),
     ] {
         if given {
             return err(key, why);
@@ -242,21 +242,29 @@ pub(super) fn profiles_fit(
     domain: &mut Domain,
     bed: &Profile,
     initial: &Initial,
+    fields: &[Field],
     grid_from_bed: bool,
 ) -> Res<()> {
-    let profiles = [
+    let mut profiles: Vec<(String, Option<&Profile>)> = [
         ("bed.b", Some(bed)),
         ("initial.h", Some(&initial.h)),
         ("initial.u", Some(&initial.u)),
         ("initial.v", Some(&initial.v)),
         ("initial.w", Some(&initial.w)),
+        ("initial.erodible_bed", Some(&initial.erodible_bed)),
         ("initial.eta", initial.eta.as_ref()),
         ("initial.phi", initial.phi.as_ref()),
-    ];
+    ]
+    .into_iter()
+    .map(|(key, p)| (key.to_string(), p))
+    .collect();
+    for (name, p) in fields {
+        profiles.push((format!("rheology.{name}"), Some(p)));
+    }
     let x_span = (domain.x_min, domain.x_max);
     let nx = domain.cells;
     let Some(plane) = domain.plane.as_mut() else {
-        for (key, p) in profiles {
+        for (key, p) in &profiles {
             if p.is_some_and(Profile::uses_y) {
                 return err(
                     key,
@@ -267,16 +275,20 @@ pub(super) fn profiles_fit(
         return Ok(());
     };
     let mut crs: Option<(&str, Crs)> = None;
-    for (key, p) in profiles {
+    for (key, p) in &profiles {
+        let key = key.as_str();
         let Some(r) = p.and_then(Profile::raster) else {
             continue;
         };
+        let file = p
+            .and_then(Profile::raster_path)
+            .map_or_else(String::new, |f| format!(" '{}'", f.display()));
         let b = r.bbox();
         if grid_from_bed && (r.nx, r.ny) != (nx, plane.ny) {
             return err(
                 key,
                 format!(
-                    "the raster has {} × {} cells (ncols × nrows) but the domain, the grid of bed.b, has {} × {}",
+                    "the raster{file} has {} × {} cells (ncols × nrows) but the domain, the grid of bed.b, has {} × {}",
                     r.nx, r.ny, nx, plane.ny
                 ),
             );
@@ -290,7 +302,7 @@ pub(super) fn profiles_fit(
             return err(
                 key,
                 format!(
-                    "the raster covers x in [{}, {}], y in [{}, {}] but the domain is x in [{}, {}], y in [{}, {}]",
+                    "the raster{file} covers x in [{}, {}], y in [{}, {}] but the domain is x in [{}, {}], y in [{}, {}]",
                     b.x_min, b.x_max, b.y_min, b.y_max, x_span.0, x_span.1, plane.y_min, plane.y_max
                 ),
             );
@@ -428,6 +440,45 @@ pub(super) fn gauges(v: Option<&toml::Value>, domain: &Domain) -> Res<(Vec<f64>,
     Ok((xs, ys))
 }
 
+/// Refuses a gauge of a raster domain that reads a wall cell (nodata of the bed): its
+/// value is interpolated bilinearly between the four centres around it
+/// (`Raster2d::locate`), and a wall cell has no surface to record.
+pub(super) fn gauges_off_walls(output: &OutputSpec, domain: &Domain, sampled: &Sampled) -> Res<()> {
+    let Some(plane) = &domain.plane else {
+        return Ok(());
+    };
+    if sampled.wall.is_empty() {
+        return Ok(());
+    }
+    let (nx, ny) = (domain.cells, plane.ny);
+    let dx = (domain.x_max - domain.x_min) / nx as f64;
+    let dy = (plane.y_max - plane.y_min) / ny as f64;
+    let centre = crate::grid::line::cell_centre;
+    let xs: Vec<f64> = (0..nx).map(|i| centre(domain.x_min, dx, i)).collect();
+    let ys: Vec<f64> = (0..ny).map(|j| centre(plane.y_min, dy, j)).collect();
+    for (k, (&x, &y)) in output.gauges.iter().zip(&output.gauges_y).enumerate() {
+        let (i, wx) = crate::grid::line::interpolate(&xs, dx, x);
+        let (j, wy) = crate::grid::line::interpolate(&ys, dy, y);
+        for (dj, fy) in [(0, 1.0 - wy), (1, wy)] {
+            for (di, fx) in [(0, 1.0 - wx), (1, wx)] {
+                let cell = (j + dj) * nx + i + di;
+                if fx * fy != 0.0 && sampled.wall[cell] {
+                    return err(
+                        "output.gauges",
+                        format!(
+                            "gauge {} at [{x}, {y}] reads the wall (nodata) cell centred at ({}, {}) of bed.b; move it onto cells with data",
+                            k + 1,
+                            xs[i + di],
+                            ys[j + dj]
+                        ),
+                    );
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Refuses a raster domain on which every cell is a wall (the raster bed has no data
 /// under the domain).
 pub(super) fn some_cell_has_bed(domain: &Domain, sampled: &Sampled, bed: &Profile) -> Res<()> {
@@ -480,6 +531,28 @@ pub(super) fn check_profiles(
             _ => Err(not_finite("initial.h", &initial.h, i, b[i])),
         };
     }
+    if let Some(i) = sampled
+        .h_bed
+        .iter()
+        .position(|h| !(h.is_finite() && *h >= 0.0))
+    {
+        let (x, y) = centres[i];
+        return match initial.erodible_bed.try_eval_xy(x, y, b[i]) {
+            Ok(h) if h.is_finite() => err(
+                "initial.erodible_bed",
+                format!(
+                    "{} gives a negative thickness {h} at (x, y) = ({x}, {y})",
+                    initial.erodible_bed.describe()
+                ),
+            ),
+            _ => Err(not_finite(
+                "initial.erodible_bed",
+                &initial.erodible_bed,
+                i,
+                b[i],
+            )),
+        };
+    }
     for (key, p, values) in [
         ("initial.u", &initial.u, &sampled.u),
         ("initial.v", &initial.v, &sampled.v),
@@ -492,6 +565,13 @@ pub(super) fn check_profiles(
     for (key, values, max, unit, why) in [
         ("bed.b", b, MAX_ELEVATION, "m", ELEVATION_WHY),
         ("initial.h", &sampled.h, MAX_THICKNESS, "m", THICKNESS_WHY),
+        (
+            "initial.erodible_bed",
+            &sampled.h_bed,
+            MAX_THICKNESS,
+            "m",
+            THICKNESS_WHY,
+        ),
         ("initial.u", &sampled.u, MAX_SPEED, "m/s", SPEED_WHY),
         ("initial.v", &sampled.v, MAX_SPEED, "m/s", SPEED_WHY),
     ] {

@@ -73,7 +73,7 @@ pub(super) fn submarine(
             "the submarine model is hydrostatic: no normal velocity",
         );
     }
-    if initial.erodible_bed != 0.0 {
+    if initial.has_erodible_bed() {
         return err(
             "initial.erodible_bed",
             "the submarine model has no erodible bed",
