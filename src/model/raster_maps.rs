@@ -187,7 +187,10 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
                 self.h_max[k] = above;
             }
             if above > thr {
-                let speed = state.hu[k].hypot(state.hv[k]) / h;
+                // √(hu² + hv²) rather than `hypot`: a libm call per wet cell was most of
+                // the tracker's cost; the momenta of a flow are far from overflow.
+                let (hu, hv) = (state.hu[k], state.hv[k]);
+                let speed = (hu * hu + hv * hv).sqrt() / h;
                 if speed > self.speed_max[k] {
                     self.speed_max[k] = speed;
                 }
