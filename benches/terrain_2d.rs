@@ -10,8 +10,9 @@
 //! 3. Memory per cell: the state and the run loop's backup, the raster, the step's
 //!    scratch.
 //! 4. The maps tracker (largest thickness and speed, arrival time, area reached; the
-//!    peak pressure is formed only when the maps are written), one thread: its cost per
-//!    step against the whole step's, and the cost of forming the maps for a snapshot.
+//!    peak pressure is formed only when the maps are written) on the step's pool, 1 and
+//!    2 threads: its cost per step against the whole step's, and the cost of forming
+//!    the maps for a snapshot.
 
 use std::time::Instant;
 
@@ -140,15 +141,16 @@ fn main() {
             base / best
         );
     }
-    println!("4. The maps tracker, one thread");
-    for n in [256, 1024] {
+    println!("4. The maps tracker on the step's pool, 1 and 2 threads");
+    for (n, threads) in [(256, 1), (1024, 1), (256, 2), (1024, 2)] {
         let (r, s0) = setup(n);
-        let mut pipe = granular_2d::pipeline(&friction, &material, &r, 1).unwrap();
+        let workers = Workers::new(threads).unwrap();
+        let mut pipe = granular_2d::pipeline_on(&friction, &material, &r, workers.clone());
         let steps = if n > 512 { 5 } else { 50 };
         let (mut t_step, mut t_maps, mut t_write) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
         for _ in 0..3 {
             let mut s = s0.clone();
-            let mut maps = RasterMaps::new(n * n, 1e-3, 1550.0);
+            let mut maps = RasterMaps::new(n * n, 1e-3, 1550.0).with_workers(workers.clone());
             maps.observe(&r, &s, 0.0);
             let (mut step, mut observe) = (0.0, 0.0);
             for k in 0..steps {
@@ -167,7 +169,7 @@ fn main() {
             t_write = t_write.min(start.elapsed().as_secs_f64());
         }
         println!(
-            "  {n}²: step {:.2} ms, tracker {:.3} ms per step ({:.2} % of the step), maps formed for a snapshot in {:.2} ms",
+            "  {n}², {threads} thread(s): step {:.2} ms, tracker {:.3} ms per step ({:.2} % of the step), maps formed for a snapshot in {:.2} ms",
             1e3 * t_step,
             1e3 * t_maps,
             100.0 * t_maps / t_step,

@@ -112,12 +112,17 @@ pub fn pipeline(
     raster: &Raster2d,
     threads: usize,
 ) -> Result<Pipeline<Raster2d, State2d>, String> {
-    let workers = Workers::new(threads)?;
-    Ok(Pipeline::new(with_law(
-        law,
-        material,
-        Stages2d { raster, workers },
-    )))
+    Ok(pipeline_on(law, material, raster, Workers::new(threads)?))
+}
+
+/// [`pipeline`] on a given pool (shared with the run's maps tracker).
+pub fn pipeline_on(
+    law: &FrictionLaw,
+    material: &Material,
+    raster: &Raster2d,
+    workers: Workers,
+) -> Pipeline<Raster2d, State2d> {
+    Pipeline::new(with_law(law, material, Stages2d { raster, workers }))
 }
 
 /// [`pipeline`] with friction zones: the Coulomb or Voellmy law of every cell takes
@@ -129,7 +134,16 @@ pub fn pipeline_with_zones(
     threads: usize,
     zones: &FrictionZones,
 ) -> Result<Pipeline<Raster2d, State2d>, String> {
-    let workers = Workers::new(threads)?;
+    pipeline_with_zones_on(law, raster, Workers::new(threads)?, zones)
+}
+
+/// [`pipeline_with_zones`] on a given pool (shared with the run's maps tracker).
+pub fn pipeline_with_zones_on(
+    law: &FrictionLaw,
+    raster: &Raster2d,
+    workers: Workers,
+    zones: &FrictionZones,
+) -> Result<Pipeline<Raster2d, State2d>, String> {
     let cells = raster.nx() * raster.ny();
     let field = |f: &Option<Vec<f64>>, uniform: f64, k: usize| f.as_ref().map_or(uniform, |v| v[k]);
     let stages = match *law {

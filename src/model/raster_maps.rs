@@ -39,6 +39,7 @@ use std::borrow::Cow;
 use crate::grid::raster::Raster2d;
 use crate::grid::{Coordinates, Grid};
 use crate::model::tracker::Tracker;
+use crate::numerics::workers::Workers;
 use crate::output::{CellField, OutputError, OutputSink, RunMaps};
 use crate::state::layered_2d::State2d;
 
@@ -57,6 +58,10 @@ pub struct RasterMaps {
     h_bed: Vec<f64>,
     reached: usize,
     area: Vec<f64>,
+    /// The run's pool: the maps are updated band by band on its threads.
+    workers: Workers,
+    /// Cells first reached in each band during one update (summed in band order).
+    band_reached: Vec<usize>,
 }
 
 impl RasterMaps {
@@ -73,7 +78,17 @@ impl RasterMaps {
             h_bed: Vec::new(),
             reached: 0,
             area: Vec::new(),
+            workers: Workers::serial(),
+            band_reached: Vec::new(),
         }
+    }
+
+    /// The maps updated on the threads of `workers` (the step's pool): each cell's maps
+    /// depend on that cell alone and the count of cells reached is an integer sum, so
+    /// the maps are the same bits for any thread count.
+    pub fn with_workers(mut self, workers: Workers) -> RasterMaps {
+        self.workers = workers;
+        self
     }
 
     /// The maps over the erodible bed `h_bed` (one per cell): they count the thickness
@@ -176,30 +191,52 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
             self.h0 = self.above(&state.h).into_owned();
         }
         let thr = self.threshold;
-        for k in 0..state.h.len() {
-            let h = state.h[k];
-            let above = if self.h_bed.is_empty() {
-                h
-            } else {
-                h - self.h_bed[k]
-            };
-            if above > self.h_max[k] {
-                self.h_max[k] = above;
-            }
-            if above > thr {
-                // √(hu² + hv²) rather than `hypot`: a libm call per wet cell was most of
-                // the tracker's cost; the momenta of a flow are far from overflow.
-                let (hu, hv) = (state.hu[k], state.hv[k]);
-                let speed = (hu * hu + hv * hv).sqrt() / h;
-                if speed > self.speed_max[k] {
-                    self.speed_max[k] = speed;
+        let cells = state.h.len();
+        let chunk = cells.div_ceil(8 * self.workers.threads()).max(1);
+        let RasterMaps {
+            h_max,
+            speed_max,
+            arrival,
+            h_bed,
+            workers,
+            band_reached,
+            ..
+        } = self;
+        band_reached.clear();
+        band_reached.resize(cells.div_ceil(chunk), 0);
+        let (h, hu, hv, h_bed) = (&state.h, &state.hu, &state.hv, &h_bed[..]);
+        workers.bands3(
+            chunk,
+            (&mut h_max[..], &mut speed_max[..], &mut arrival[..]),
+            &mut band_reached[..],
+            |band, (h_max, speed_max, arrival), reached| {
+                let base = band * chunk;
+                for i in 0..h_max.len() {
+                    let k = base + i;
+                    let above = if h_bed.is_empty() {
+                        h[k]
+                    } else {
+                        h[k] - h_bed[k]
+                    };
+                    if above > h_max[i] {
+                        h_max[i] = above;
+                    }
+                    if above > thr {
+                        // √(hu² + hv²) rather than `hypot`: a libm call per wet cell
+                        // was most of the tracker's cost; momenta are far from overflow.
+                        let speed = (hu[k] * hu[k] + hv[k] * hv[k]).sqrt() / h[k];
+                        if speed > speed_max[i] {
+                            speed_max[i] = speed;
+                        }
+                        if arrival[i].is_nan() {
+                            arrival[i] = t;
+                            *reached += 1;
+                        }
+                    }
                 }
-                if self.arrival[k].is_nan() {
-                    self.arrival[k] = t;
-                    self.reached += 1;
-                }
-            }
-        }
+            },
+        );
+        self.reached += self.band_reached.iter().sum::<usize>();
         self.area.push(self.reached as f64 * grid.cell_area());
     }
 

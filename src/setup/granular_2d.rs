@@ -7,8 +7,9 @@
 
 use crate::grid::raster::{Raster2d, RasterSpec, Sides};
 use crate::grid::{Coordinates, Grid};
-use crate::model::granular_2d::{pipeline, pipeline_with_zones, Granular2d};
+use crate::model::granular_2d::{pipeline_on, pipeline_with_zones_on, Granular2d};
 use crate::model::raster_maps::RasterMaps;
+use crate::numerics::workers::Workers;
 use crate::output::{RasterInfo, ReleaseVolumes};
 use crate::scenario::Scenario;
 use crate::setup::{run_config, run_info};
@@ -58,13 +59,12 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
         (model, Vec::new())
     };
     // A pool that cannot be started falls back to one thread: the same bits, slower.
-    let build = |threads| match &scn.friction_zones {
-        None => pipeline(&scn.friction, &scn.material, &grid, threads),
-        Some(zones) => pipeline_with_zones(&scn.friction, &grid, threads, zones),
+    let workers = Workers::new(threads).unwrap_or_else(|_| Workers::serial());
+    let stages = match &scn.friction_zones {
+        None => pipeline_on(&scn.friction, &scn.material, &grid, workers.clone()),
+        Some(zones) => pipeline_with_zones_on(&scn.friction, &grid, workers.clone(), zones)
+            .expect("validation refuses friction zones for the μ(I) law"),
     };
-    let stages = build(threads)
-        .or_else(|_| build(1))
-        .expect("a serial pipeline starts no thread");
     let mut info = run_info(scn, "hydrostatic", 1);
     info.raster = Some(RasterInfo {
         nx: grid.nx(),
@@ -89,7 +89,9 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let mut sim = Simulation::new(grid, model, state, stages, rules, config, info);
     let density = scn.material.phi * scn.material.rho_s;
     sim.set_tracker(Box::new(
-        RasterMaps::new(cells, scn.output.front_threshold, density).with_erodible_bed(erodible),
+        RasterMaps::new(cells, scn.output.front_threshold, density)
+            .with_erodible_bed(erodible)
+            .with_workers(workers),
     ));
     sim
 }
