@@ -125,20 +125,10 @@ pub fn pipeline_on(
     Pipeline::new(with_law(law, material, Stages2d { raster, workers }))
 }
 
-/// [`pipeline`] with friction zones: the Coulomb or Voellmy law of every cell takes
+/// [`pipeline_on`] with friction zones: the Coulomb or Voellmy law of every cell takes
 /// the cell's μ and ξ where `zones` gives them (the law's own number elsewhere); μ(I)
 /// has no zones (refused by validation).
 pub fn pipeline_with_zones(
-    law: &FrictionLaw,
-    raster: &Raster2d,
-    threads: usize,
-    zones: &FrictionZones,
-) -> Result<Pipeline<Raster2d, State2d>, String> {
-    pipeline_with_zones_on(law, raster, Workers::new(threads)?, zones)
-}
-
-/// [`pipeline_with_zones`] on a given pool (shared with the run's maps tracker).
-pub fn pipeline_with_zones_on(
     law: &FrictionLaw,
     raster: &Raster2d,
     workers: Workers,

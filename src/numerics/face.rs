@@ -96,26 +96,11 @@ pub fn interface<M: Fn(f64, f64) -> f64>(
 /// d_n alone at g_n μ (a square) would hold, face by face, a mass that the friction
 /// step sets moving along a diagonal slope. With d_t = 0 (a line, or a flow
 /// invariant along the face) it is the clamp of the line, to the bit.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-pub fn interface_with_transverse_drive<M: Fn(f64, f64) -> f64>(
-    mu_of: M,
-    l: Side,
-    r: Side,
-    extra: f64,
-    drive_t: (f64, f64),
-    g_n: f64,
-    dx: f64,
-    dt: f64,
-) -> Option<(Interface, Side, Side)> {
-    let mu_of = |speed: f64, h: f64, _drive: f64| mu_of(speed, h);
-    interface_with_zoned_transverse_drive(mu_of, l, r, extra, drive_t, g_n, dx, dt)
-}
-
-/// [`interface_with_transverse_drive`] with `mu_of(speed, h, d_n)`: the face's μ at
-/// the Roe speed and mean depth also sees the normal drive d_n, whose sign tells the
-/// cell the drive pushes mass out of (d_n > 0: the left one), the cell whose friction
-/// holds that mass where the two cells' μ differ (friction zones).
+///
+/// `mu_of(speed, h, d_n)` is the face's μ at the Roe speed and mean depth; it also
+/// sees the normal drive d_n, whose sign tells the cell the drive pushes mass out of
+/// (d_n > 0: the left one), the cell whose friction holds that mass where the two
+/// cells' μ differ (friction zones).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn interface_with_zoned_transverse_drive<M: Fn(f64, f64, f64) -> f64>(

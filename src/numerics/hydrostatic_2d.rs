@@ -103,7 +103,7 @@ impl FaceFlux {
 
 /// A cell as a face sees it: the side along the face's normal, the tangential
 /// velocity `t`, the tangential drive u_t/Δt − g_n ∂_t(h + z) of the cell (for the
-/// disk threshold of ΔC, [`super::face::interface_with_transverse_drive`]) and the
+/// disk threshold of ΔC, [`super::face::interface_with_zoned_transverse_drive`]) and the
 /// cell's speed |(u, v)| (for a friction law whose face threshold takes the cells'
 /// own speeds, [`BasalFriction::face_mu`]).
 #[derive(Debug, Clone, Copy)]

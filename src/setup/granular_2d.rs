@@ -7,7 +7,7 @@
 
 use crate::grid::raster::{Raster2d, RasterSpec, Sides};
 use crate::grid::{Coordinates, Grid};
-use crate::model::granular_2d::{pipeline_on, pipeline_with_zones_on, Granular2d};
+use crate::model::granular_2d::{pipeline_on, pipeline_with_zones, Granular2d};
 use crate::model::raster_maps::RasterMaps;
 use crate::numerics::workers::Workers;
 use crate::output::{RasterInfo, ReleaseVolumes};
@@ -62,7 +62,7 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let workers = Workers::new(threads).unwrap_or_else(|_| Workers::serial());
     let stages = match &scn.friction_zones {
         None => pipeline_on(&scn.friction, &scn.material, &grid, workers.clone()),
-        Some(zones) => pipeline_with_zones_on(&scn.friction, &grid, workers.clone(), zones)
+        Some(zones) => pipeline_with_zones(&scn.friction, &grid, workers.clone(), zones)
             .expect("validation refuses friction zones for the μ(I) law"),
     };
     let mut info = run_info(scn, "hydrostatic", 1);
