@@ -573,7 +573,7 @@ fn nh_cartesian_and_h_local_deposits_are_close_while_dynamics_differ() {
 /// Bounds as for the multilayer: twice the largest pressure, 2 % in L1.
 #[test]
 fn snapshot_times_do_not_change_the_complex_topography_run() {
-    use crate::common::{relative_l1, PressureWatch};
+    use crate::common::{assert_snapshot_times_agree, PressureWatch};
     let watch = |every: &str| {
         let every = format!("output.every={every}");
         let mut sim = build("nh_complex_topography.toml", &[every.as_str()]);
@@ -585,16 +585,5 @@ fn snapshot_times_do_not_change_the_complex_topography_run() {
         w
     };
     let (coarse, fine) = (watch("0.1"), watch("0.004"));
-    let d = relative_l1(&coarse.last_h, &fine.last_h);
-    println!(
-        "monolayer NH, snapshots every 0.1 / 0.004 s: largest |p_nh| {:.3e} / {:.3e}, h at t = 10 s {d:.2e} apart (relative L1)",
-        coarse.max_p, fine.max_p
-    );
-    assert!(
-        fine.max_p < 2.0 * coarse.max_p,
-        "{} vs {}",
-        fine.max_p,
-        coarse.max_p
-    );
-    assert!(d < 0.02, "{d}");
+    assert_snapshot_times_agree("monolayer NH", &coarse, &fine);
 }
