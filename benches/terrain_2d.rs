@@ -6,20 +6,23 @@
 //! 1. Cell updates per second of the 2-D hydrostatic step (step 1) and of the friction
 //!    step, one thread, at 256² and 1024² cells: a Coulomb cone (μ = tan 24°) on a
 //!    30° plane in local coordinates, half the raster wet, fixed Δt (CFL ≈ 0.4).
-//! 2. Thread speed-up of the whole step at 1024² cells, 1, 2 and 4 threads.
+//! 2. Thread speed-up at 1024² cells, 1, 2 and 4 threads: of the stages alone, and of
+//!    a run's step (the run loop's copy of the state of t^n, the stages, the
+//!    diagnostics and the maps tracker, each timed).
 //! 3. Memory per cell: the state and the run loop's backup, the raster, the step's
 //!    scratch.
 //! 4. The maps tracker (largest thickness and speed, arrival time, area reached; the
-//!    peak pressure is formed only when the maps are written) on the step's pool, 1 and
-//!    2 threads: its cost per step against the whole step's, and the cost of forming
-//!    the maps for a snapshot.
+//!    peak pressure is formed only when the maps are written) on the run's pool, 1 and
+//!    2 threads: its share of a run's step, and the cost of forming the maps for a
+//!    snapshot.
 
 use std::time::Instant;
 
 use granflow::grid::{BoundaryKind, Coordinates, Raster2d, RasterSpec, Sides};
-use granflow::model::granular_2d;
+use granflow::model::granular_2d::{self, Granular2d};
 use granflow::model::raster_maps::RasterMaps;
 use granflow::model::tracker::Tracker;
+use granflow::model::Model;
 use granflow::numerics::hydrostatic_2d::HydrostaticStep2d;
 use granflow::numerics::workers::Workers;
 use granflow::numerics::Stage;
@@ -79,6 +82,79 @@ fn time_stage(
     best
 }
 
+/// Seconds per step of the parts of a run's step (best of three blocks).
+#[derive(Debug, Clone, Copy)]
+struct RunStep {
+    copy: f64,
+    stages: f64,
+    diagnostics: f64,
+    maps: f64,
+}
+
+impl RunStep {
+    fn total(&self) -> f64 {
+        self.copy + self.stages + self.diagnostics + self.maps
+    }
+}
+
+/// Seconds per step of the stages alone (`Pipeline::advance`), and of each part of
+/// the run loop's step on `threads` threads: the copy of the state of t^n, the stages,
+/// the diagnostics (a pass over the cells: mass, energy, signal speed, front) and the
+/// maps tracker (best of three blocks of `steps` steps each).
+fn time_run_step(
+    friction: &FrictionLaw,
+    material: &Material,
+    r: &Raster2d,
+    s0: &State2d,
+    threads: usize,
+    steps: usize,
+) -> (f64, RunStep) {
+    let workers = Workers::new(threads).unwrap();
+    let mut pipe = granular_2d::pipeline_on(friction, material, r, workers.clone());
+    let model = Granular2d::new(r, 1e-3).with_workers(workers.clone());
+    let mut stages_only = f64::INFINITY;
+    let mut best = RunStep {
+        copy: f64::INFINITY,
+        stages: f64::INFINITY,
+        diagnostics: f64::INFINITY,
+        maps: f64::INFINITY,
+    };
+    for _ in 0..3 {
+        let mut s = s0.clone();
+        let start = Instant::now();
+        for _ in 0..steps {
+            pipe.advance(r, dt(r), &mut s).unwrap();
+        }
+        stages_only = stages_only.min(start.elapsed().as_secs_f64() / steps as f64);
+        let mut s = s0.clone();
+        let mut backup = s0.clone();
+        let mut maps = RasterMaps::new(s.h.len(), 1e-3, 1550.0).with_workers(workers.clone());
+        maps.observe(r, &s, 0.0);
+        let mut t = [0.0; 4];
+        for k in 0..steps {
+            let clock = Instant::now();
+            model.save_state(&mut backup, &s);
+            t[0] += clock.elapsed().as_secs_f64();
+            let clock = Instant::now();
+            pipe.advance(r, dt(r), &mut s).unwrap();
+            t[1] += clock.elapsed().as_secs_f64();
+            let clock = Instant::now();
+            let d = model.diagnose(r, &s);
+            t[2] += clock.elapsed().as_secs_f64();
+            assert!(d.mass > 0.0);
+            let clock = Instant::now();
+            maps.observe(r, &s, (k + 1) as f64 * dt(r));
+            t[3] += clock.elapsed().as_secs_f64();
+        }
+        let n = steps as f64;
+        best.copy = best.copy.min(t[0] / n);
+        best.stages = best.stages.min(t[1] / n);
+        best.diagnostics = best.diagnostics.min(t[2] / n);
+        best.maps = best.maps.min(t[3] / n);
+    }
+    (stages_only, best)
+}
+
 fn main() {
     let law = Coulomb {
         mu: 24f64.to_radians().tan(),
@@ -118,61 +194,51 @@ fn main() {
             );
         }
     }
-    println!("2. Thread speed-up of the whole step at 1024² cells");
+    println!("2. Thread speed-up at 1024² cells: the stages, and a run's step");
     let (r, s0) = setup(1024);
-    let mut base = 0.0;
+    let mut base = (0.0, 0.0);
     for threads in [1, 2, 4] {
-        let mut pipe = granular_2d::pipeline(&friction, &material, &r, threads).unwrap();
-        let mut best = f64::INFINITY;
-        for _ in 0..3 {
-            let mut s = s0.clone();
-            let start = Instant::now();
-            for _ in 0..10 {
-                pipe.advance(&r, dt(&r), &mut s).unwrap();
-            }
-            best = best.min(start.elapsed().as_secs_f64() / 10.0);
-        }
+        let (stages, run) = time_run_step(&friction, &material, &r, &s0, threads, 10);
         if threads == 1 {
-            base = best;
+            base = (stages, run.total());
         }
         println!(
-            "  {threads} thread(s): {:.1} ms/step, speed-up {:.2}",
-            1e3 * best,
-            base / best
+            "  {threads} thread(s): stages {:.1} ms/step (speed-up {:.2}); run step {:.1} ms (speed-up {:.2}: copy of t^n {:.1}, stages {:.1}, diagnostics {:.1}, maps {:.1})",
+            1e3 * stages,
+            base.0 / stages,
+            1e3 * run.total(),
+            base.1 / run.total(),
+            1e3 * run.copy,
+            1e3 * run.stages,
+            1e3 * run.diagnostics,
+            1e3 * run.maps,
         );
     }
-    println!("4. The maps tracker on the step's pool, 1 and 2 threads");
+    println!("4. The maps tracker on the run's pool: its share of a run's step, 1 and 2 threads");
     for (n, threads) in [(256, 1), (1024, 1), (256, 2), (1024, 2)] {
-        let (r, s0) = setup(n);
+        let (r, mut s) = setup(n);
+        let steps = if n > 512 { 10 } else { 50 };
+        let (_, run) = time_run_step(&friction, &material, &r, &s, threads, steps);
         let workers = Workers::new(threads).unwrap();
         let mut pipe = granular_2d::pipeline_on(&friction, &material, &r, workers.clone());
-        let steps = if n > 512 { 5 } else { 50 };
-        let (mut t_step, mut t_maps, mut t_write) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let mut maps = RasterMaps::new(n * n, 1e-3, 1550.0).with_workers(workers);
+        maps.observe(&r, &s, 0.0);
+        for k in 0..steps {
+            pipe.advance(&r, dt(&r), &mut s).unwrap();
+            maps.observe(&r, &s, (k + 1) as f64 * dt(&r));
+        }
+        let mut t_write = f64::INFINITY;
         for _ in 0..3 {
-            let mut s = s0.clone();
-            let mut maps = RasterMaps::new(n * n, 1e-3, 1550.0).with_workers(workers.clone());
-            maps.observe(&r, &s, 0.0);
-            let (mut step, mut observe) = (0.0, 0.0);
-            for k in 0..steps {
-                let start = Instant::now();
-                pipe.advance(&r, dt(&r), &mut s).unwrap();
-                step += start.elapsed().as_secs_f64();
-                let start = Instant::now();
-                maps.observe(&r, &s, (k + 1) as f64 * dt(&r));
-                observe += start.elapsed().as_secs_f64();
-            }
-            t_step = t_step.min(step / steps as f64);
-            t_maps = t_maps.min(observe / steps as f64);
             let mut sink = MemorySink::default();
             let start = Instant::now();
             maps.write_so_far(&r, &s, &mut sink).unwrap();
             t_write = t_write.min(start.elapsed().as_secs_f64());
         }
         println!(
-            "  {n}², {threads} thread(s): step {:.2} ms, tracker {:.3} ms per step ({:.2} % of the step), maps formed for a snapshot in {:.2} ms",
-            1e3 * t_step,
-            1e3 * t_maps,
-            100.0 * t_maps / t_step,
+            "  {n}², {threads} thread(s): run step {:.2} ms, tracker {:.3} ms per step ({:.2} % of the run step), maps formed for a snapshot in {:.2} ms",
+            1e3 * run.total(),
+            1e3 * run.maps,
+            100.0 * run.maps / run.total(),
             1e3 * t_write
         );
     }

@@ -202,7 +202,7 @@ impl<M: Model> Simulation<M> {
         let mut dt_full = self.cfl_dt(s);
         let mut dt = dt_full.min(dt_max);
         let mut last_failure = None;
-        self.backup.clone_from(&self.state);
+        self.model.save_state(&mut self.backup, &self.state);
         for _ in 0..=MAX_RETRIES {
             let attempt = self
                 .pipeline

@@ -17,6 +17,7 @@
 //! no other term sees it. The front, the maps ([`crate::model::raster_maps`]) and
 //! `/grid/h_bed` count h − h_i.
 
+use crate::grid::raster::BAND_ROWS;
 use crate::grid::Raster2d;
 use crate::model::granular::pipeline::{with_law, WithLaw};
 use crate::model::{first_maximum, Diagnostics, Model};
@@ -51,6 +52,20 @@ pub struct Granular2d {
     pub h_bed: Vec<f64>,
     /// Whether `h_bed` is an erodible bed (not the zeros of a run without one).
     erodible: bool,
+    /// The run's threads, for the diagnostics and the copy of the state of t^n.
+    workers: Workers,
+}
+
+/// One band's part of the diagnostics (sums and extrema over its cells).
+#[derive(Debug, Clone, Copy)]
+struct BandDiagnostics {
+    mass: f64,
+    ke: f64,
+    q_sum: f64,
+    max_speed2: f64,
+    signal: f64,
+    h_max: f64,
+    front: f64,
 }
 
 impl Granular2d {
@@ -60,7 +75,53 @@ impl Granular2d {
             front_threshold,
             h_bed: vec![0.0; raster.nx() * raster.ny()],
             erodible: false,
+            workers: Workers::serial(),
         }
+    }
+
+    /// The model with its diagnostics and its copy of the state on `workers` (the
+    /// run's pool; the numbers do not depend on it).
+    pub fn with_workers(mut self, workers: Workers) -> Granular2d {
+        self.workers = workers;
+        self
+    }
+
+    /// The diagnostics of the cells `cells` of `state` (one band).
+    fn band_diagnostics(
+        &self,
+        raster: &Raster2d,
+        state: &State2d,
+        cells: std::ops::Range<usize>,
+    ) -> BandDiagnostics {
+        let g_n = raster.g_n;
+        let nx = raster.nx();
+        let mut d = BandDiagnostics {
+            mass: 0.0,
+            ke: 0.0,
+            q_sum: 0.0,
+            max_speed2: 0.0,
+            signal: 0.0,
+            h_max: 0.0,
+            front: f64::NEG_INFINITY,
+        };
+        for k in cells {
+            let (h, qx, qy) = (state.h[k], state.hu[k], state.hv[k]);
+            d.mass += h;
+            d.q_sum += qx + qy;
+            d.h_max = d.h_max.max(h);
+            let (u, v) = (velocity(h, qx), velocity(h, qy));
+            let speed2 = u * u + v * v;
+            d.ke += h * speed2;
+            d.max_speed2 = d.max_speed2.max(speed2);
+            d.signal = d.signal.max(u.abs().max(v.abs()) + celerity(g_n, h));
+            // h − h_i ≤ h: without an erodible bed the first test decides.
+            if h > self.front_threshold
+                && (!self.erodible || h - self.h_bed[k] > self.front_threshold)
+            {
+                d.front = d.front.max(raster.x(k % nx));
+            }
+        }
+        d
     }
 
     /// The model over the erodible bed `h_bed` (one per cell, row-major).
@@ -163,27 +224,24 @@ impl Model for Granular2d {
         "granular"
     }
 
+    /// The sums (mass, kinetic energy) are formed band by band ([`BAND_ROWS`] rows)
+    /// and the bands' sums added in band order: the same bits on any number of threads.
     fn diagnose(&self, raster: &Raster2d, state: &State2d) -> Diagnostics {
-        let g_n = raster.g_n;
+        let (cells, chunk) = (state.h.len(), BAND_ROWS * raster.nx());
+        let bands = self.workers.map_bands(cells.div_ceil(chunk), |k| {
+            self.band_diagnostics(raster, state, k * chunk..((k + 1) * chunk).min(cells))
+        });
         let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
         let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
         let mut front = f64::NEG_INFINITY;
-        let nx = raster.nx();
-        for (k, ((&h, &qx), &qy)) in state.h.iter().zip(&state.hu).zip(&state.hv).enumerate() {
-            mass += h;
-            q_sum += qx + qy;
-            h_max = h_max.max(h);
-            let (u, v) = (velocity(h, qx), velocity(h, qy));
-            let speed2 = u * u + v * v;
-            ke += h * speed2;
-            max_speed = max_speed.max(speed2);
-            signal = signal.max(u.abs().max(v.abs()) + celerity(g_n, h));
-            // h − h_i ≤ h: without an erodible bed the first test decides.
-            if h > self.front_threshold
-                && (!self.erodible || h - self.h_bed[k] > self.front_threshold)
-            {
-                front = front.max(raster.x(k % nx));
-            }
+        for b in &bands {
+            mass += b.mass;
+            ke += b.ke;
+            q_sum += b.q_sum;
+            max_speed = max_speed.max(b.max_speed2);
+            signal = signal.max(b.signal);
+            h_max = h_max.max(b.h_max);
+            front = front.max(b.front);
         }
         let non_finite_at = if (mass + q_sum).is_finite() {
             None
@@ -204,6 +262,15 @@ impl Model for Granular2d {
             h_max,
             non_finite_at,
         }
+    }
+
+    /// The copy in chunks of 2¹⁴ values (128 kB) on the run's threads: a plain copy
+    /// is bound by memory bandwidth, which two cores share but do not halve.
+    fn save_state(&self, backup: &mut State2d, state: &State2d) {
+        let chunk = 1 << 14;
+        self.workers.copy(chunk, &mut backup.h, &state.h);
+        self.workers.copy(chunk, &mut backup.hu, &state.hu);
+        self.workers.copy(chunk, &mut backup.hv, &state.hv);
     }
 
     /// The first cell with the largest u² + v² (the speed of [`Self::diagnose`]).

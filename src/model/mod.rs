@@ -85,6 +85,13 @@ pub trait Model: Send + 'static {
     /// Diagnostics of `state` in one pass over the cells.
     fn diagnose(&self, grid: &Self::Grid, state: &Self::State) -> Diagnostics;
 
+    /// Copies `state` into `backup`, the run loop's state of t^n (kept every step, in
+    /// case a stage refuses the step). The default is `clone_from`; a model whose
+    /// state is large copies it on its run's threads.
+    fn save_state(&self, backup: &mut Self::State, state: &Self::State) {
+        backup.clone_from(state);
+    }
+
     /// Largest speed (m/s) of a mass that counts as at rest (0: exactly at rest).
     fn rest_speed(&self) -> f64 {
         0.0

@@ -36,7 +36,7 @@
 
 use std::borrow::Cow;
 
-use crate::grid::raster::Raster2d;
+use crate::grid::raster::{Raster2d, BAND_ROWS};
 use crate::grid::{Coordinates, Grid};
 use crate::model::tracker::Tracker;
 use crate::numerics::workers::Workers;
@@ -192,7 +192,8 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         }
         let thr = self.threshold;
         let cells = state.h.len();
-        let chunk = cells.div_ceil(8 * self.workers.threads()).max(1);
+        // The step's bands: a thread steals whole bands, the count is exact anyway.
+        let chunk = BAND_ROWS * grid.nx();
         let RasterMaps {
             h_max,
             speed_max,
@@ -218,7 +219,13 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
                     } else {
                         h[k] - h_bed[k]
                     };
-                    if above > h_max[i] {
+                    // Nothing changes where there is no flow (h_max ≥ 0): such a
+                    // cell costs the read of h alone, not of the maps.
+                    if above <= 0.0 {
+                        continue;
+                    }
+                    let before = h_max[i];
+                    if above > before {
                         h_max[i] = above;
                     }
                     if above > thr {
@@ -228,7 +235,10 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
                         if speed > speed_max[i] {
                             speed_max[i] = speed;
                         }
-                        if arrival[i].is_nan() {
+                        // Reached before ⇔ h_max > h_f before (h_max, never NaN, is the largest
+                        // h above the bed seen, the arrival its first time over h_f):
+                        // the arrival map is read only on the first arrival.
+                        if before <= thr {
                             arrival[i] = t;
                             *reached += 1;
                         }

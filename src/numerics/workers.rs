@@ -2,7 +2,9 @@
 //! a 2-D stage run on a rayon pool that the stages of one pipeline share and own.
 //!
 //! With one thread there is no pool and the bands run in order on the caller's thread
-//! (no rayon at all). With more, each band is one task. The partition into bands does
+//! (no rayon at all). With more, each band is one task (`with_max_len(1)`: a thread
+//! that runs out of work steals single bands, so the dry and wet bands of a run
+//! balance to within one band). The partition into bands does
 //! not depend on the number of threads, each band writes only its own cells, and every
 //! reduction over bands (the smallest new thickness of the step) is combined in band
 //! order: the results are the same bits for 1, 2 or 4 threads. Each band owns its
@@ -43,6 +45,36 @@ impl Workers {
         self.pool.as_ref().map_or(1, |p| p.current_num_threads())
     }
 
+    /// `f(k)` for every band k < `bands`, in band order (for reductions combined in
+    /// that order, whatever the number of threads).
+    pub fn map_bands<T, F>(&self, bands: usize, f: F) -> Vec<T>
+    where
+        T: Send,
+        F: Fn(usize) -> T + Sync + Send,
+    {
+        match &self.pool {
+            None => (0..bands).map(f).collect(),
+            Some(pool) => {
+                pool.install(|| (0..bands).into_par_iter().with_max_len(1).map(f).collect())
+            }
+        }
+    }
+
+    /// Copies `src` into `dst` (the same length) band by band (chunks of `chunk`
+    /// values): the run loop's copy of the state of t^n.
+    pub fn copy(&self, chunk: usize, dst: &mut [f64], src: &[f64]) {
+        assert_eq!(dst.len(), src.len(), "a copy between buffers of one length");
+        match &self.pool {
+            None => dst.copy_from_slice(src),
+            Some(pool) => pool.install(|| {
+                dst.par_chunks_mut(chunk)
+                    .zip(src.par_chunks(chunk))
+                    .with_max_len(1)
+                    .for_each(|(d, s)| d.copy_from_slice(s));
+            }),
+        }
+    }
+
     /// Calls `f(k, a_k, b_k)` for every band k (chunks of `chunk` values).
     pub fn bands2<F>(&self, chunk: usize, a: &mut [f64], b: &mut [f64], f: F)
     where
@@ -57,6 +89,7 @@ impl Workers {
             Some(pool) => pool.install(|| {
                 a.par_chunks_mut(chunk)
                     .zip(b.par_chunks_mut(chunk))
+                    .with_max_len(1)
                     .enumerate()
                     .for_each(|(k, (a, b))| f(k, a, b));
             }),
@@ -90,6 +123,7 @@ impl Workers {
                     .zip(b.par_chunks_mut(chunk))
                     .zip(c.par_chunks_mut(chunk))
                     .zip(scratch.par_iter_mut())
+                    .with_max_len(1)
                     .enumerate()
                     .for_each(|(k, (((a, b), c), s))| f(k, (a, b, c), s));
             }),
@@ -125,6 +159,7 @@ impl Workers {
                     .zip(c.par_chunks_mut(chunk))
                     .zip(d.par_chunks_mut(chunk))
                     .zip(scratch.par_iter_mut())
+                    .with_max_len(1)
                     .enumerate()
                     .for_each(|(k, ((((a, b), c), d), s))| f(k, (a, b, c, d), s));
             }),

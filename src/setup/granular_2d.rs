@@ -52,14 +52,14 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
         s.h.clone()
     };
     let state = State2d::from_velocities(h, &s.u, &s.v);
-    let model = Granular2d::new(&grid, scn.output.front_threshold);
+    // A pool that cannot be started falls back to one thread: the same bits, slower.
+    let workers = Workers::new(threads).unwrap_or_else(|_| Workers::serial());
+    let model = Granular2d::new(&grid, scn.output.front_threshold).with_workers(workers.clone());
     let (model, erodible) = if scn.initial.has_erodible_bed() {
         (model.with_erodible_bed(s.h_bed.clone()), s.h_bed.clone())
     } else {
         (model, Vec::new())
     };
-    // A pool that cannot be started falls back to one thread: the same bits, slower.
-    let workers = Workers::new(threads).unwrap_or_else(|_| Workers::serial());
     let stages = match &scn.friction_zones {
         None => pipeline_on(&scn.friction, &scn.material, &grid, workers.clone()),
         Some(zones) => pipeline_with_zones(&scn.friction, &grid, workers.clone(), zones)
