@@ -57,7 +57,9 @@
 //! donor's θ differ from the unlimited ones only where θ ≠ 1 (a flux times 1 is the
 //! flux), so it recomputes just the cells next to a draining cell (the cell and its
 //! four neighbours), face by face, and keeps the unlimited values elsewhere: the same
-//! bits as a full second pass, at the cost of the fronts only.
+//! bits as a full second pass, at the cost of the fronts only. The unlimited pass
+//! records which rows hold a draining cell, so the limited pass visits only the rows
+//! next to one, and a band with none keeps its smallest thickness too.
 //!
 //! The CFL step: with the per-cell signal speed s = max(|u|, |v|) + √(g_n h) and
 //! Δt = CFL · min(Δx, Δy)/s, Δt (s_x/Δx + s_y/Δy) ≤ 2 CFL; the unsplit update keeps
@@ -191,6 +193,9 @@ struct BandScratch {
     lower: Vec<CellView>,
     upper: Vec<CellView>,
     worst: (f64, usize),
+    /// Whether each row of the band has a draining cell (θ ≠ 1), from the unlimited
+    /// pass.
+    drains: [bool; BAND_ROWS],
 }
 
 /// The 2-D hydrostatic step, generic over the basal friction law (used in ΔC).
@@ -203,6 +208,8 @@ pub struct HydrostaticStep2d<L: BasalFriction> {
     hv_new: Vec<f64>,
     /// Draining factors per cell, from the unlimited pass's faces.
     drain: Vec<f64>,
+    /// Whether each row has a draining cell (gathered from the bands' scratch).
+    row_drains: Vec<bool>,
     scratch: Vec<BandScratch>,
 }
 
@@ -222,6 +229,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             lower: vec![CellView::default(); nx],
             upper: vec![CellView::default(); nx],
             worst: (f64::INFINITY, 0),
+            drains: [false; BAND_ROWS],
         };
         HydrostaticStep2d {
             friction,
@@ -230,6 +238,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             hu_new: vec![0.0; cells],
             hv_new: vec![0.0; cells],
             drain: vec![1.0; cells],
+            row_drains: vec![false; raster.ny()],
             scratch: vec![band; raster.bands()],
         }
     }
@@ -801,7 +810,9 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             &mut self.scratch,
             |k, (h_new, hu_new, hv_new, drain), s| {
                 let offset = k * BAND_ROWS * nx;
+                let first_row = k * BAND_ROWS;
                 let mut worst = (f64::INFINITY, 0usize);
+                let mut drains = [false; BAND_ROWS];
                 ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
                     let cell = j * nx + i;
                     let local = cell - offset;
@@ -811,9 +822,12 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
                         worst = (hn, cell);
                     }
                     (h_new[local], hu_new[local], hv_new[local]) = (hn, qu, qv);
-                    drain[local] = draining_factor(old.0, r, [w, e, so, no]);
+                    let theta = draining_factor(old.0, r, [w, e, so, no]);
+                    drain[local] = theta;
+                    drains[j - first_row] |= theta != 1.0;
                 });
                 s.worst = worst;
+                s.drains = drains;
             },
         );
         self.worst()
@@ -842,7 +856,17 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let (nx, ny) = (raster.nx(), raster.ny());
         let r = (dt / raster.dx(), dt / raster.dy());
         let ctx = Ctx::new(&self.friction, raster, state, dt);
+        for (k, s) in self.scratch.iter().enumerate() {
+            let rows = raster.band_rows(k);
+            let n = rows.len();
+            self.row_drains[rows].copy_from_slice(&s.drains[..n]);
+        }
         let theta = self.drain.as_slice();
+        // A row changes only if it or a row next to it has a draining cell.
+        let row_drains = self.row_drains.as_slice();
+        let near = |j: usize| {
+            row_drains[j] || (j > 0 && row_drains[j - 1]) || (j + 1 < ny && row_drains[j + 1])
+        };
         let outputs = (
             self.h_new.as_mut_slice(),
             self.hu_new.as_mut_slice(),
@@ -854,17 +878,18 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             &mut self.scratch,
             |k, (h_new, hu_new, hv_new), s| {
                 let offset = k * BAND_ROWS * nx;
+                // A band with no row that changes keeps the unlimited pass's values
+                // and with them its smallest thickness (`s.worst`, in cell order).
+                if !raster.band_rows(k).any(near) {
+                    return;
+                }
                 for j in raster.band_rows(k) {
+                    if !near(j) {
+                        continue;
+                    }
                     let row = &theta[j * nx..(j + 1) * nx];
                     let below = (j > 0).then(|| &theta[(j - 1) * nx..j * nx]);
                     let above = (j + 1 < ny).then(|| &theta[(j + 1) * nx..(j + 2) * nx]);
-                    let draining = |t: &[f64]| t.iter().any(|&t| t != 1.0);
-                    if !(draining(row)
-                        || below.is_some_and(draining)
-                        || above.is_some_and(draining))
-                    {
-                        continue;
-                    }
                     for i in 0..nx {
                         let affected = row[i] != 1.0
                             || (i > 0 && row[i - 1] != 1.0)
@@ -917,11 +942,17 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
                 h: worst.0,
             });
         }
-        // Round-off below zero, kept for the test above, is clipped now.
+        // Round-off below zero, kept for the test above, is clipped now (in the bands
+        // that have it).
         if worst.0 < 0.0 {
-            for h in &mut self.h_new {
-                if *h < 0.0 {
-                    *h = 0.0;
+            let chunk = BAND_ROWS * raster.nx();
+            for (band, s) in self.h_new.chunks_mut(chunk).zip(&self.scratch) {
+                if s.worst.0 < 0.0 {
+                    for h in band {
+                        if *h < 0.0 {
+                            *h = 0.0;
+                        }
+                    }
                 }
             }
         }
