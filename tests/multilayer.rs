@@ -946,6 +946,67 @@ fn erodible_bed_stop_time_grows_with_the_bed_thickness_at_22_degrees() {
     assert!((growth[1].0 / growth[0].0 - 1.0).abs() < 0.1, "{growth:?}");
 }
 
+/// The time from which the kinetic energy of a run stays at or below `fraction` × its
+/// running peak, from its recorded steps: the rule of `/summary` `settled_time`
+/// (`time.settle_fraction`), for any fraction after the run.
+fn settled_time_at(sink: &MemorySink, fraction: f64) -> f64 {
+    let mut peak = 0.0f64;
+    let mut since = None;
+    for r in &sink.steps {
+        peak = peak.max(r.kinetic_energy);
+        since = if r.kinetic_energy <= fraction * peak {
+            since.or(Some(r.t))
+        } else {
+            None
+        };
+    }
+    since.unwrap_or(f64::NAN)
+}
+
+/// Fernández-Nieto et al. 2016, Fig. 13 at 19° (20 layers, h_i = 1.5 → 5.3 mm): the sign
+/// of the stop time's change with the bed is set by where the stop is cut
+/// (docs/validation.md, "Stop time against h_i"). The end of the bulk flow (kinetic
+/// energy down to 10⁻⁴ of its peak) comes later on the thicker bed, as in Fig. 13
+/// (measured +47 and +44 ms on 640 and 1280 cells, +39 ms on 2560); the settled time
+/// (10⁻⁶, the default) comes earlier (−10, −18 ms; −33 ms on 2560: the fall grows
+/// under refinement), and so does the time every layer is slower than 1 mm/s (−247,
+/// −252 ms): the front's last creep towards repose is shorter on the thicker bed.
+#[test]
+fn erodible_bed_at_19_degrees_the_bulk_flow_lasts_longer_and_the_final_creep_less_long_on_a_thicker_bed(
+) {
+    // (bulk end, settled time, every layer below 1 mm/s) of one run.
+    let stop_times = |cells: usize, h_i: f64| {
+        let cells = format!("domain.cells={cells}");
+        let bed = format!("initial.erodible_bed={h_i}");
+        let (_, mut sim) = scenario(
+            "erodible_bed.toml",
+            &sets(&["domain.slope_deg=19", cells.as_str(), bed.as_str()]),
+        );
+        let mut sink = MemorySink::default();
+        let summary = sim.run(&mut sink, &mut |_| {}).expect("run");
+        assert_eq!(summary.status, "stopped_at_rest");
+        assert_eq!(settled_time_at(&sink, 1e-6), summary.settled_time);
+        (
+            settled_time_at(&sink, 1e-4),
+            summary.settled_time,
+            summary.stop_time,
+        )
+    };
+    let mut late_changes = Vec::new();
+    for cells in [640, 1280] {
+        let (thin, thick) = (stop_times(cells, 1.5e-3), stop_times(cells, 5.3e-3));
+        println!(
+            "erodible bed, 19°, {cells} cells, h_i = 1.5 -> 5.3 mm: bulk end (1e-4) {:.3} -> {:.3} s, settled (1e-6) {:.3} -> {:.3} s, every layer < 1 mm/s {:.3} -> {:.3} s",
+            thin.0, thick.0, thin.1, thick.1, thin.2, thick.2
+        );
+        assert!(thick.0 > thin.0, "bulk end, {cells} cells: {thin:?} {thick:?}");
+        assert!(thick.1 < thin.1, "settled, {cells} cells: {thin:?} {thick:?}");
+        assert!(thick.2 < thin.2, "rest, {cells} cells: {thin:?} {thick:?}");
+        late_changes.push(thick.1 - thin.1);
+    }
+    assert!(late_changes[1] < late_changes[0], "{late_changes:?}");
+}
+
 /// The largest along-slope strain rate |∂_X(u_α + u_{α+1})| of the C-MSM correction
 /// (Fernández-Nieto et al. 2016, eq. 32) over the interfaces of the cells thicker than
 /// 1 mm (and their neighbours): with the centred difference of the code, (S_{i+1} −
