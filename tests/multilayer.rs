@@ -2,7 +2,7 @@
 //! p_nh = 0): N = 1 is the monolayer bit for bit, steady profiles against the exact
 //! solutions of Fernández-Nieto et al. 2016 (Bagnold eq. 29, Table 1; sidewalls eq. 30, Table 2),
 //! well-balancing with N layers (Escalante et al. 2023, Table 6), mass and positivity, and the
-//! erodible-bed effect of Fernández-Nieto et al. 2016, §4.2.4 (Figs. 11–12).
+//! erodible-bed effect of Fernández-Nieto et al. 2016, §4.2.4 (Figs. 11–13).
 //!
 //! The numbers each test measures are printed (`cargo test --test main multilayer:: --
 //! --nocapture`) and recorded in docs/numerics.md.
@@ -999,8 +999,14 @@ fn erodible_bed_at_19_degrees_the_bulk_flow_lasts_longer_and_the_final_creep_les
             "erodible bed, 19°, {cells} cells, h_i = 1.5 -> 5.3 mm: bulk end (1e-4) {:.3} -> {:.3} s, settled (1e-6) {:.3} -> {:.3} s, every layer < 1 mm/s {:.3} -> {:.3} s",
             thin.0, thick.0, thin.1, thick.1, thin.2, thick.2
         );
-        assert!(thick.0 > thin.0, "bulk end, {cells} cells: {thin:?} {thick:?}");
-        assert!(thick.1 < thin.1, "settled, {cells} cells: {thin:?} {thick:?}");
+        assert!(
+            thick.0 > thin.0,
+            "bulk end, {cells} cells: {thin:?} {thick:?}"
+        );
+        assert!(
+            thick.1 < thin.1,
+            "settled, {cells} cells: {thin:?} {thick:?}"
+        );
         assert!(thick.2 < thin.2, "rest, {cells} cells: {thin:?} {thick:?}");
         late_changes.push(thick.1 - thin.1);
     }
