@@ -76,7 +76,7 @@ CHECKS = {
     "erodible_cmsm": cargo_test("multilayer", "erodible_bed_lengthens_runout_with_c_msm"),
     "erodible_stop_19": cargo_test(
         "multilayer",
-        "erodible_bed_at_19_degrees_the_bulk_flow_lasts_longer_and_the_final_creep_less_long_on_a_thicker_bed"),
+        "erodible_bed_at_19_degrees_bulk_flow_ends_later_and_creep_earlier_on_a_thicker_bed"),
     "erodible_sweep": ["sh", "-c",
                        "granflow sweep scenarios/sweeps/erodible_bed.toml --jobs 2 --quiet "
                        "--output {tmp}/erodible && "
