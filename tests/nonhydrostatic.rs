@@ -311,9 +311,11 @@ fn mass_median(x: &[f64], h: &[f64]) -> f64 {
 
 /// Garres-Díaz et al. 2021, §4.1, Fig. 3: in local coordinates the hydrostatic wedge runs
 /// out further than the non-hydrostatic one (by 12.7 % in the paper, at the 1 mm
-/// front). Under refinement the non-hydrostatic 1 mm front does not converge (a toe of
-/// 1–5 mm and about 1 % of the mass keeps moving out: 0.723 … 0.881 m on 320 … 10240
-/// cells, docs/validation.md, "Non-hydrostatic runout under refinement"), so the
+/// front). Under refinement the non-hydrostatic 1 mm front does not converge (0.723 …
+/// 0.881 m on 320 … 10240 cells: it converges until the toe stops, but a later surge
+/// over the deposit grows under refinement, see
+/// `wedge_toe_converges_until_it_stops_and_a_later_surge_over_the_deposit_does_not` and
+/// docs/validation.md, "Non-hydrostatic runout under refinement"), so the
 /// comparison is made on what converges for both models: the displacement of the mass
 /// median. Runs of 320, 640 and 1280 cells to the settled state: the median's change
 /// shrinks under refinement for both models, and H/NH − 1 of it stays within 8–12 %
