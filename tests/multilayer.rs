@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use crate::common::{run, tan_deg, Case};
 use granflow::model::granular::Granular;
 use granflow::output::memory::MemorySink;
+use granflow::output::RunSummary;
 use granflow::physics::GRAVITY as G;
 use granflow::scenario::{load_file, BoundaryKind, FrictionLaw, MonolayerShear, Scenario};
 use granflow::setup::build_granular;
@@ -921,17 +922,7 @@ fn complex_topography_with_ten_nonhydrostatic_layers_completes() {
 /// the settled time itself moves by less than 10 % between the grids (2.127 → 1.943 s).
 #[test]
 fn erodible_bed_stop_time_grows_with_the_bed_thickness_at_22_degrees() {
-    let settled = |cells: usize, h_i: f64| {
-        let cells = format!("domain.cells={cells}");
-        let bed = format!("initial.erodible_bed={h_i}");
-        let (_, mut sim) = scenario(
-            "erodible_bed.toml",
-            &sets(&["domain.slope_deg=22", cells.as_str(), bed.as_str()]),
-        );
-        let mut sink = MemorySink::default();
-        let summary = sim.run(&mut sink, &mut |_| {}).expect("run");
-        summary.settled_time
-    };
+    let settled = |cells: usize, h_i: f64| erodible_bed_run(22.0, cells, h_i).1.settled_time;
     let growth: Vec<(f64, f64)> = [640, 1280]
         .iter()
         .map(|&n| (settled(n, 1.82e-3), settled(n, 4.6e-3)))
@@ -944,6 +935,21 @@ fn erodible_bed_stop_time_grows_with_the_bed_thickness_at_22_degrees() {
     assert!(change.iter().all(|&d| d > 0.0), "{growth:?}");
     assert!(change[1] > change[0], "{growth:?}");
     assert!((growth[1].0 / growth[0].0 - 1.0).abs() < 0.1, "{growth:?}");
+}
+
+/// The 20-layer collapse of `erodible_bed.toml` on a `slope_deg` slope over an erodible
+/// bed `h_i` (m) thick, on `cells` cells, run to its end: its steps and summary.
+fn erodible_bed_run(slope_deg: f64, cells: usize, h_i: f64) -> (MemorySink, RunSummary) {
+    let slope = format!("domain.slope_deg={slope_deg}");
+    let cells = format!("domain.cells={cells}");
+    let bed = format!("initial.erodible_bed={h_i}");
+    let (_, mut sim) = scenario(
+        "erodible_bed.toml",
+        &sets(&[slope.as_str(), cells.as_str(), bed.as_str()]),
+    );
+    let mut sink = MemorySink::default();
+    let summary = sim.run(&mut sink, &mut |_| {}).expect("run");
+    (sink, summary)
 }
 
 /// The time from which the kinetic energy of a run stays at or below `fraction` × its
@@ -976,14 +982,7 @@ fn settled_time_at(sink: &MemorySink, fraction: f64) -> f64 {
 fn erodible_bed_at_19_degrees_bulk_flow_ends_later_and_creep_earlier_on_a_thicker_bed() {
     // (bulk end, settled time, every layer below 1 mm/s) of one run.
     let stop_times = |cells: usize, h_i: f64| {
-        let cells = format!("domain.cells={cells}");
-        let bed = format!("initial.erodible_bed={h_i}");
-        let (_, mut sim) = scenario(
-            "erodible_bed.toml",
-            &sets(&["domain.slope_deg=19", cells.as_str(), bed.as_str()]),
-        );
-        let mut sink = MemorySink::default();
-        let summary = sim.run(&mut sink, &mut |_| {}).expect("run");
+        let (sink, summary) = erodible_bed_run(19.0, cells, h_i);
         assert_eq!(summary.status, "stopped_at_rest");
         assert_eq!(settled_time_at(&sink, 1e-6), summary.settled_time);
         (
