@@ -40,11 +40,6 @@ impl Workers {
         Workers::default()
     }
 
-    /// Number of threads (1 when serial).
-    pub fn threads(&self) -> usize {
-        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
-    }
-
     /// `f(k)` for every band k < `bands`, in band order (for reductions combined in
     /// that order, whatever the number of threads).
     pub fn map_bands<T, F>(&self, bands: usize, f: F) -> Vec<T>
