@@ -700,3 +700,52 @@ fn bad_water_keys_are_named_with_their_line() {
         "submarine.water_layers",
     );
 }
+
+/// A step shortened to land on an output time stores the pressure of a full step
+/// (`numerics::water_nh::WaterProjectionStage`): the 30 km tsunami with M = 1 and 2
+/// layers, from its state at t ≈ 10 s, one step of the full CFL length (0.31 s) and
+/// steps cut to 0.1 s, 10 ms and 1 ms. The impulse Π of the coupled projection does not
+/// shrink with the step where the grains are stopped or started under the water, so
+/// Π/Δt grew as 1/Δt on the cut steps (M = 1: 647, 6620, 66 300 m²/s² against 185 for
+/// the full step). With Π/Δt_full the stored pressure no longer grows as the cut step
+/// shrinks (M = 1: 207, 211, 212; M = 2: 319, 314, 314 against 82 for the full step).
+#[test]
+fn a_shortened_step_stores_the_pressure_of_a_full_step() {
+    for layers in [1, 2] {
+        let sets = [
+            "submarine.water_pressure=\"nonhydrostatic\"".to_string(),
+            format!("submarine.water_layers={layers}"),
+        ];
+        let scn = granflow::scenario::load_file(
+            std::path::Path::new("scenarios/tsunami_30km.toml"),
+            &sets,
+        )
+        .expect("the bundled scenario");
+        let mut sim = granflow::setup::build_submarine(&scn);
+        while sim.t < 10.0 {
+            let dt = sim.step(f64::INFINITY).expect("step");
+            sim.t += dt;
+        }
+        let (state, t) = (sim.state.clone(), sim.t);
+        let largest_p = |s: &TwoLayerState| {
+            let water = s.water.as_ref().expect("non-hydrostatic water");
+            water.p.iter().fold(0.0f64, |m, p| m.max(p.abs()))
+        };
+        let peaks: Vec<(f64, f64)> = [f64::INFINITY, 0.1, 1e-2, 1e-3]
+            .iter()
+            .map(|&dt_max| {
+                sim.state.clone_from(&state);
+                sim.t = t;
+                let dt = sim.step(dt_max).expect("step");
+                (dt, largest_p(&sim.state))
+            })
+            .collect();
+        println!("tsunami, M = {layers}, from t = {t:.3} s: (step, largest |p|) {peaks:?}");
+        assert!(peaks[0].0 > 0.3 && peaks[0].1 > 10.0, "{peaks:?}");
+        // Cut a hundredfold (0.1 s → 1 ms), the stored pressure changes by under 10 %
+        // (it grew a hundredfold).
+        let (cut, shortest) = (peaks[1].1, peaks[3].1);
+        assert!(peaks[3].0 < 1.1e-3, "{peaks:?}");
+        assert!((shortest / cut - 1.0).abs() < 0.1, "{peaks:?}");
+    }
+}

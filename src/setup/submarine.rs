@@ -50,7 +50,7 @@ pub fn build(scn: &Scenario) -> Simulation<Submarine> {
     if let WaterPressure::NonHydrostatic { layers } = spec.water {
         let projection = WaterProjection::new(&grid, layers, params.r * params.a1);
         state.water = Some(projection.water_at_rest(nx));
-        stages.push(Box::new(WaterProjectionStage { projection }));
+        stages.push(Box::new(WaterProjectionStage::new(projection)));
     }
     let eta0 = Submarine::initial_surface(&grid, &state, scn.output.front_threshold);
     let model = Submarine {

@@ -151,6 +151,12 @@ impl WaterProjection {
     /// The projection of the water of `s` over the bottom recorded by
     /// [`record_bottom`](Self::record_bottom) before this step of length `dt`.
     pub fn project(&mut self, g: &CurvedLine, s: &mut TwoLayerState, dt: f64) {
+        self.project_storing(g, s, dt, dt);
+    }
+
+    /// [`project`](Self::project), storing the pressure p = Π/`dt_p` (`dt_p` = `dt`
+    /// but on a step shortened to land on an output time, [`WaterProjectionStage`]).
+    pub fn project_storing(&mut self, g: &CurvedLine, s: &mut TwoLayerState, dt: f64, dt_p: f64) {
         let n = self.layers;
         let nx = g.line.nx;
         let inv_dt = 1.0 / dt;
@@ -217,7 +223,7 @@ impl WaterProjection {
                 self.solver.solve(&water, &mut self.pi);
             }
         }
-        self.op.correct(&g.line, &mut self.column, &self.pi, dt);
+        self.op.correct(&g.line, &mut self.column, &self.pi, dt_p);
         if coupled {
             push_grains(
                 &self.kappa,
@@ -424,9 +430,30 @@ fn advect(left: f64, here: f64, right: f64, c_up: f64, c_down: f64) -> f64 {
 }
 
 /// The projection as the second stage of a submarine run with non-hydrostatic water.
+///
+/// A step shortened to land on an output time stores p = Π/Δt_full, Δt_full the step
+/// the CFL condition allowed ([`Stage::full_step`]), as the granular projections do
+/// ([`super::projection`], "Shortened steps"): Π does not shrink with Δt where the
+/// two-layer step changes the grains' discharge by an amount that does not (grains
+/// stopped or started by the Coulomb rule under the water, which the coupled
+/// projection answers with an impulse of the same size), so Π/Δt on a step shortened
+/// a thousandfold stored a pressure a thousand times the full step's. The velocities
+/// take Π whatever the step; only the stored p, an output, changes.
 #[derive(Debug)]
 pub struct WaterProjectionStage {
     pub projection: WaterProjection,
+    /// The full step of the current step (0 when not told).
+    dt_full: f64,
+}
+
+impl WaterProjectionStage {
+    /// The stage of `projection`.
+    pub fn new(projection: WaterProjection) -> Self {
+        WaterProjectionStage {
+            projection,
+            dt_full: 0.0,
+        }
+    }
 }
 
 impl Stage<CurvedLine, TwoLayerState> for WaterProjectionStage {
@@ -438,13 +465,23 @@ impl Stage<CurvedLine, TwoLayerState> for WaterProjectionStage {
         self.projection.record_bottom(grid, state);
     }
 
+    fn full_step(&mut self, dt_full: f64) {
+        self.dt_full = dt_full;
+    }
+
     fn apply(
         &mut self,
         grid: &CurvedLine,
         dt: f64,
         state: &mut TwoLayerState,
     ) -> Result<(), StageError> {
-        self.projection.project(grid, state, dt);
+        let dt_p = if self.dt_full > dt && self.dt_full.is_finite() {
+            self.dt_full
+        } else {
+            dt
+        };
+        self.dt_full = 0.0;
+        self.projection.project_storing(grid, state, dt, dt_p);
         Ok(())
     }
 }
