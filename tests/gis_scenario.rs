@@ -10,9 +10,8 @@ use std::path::Path;
 use std::process::Command;
 
 use assert_cmd::prelude::*;
-use granflow::scenario::{load_str, Scenario, ScenarioError};
 
-use crate::common::python_with_h5py;
+use crate::common::{fails_at, load_in, python_with_h5py};
 
 fn granflow() -> Command {
     Command::cargo_bin("granflow").unwrap()
@@ -79,23 +78,6 @@ t_end = 1.0
     )
 }
 
-fn load(text: &str, dir: &Path) -> Result<Scenario, ScenarioError> {
-    load_str(text, dir, &[])
-}
-
-/// Loads `text`, expects an error at `key` (with its line), returns the message.
-#[track_caller]
-fn fails_at(text: &str, dir: &Path, key: &str) -> String {
-    match load(text, dir) {
-        Ok(_) => panic!("expected an error at {key}, the scenario loaded"),
-        Err(e) => {
-            assert_eq!(e.key(), Some(key), "{e}");
-            assert!(e.line().is_some(), "no line: {e}");
-            e.message().to_owned()
-        }
-    }
-}
-
 /// A quadrilateral not aligned with the cells: area by the shoelace formula.
 const QUAD: [[f64; 2]; 4] = [[13.3, 11.7], [41.9, 14.2], [38.6, 36.1], [16.2, 31.4]];
 
@@ -127,7 +109,7 @@ fn a_release_polygon_releases_its_area_times_its_thickness() {
     for n in [10, 20, 40, 80] {
         let cell = 50.0 / n as f64;
         write_dem(&d.join("dem.asc"), (n, n, cell), (0.0, 0.0), |_, _| 0.0);
-        let scn = load(&scenario(&h("area_fraction"), ""), d).unwrap();
+        let scn = load_in(&scenario(&h("area_fraction"), ""), d).unwrap();
         let release = scn.release.as_ref().unwrap();
         assert!(
             (release.volume - exact).abs() < 1e-12 * exact,
@@ -139,7 +121,7 @@ fn a_release_polygon_releases_its_area_times_its_thickness() {
         assert!((held - exact).abs() < 1e-12 * exact);
         assert!((release.area - shoelace(&QUAD)).abs() < 1e-12 * exact);
         assert_eq!(release.volume_on_walls, 0.0);
-        let scn = load(&scenario(&h("cell_centre"), ""), d).unwrap();
+        let scn = load_in(&scenario(&h("cell_centre"), ""), d).unwrap();
         let v = scn.release.unwrap().volume;
         // Whole cells only.
         assert!(scn.sampled.h.iter().all(|&h| h == 0.0 || h == 1.5));
@@ -170,8 +152,8 @@ fn a_normal_thickness_on_a_30_degree_plane_is_h_over_cos_theta() {
     let h = |is: &str| {
         format!(r#"{{ polygon = "release.geojson", thickness = 2.0, thickness_is = "{is}" }}"#)
     };
-    let vertical = load(&scenario(&h("vertical"), ""), d).unwrap();
-    let normal = load(&scenario(&h("normal"), ""), d).unwrap();
+    let vertical = load_in(&scenario(&h("vertical"), ""), d).unwrap();
+    let normal = load_in(&scenario(&h("normal"), ""), d).unwrap();
     let cos = 30f64.to_radians().cos();
     let mut released = 0;
     for (&hv, &hn) in vertical.sampled.h.iter().zip(&normal.sampled.h) {
@@ -250,7 +232,7 @@ fn release_keys_are_checked_by_name() {
         assert!(message.contains(words), "{key}: {message}");
     }
     // A thickness attribute: the feature's `d` = 2.
-    let scn = load(
+    let scn = load_in(
         &scenario(&format!("{{ {base}, thickness_attribute = \"d\" }}"), ""),
         d,
     )
@@ -464,8 +446,8 @@ fn nodata_cells_reflect_the_flow_like_a_wall_side() {
     write_dem(&sub.join("dem.asc"), (30, 12, 1.0), (0.0, 0.0), bed);
     let text =
         scenario("\"if(x > 18 && y > 3, 1.0, 0.1)\"", "").replace("mu_deg = 30.0", "mu = 0.05");
-    let holed = load(&text, d).unwrap();
-    let cut = load(&text, &sub).unwrap();
+    let holed = load_in(&text, d).unwrap();
+    let cut = load_in(&text, &sub).unwrap();
     let mut a = granflow::setup::build_granular_2d(&holed, 1);
     let mut b = granflow::setup::build_granular_2d(&cut, 1);
     let m0 = a.diagnostics().mass;
@@ -518,7 +500,7 @@ fn a_nodata_hole_stays_empty_and_the_volume_is_conserved() {
         None,
     );
     let h = r#"{ polygon = "release.geojson", thickness = 1, thickness_is = "vertical" }"#;
-    let scn = load(
+    let scn = load_in(
         &scenario(h, "").replace("mu_deg = 30.0", "mu_deg = 15.0"),
         d,
     )
@@ -569,7 +551,7 @@ fn a_cropped_and_coarsened_run_has_its_grid_and_its_volume() {
     );
     let h = r#"{ polygon = "release.geojson", thickness = 1.5, thickness_is = "vertical" }"#;
     let exact = shoelace(&QUAD) * 1.5;
-    let fine = load(&scenario(h, ""), d).unwrap();
+    let fine = load_in(&scenario(h, ""), d).unwrap();
     assert_eq!(
         (fine.domain.cells, fine.domain.plane.as_ref().unwrap().ny),
         (40, 30)
@@ -577,7 +559,7 @@ fn a_cropped_and_coarsened_run_has_its_grid_and_its_volume() {
     // Crop to the centres in x ∈ [1012, 1163], y ∈ [2021, 2140]: columns 2..32 (31),
     // rows from the top 2..25 (24); coarsened by 2: the last column is left out.
     let extra = "crop = [1012.0, 1163.0, 2021.0, 2140.0]\ncoarsen = 2\n";
-    let coarse = load(&scenario(h, extra), d).unwrap();
+    let coarse = load_in(&scenario(h, extra), d).unwrap();
     let plane = coarse.domain.plane.as_ref().unwrap();
     assert_eq!((coarse.domain.cells, plane.ny), (15, 12));
     assert_eq!((coarse.domain.x_min, coarse.domain.x_max), (1010.0, 1160.0));
@@ -616,7 +598,7 @@ fn a_cropped_and_coarsened_run_has_its_grid_and_its_volume() {
             0.0
         }
     });
-    let raster_h = load(&scenario(r#"{ raster = "h.asc" }"#, extra), d).unwrap();
+    let raster_h = load_in(&scenario(r#"{ raster = "h.asc" }"#, extra), d).unwrap();
     let volume: f64 = raster_h.sampled.h.iter().sum::<f64>() * 100.0;
     let fine_volume: f64 = (8..14)
         .flat_map(|c| (6..16).map(move |_| (0.5 + 0.01 * c as f64) * 25.0))

@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use assert_cmd::prelude::*;
-use granflow::scenario::{load_str, ScenarioError};
+use granflow::scenario::load_str;
 
-use crate::common::{assert_success, python_with_h5py};
+use crate::common::{assert_success, fails_at, load_in, python_with_h5py};
 
 fn granflow() -> Command {
     Command::cargo_bin("granflow").unwrap()
@@ -43,27 +43,10 @@ t_end = 0.4
 every = 0.1
 "#;
 
-fn load(text: &str, dir: &Path) -> Result<granflow::scenario::Scenario, ScenarioError> {
-    load_str(text, dir, &[])
-}
-
-/// Loads `text`, expects an error at `key`, returns its message.
-#[track_caller]
-fn fails_at(text: &str, dir: &Path, key: &str) -> String {
-    match load(text, dir) {
-        Ok(_) => panic!("expected an error at {key}, the scenario loaded"),
-        Err(e) => {
-            assert_eq!(e.key(), Some(key), "{e}");
-            assert!(e.line().is_some() || e.is_from_set(), "no line: {e}");
-            e.message().to_owned()
-        }
-    }
-}
-
 #[test]
 fn a_raster_domain_loads_with_its_centres_row_major() {
     let dir = tempfile::tempdir().unwrap();
-    let scn = load(RADIAL, dir.path()).unwrap();
+    let scn = load_in(RADIAL, dir.path()).unwrap();
     let plane = scn.domain.plane.as_ref().unwrap();
     assert_eq!((scn.domain.cells, plane.ny), (24, 12));
     assert_eq!(scn.domain.cell_count(), 288);
@@ -212,7 +195,7 @@ fn a_raster_bed_gives_its_grid_and_its_values_north_up() {
         3,
         |c, _| if c == 0 { 0.2 } else { 0.0 },
     );
-    let scn = load(RASTER_BED, d).unwrap();
+    let scn = load_in(RASTER_BED, d).unwrap();
     let plane = scn.domain.plane.as_ref().unwrap();
     assert_eq!((scn.domain.cells, plane.ny), (4, 3));
     assert_eq!((scn.domain.x_min, scn.domain.x_max), (0.0, 0.4));
@@ -430,7 +413,7 @@ fn voellmy_keys_are_checked_by_name() {
         "law = \"coulomb\"\nmu_deg = 27.0",
         "law = \"voellmy\"\nmu = 0.155\nxi = 4000.0",
     );
-    let scn = load(&voellmy, d).unwrap();
+    let scn = load_in(&voellmy, d).unwrap();
     assert_eq!(
         scn.friction,
         granflow::scenario::FrictionLaw::Voellmy {
@@ -454,7 +437,7 @@ fn voellmy_keys_are_checked_by_name() {
     assert!(m.contains("only used by law = \"voellmy\""), "{m}");
     // A line takes the law too, and needs no raster key for it.
     let line = "[domain]\nx_min = 0.0\nx_max = 1.0\ncells = 10\n[rheology]\nlaw = \"voellmy\"\nmu = 0.2\nxi = 500\n[initial]\nh = 0.1\n[time]\nt_end = 1.0\n";
-    assert!(load(line, d).is_ok());
+    assert!(load_in(line, d).is_ok());
     // Voellmy is a basal law of the depth-averaged flow: no multilayer column takes it.
     let layered = line.replace("[initial]", "[model]\nlayers = 4\n[initial]");
     let m = fails_at(&layered, d, "rheology.law");

@@ -9,7 +9,9 @@ use std::process::Command;
 
 use assert_cmd::prelude::*;
 use granflow::output::memory::MemorySink;
-use granflow::scenario::{load_str, Scenario, ScenarioError};
+use granflow::scenario::Scenario;
+
+use crate::common::{fails_at, load_in};
 use granflow::setup::{build_granular, build_granular_2d};
 
 /// An ESRI ASCII grid of `ncols` × `nrows` cells of `d` m, lower-left corner (0, 0),
@@ -27,23 +29,6 @@ fn write_asc(path: &Path, (ncols, nrows, d): (usize, usize, f64), value: impl Fn
         text.push('\n');
     }
     fs::write(path, text).unwrap();
-}
-
-fn load(text: &str, dir: &Path) -> Result<Scenario, ScenarioError> {
-    load_str(text, dir, &[])
-}
-
-/// Loads `text`, expects an error at `key` (with its line), returns the message.
-#[track_caller]
-fn fails_at(text: &str, dir: &Path, key: &str) -> String {
-    match load(text, dir) {
-        Ok(_) => panic!("expected an error at {key}, the scenario loaded"),
-        Err(e) => {
-            assert_eq!(e.key(), Some(key), "{e}");
-            assert!(e.line().is_some(), "no line: {e}");
-            e.message().to_owned()
-        }
-    }
 }
 
 /// A raster domain [0, 4] × [0, 1] of 80 × 20 cells of 5 cm, a Cartesian plane falling
@@ -104,8 +89,8 @@ fn a_uniform_friction_raster_gives_the_bits_of_the_number() {
     write_asc(&d.join("mu.asc"), (80, 20, 0.05), |_, _| 0.15);
     write_asc(&d.join("xi.asc"), (80, 20, 0.05), |_, _| 400.0);
     let coulomb = |mu: &str| plane(&format!("law = \"coulomb\"\nmu = {mu}"), TWO_CONES);
-    let number = load(&coulomb("0.15"), d).unwrap();
-    let raster = load(&coulomb("{ raster = \"mu.asc\" }"), d).unwrap();
+    let number = load_in(&coulomb("0.15"), d).unwrap();
+    let raster = load_in(&coulomb("{ raster = \"mu.asc\" }"), d).unwrap();
     assert!(raster.friction_zones.is_some());
     same_bits(&number, &raster, 60);
     let voellmy = |mu: &str, xi: &str| {
@@ -114,15 +99,15 @@ fn a_uniform_friction_raster_gives_the_bits_of_the_number() {
             TWO_CONES,
         )
     };
-    let number = load(&voellmy("0.15", "400"), d).unwrap();
-    let raster = load(
+    let number = load_in(&voellmy("0.15", "400"), d).unwrap();
+    let raster = load_in(
         &voellmy("{ raster = \"mu.asc\" }", "{ raster = \"xi.asc\" }"),
         d,
     )
     .unwrap();
     same_bits(&number, &raster, 60);
     // An expression of one value is a field too.
-    let expression = load(&voellmy("\"0.15 + 0*x\"", "400"), d).unwrap();
+    let expression = load_in(&voellmy("\"0.15 + 0*x\"", "400"), d).unwrap();
     same_bits(&number, &expression, 60);
 }
 
@@ -143,7 +128,7 @@ fn two_friction_zones_hold_one_mass_and_release_the_other() {
         }
     });
     let text = plane("law = \"coulomb\"\nmu = { raster = \"mu.asc\" }", TWO_CONES);
-    let scn = load(&text, d).unwrap();
+    let scn = load_in(&text, d).unwrap();
     assert_eq!(
         scn.friction,
         granflow::scenario::FrictionLaw::Coulomb { mu: 0.1 }
@@ -184,7 +169,7 @@ fn two_friction_zones_hold_one_mass_and_release_the_other() {
     // Both on μ = 0.1 or both on μ = 0.8: the zones are what tells them apart.
     for (mu, left_moves) in [("0.1", true), ("0.8", false)] {
         let text = plane(&format!("law = \"coulomb\"\nmu = {mu}"), TWO_CONES);
-        let mut sim = build_granular_2d(&load(&text, d).unwrap(), 1);
+        let mut sim = build_granular_2d(&load_in(&text, d).unwrap(), 1);
         for _ in 0..300 {
             sim.step(f64::INFINITY).unwrap();
         }
@@ -211,7 +196,7 @@ fn xi_zones_change_the_voellmy_runout_in_the_expected_direction() {
             "h = \"if(x < 0.6, 0.2, 0)\"",
         )
         .replace("b = \"-0.2 * x\"", "b = \"-0.4 * x\"");
-        let mut sim = build_granular_2d(&load(&text, d).unwrap(), 1);
+        let mut sim = build_granular_2d(&load_in(&text, d).unwrap(), 1);
         let mut t = 0.0;
         while t < 1.0 {
             t += sim.step(1.0 - t).unwrap();
@@ -247,7 +232,7 @@ fn bad_friction_fields_are_refused_naming_the_key_and_the_file() {
     };
     let mu = "{ raster = \"mu.asc\" }";
     write_asc(&d.join("mu.asc"), (20, 10, 0.1), |_, _| 0.3);
-    assert!(load(&text(mu), d).is_ok());
+    assert!(load_in(&text(mu), d).is_ok());
     type Case = (&'static str, fn(&Path), &'static str, Vec<&'static str>);
     let cases: Vec<Case> = vec![
         (
@@ -321,7 +306,7 @@ fn bad_friction_fields_are_refused_naming_the_key_and_the_file() {
         "rheology.mu_deg",
     );
     assert!(m.contains("[0, 90)"), "{m}");
-    assert!(load(&text("\"30 - x\"").replace("mu = ", "mu_deg = "), d).is_ok());
+    assert!(load_in(&text("\"30 - x\"").replace("mu = ", "mu_deg = "), d).is_ok());
     // A line has one law: a field is refused there.
     let line = "[domain]\nx_min = 0.0\nx_max = 1.0\ncells = 10\n[rheology]\nlaw = \"coulomb\"\nmu = \"0.3 + 0.1 * x\"\n[initial]\nh = 0.1\n[time]\nt_end = 1.0\n";
     let m = fails_at(line, d, "rheology.mu");
@@ -370,8 +355,8 @@ t_end = 8.0
             "west = \"wall\"\neast = \"outflow\"",
         );
     let (a, b) = (
-        load(line, dir.path()).unwrap(),
-        load(&raster, dir.path()).unwrap(),
+        load_in(line, dir.path()).unwrap(),
+        load_in(&raster, dir.path()).unwrap(),
     );
     let (mut one, mut two) = (build_granular(&a), build_granular_2d(&b, 1));
     let nx = 160;
@@ -409,7 +394,7 @@ fn an_erodible_layer_below_repose_stays_at_rest_and_its_maps_stay_zero() {
         "h = 0.0\nerodible_bed = \"0.01 + 0.002 * y\"",
     )
     .replace("t_end = 2.0", "t_end = 0.5\n[output]\nevery = 0.25");
-    let scn = load(&text, dir.path()).unwrap();
+    let scn = load_in(&text, dir.path()).unwrap();
     let mut sim = build_granular_2d(&scn, 1);
     let h0 = sim.state.h.clone();
     assert!(h0.iter().all(|&h| h >= 0.01));
@@ -486,7 +471,7 @@ fn a_release_entrains_a_raster_erodible_zone() {
             &format!("h = \"if(x > 0.5 && x < 1.0, 0.3, 0)\"\n{erodible}"),
         )
         .replace("b = \"-0.2 * x\"", "b = \"-0.27 * x\"");
-        let scn = load(&text, d).unwrap();
+        let scn = load_in(&text, d).unwrap();
         let mut sim = build_granular_2d(&scn, 1);
         let (mut peak, mut t) = (0.0f64, 0.0);
         while t < 1.5 {
@@ -532,7 +517,7 @@ fn a_gauge_on_a_wall_cell_is_refused() {
             "[domain]\ncoordinates = \"cartesian\"\n[bed]\nb = {{ raster = \"dem.asc\" }}\n[rheology]\nlaw = \"coulomb\"\nmu = 0.3\n[initial]\nh = \"if(x < 5, 0.5, 0)\"\n[time]\nt_end = 1.0\n[output]\ngauges = {gauges}\n"
         )
     };
-    assert!(load(&text("[[3.5, 3.5], [15.5, 5.5]]"), d).is_ok());
+    assert!(load_in(&text("[[3.5, 3.5], [15.5, 5.5]]"), d).is_ok());
     let m = fails_at(&text("[[3.5, 3.5], [11.5, 5.5]]"), d, "output.gauges");
     assert!(
         m.contains("gauge 2 at [11.5, 5.5]") && m.contains("wall"),

@@ -1,4 +1,5 @@
-//! Builds runs from plain closures, without scenario files.
+//! Shared test helpers: runs built from plain closures without scenario files, and
+//! scenario texts loaded or refused at a key.
 #![allow(dead_code)]
 
 use granflow::grid::LineSpec;
@@ -344,4 +345,26 @@ pub fn assert_snapshot_times_agree(label: &str, coarse: &PressureWatch, fine: &P
 pub fn relative_l1(a: &[f64], b: &[f64]) -> f64 {
     let d: f64 = a.iter().zip(b).map(|(a, b)| (a - b).abs()).sum();
     d / a.iter().map(|a| a.abs()).sum::<f64>()
+}
+
+/// A scenario from its text, with `dir` for the files it names (no overrides).
+pub fn load_in(
+    text: &str,
+    dir: &std::path::Path,
+) -> Result<granflow::scenario::Scenario, granflow::scenario::ScenarioError> {
+    granflow::scenario::load_str(text, dir, &[])
+}
+
+/// Loads `text` (files in `dir`), expects an error at `key` with its line, returns the
+/// message.
+#[track_caller]
+pub fn fails_at(text: &str, dir: &std::path::Path, key: &str) -> String {
+    match load_in(text, dir) {
+        Ok(_) => panic!("expected an error at {key}, the scenario loaded"),
+        Err(e) => {
+            assert_eq!(e.key(), Some(key), "{e}");
+            assert!(e.line().is_some(), "no line: {e}");
+            e.message().to_owned()
+        }
+    }
 }
