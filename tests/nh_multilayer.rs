@@ -714,19 +714,10 @@ fn collapse_deposit_comes_to_rest() {
 /// 0.4 moves h at t = 10 s by 0.53 %).
 #[test]
 fn snapshot_times_do_not_change_the_ten_layer_run() {
-    use crate::common::{assert_snapshot_times_agree, PressureWatch};
+    use crate::common::{assert_snapshot_times_agree, watch_pressure};
     let watch = |every: &str| {
-        let every = format!("output.every={every}");
-        let mut sim = build(
-            "nh_complex_topography_multilayer.toml",
-            &["model.pressure=nonhydrostatic", every.as_str()],
-        );
-        let mut w = PressureWatch::default();
-        let summary = sim
-            .run(&mut w, &mut |_| {})
-            .unwrap_or_else(|e| panic!("{every}: the run fails: {e}"));
-        assert_eq!(summary.t_end, 10.0, "{every}");
-        w
+        let file = "nh_complex_topography_multilayer.toml";
+        watch_pressure(file, &["model.pressure=nonhydrostatic"], every)
     };
     let (coarse, fine) = (watch("0.1"), watch("0.004"));
     assert_eq!((coarse.snapshots, fine.snapshots), (101, 2501));

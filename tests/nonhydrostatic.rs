@@ -740,17 +740,8 @@ fn nh_cartesian_and_h_local_deposits_are_close_while_dynamics_differ() {
 /// Bounds as for the multilayer: twice the largest pressure, 2 % in L1.
 #[test]
 fn snapshot_times_do_not_change_the_complex_topography_run() {
-    use crate::common::{assert_snapshot_times_agree, PressureWatch};
-    let watch = |every: &str| {
-        let every = format!("output.every={every}");
-        let mut sim = build("nh_complex_topography.toml", &[every.as_str()]);
-        let mut w = PressureWatch::default();
-        let summary = sim
-            .run(&mut w, &mut |_| {})
-            .unwrap_or_else(|e| panic!("{every}: the run fails: {e}"));
-        assert_eq!(summary.t_end, 10.0, "{every}");
-        w
-    };
+    use crate::common::{assert_snapshot_times_agree, watch_pressure};
+    let watch = |every: &str| watch_pressure("nh_complex_topography.toml", &[], every);
     let (coarse, fine) = (watch("0.1"), watch("0.004"));
     assert_snapshot_times_agree("monolayer NH", &coarse, &fine);
 }

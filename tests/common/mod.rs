@@ -321,6 +321,24 @@ impl granflow::output::OutputSink for PressureWatch {
     }
 }
 
+/// The bundled granular scenario `file` with the overrides `sets`, run to its end of
+/// 10 s with snapshots every `every` s into a [`PressureWatch`].
+pub fn watch_pressure(file: &str, sets: &[&str], every: &str) -> PressureWatch {
+    let mut sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    sets.push(format!("output.every={every}"));
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(file);
+    let scn = granflow::scenario::load_file(&path, &sets).expect("scenario loads");
+    let mut sim = build_granular(&scn);
+    let mut w = PressureWatch::default();
+    let summary = sim
+        .run(&mut w, &mut |_| {})
+        .unwrap_or_else(|e| panic!("every {every}: the run fails: {e}"));
+    assert_eq!(summary.t_end, 10.0, "every {every}");
+    w
+}
+
 /// The check of a run with snapshots every 0.1 s (`coarse`) against the same run with
 /// snapshots every 0.004 s (`fine`, many steps shortened to land on an output time):
 /// the largest |p_nh| of the fine run's snapshots within twice the coarse run's (250
