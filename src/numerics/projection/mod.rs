@@ -101,14 +101,39 @@ pub trait ProjectionOperator: Send + std::fmt::Debug {
     fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt_p: f64);
 }
 
+/// The full step of the current step attempt ([`Stage::full_step`]) for a stage that
+/// turns its impulse Π into a pressure: a step shortened to land on an output time
+/// takes the rate over the full step (module documentation, "Shortened steps").
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FullStep(f64);
+
+impl FullStep {
+    /// Records the full step of the attempt about to be applied.
+    pub fn set(&mut self, dt_full: f64) {
+        self.0 = dt_full;
+    }
+
+    /// The step to divide the impulse of a step of length `dt` by: the full step when
+    /// `dt` was shortened from it, else `dt` (also when no full step was given, or it
+    /// is infinite: a mass at rest is no step to take a rate over). Forgets the full
+    /// step, which holds for one attempt.
+    pub fn pressure_step(&mut self, dt: f64) -> f64 {
+        let dt_full = std::mem::take(&mut self.0);
+        if dt_full > dt && dt_full.is_finite() {
+            dt_full
+        } else {
+            dt
+        }
+    }
+}
+
 /// The "projection" stage: form and solve the pressure system, correct.
 #[derive(Debug)]
 pub struct ProjectionStage<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> {
     operator: O,
     solver: S,
     pi: Vec<f64>,
-    /// The full step of the current attempt ([`Stage::full_step`]); 0 when not given.
-    dt_full: f64,
+    dt_full: FullStep,
 }
 
 impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> ProjectionStage<O, S> {
@@ -118,7 +143,7 @@ impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> ProjectionStage<O, 
             operator,
             solver,
             pi: vec![0.0; (nx + 1) * m],
-            dt_full: 0.0,
+            dt_full: FullStep::default(),
         }
     }
 
@@ -136,21 +161,13 @@ impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> Stage<Line, Layered
     }
 
     fn full_step(&mut self, dt_full: f64) {
-        self.dt_full = dt_full;
+        self.dt_full.set(dt_full);
     }
 
     fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
         self.operator
             .solve(mesh, state, &mut self.solver, &mut self.pi);
-        // A step shortened to land on an output time stores the pressure of the full
-        // step (module documentation, "Shortened steps"); an infinite full step (a
-        // mass at rest) is no step to take a rate over.
-        let dt_p = if self.dt_full > dt && self.dt_full.is_finite() {
-            self.dt_full
-        } else {
-            dt
-        };
-        self.dt_full = 0.0;
+        let dt_p = self.dt_full.pressure_step(dt);
         self.operator.correct(mesh, state, &self.pi, dt_p);
         Ok(())
     }

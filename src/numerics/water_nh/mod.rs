@@ -59,7 +59,7 @@ pub mod grains;
 use super::banded::BandedCholesky;
 use super::projection::monolayer::wet_threshold;
 use super::projection::multilayer::MultilayerOperator;
-use super::projection::{PressureSolver, ProjectionOperator};
+use super::projection::{FullStep, PressureSolver, ProjectionOperator};
 use super::{Stage, StageError};
 use crate::grid::CurvedLine;
 use crate::physics::two_layer::H_DRY_TWO_LAYER;
@@ -442,8 +442,7 @@ fn advect(left: f64, here: f64, right: f64, c_up: f64, c_down: f64) -> f64 {
 #[derive(Debug)]
 pub struct WaterProjectionStage {
     pub projection: WaterProjection,
-    /// The full step of the current step (0 when not told).
-    dt_full: f64,
+    dt_full: FullStep,
 }
 
 impl WaterProjectionStage {
@@ -451,7 +450,7 @@ impl WaterProjectionStage {
     pub fn new(projection: WaterProjection) -> Self {
         WaterProjectionStage {
             projection,
-            dt_full: 0.0,
+            dt_full: FullStep::default(),
         }
     }
 }
@@ -466,7 +465,7 @@ impl Stage<CurvedLine, TwoLayerState> for WaterProjectionStage {
     }
 
     fn full_step(&mut self, dt_full: f64) {
-        self.dt_full = dt_full;
+        self.dt_full.set(dt_full);
     }
 
     fn apply(
@@ -475,12 +474,7 @@ impl Stage<CurvedLine, TwoLayerState> for WaterProjectionStage {
         dt: f64,
         state: &mut TwoLayerState,
     ) -> Result<(), StageError> {
-        let dt_p = if self.dt_full > dt && self.dt_full.is_finite() {
-            self.dt_full
-        } else {
-            dt
-        };
-        self.dt_full = 0.0;
+        let dt_p = self.dt_full.pressure_step(dt);
         self.projection.project_storing(grid, state, dt, dt_p);
         Ok(())
     }
