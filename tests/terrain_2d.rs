@@ -689,60 +689,46 @@ fn rotated_releases_agree_within_a_tolerance_that_shrinks_with_the_cell_size() {
 #[test]
 fn a_speed_bound_failure_names_the_fastest_cell_by_x_and_y() {
     use granflow::output::memory::MemorySink;
-    use granflow::output::RunInfo;
     use granflow::physics::shallow::velocity;
-    use granflow::simulation::{RunConfig, RunError, Simulation};
+    use granflow::simulation::RunError;
     use granflow::stop::SpeedBound;
-    let (nx, ny) = (24, 12);
-    let r = raster(
-        nx,
-        ny,
-        (-1.0, 1.0),
-        (-0.5, 0.5),
-        Sides::all(WALL),
-        Coordinates::Cartesian,
-        0.0,
-        |_, _| 0.0,
-    );
-    // A lopsided, off-centre release: no symmetry makes two cells equally fast.
-    let h: Vec<f64> = (0..nx * ny)
-        .map(|k| {
-            let (x, y) = (r.x(k % nx), r.y(k / nx));
-            let inside = (x - 0.1).powi(2) + 2.0 * y * y < 0.04;
-            if inside {
-                0.3 + 0.5 * x + 0.2 * y
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let mut state = State2d::zeros(nx * ny);
-    state.h.clone_from(&h);
-    let law = FrictionLaw::Coulomb { mu: tan_deg(27.0) };
-    let pipeline = granular_2d::pipeline(&law, &material(), &r, 1).unwrap();
-    let config = RunConfig {
-        t_end: 0.4,
-        cfl: 0.45,
-        output_every: 0.1,
-        gauges: Vec::new(),
-        gauges_y: Vec::new(),
-        gauge_every: None,
-        settle_fraction: 0.0,
-    };
-    let info = RunInfo {
-        granflow_version: String::new(),
-        model: "granular".into(),
-        pressure: "hydrostatic".into(),
-        layers: 1,
-        coordinates: "cartesian".into(),
-        slope_deg: 0.0,
-        scenario_toml: String::new(),
-        front_threshold: 1e-3,
-        raster: None,
-    };
-    let model = Granular2d::new(&r, 1e-3);
-    let rules: Vec<Box<dyn granflow::stop::StopRule>> = vec![Box::new(SpeedBound { bound: 0.2 })];
-    let mut sim = Simulation::new(r, model, state, pipeline, rules, config, info);
+    // A lopsided, off-centre release on a flat bed in a walled box of 24 × 12 cells:
+    // no symmetry makes two cells equally fast.
+    let text = r#"[domain]
+x_min = -1.0
+x_max = 1.0
+y_min = -0.5
+y_max = 0.5
+cells = [24, 12]
+coordinates = "cartesian"
+
+[bed]
+b = 0.0
+
+[rheology]
+law = "coulomb"
+mu_deg = 27.0
+
+[initial]
+h = "if((x - 0.1)^2 + 2*y^2 < 0.04, 0.3 + 0.5*x + 0.2*y, 0)"
+
+[boundary]
+west = "wall"
+east = "wall"
+south = "wall"
+north = "wall"
+
+[time]
+t_end = 0.4
+cfl = 0.45
+
+[output]
+every = 0.1
+"#;
+    let scn = crate::common::load_in(text, std::path::Path::new(".")).expect("valid scenario");
+    let nx = 24;
+    let mut sim = granflow::setup::build_granular_2d(&scn, 1);
+    sim.add_rule(Box::new(SpeedBound { bound: 0.2 }));
     let mut sink = MemorySink::default();
     let Err(RunError::Solver(failure)) = sim.run(&mut sink, &mut |_| {}) else {
         panic!("the run fails its speed bound");
