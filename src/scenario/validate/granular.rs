@@ -120,17 +120,18 @@ pub(super) fn rheology(
             ),
         );
     }
+    // The Coulomb coefficient of the laws that have one (`name` as in rheology.law).
+    let mu = |name: &str| -> Result<f64, ScenarioError> {
+        let (mu, _) = coefficient("mu", number(&r.mu), number(&r.mu_deg))?.ok_or_else(|| {
+            ScenarioError::at(
+                "rheology.mu",
+                format!("missing required key (law = \"{name}\" needs mu or mu_deg)"),
+            )
+        })?;
+        Ok(mu)
+    };
     match law {
-        Law::Coulomb => {
-            let (mu, _) =
-                coefficient("mu", number(&r.mu), number(&r.mu_deg))?.ok_or_else(|| {
-                    ScenarioError::at(
-                        "rheology.mu",
-                        "missing required key (law = \"coulomb\" needs mu or mu_deg)",
-                    )
-                })?;
-            Ok(FrictionLaw::Coulomb { mu })
-        }
+        Law::Coulomb => Ok(FrictionLaw::Coulomb { mu: mu("coulomb")? }),
         Law::MuI => {
             let need = |name: &str| {
                 ScenarioError::at(
@@ -165,13 +166,7 @@ pub(super) fn rheology(
             })
         }
         Law::Voellmy => {
-            let (mu, _) =
-                coefficient("mu", number(&r.mu), number(&r.mu_deg))?.ok_or_else(|| {
-                    ScenarioError::at(
-                        "rheology.mu",
-                        "missing required key (law = \"voellmy\" needs mu or mu_deg)",
-                    )
-                })?;
+            let mu = mu("voellmy")?;
             let xi = positive("rheology.xi", required("rheology.xi", number(&r.xi))?)?;
             Ok(FrictionLaw::Voellmy { mu, xi })
         }
