@@ -746,8 +746,11 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             let (speed, h) = (0.5 * (l.speed + r.speed), 0.5 * (l.h_n + r.h_n));
             law.face_mu((l.speed, l.h_n), (r.speed, r.h_n), speed, h, g_normal)
         };
+        // The kernel's gravity, and that of its wave speeds: along the face's normal
+        // the waves of H run at √(g c_f² H G⁻¹_nn) in horizontal coordinates.
         let g_k = GRAVITY * c2;
-        match interface_with_friction(mu_of, ls, rs, 0.0, friction, g_k, d, self.dt) {
+        let gravities = (g_k, g_k * gi_nn);
+        match interface_with_friction(mu_of, ls, rs, 0.0, friction, gravities, d, self.dt) {
             None => FaceFlux::default(),
             Some((c, sl, sr)) => {
                 let t_l = if c.left_at_rest { 0.0 } else { l.t };
