@@ -712,14 +712,22 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         let c2 = 1.0 / inv_c2;
         let (gi_nn, gi_nt, gi_tt) = (1.0 - c2 * gn * gn, -c2 * gn * gt, 1.0 - c2 * gt * gt);
         let g_normal = c2.sqrt() * (GRAVITY + 0.5 * (l.kappa + r.kappa)).max(0.0);
+        // Absolute potentials (not Δb/c_f² on one side): a face and its mirror image
+        // then give the same bits with the sign changed, as in the other frames. The
+        // bed lies in the face's plane (b = 0: no step to reconstruct over) between two
+        // wet cells; beside a dry cell it is the potential itself, so that a dry cell
+        // whose bed stands above the wet one's surface is an emerging bed, as in the
+        // Cartesian system: it neither takes mass nor pushes the layer down.
+        let (zl, zr) = (l.side.b * inv_c2, r.side.b * inv_c2);
+        let step = l.side.h <= H_DRY || r.side.h <= H_DRY;
         let ls = Side {
-            b: 0.0,
-            z: 0.0,
+            b: if step { zl } else { 0.0 },
+            z: zl,
             ..l.side
         };
         let rs = Side {
-            b: 0.0,
-            z: db * inv_c2,
+            b: if step { zr } else { 0.0 },
+            z: zr,
             ..r.side
         };
         let (wl, wr) = (ls.sqrt_h, rs.sqrt_h);
