@@ -470,3 +470,45 @@ fn a_y_invariant_run_on_a_dem_plane_is_the_local_frame_line() {
         assert!(worst_h < 1e-10 && worst_u < 1e-9, "{worst_h:e} {worst_u:e}");
     }
 }
+
+/// An outflow edge that cuts a slope lets the mass leave: a layer on a DEM plane
+/// slightly steeper than its friction angle (tan θ = 1.01 μ), with a wall upslope,
+/// slides out through the downslope edge instead of stopping against it (the ghost bed continues the slope;
+/// a flat ghost held it there). After 60 s more than half of the mass has left and no
+/// cell has thickened above the release.
+#[test]
+fn a_layer_leaves_through_an_outflow_edge_that_cuts_the_slope() {
+    let mu = 0.5f64;
+    let theta = (1.01 * mu).atan();
+    let tan = theta.tan();
+    let sides = Sides {
+        west: WALL,
+        east: OUTFLOW,
+        south: WALL,
+        north: WALL,
+    };
+    let r = raster(
+        60,
+        3,
+        (0.0, 120.0),
+        (0.0, 6.0),
+        sides,
+        Coordinates::BedNormal,
+        0.0,
+        move |x, _| -x * tan,
+    );
+    let mut s = at_rest(&r, |_| 0.5);
+    let (h0, mass0): (f64, f64) = (s.h[0], s.h.iter().sum());
+    let law = FrictionLaw::Coulomb { mu };
+    let mut p = granular_2d::pipeline(&law, &material(), &r, 1).unwrap();
+    run_until(&r, &mut s, &mut p, 60.0);
+    let mass: f64 = s.h.iter().sum();
+    let thickest = s.h.iter().fold(0.0f64, |m, &h| m.max(h));
+    let q_max = s.hu.iter().fold(0.0f64, |m, q| m.max(q.abs()));
+    eprintln!(
+        "mass left {:.3} of the release, thickest {thickest:.4} (release {h0:.4}), max q {q_max:e}",
+        mass / mass0
+    );
+    assert!(mass < 0.5 * mass0, "{mass} of {mass0}");
+    assert!(thickest <= h0 * (1.0 + 1e-12), "{thickest} > {h0}");
+}
