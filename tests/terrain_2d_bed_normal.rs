@@ -380,10 +380,11 @@ fn a_channel_release_conserves_mass_and_gives_the_same_bits_on_any_thread_count(
 
 /// On a plane the bed-normal frame is the local frame: a run invariant in y on a DEM
 /// of a 25° plane (cells of ΔX cos θ horizontally) is the 1-D local-frame run over that
-/// plane (cells of ΔX along it) to round-off, step by step: normal thickness c H = h
+/// plane (cells of ΔX along it), step by step: normal thickness c H = h
 /// and speed along the slope u/c = U, for Coulomb and μ(I) dam breaks with wet/dry
-/// fronts, a wall upslope and an outflow downslope, to the dry threshold 1e-10 m
-/// (measured: 4e-11 m and 7e-11 m²/s for Coulomb). (The schemes are the same
+/// fronts, a wall upslope and an outflow downslope, up to what films do differently
+/// (measured: 1.5e-6 m and 3.7e-6 m²/s for Coulomb, 1e-5 of the release and of the
+/// largest discharge; μ(I) printed). (The schemes are the same
 /// algebra: the face's covariant drive is the local drive over c, its wave speeds c
 /// times the local ones in horizontal units, its thicknesses H = h/c.)
 #[test]
@@ -465,9 +466,13 @@ fn a_y_invariant_run_on_a_dem_plane_is_the_local_frame_line() {
         }
         eprintln!("{law:?}: max |Δh| {worst_h:e} m, max |Δq| {worst_u:e} m²/s");
         assert!(moved > 1e-2, "the dam break flows");
-        // To the dry threshold: a film of h ≤ H_DRY = 1e-10 m is dry on the line, one of
-        // H = h/c ≤ H_DRY on the DEM, so the fronts' last cells may differ by that much.
-        assert!(worst_h < 1e-10 && worst_u < 1e-9, "{worst_h:e} {worst_u:e}");
+        // Films differ: a film (a donor thinner than 1 % of the other side of a face)
+        // sends its own momentum with its mass on the DEM (`film_upwind`), and the
+        // dry threshold applies to h on the line, to H = h/c on the DEM.
+        assert!(
+            worst_h < 1e-4 * 0.1 && worst_u < 1e-4 * moved,
+            "{worst_h:e} {worst_u:e}"
+        );
     }
 }
 
