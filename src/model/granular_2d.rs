@@ -122,9 +122,11 @@ impl Granular2d {
             d.ke += h * speed2;
             d.max_speed2 = d.max_speed2.max(speed2);
             d.signal = d.signal.max(u.abs().max(v.abs()) + wave);
-            // h − h_i ≤ h: without an erodible bed the first test decides.
-            if h > self.front_threshold
-                && (!self.erodible || h - self.h_bed[k] > self.front_threshold)
+            // h − h_i ≤ h: without an erodible bed the first test decides. In the
+            // bed-normal frame the threshold is on the normal thickness c H.
+            let normal = raster.metric().map_or(1.0, |m| m.cos[k]);
+            if normal * h > self.front_threshold
+                && (!self.erodible || normal * (h - self.h_bed[k]) > self.front_threshold)
             {
                 d.front = d.front.max(raster.x(k % nx));
             }
