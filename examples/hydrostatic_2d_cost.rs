@@ -14,7 +14,9 @@
 //!   max(0, 0.5 − 0.3 r) at rest around (2, 0) (about 55 % of the cells wet), no
 //!   basal friction (μ = 0 in ΔC), outflow on every side;
 //! - `local`: the set-up of `benches/terrain_2d.rs` (a Coulomb cone, μ = tan 24°, on a
-//!   30° plane in local coordinates, whose fronts run the draining limiter).
+//!   30° plane in local coordinates, whose fronts run the draining limiter);
+//! - `bed_normal`: the same cone on the same wavy 30° plane given as a DEM (the plane
+//!   in the bed, x horizontal), in the bed-normal frame.
 //!
 //! For instruction counts run it under `valgrind --tool=callgrind` with two step
 //! counts and difference the totals. The last line is an FNV-1a hash of the final
@@ -32,7 +34,8 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(256);
     let steps: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(10);
-    let local = args.get(3).is_some_and(|s| s == "local");
+    let bed_normal = args.get(3).is_some_and(|s| s == "bed_normal");
+    let local = bed_normal || args.get(3).is_some_and(|s| s == "local");
     let threads: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(1);
     let both = args.get(5).is_some_and(|s| s == "both");
     // The bench's cone touches the west edge; the side-by-side one is inside.
@@ -45,17 +48,20 @@ fn main() {
         y_min,
         y_max: y_min + 4.0,
         sides: Sides::all(BoundaryKind::Outflow),
-        coordinates: if local {
+        coordinates: if bed_normal {
+            Coordinates::BedNormal
+        } else if local {
             Coordinates::Local
         } else {
             Coordinates::Cartesian
         },
-        slope_deg: if local { 30.0 } else { 0.0 },
+        slope_deg: if local && !bed_normal { 30.0 } else { 0.0 },
     };
     let bed = (0..n * n)
         .map(|k| {
             let (x, y) = (spec.x(k % n), spec.y(k / n));
-            0.05 * (2.0 * x).sin() * y.cos()
+            let plane = if bed_normal { -x * 30f64.to_radians().tan() } else { 0.0 };
+            0.05 * (2.0 * x).sin() * y.cos() + plane
         })
         .collect();
     let raster = Raster2d::new(spec, bed).expect("raster");

@@ -288,10 +288,12 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     }
 }
 
-/// The read-only data of one step.
-struct Ctx<'a, L: BasalFriction> {
+/// The read-only data of one step; `BN`: the raster is in the bed-normal frame (the
+/// flat frames' code is compiled without its branches).
+struct Ctx<'a, L: BasalFriction, const BN: bool> {
     friction: &'a CellFriction<L>,
     raster: &'a Raster2d,
+    metric: Option<&'a BedMetric>,
     h: &'a [f64],
     hu: &'a [f64],
     hv: &'a [f64],
@@ -300,7 +302,18 @@ struct Ctx<'a, L: BasalFriction> {
     dt: f64,
 }
 
-impl<'a, L: BasalFriction> Ctx<'a, L> {
+impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
+    /// The bed's metric in the bed-normal frame, `None` (known at compile time) in
+    /// the others.
+    #[inline(always)]
+    fn bed(&self) -> Option<&'a BedMetric> {
+        if BN {
+            self.metric
+        } else {
+            None
+        }
+    }
+
     /// The context of one pass over `state` on `raster` with step `dt`.
     fn new(
         friction: &'a CellFriction<L>,
@@ -311,6 +324,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         Ctx {
             friction,
             raster,
+            metric: raster.metric(),
             h: &state.h,
             hu: &state.hu,
             hv: &state.hv,
@@ -387,7 +401,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
     #[inline(always)]
     fn tangential_drive(&self, i: usize, j: usize, t: f64, along_x: bool) -> f64 {
         let (lo, hi, d) = self.neighbours(i, j, along_x);
-        if let Some(m) = self.raster.metric() {
+        if let Some(m) = self.bed() {
             return self.covariant_drive(m, (i, j), t, along_x, (lo, hi, d));
         }
         if lo == hi {
@@ -482,7 +496,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             kappa: 0.0,
             h_n: h,
         };
-        if let Some(m) = self.raster.metric() {
+        if let Some(m) = self.bed() {
             (view.wx, view.wy) = m.lower(cell, u, v);
             view.speed = m.speed(cell, u, v);
             (view.gx, view.gy) = (m.gx[cell], m.gy[cell]);
@@ -540,7 +554,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             (j * self.nx + c - 1, 1.0)
         };
         let g = self.raster.ghost_index(c, j + 1);
-        if let Some(m) = self.raster.metric() {
+        if let Some(m) = self.bed() {
             return self.covariant_side(m, cell, sign, g, true);
         }
         let h = self.h[cell];
@@ -616,7 +630,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             ((r - 1) * self.nx + i, 1.0)
         };
         let g = self.raster.ghost_index(i + 1, r);
-        if let Some(m) = self.raster.metric() {
+        if let Some(m) = self.bed() {
             return self.covariant_side(m, cell, sign, g, false);
         }
         let h = self.h[cell];
@@ -665,7 +679,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         d: f64,
         cells: C,
     ) -> FaceFlux {
-        if let Some(m) = self.raster.metric() {
+        if let Some(m) = self.bed() {
             return self.bed_normal_face(m, l, r, d, cells);
         }
         let mu_of = |speed: f64, h: f64, drive: f64| self.face_mu(l, r, speed, h, drive, cells);
@@ -914,7 +928,7 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
     #[inline(always)]
     fn update(&self, cell: usize, r: (f64, f64), faces: [&FaceFlux; 4]) -> (f64, f64, f64) {
         let old = (self.h[cell], self.hu[cell], self.hv[cell]);
-        let Some(m) = self.raster.metric() else {
+        let Some(m) = self.bed() else {
             return update_cell(old, r, faces);
         };
         let (h, qx, qy) = old;
@@ -1101,15 +1115,17 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     /// unclipped), with every cell's draining factor from the same faces; returns the
     /// smallest new thickness and its cell, first in cell order.
     fn update_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
-        if raster.walls().is_empty() {
-            self.update_pass_with::<false>(raster, dt, state)
-        } else {
-            self.update_pass_with::<true>(raster, dt, state)
+        match (raster.walls().is_empty(), raster.metric().is_some()) {
+            (true, false) => self.update_pass_with::<false, false>(raster, dt, state),
+            (false, false) => self.update_pass_with::<true, false>(raster, dt, state),
+            (true, true) => self.update_pass_with::<false, true>(raster, dt, state),
+            (false, true) => self.update_pass_with::<true, true>(raster, dt, state),
         }
     }
 
-    /// [`Self::update_pass`] with (`WALLS`) or without the test for wall cells.
-    fn update_pass_with<const WALLS: bool>(
+    /// [`Self::update_pass`] with (`WALLS`) or without the test for wall cells, in the
+    /// bed-normal frame (`BN`) or another.
+    fn update_pass_with<const WALLS: bool, const BN: bool>(
         &mut self,
         raster: &Raster2d,
         dt: f64,
@@ -1117,7 +1133,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     ) -> (f64, usize) {
         let nx = raster.nx();
         let r = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx::new(&self.friction, raster, state, dt);
+        let ctx = Ctx::<L, BN>::new(&self.friction, raster, state, dt);
         let outputs = (
             self.h_new.as_mut_slice(),
             self.hu_new.as_mut_slice(),
@@ -1158,15 +1174,17 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     /// which are the same bits (a flux times θ = 1 is the flux). Returns the smallest
     /// new thickness and its cell, first in cell order.
     fn limited_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
-        if raster.walls().is_empty() {
-            self.limited_pass_with::<false>(raster, dt, state)
-        } else {
-            self.limited_pass_with::<true>(raster, dt, state)
+        match (raster.walls().is_empty(), raster.metric().is_some()) {
+            (true, false) => self.limited_pass_with::<false, false>(raster, dt, state),
+            (false, false) => self.limited_pass_with::<true, false>(raster, dt, state),
+            (true, true) => self.limited_pass_with::<false, true>(raster, dt, state),
+            (false, true) => self.limited_pass_with::<true, true>(raster, dt, state),
         }
     }
 
-    /// [`Self::limited_pass`] with (`WALLS`) or without the test for wall cells.
-    fn limited_pass_with<const WALLS: bool>(
+    /// [`Self::limited_pass`] with (`WALLS`) or without the test for wall cells, in the
+    /// bed-normal frame (`BN`) or another.
+    fn limited_pass_with<const WALLS: bool, const BN: bool>(
         &mut self,
         raster: &Raster2d,
         dt: f64,
@@ -1174,7 +1192,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     ) -> (f64, usize) {
         let (nx, ny) = (raster.nx(), raster.ny());
         let r = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx::new(&self.friction, raster, state, dt);
+        let ctx = Ctx::<L, BN>::new(&self.friction, raster, state, dt);
         for (k, s) in self.scratch.iter().enumerate() {
             let rows = raster.band_rows(k);
             let n = rows.len();
