@@ -114,18 +114,13 @@ impl FaceFlux {
 /// velocity (which carries the mass), `side.u_base` and `t` the normal and tangential
 /// covariant components of the tangent velocity (the momenta the face carries,
 /// [`BedMetric::lower`]), `drive` the tangential covariant drive, `speed` the speed
-/// along the surface; `slope_t` is the bed's gradient along the face, `kappa` the
-/// cell's centrifugal term uᵀ∇²b u and `h_n` its thickness normal to the bed. In the
-/// other frames `side.u_base` = `side.u` and the last three are unused.
+/// along the surface. In the other frames `side.u_base` = `side.u`.
 #[derive(Debug, Clone, Copy)]
 struct FaceSide {
     side: Side,
     t: f64,
     drive: f64,
     speed: f64,
-    slope_t: f64,
-    kappa: f64,
-    h_n: f64,
 }
 
 /// A cell as its four faces see it, computed once per sweep: thickness, the
@@ -136,8 +131,7 @@ struct FaceSide {
 /// boundary's sign on v; only its y-side is read.
 ///
 /// (wx, wy) are the momenta per unit mass the faces carry: (u, v) in the flat frames,
-/// the covariant components G (u, v) in the bed-normal frame, where (gx, gy), `kappa`
-/// and `h_n` are the bed's gradient, uᵀ∇²b u and the normal thickness ([`FaceSide`]).
+/// the covariant components G (u, v) in the bed-normal frame ([`FaceSide`]).
 #[derive(Debug, Clone, Copy, Default)]
 struct CellView {
     h: f64,
@@ -151,10 +145,6 @@ struct CellView {
     drive_x: f64,
     drive_y: f64,
     speed: f64,
-    gx: f64,
-    gy: f64,
-    kappa: f64,
-    h_n: f64,
 }
 
 impl CellView {
@@ -166,9 +156,6 @@ impl CellView {
             t: self.wy,
             drive: self.drive_y,
             speed: self.speed,
-            slope_t: self.gy,
-            kappa: self.kappa,
-            h_n: self.h_n,
         }
     }
 
@@ -180,9 +167,6 @@ impl CellView {
             t: self.wx,
             drive: self.drive_x,
             speed: self.speed,
-            slope_t: self.gx,
-            kappa: self.kappa,
-            h_n: self.h_n,
         }
     }
 
@@ -491,17 +475,10 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             drive_x: 0.0,
             drive_y: 0.0,
             speed: 0.0,
-            gx: 0.0,
-            gy: 0.0,
-            kappa: 0.0,
-            h_n: h,
         };
         if let Some(m) = self.bed() {
             (view.wx, view.wy) = m.lower(cell, u, v);
             view.speed = m.speed(cell, u, v);
-            (view.gx, view.gy) = (m.gx[cell], m.gy[cell]);
-            view.kappa = m.normal_curvature(cell, u, v);
-            view.h_n = m.cos[cell] * h;
         } else {
             view.speed = cell_speed(u, v);
         }
@@ -532,10 +509,6 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
                     drive_x: y.drive,
                     drive_y: 0.0,
                     speed: y.speed,
-                    gx: y.slope_t,
-                    gy: 0.0,
-                    kappa: y.kappa,
-                    h_n: y.h_n,
                 };
             }
         }
@@ -570,9 +543,6 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             t: v,
             drive: self.tangential_drive(cell % self.nx, j, v, false),
             speed: cell_speed(side.u, v),
-            slope_t: 0.0,
-            kappa: 0.0,
-            h_n: h,
         }
     }
 
@@ -591,10 +561,10 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         let h = self.h[cell];
         let (u, v) = (velocity(h, self.hu[cell]), velocity(h, self.hv[cell]));
         let (wx, wy) = m.lower(cell, u, v);
-        let (normal, carried, t, slope_t) = if x_face {
-            (u, wx, wy, m.gy[cell])
+        let (normal, carried, t) = if x_face {
+            (u, wx, wy)
         } else {
-            (v, wy, wx, m.gx[cell])
+            (v, wy, wx)
         };
         let b = self.raster.b_ghost[g];
         let (i, j) = (cell % self.nx, cell / self.nx);
@@ -611,9 +581,6 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             t,
             drive: self.tangential_drive(i, j, t, !x_face),
             speed: m.speed(cell, u, v),
-            slope_t,
-            kappa: m.normal_curvature(cell, u, v),
-            h_n: m.cos[cell] * h,
         }
     }
 
@@ -646,9 +613,6 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             t: u,
             drive: self.tangential_drive(i, cell / self.nx, u, true),
             speed: cell_speed(u, side.u),
-            slope_t: 0.0,
-            kappa: 0.0,
-            h_n: h,
         }
     }
 
@@ -670,17 +634,18 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     /// The fluxes of one face with sides `l`, `r` along its normal (velocities normal
     /// to the face); zero where nothing crosses. The 1-D monolayer face
     /// ([`super::face::monolayer_fluxes`]) with the disk threshold of ΔC, plus the
-    /// tangential flux. `d` is the cell width across the face, `cells` its cells.
+    /// tangential flux. `d` is the cell width across the face (an x-face where
+    /// `along_x`), `cells` its cells.
     #[inline(always)]
     fn face_flux<C: Fn() -> (usize, usize) + Copy>(
         &self,
         l: &FaceSide,
         r: &FaceSide,
-        d: f64,
+        (d, along_x): (f64, bool),
         cells: C,
     ) -> FaceFlux {
         if let Some(m) = self.bed() {
-            return self.bed_normal_face(m, l, r, d, cells);
+            return self.bed_normal_face(m, l, r, (d, along_x), cells);
         }
         let mu_of = |speed: f64, h: f64, drive: f64| self.face_mu(l, r, speed, h, drive, cells);
         let (g_n, dt) = (self.raster.g_n, self.dt);
@@ -714,18 +679,27 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     #[inline(always)]
     fn bed_normal_face<C: Fn() -> (usize, usize) + Copy>(
         &self,
-        _m: &BedMetric,
+        m: &BedMetric,
         l: &FaceSide,
         r: &FaceSide,
-        d: f64,
+        (d, along_x): (f64, bool),
         cells: C,
     ) -> FaceFlux {
+        // The cells' geometry (a ghost's is its edge cell's): the bed's slope along the
+        // face, the centrifugal term and the normal thickness.
+        let (cl, cr) = cells();
+        let slope_t = |c: usize| if along_x { m.gy[c] } else { m.gx[c] };
+        let kappa = |c: usize| {
+            let h = self.h[c];
+            m.normal_curvature(c, velocity(h, self.hu[c]), velocity(h, self.hv[c]))
+        };
+        let (hn_l, hn_r) = (m.cos[cl] * l.side.h, m.cos[cr] * r.side.h);
         let db = r.side.b - l.side.b;
-        let (gn, gt) = (db / d, 0.5 * (l.slope_t + r.slope_t));
+        let (gn, gt) = (db / d, 0.5 * (slope_t(cl) + slope_t(cr)));
         let inv_c2 = 1.0 + gn * gn + gt * gt;
         let c2 = 1.0 / inv_c2;
         let (gi_nn, gi_nt, gi_tt) = (1.0 - c2 * gn * gn, -c2 * gn * gt, 1.0 - c2 * gt * gt);
-        let g_normal = c2.sqrt() * (GRAVITY + 0.5 * (l.kappa + r.kappa)).max(0.0);
+        let g_normal = c2.sqrt() * (GRAVITY + 0.5 * (kappa(cl) + kappa(cr))).max(0.0);
         // Absolute potentials (not Δb/c_f² on one side): a face and its mirror image
         // then give the same bits with the sign changed, as in the other frames. The
         // bed lies in the face's plane (b = 0: no step to reconstruct over) between two
@@ -765,8 +739,8 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
                     laws[if drive > 0.0 { lo } else { hi }]
                 }
             };
-            let (speed, h) = (0.5 * (l.speed + r.speed), 0.5 * (l.h_n + r.h_n));
-            law.face_mu((l.speed, l.h_n), (r.speed, r.h_n), speed, h, g_normal)
+            let (speed, h) = (0.5 * (l.speed + r.speed), 0.5 * (hn_l + hn_r));
+            law.face_mu((l.speed, hn_l), (r.speed, hn_r), speed, h, g_normal)
         };
         // The kernel's gravity, and that of its wave speeds: along the face's normal
         // the waves of H run at √(g c_f² H G⁻¹_nn) in horizontal coordinates.
@@ -806,7 +780,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         l: FaceSide,
         r: FaceSide,
         (wall_l, wall_r): (bool, bool),
-        d: f64,
+        d: (f64, bool),
         (lo, hi): (usize, usize),
     ) -> FaceFlux {
         let mirror = |s: FaceSide| FaceSide {
@@ -839,7 +813,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         l: FaceSide,
         r: FaceSide,
         (wl, wr): (bool, bool),
-        d: f64,
+        d: (f64, bool),
         cells: C,
     ) -> FaceFlux {
         if WALLS && (wl || wr) {
@@ -866,7 +840,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
                 (false, false)
             };
             let cells = || self.y_cells(i, r);
-            *f = self.face::<WALLS, _>(lo.y_side(), hi.y_side(), walls, dy, cells);
+            *f = self.face::<WALLS, _>(lo.y_side(), hi.y_side(), walls, (dy, false), cells);
         }
     }
 
@@ -900,7 +874,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
                 } else {
                     (false, false)
                 };
-                self.face::<WALLS, _>(left, right, walls, dx, || self.x_cells(c, j))
+                self.face::<WALLS, _>(left, right, walls, (dx, true), || self.x_cells(c, j))
             };
             let mut left = self.x_side(0, j);
             let mut right = row[0].x_side();
@@ -981,11 +955,11 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             if WALLS {
                 let (wl, wr) = (self.x_wall(c, j), self.x_wall(c + 1, j));
                 if wl || wr {
-                    return self.wall_face(l, r, (wl, wr), dx, cells());
+                    return self.wall_face(l, r, (wl, wr), (dx, true), cells());
                 }
             }
             donor(
-                self.face_flux(&l, &r, dx, cells),
+                self.face_flux(&l, &r, (dx, true), cells),
                 x_theta(c),
                 x_theta(c + 1),
             )
@@ -997,11 +971,11 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             if WALLS {
                 let (wl, wr) = (self.y_wall(i, r), self.y_wall(i, r + 1));
                 if wl || wr {
-                    return self.wall_face(lo, hi, (wl, wr), dy, cells());
+                    return self.wall_face(lo, hi, (wl, wr), (dy, false), cells());
                 }
             }
             donor(
-                self.face_flux(&lo, &hi, dy, cells),
+                self.face_flux(&lo, &hi, (dy, false), cells),
                 y_theta(r),
                 y_theta(r + 1),
             )
