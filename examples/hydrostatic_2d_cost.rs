@@ -60,7 +60,11 @@ fn main() {
     let bed = (0..n * n)
         .map(|k| {
             let (x, y) = (spec.x(k % n), spec.y(k / n));
-            let plane = if bed_normal { -x * 30f64.to_radians().tan() } else { 0.0 };
+            let plane = if bed_normal {
+                -x * 30f64.to_radians().tan()
+            } else {
+                0.0
+            };
             0.05 * (2.0 * x).sin() * y.cos() + plane
         })
         .collect();

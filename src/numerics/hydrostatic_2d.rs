@@ -114,13 +114,15 @@ impl FaceFlux {
 /// velocity (which carries the mass), `side.u_base` and `t` the normal and tangential
 /// covariant components of the tangent velocity (the momenta the face carries,
 /// [`BedMetric::lower`]), `drive` the tangential covariant drive, `speed` the speed
-/// along the surface. In the other frames `side.u_base` = `side.u`.
+/// along the surface, `kappa` the cell's centrifugal term uᵀ∇²b u. In the other
+/// frames `side.u_base` = `side.u` and `kappa` = 0.
 #[derive(Debug, Clone, Copy)]
 struct FaceSide {
     side: Side,
     t: f64,
     drive: f64,
     speed: f64,
+    kappa: f64,
 }
 
 /// A cell as its four faces see it, computed once per sweep: thickness, the
@@ -145,6 +147,7 @@ struct CellView {
     drive_x: f64,
     drive_y: f64,
     speed: f64,
+    kappa: f64,
 }
 
 impl CellView {
@@ -156,6 +159,7 @@ impl CellView {
             t: self.wy,
             drive: self.drive_y,
             speed: self.speed,
+            kappa: self.kappa,
         }
     }
 
@@ -167,6 +171,7 @@ impl CellView {
             t: self.wx,
             drive: self.drive_x,
             speed: self.speed,
+            kappa: self.kappa,
         }
     }
 
@@ -475,10 +480,12 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             drive_x: 0.0,
             drive_y: 0.0,
             speed: 0.0,
+            kappa: 0.0,
         };
         if let Some(m) = self.bed() {
             (view.wx, view.wy) = m.lower(cell, u, v);
             view.speed = m.speed(cell, u, v);
+            view.kappa = m.normal_curvature(cell, u, v);
         } else {
             view.speed = cell_speed(u, v);
         }
@@ -509,6 +516,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
                     drive_x: y.drive,
                     drive_y: 0.0,
                     speed: y.speed,
+                    kappa: y.kappa,
                 };
             }
         }
@@ -543,6 +551,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             t: v,
             drive: self.tangential_drive(cell % self.nx, j, v, false),
             speed: cell_speed(side.u, v),
+            kappa: 0.0,
         }
     }
 
@@ -561,11 +570,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         let h = self.h[cell];
         let (u, v) = (velocity(h, self.hu[cell]), velocity(h, self.hv[cell]));
         let (wx, wy) = m.lower(cell, u, v);
-        let (normal, carried, t) = if x_face {
-            (u, wx, wy)
-        } else {
-            (v, wy, wx)
-        };
+        let (normal, carried, t) = if x_face { (u, wx, wy) } else { (v, wy, wx) };
         let b = self.raster.b_ghost[g];
         let (i, j) = (cell % self.nx, cell / self.nx);
         FaceSide {
@@ -581,6 +586,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             t,
             drive: self.tangential_drive(i, j, t, !x_face),
             speed: m.speed(cell, u, v),
+            kappa: m.normal_curvature(cell, u, v),
         }
     }
 
@@ -613,6 +619,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             t: u,
             drive: self.tangential_drive(i, cell / self.nx, u, true),
             speed: cell_speed(u, side.u),
+            kappa: 0.0,
         }
     }
 
@@ -686,20 +693,16 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         cells: C,
     ) -> FaceFlux {
         // The cells' geometry (a ghost's is its edge cell's): the bed's slope along the
-        // face, the centrifugal term and the normal thickness.
+        // face and the normal thickness.
         let (cl, cr) = cells();
         let slope_t = |c: usize| if along_x { m.gy[c] } else { m.gx[c] };
-        let kappa = |c: usize| {
-            let h = self.h[c];
-            m.normal_curvature(c, velocity(h, self.hu[c]), velocity(h, self.hv[c]))
-        };
         let (hn_l, hn_r) = (m.cos[cl] * l.side.h, m.cos[cr] * r.side.h);
         let db = r.side.b - l.side.b;
         let (gn, gt) = (db / d, 0.5 * (slope_t(cl) + slope_t(cr)));
         let inv_c2 = 1.0 + gn * gn + gt * gt;
         let c2 = 1.0 / inv_c2;
         let (gi_nn, gi_nt, gi_tt) = (1.0 - c2 * gn * gn, -c2 * gn * gt, 1.0 - c2 * gt * gt);
-        let g_normal = c2.sqrt() * (GRAVITY + 0.5 * (kappa(cl) + kappa(cr))).max(0.0);
+        let g_normal = c2.sqrt() * (GRAVITY + 0.5 * (l.kappa + r.kappa)).max(0.0);
         // Absolute potentials (not Δb/c_f² on one side): a face and its mirror image
         // then give the same bits with the sign changed, as in the other frames. The
         // bed lies in the face's plane (b = 0: no step to reconstruct over) between two
