@@ -730,6 +730,14 @@ fn a_run_of_one_row_exports_where_it_is_or_is_refused() {
     assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("not square"), "{stderr}");
     assert!(stderr.contains("dy = 2"), "{stderr}");
+    // A negative time is granflow's to refuse (the argument parser took `-1` for an
+    // option).
+    let (code, stderr) = granflow_in(d, &["export", "square.h5", "--time", "-1"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--time -1: outside the snapshots' times [0, 0.2] s"),
+        "{stderr}"
+    );
 }
 
 /// `scripts/check_output.py` accepts a run with wall cells (NaN by design in
