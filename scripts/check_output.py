@@ -4,8 +4,9 @@
     python scripts/check_output.py FILE.h5 [--expect-layers N] [--unfinished]
 
 A raster (2-D) run (root attribute grid = "raster") is checked against its own
-layout: (ny, nx) grid arrays, (nt, ny, nx) snapshots, the volume in /diagnostics/mass
-against sum(h) dx dy of the snapshots, the /maps (h_max >= deposit, arrival_time NaN
+layout: (ny, nx) grid arrays, (nt, ny, nx) snapshots (NaN exactly on the wall cells,
+the NaN cells of /grid/b), the volume in /diagnostics/mass against sum(h) dx dy of
+the snapshots, the /maps (h_max >= deposit, arrival_time NaN
 exactly where h_max never exceeded the front threshold) and the XDMF file beside it
 (it parses, and every dataset it names exists with the dimensions it states).
 
@@ -90,6 +91,7 @@ class Checker:
         self.expect_layers = expect_layers
         self.unfinished = unfinished
         self.problems = []
+        self.walls = None
 
     def fail(self, message):
         self.problems.append(message)
@@ -337,11 +339,23 @@ class Checker:
         for name, a in (("x", x), ("y", y)):
             if len(a) > 1 and not np.all(np.diff(a) > 0):
                 self.fail(f"/grid/{name} is not strictly increasing")
+        # Wall cells (nodata cells of the DEM) are NaN in /grid/b, the snapshots and
+        # the maps by design; every other cell must be finite.
+        walls = np.isnan(f["grid/b"][:])
+        n_walls = int(walls.sum())
+        stated = int(f["summary"].attrs.get("wall_cells", 0))
+        if n_walls != stated and "wall_cells" in f["summary"].attrs:
+            self.fail(f"/grid/b has {n_walls} NaN (wall) cells but /summary wall_cells "
+                      f"is {stated}")
+        self.walls = walls
         h = f["snapshots/h"][:]
         for name in ("h", "u", "v"):
             a = f[f"snapshots/{name}"][:]
-            if not np.isfinite(a).all():
-                self.fail(f"/snapshots/{name} has non-finite values")
+            if not np.isfinite(a[:, ~walls]).all():
+                self.fail(f"/snapshots/{name} has non-finite values off the wall cells")
+            if n_walls and not np.isnan(a[:, walls]).all():
+                self.fail(f"/snapshots/{name} has values on wall cells (NaN expected)")
+        h = np.where(walls, 0.0, h)
         if (h < 0).any():
             self.fail(f"/snapshots/h has negative values (min {np.nanmin(h):.3g})")
         # The volume: sum(h) dx dy of each snapshot against /diagnostics/mass.
@@ -382,6 +396,13 @@ class Checker:
             if a.shape != (ny, nx):
                 self.fail(f"/maps/{n} has shape {a.shape}, expected {(ny, nx)}")
                 return
+        # Wall cells are NaN in every map; the checks below are on the other cells.
+        walls = self.walls
+        for n, a in m.items():
+            if walls.any() and not np.isnan(a[walls]).all():
+                self.fail(f"/maps/{n} has values on wall cells (NaN expected)")
+            m[n] = a[~walls]
+        h = h[:, ~walls]
         if not (m["h_max"] >= m["deposit"]).all():
             self.fail("/maps/h_max is below /maps/deposit somewhere")
         if len(h) and not (m["h_max"] >= h.max(axis=0)).all():

@@ -348,6 +348,9 @@ impl<M: Model> Simulation<M> {
         if let Some(i) = d0.non_finite_at {
             return Err(self.failure(FailureReason::NonFinite, Some(i)));
         }
+        if let Some(quantity) = crate::stop::total_overflow(&d0) {
+            return Err(self.failure(FailureReason::TotalOverflow { quantity }, None));
+        }
         sink.step(&self.record(&d0, 0.0))?;
         if let Some(tracker) = self.tracker.as_mut() {
             tracker.observe(&self.grid, &self.state, self.t);

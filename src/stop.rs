@@ -3,10 +3,12 @@
 //! answers "go on", "stop with this status" or "fail with this reason"; the loop
 //! itself only advances time and writes output.
 //!
-//! The default rules ([`default_rules`]): a non-finite value fails the run, a CFL step
-//! that collapses fails it, Ctrl-C ends it (`interrupted`), an empty domain ends it
+//! The default rules ([`default_rules`]): a non-finite value (or a total mass or
+//! kinetic energy that overflows) fails the run, a CFL step that collapses fails it,
+//! and so does one that would need more than [`MAX_STEPS`] steps to reach t_end in a run
+//! no early-stop rule can end, Ctrl-C ends it (`interrupted`), an empty domain ends it
 //! (`no_mass`, `outflowed`), a speed beyond the run's physical bound or a mass that
-//! grows without a source fails it, with `time.stop_at_rest` a mass at rest ends it and with
+//! grows fails it, with `time.stop_at_rest` a mass at rest ends it and with
 //! `time.stop_when_settled` a mass whose kinetic energy has fallen to
 //! `time.settle_fraction` of its peak ends it (`settled`).
 //! The end time is the loop's own condition.
@@ -49,10 +51,16 @@ pub struct SolverFailure {
 pub enum FailureReason {
     /// A NaN or infinity in the state (before the first step: in the initial state).
     NonFinite,
+    /// Every cell is finite but a total over the domain (its mass or kinetic energy)
+    /// overflows to infinity: no budget or stop rule can be judged on it.
+    TotalOverflow { quantity: &'static str },
     /// The thickness would become negative even with the smallest retried Δt.
     NegativeThickness { h: f64, dt: f64 },
-    /// The CFL step fell below [`MIN_DT_FRACTION`] of t_end.
+    /// The CFL step fell below [`collapse_threshold`].
     DtCollapse { dt: f64, max_speed: f64 },
+    /// At the CFL step `dt` the time left to t_end would take more than [`MAX_STEPS`]
+    /// steps, in a run that no early-stop rule can end.
+    TooManySteps { dt: f64, steps: f64, t_end: f64 },
     /// A stage left the model's admissible states (e.g. a volume fraction outside (0, 1)).
     Inadmissible { quantity: &'static str, value: f64 },
     /// The largest speed exceeds the run's physical bound ([`SpeedBound`]).
@@ -77,6 +85,19 @@ impl std::fmt::Display for SolverFailure {
             FailureReason::NonFinite => {
                 write!(f, "non-finite value at {at}, t = {t:.6e} s (step {step})")
             }
+            FailureReason::TotalOverflow { quantity } => {
+                let when = if step == 0 {
+                    "of the initial state".to_string()
+                } else {
+                    format!("at t = {t:.6e} s (step {step})")
+                };
+                write!(
+                    f,
+                    "the total {quantity} {when} overflows (every cell is finite, their sum \
+                     over the domain is not): the domain is too large for its thicknesses \
+                     and speeds, or the scheme blew up"
+                )
+            }
             FailureReason::NegativeThickness { h, dt } => write!(
                 f,
                 "thickness would become negative ({h:.3e} m) at {at}, t = {t:.6e} s even with Δt = {dt:.3e} s"
@@ -84,6 +105,17 @@ impl std::fmt::Display for SolverFailure {
             FailureReason::DtCollapse { dt, max_speed } => write!(
                 f,
                 "time step collapsed to {dt:.3e} s at t = {t:.6e} s (step {step}, max speed {max_speed:.3e} m/s)"
+            ),
+            FailureReason::TooManySteps {
+                dt,
+                steps,
+                t_end,
+            } => write!(
+                f,
+                "at the CFL step {dt:.3e} s the run would take {steps:.1e} more steps to reach \
+                 time.t_end = {t_end:e} s (more than {MAX_STEPS:e}) at t = {t:.6e} s (step \
+                 {step}): shorten time.t_end, or let the run end itself with \
+                 time.stop_at_rest or time.stop_when_settled"
             ),
             FailureReason::Inadmissible { quantity, value } => write!(
                 f,
@@ -126,27 +158,55 @@ pub trait StopRule: Send {
     fn check(&mut self, ctx: &StepContext) -> Verdict;
 }
 
-/// A non-finite value anywhere fails the run at the step that produced it.
+/// A non-finite value anywhere fails the run at the step that produced it, and so
+/// does a total (mass, kinetic energy) that overflows although every cell is finite:
+/// an infinite mass would otherwise count as "outflowed" or "at rest".
 #[derive(Debug, Default)]
 pub struct NonFinite;
 
 impl StopRule for NonFinite {
     fn check(&mut self, ctx: &StepContext) -> Verdict {
-        match ctx.diagnostics.non_finite_at {
-            None => Verdict::Continue,
-            Some(i) => Verdict::Fail(SolverFailure {
-                reason: FailureReason::NonFinite,
-                x: ctx.x.get(i).copied(),
-                y: ctx.y.get(i).copied(),
-                t: ctx.t,
-                step: ctx.steps,
-            }),
-        }
+        let d = ctx.diagnostics;
+        let (reason, cell) = match (d.non_finite_at, total_overflow(d)) {
+            (Some(i), _) => (FailureReason::NonFinite, Some(i)),
+            (None, Some(quantity)) => (FailureReason::TotalOverflow { quantity }, None),
+            (None, None) => return Verdict::Continue,
+        };
+        Verdict::Fail(SolverFailure {
+            reason,
+            x: cell.and_then(|i| ctx.x.get(i).copied()),
+            y: cell.and_then(|i| ctx.y.get(i).copied()),
+            t: ctx.t,
+            step: ctx.steps,
+        })
     }
 }
 
-/// A CFL step below this fraction of t_end stops the run as a solver failure.
+/// The total of `d` that is not finite (mass first), if any.
+pub fn total_overflow(d: &Diagnostics) -> Option<&'static str> {
+    if !d.mass.is_finite() {
+        Some("mass")
+    } else if !d.kinetic_energy.is_finite() {
+        Some("kinetic energy")
+    } else {
+        None
+    }
+}
+
+/// A CFL step below this fraction of t_end (of [`COLLAPSE_REFERENCE_MAX`] for longer
+/// runs) stops the run as a solver failure.
 pub const MIN_DT_FRACTION: f64 = 1e-10;
+
+/// The longest time (s) the collapse threshold is taken from: with t_end = 10¹⁰ s a
+/// threshold of 10⁻¹⁰ t_end would be 1 s, above the ordinary CFL step of most runs. A
+/// step below 10⁻¹⁰ of this (10⁻⁶ s) on a run of hours would take more than 10¹⁰
+/// steps, so the capped threshold still catches every collapse that matters.
+pub const COLLAPSE_REFERENCE_MAX: f64 = 1e4;
+
+/// The Δt below which a run of end time `t_end` counts as collapsed.
+pub fn collapse_threshold(t_end: f64) -> f64 {
+    MIN_DT_FRACTION * t_end.min(COLLAPSE_REFERENCE_MAX)
+}
 
 /// A finite but absurd state (e.g. u = 1e154 m/s) would crawl on with Δt near zero,
 /// filling memory with step records: fail it instead.
@@ -155,13 +215,45 @@ pub struct DtCollapse;
 
 impl StopRule for DtCollapse {
     fn check(&mut self, ctx: &StepContext) -> Verdict {
-        if ctx.next_dt >= MIN_DT_FRACTION * ctx.t_end {
+        if ctx.next_dt >= collapse_threshold(ctx.t_end) {
             return Verdict::Continue;
         }
         Verdict::Fail(SolverFailure {
             reason: FailureReason::DtCollapse {
                 dt: ctx.next_dt,
                 max_speed: ctx.diagnostics.max_speed,
+            },
+            x: None,
+            y: None,
+            t: ctx.t,
+            step: ctx.steps,
+        })
+    }
+}
+
+/// Most steps a run may still need at its current CFL step: a run of t_end = 10⁹ s at
+/// Δt = 2·10⁻³ s (5·10¹¹ steps) would crawl on for years, filling the disk with step
+/// records.
+pub const MAX_STEPS: f64 = 1e10;
+
+/// Fails a run whose remaining time would take more than [`MAX_STEPS`] steps at its
+/// CFL step. Only in runs without `time.stop_at_rest` or `time.stop_when_settled`: a
+/// run that may end itself (t_end is then only an upper bound) is never judged on a
+/// forecast.
+#[derive(Debug, Default)]
+pub struct StepBudget;
+
+impl StopRule for StepBudget {
+    fn check(&mut self, ctx: &StepContext) -> Verdict {
+        let steps = (ctx.t_end - ctx.t) / ctx.next_dt;
+        if steps.is_nan() || steps <= MAX_STEPS {
+            return Verdict::Continue;
+        }
+        Verdict::Fail(SolverFailure {
+            reason: FailureReason::TooManySteps {
+                dt: ctx.next_dt,
+                steps,
+                t_end: ctx.t_end,
             },
             x: None,
             y: None,
@@ -201,7 +293,10 @@ pub struct MassGone;
 impl StopRule for MassGone {
     fn check(&mut self, ctx: &StepContext) -> Verdict {
         let mass = ctx.diagnostics.mass;
-        if ctx.mass0 <= 0.0 {
+        // An overflowing total is the NonFinite rule's failure, never an empty domain.
+        if !(mass.is_finite() && ctx.mass0.is_finite()) {
+            Verdict::Continue
+        } else if ctx.mass0 <= 0.0 {
             Verdict::Stop("no_mass")
         } else if mass <= OUTFLOWED_FRACTION * ctx.mass0 {
             Verdict::Stop("outflowed")
@@ -255,9 +350,11 @@ impl StopRule for SpeedBound {
 pub const MASS_GAIN_TOLERANCE: f64 = 1e-3;
 
 /// Fails a run whose mass grows by more than [`MASS_GAIN_TOLERANCE`] of the initial
-/// mass when nothing can add any (no erodible bed): the mass budget initial −
-/// outflowed = current has outflowed ≥ 0, so a gain means material entered through an
-/// outflow end (the ghost state of an unstable run) or the scheme created it.
+/// mass: the mass budget initial − outflowed = current has outflowed ≥ 0, so a gain
+/// means material entered through an outflow end (the ghost state of an unstable run)
+/// or the scheme created it. An erodible bed adds nothing to this measure: its grains
+/// are part of the initial thickness (h = initial.h + h_i) and the friction law only
+/// sets them moving, so the rule holds for every run.
 #[derive(Debug, Default)]
 pub struct MassGain;
 
@@ -343,9 +440,6 @@ pub struct StopOptions {
     pub settled_fraction: Option<f64>,
     /// Fail the run once a speed exceeds this bound (m/s; ∞: never), [`SpeedBound`].
     pub speed_bound: f64,
-    /// Fail the run if its mass grows ([`MassGain`]): true unless something (an
-    /// erodible bed) adds mass.
-    pub mass_conserved: bool,
 }
 
 /// The rules every run consults, in order.
@@ -356,11 +450,12 @@ pub fn default_rules(options: StopOptions) -> Vec<Box<dyn StopRule>> {
         Box::new(SpeedBound {
             bound: options.speed_bound,
         }),
+        Box::new(MassGain),
         Box::new(Interrupted),
         Box::new(MassGone),
     ];
-    if options.mass_conserved {
-        rules.insert(3, Box::new(MassGain));
+    if !options.at_rest && options.settled_fraction.is_none() {
+        rules.insert(2, Box::new(StepBudget));
     }
     if options.at_rest {
         rules.push(Box::new(AtRest));
@@ -469,13 +564,112 @@ mod tests {
         assert!(settled(0.0, 0.0, 1e-6) && !settled(1e-9, 0.0, 1e-6));
     }
 
+    /// The context of one step with these diagnostics and Δt.
+    fn judge(
+        rule: &mut dyn StopRule,
+        d: &Diagnostics,
+        t_end: f64,
+        next_dt: f64,
+        mass0: f64,
+    ) -> Verdict {
+        rule.check(&StepContext {
+            t: 1.0,
+            t_end,
+            steps: 1,
+            diagnostics: d,
+            next_dt,
+            x: &[0.0],
+            y: &[],
+            at_rest: false,
+            mass0,
+        })
+    }
+
+    fn diagnostics(mass: f64, kinetic_energy: f64) -> Diagnostics {
+        Diagnostics {
+            mass,
+            kinetic_energy,
+            max_speed: 1.0,
+            signal_speed: 1.0,
+            front_x: 0.0,
+            h_max: 1.0,
+            non_finite_at: None,
+        }
+    }
+
     #[test]
-    fn settled_rule_is_only_in_the_rules_when_asked_for() {
+    fn the_collapse_threshold_is_capped_for_huge_end_times() {
+        let d = diagnostics(1.0, 1.0);
+        let fails = |t_end: f64, dt: f64| {
+            matches!(judge(&mut DtCollapse, &d, t_end, dt, 1.0), Verdict::Fail(_))
+        };
+        assert!(fails(1.0, 0.9e-10) && !fails(1.0, 1e-10));
+        // t_end = 1e10: an ordinary step of 0.5 s is no collapse (it was below 1 s).
+        assert!(!fails(1e10, 0.5));
+        assert!(fails(1e10, 0.9e-6) && !fails(1e10, 1e-6));
+    }
+
+    #[test]
+    fn a_run_that_cannot_end_itself_is_refused_beyond_its_step_budget() {
+        let d = diagnostics(1.0, 1.0);
+        let v = judge(&mut StepBudget, &d, 1e9, 2e-3, 1.0);
+        let Verdict::Fail(f) = v else { panic!("{v:?}") };
+        assert!(f.to_string().contains("5.0e11 more steps"), "{f}");
+        assert_eq!(
+            judge(&mut StepBudget, &d, 10.0, 2e-3, 1.0),
+            Verdict::Continue
+        );
+        assert_eq!(
+            judge(&mut StepBudget, &d, 1e9, f64::INFINITY, 1.0),
+            Verdict::Continue
+        );
+        // Only in runs without an early-stop rule.
         let mut options = StopOptions {
             at_rest: false,
             settled_fraction: None,
             speed_bound: f64::INFINITY,
-            mass_conserved: false,
+        };
+        let budget = |o: StopOptions| {
+            default_rules(o)
+                .iter_mut()
+                .any(|r| matches!(judge(r.as_mut(), &d, 1e9, 2e-3, 1.0), Verdict::Fail(ref f) if matches!(f.reason, FailureReason::TooManySteps { .. })))
+        };
+        assert!(budget(options));
+        options.at_rest = true;
+        assert!(!budget(options));
+        options.at_rest = false;
+        options.settled_fraction = Some(1e-3);
+        assert!(!budget(options));
+    }
+
+    #[test]
+    fn an_overflowing_total_fails_and_is_never_outflowed() {
+        for (mass, ke, name) in [
+            (f64::INFINITY, 1.0, "mass"),
+            (1.0, f64::INFINITY, "kinetic energy"),
+        ] {
+            let d = diagnostics(mass, ke);
+            let v = judge(&mut NonFinite, &d, 1.0, 1.0, 1.0);
+            let Verdict::Fail(f) = v else { panic!("{v:?}") };
+            assert!(
+                f.to_string().contains(&format!("the total {name} at t")),
+                "{f}"
+            );
+        }
+        let d = diagnostics(f64::INFINITY, 1.0);
+        assert_eq!(
+            judge(&mut MassGone, &d, 1.0, 1.0, f64::INFINITY),
+            Verdict::Continue
+        );
+    }
+
+    #[test]
+    fn settled_rule_is_only_in_the_rules_when_asked_for() {
+        // With stop_at_rest, so that the step budget is out of the rules either way.
+        let mut options = StopOptions {
+            at_rest: true,
+            settled_fraction: None,
+            speed_bound: f64::INFINITY,
         };
         let n = default_rules(options).len();
         options.settled_fraction = Some(1e-6);

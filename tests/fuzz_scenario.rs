@@ -3,7 +3,10 @@
 //! of every model (granular, multilayer, non-hydrostatic, dilatant, submarine) with
 //! hostile values must give
 //! a scenario or a `ScenarioError` (exit 0 or 2), never a panic, an abort (stack
-//! overflow, out of memory) or a hang.
+//! overflow, out of memory) or a hang. The GIS and result inputs are fuzzed the same
+//! way: crafted GeoTIFF headers, ESRI grids and side-car CRS files, release polygons,
+//! run files for `export` and its arguments, sweep plans for `maps` and its
+//! arguments, and signals sent to a 2-D run.
 //!
 //! By default a fixed number of cases runs (deterministic, about a second). CI runs it
 //! for a time budget: `GRANFLOW_FUZZ_SECONDS=60 cargo test --release --test main
@@ -523,6 +526,575 @@ fn any_input_loads_or_is_refused_without_panic_or_hang() {
         "fuzz: {round} rounds, {} inputs refused and {} accepted, in {:.1} s",
         refused.load(std::sync::atomic::Ordering::Relaxed),
         accepted.load(std::sync::atomic::Ordering::Relaxed),
+        start.elapsed().as_secs_f64()
+    );
+}
+
+// ------------------------------------------------------------- GIS and result files
+
+/// Numbers that have broken GIS headers: round-off, overflow, NaN, signs.
+const HOSTILE_F64: &[f64] = &[
+    0.0,
+    -0.0,
+    1.0,
+    -1.0,
+    5.0,
+    1e-300,
+    5e-324,
+    1e17,
+    1e300,
+    -1e300,
+    1.7e308,
+    f64::NAN,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    2_600_000.0,
+    0.5,
+];
+
+/// Texts of the same numbers, and some that are not numbers, for text headers.
+const HOSTILE_TEXT: &[&str] = &[
+    "0",
+    "1",
+    "2",
+    "3",
+    "-1",
+    "5",
+    "1e-300",
+    "1e17",
+    "1e300",
+    "-1e308",
+    "nan",
+    "inf",
+    "99999999999",
+    "1e3",
+    "x",
+    "",
+    "2600000",
+    "0.5",
+];
+
+/// WKT texts for side-car `.prj` files: projected, geographic, without code, junk.
+const WKTS: &[&str] = &[
+    r#"PROJCS["CH1903+ / LV95",AUTHORITY["EPSG","2056"]]"#,
+    r#"GEOGCS["WGS 84",AUTHORITY["EPSG","4326"]]"#,
+    r#"PROJCS["no code"]"#,
+    "\u{feff}",
+    "[[[[",
+];
+
+/// Sizes for crafted headers: ordinary, degenerate and far beyond any run.
+const SIZES: &[u32] = &[0, 1, 2, 3, 17, 1000, 40_000, 65_535, u32::MAX];
+
+/// One crafted GIS or result input.
+#[derive(Debug, Clone)]
+enum GisInput {
+    Tiff {
+        spec: Box<crate::common::crafted::Tiff>,
+    },
+    Asc {
+        header: Vec<(String, String)>,
+        bom: bool,
+        values: usize,
+        prj: Option<usize>,
+    },
+    GeoJson {
+        rings: Vec<Vec<[f64; 2]>>,
+        crs: Option<u32>,
+    },
+    Shapefile {
+        records: Vec<Vec<Vec<[f64; 2]>>>,
+    },
+    Export {
+        nx: usize,
+        ny: usize,
+        maps: Option<(usize, usize)>,
+        times: usize,
+        args: Vec<String>,
+    },
+    Maps {
+        plan: String,
+        args: Vec<String>,
+    },
+}
+
+fn hostile_f64() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        (0..HOSTILE_F64.len()).prop_map(|k| HOSTILE_F64[k]),
+        -1e3..1e3f64,
+    ]
+}
+
+fn tiff_input() -> impl Strategy<Value = GisInput> {
+    let sizes = (0..SIZES.len(), 0..SIZES.len());
+    let sample = (
+        prop::sample::select(vec![1u16, 7, 8, 16, 32, 64]),
+        0u16..5,
+        prop::sample::select(vec![1u16, 5, 7, 8, 32773]),
+    );
+    let strip = (
+        prop::collection::vec(any::<u8>(), 0..256),
+        prop::option::of(prop::sample::select(vec![0u32, 1, 7, u32::MAX])),
+    );
+    let georef = (
+        prop::option::of(prop::array::uniform3(hostile_f64())),
+        prop::option::of(prop::array::uniform6(hostile_f64())),
+        prop::option::of(prop::collection::vec(hostile_f64(), 16)),
+        prop::option::of((
+            prop::sample::select(vec![1024u16, 1025, 2048, 3072, 4096]),
+            prop::sample::select(vec![0u16, 1, 2, 2056, 4326, 21781, 32632, 32767]),
+        )),
+    );
+    (sizes, sample, strip, georef).prop_map(
+        |((w, h), (bits, format, compression), (bytes, count), (scale, tie, transform, key))| {
+            let (width, height) = (SIZES[w], SIZES[h]);
+            let mut spec = crate::common::crafted::Tiff::float32(1, 1);
+            (spec.width, spec.height) = (width, height);
+            (spec.bits, spec.sample_format, spec.compression) = (bits, format, compression);
+            // A complete uncompressed strip when it is small, else the random bytes.
+            let full = u64::from(width)
+                .saturating_mul(u64::from(height))
+                .saturating_mul(u64::from(bits / 8));
+            spec.strip = if compression == 1 && full <= 4096 {
+                vec![0; full as usize]
+            } else {
+                bytes
+            };
+            spec.strip_byte_count = count;
+            spec.scale = scale;
+            spec.tiepoint = tie;
+            spec.transform = transform.map(|m| m.try_into().unwrap());
+            if let Some((k, code)) = key {
+                spec = spec.with_epsg(k, code);
+            }
+            GisInput::Tiff {
+                spec: Box::new(spec),
+            }
+        },
+    )
+}
+
+fn asc_input() -> impl Strategy<Value = GisInput> {
+    let keys = prop::sample::select(vec![
+        "ncols",
+        "nrows",
+        "xllcorner",
+        "yllcorner",
+        "xllcenter",
+        "cellsize",
+        "dx",
+        "dy",
+        "NODATA_value",
+        "bogus",
+    ]);
+    let good: Vec<(String, String)> = [
+        ("ncols", "4"),
+        ("nrows", "3"),
+        ("xllcorner", "0"),
+        ("yllcorner", "0"),
+        ("cellsize", "5"),
+    ]
+    .iter()
+    .map(|(k, v)| (k.to_string(), v.to_string()))
+    .collect();
+    (
+        prop::collection::vec((keys, 0..HOSTILE_TEXT.len()), 0..4),
+        any::<bool>(),
+        0usize..30,
+        prop::option::of(0..WKTS.len()),
+    )
+        .prop_map(move |(edits, bom, values, prj)| {
+            let mut header = good.clone();
+            for (key, v) in edits {
+                let value = HOSTILE_TEXT[v].to_string();
+                match header.iter_mut().find(|(k, _)| k == key) {
+                    Some(entry) => entry.1 = value,
+                    None => header.push((key.to_string(), value)),
+                }
+            }
+            GisInput::Asc {
+                header,
+                bom,
+                values,
+                prj,
+            }
+        })
+}
+
+fn ring() -> impl Strategy<Value = Vec<[f64; 2]>> {
+    prop::collection::vec(
+        prop_oneof![
+            (0.0..20.0f64, 0.0..15.0f64).prop_map(|(x, y)| [x, y]),
+            (hostile_f64(), hostile_f64()).prop_map(|(x, y)| [x, y]),
+        ],
+        0..8,
+    )
+}
+
+fn polygon_input() -> impl Strategy<Value = GisInput> {
+    prop_oneof![
+        (
+            prop::collection::vec(ring(), 1..4),
+            prop::option::of(prop::sample::select(vec![2056u32, 4326, 21781])),
+        )
+            .prop_map(|(rings, crs)| GisInput::GeoJson { rings, crs }),
+        prop::collection::vec(prop::collection::vec(ring(), 1..3), 1..3)
+            .prop_map(|records| GisInput::Shapefile { records }),
+    ]
+}
+
+fn result_input() -> impl Strategy<Value = GisInput> {
+    let counts = prop::sample::select(vec![0usize, 1, 2, 5]);
+    let export_args = prop::collection::vec(
+        prop::sample::select(vec![
+            "--format=geotiff",
+            "--format=asc",
+            "--format=netcdf",
+            "--format=png",
+            "--time=-1",
+            "--time=0",
+            "--time=nan",
+            "--time=1e300",
+            "--time=-inf",
+            "--fields=pft",
+            "--fields=h,speed",
+            "--fields=",
+            "--fields=bogus",
+            "--fields=pft,pft",
+            "--float64",
+            "--quiet",
+        ]),
+        0..4,
+    );
+    let maps_args = prop::collection::vec(
+        prop::sample::select(vec![
+            "--threshold=-1",
+            "--threshold=nan",
+            "--threshold=1e300",
+            "--threshold=0",
+            "--observed=missing.geojson",
+            "--observed=plan.toml",
+            "--partial",
+            "--format=asc",
+        ]),
+        0..4,
+    );
+    prop_oneof![
+        (
+            counts.clone(),
+            counts.clone(),
+            prop::option::of((counts.clone(), counts.clone())),
+            counts,
+            export_args,
+        )
+            .prop_map(|(nx, ny, maps, times, args)| GisInput::Export {
+                nx,
+                ny,
+                maps,
+                times,
+                args: args.into_iter().map(str::to_owned).collect(),
+            }),
+        (any::<Vec<u8>>(), maps_args).prop_map(|(plan, args)| GisInput::Maps {
+            plan: String::from_utf8_lossy(&plan).into_owned(),
+            args: args.into_iter().map(str::to_owned).collect(),
+        }),
+    ]
+}
+
+fn gis_input() -> impl Strategy<Value = GisInput> {
+    prop_oneof![tiff_input(), asc_input(), polygon_input(), result_input()]
+}
+
+/// A scenario on the raster bed `bed` with the thickness `h` (a TOML value).
+fn raster_scenario(bed: &str, h: &str) -> String {
+    format!(
+        "[domain]\ncoordinates = \"cartesian\"\n[bed]\nb = {{ raster = \"{bed}\" }}\n[rheology]\nlaw = \"coulomb\"\nmu_deg = 30\n[initial]\nh = {h}\n[time]\nt_end = 0.1\n"
+    )
+}
+
+/// Loads a scenario of `dir` and builds its run when it is small.
+fn load_and_check(text: &str, dir: &Path) {
+    if let Ok(scn) = granflow::scenario::load_str(text, dir, &[]) {
+        if scn.domain.cell_count() <= 200_000 {
+            let _ = granflow::runner::check(&scn);
+        }
+    }
+}
+
+/// The export and maps command lines as `granflow` parses them.
+#[derive(clap::Parser, Debug)]
+struct ExportLine {
+    #[command(flatten)]
+    args: granflow::results::ExportArgs,
+}
+
+#[derive(clap::Parser, Debug)]
+struct MapsLine {
+    #[command(flatten)]
+    args: granflow::results::MapsArgs,
+}
+
+/// A run file with the given axes, maps and snapshot times (and nothing else a run
+/// writes), for `export` to read.
+fn crafted_run(path: &Path, nx: usize, ny: usize, maps: Option<(usize, usize)>, times: usize) {
+    let Ok(f) = rust_hdf5::H5File::create(path) else {
+        return;
+    };
+    let _ = f.set_attr_string("granflow_version", "0");
+    let _ = f.set_attr_string("grid", "raster");
+    let axis = |n: usize| (0..n).map(|i| i as f64 + 0.5).collect::<Vec<f64>>();
+    if let Ok(g) = f.create_group("grid") {
+        for (name, n) in [("x", nx), ("y", ny)] {
+            if let Ok(ds) = g.new_dataset::<f64>().shape([n]).create(name) {
+                let _ = ds.write_raw(&axis(n));
+            }
+        }
+    }
+    if let Ok(s) = f.create_group("snapshots") {
+        if let Ok(ds) = s.new_dataset::<f64>().shape([times]).create("t") {
+            let _ = ds.write_raw(&axis(times));
+        }
+    }
+    if let (Some((rows, cols)), Ok(m)) = (maps, f.create_group("maps")) {
+        for name in ["h_max", "speed_max", "ppr", "arrival_time", "deposit"] {
+            if let Ok(ds) = m.new_dataset::<f64>().shape([rows, cols]).create(name) {
+                let _ = ds.write_raw(&vec![0.25; rows * cols]);
+            }
+        }
+    }
+}
+
+/// Reads (or refuses) one crafted input through the library and a scenario, as
+/// `granflow check`, `export` and `maps` would.
+fn exercise_gis(input: &GisInput) -> Result<(), TestCaseError> {
+    use clap::Parser;
+    let start = Instant::now();
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    match input {
+        GisInput::Tiff { spec } => {
+            let p = d.join("dem.tif");
+            std::fs::write(&p, spec.bytes()).unwrap();
+            let _ = granflow::gis::geotiff::read(&p);
+            load_and_check(&raster_scenario("dem.tif", "0.5"), d);
+        }
+        GisInput::Asc {
+            header,
+            bom,
+            values,
+            prj,
+        } => {
+            let mut text = if *bom {
+                "\u{feff}".to_string()
+            } else {
+                String::new()
+            };
+            for (k, v) in header {
+                text.push_str(&format!("{k} {v}\n"));
+            }
+            let row: Vec<&str> = vec!["1.5"; *values];
+            text.push_str(&row.join(" "));
+            let p = d.join("dem.asc");
+            std::fs::write(&p, text).unwrap();
+            if let Some(k) = prj {
+                std::fs::write(d.join("dem.prj"), WKTS[*k]).unwrap();
+            }
+            let _ = granflow::gis::asc::read(&p);
+            load_and_check(&raster_scenario("dem.asc", "0.5"), d);
+        }
+        GisInput::GeoJson { .. } | GisInput::Shapefile { .. } => {
+            let dem = "ncols 4\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 5\n0 0 0 0\n0 0 0 0\n0 0 0 0\n";
+            std::fs::write(d.join("dem.asc"), dem).unwrap();
+            let file = match input {
+                GisInput::GeoJson { rings, crs } => {
+                    let ring_text = |r: &Vec<[f64; 2]>| {
+                        let pts: Vec<String> = r
+                            .iter()
+                            .map(|p| format!("[{:?}, {:?}]", p[0], p[1]))
+                            .collect();
+                        format!("[{}]", pts.join(", "))
+                    };
+                    let rings: Vec<String> = rings.iter().map(ring_text).collect();
+                    let crs = crs.map_or(String::new(), |c| {
+                        format!(
+                            r#""crs": {{"type": "name", "properties": {{"name": "EPSG:{c}"}}}},"#
+                        )
+                    });
+                    let text = format!(
+                        r#"{{"type": "FeatureCollection", {crs} "features": [{{"type": "Feature", "properties": {{}}, "geometry": {{"type": "Polygon", "coordinates": [{}]}}}}]}}"#,
+                        rings.join(", ")
+                    );
+                    // NaN and infinity are no JSON numbers: such a file is refused as
+                    // JSON, which is a case too.
+                    std::fs::write(d.join("r.geojson"), text).unwrap();
+                    "r.geojson"
+                }
+                GisInput::Shapefile { records } => {
+                    std::fs::write(
+                        d.join("r.shp"),
+                        crate::common::crafted::polygon_shp(records),
+                    )
+                    .unwrap();
+                    "r.shp"
+                }
+                _ => unreachable!(),
+            };
+            let _ = granflow::gis::release::read(
+                &d.join(file),
+                granflow::gis::release::ThicknessSource::Uniform(1.0),
+            );
+            let h =
+                format!("{{ polygon = \"{file}\", thickness = 1, thickness_is = \"vertical\" }}");
+            load_and_check(&raster_scenario("dem.asc", &h), d);
+        }
+        GisInput::Export {
+            nx,
+            ny,
+            maps,
+            times,
+            args,
+        } => {
+            let run = d.join("run.h5");
+            crafted_run(&run, *nx, *ny, *maps, *times);
+            let out = d.join("out");
+            let mut line = vec![
+                "export".to_string(),
+                run.display().to_string(),
+                format!("--output={}", out.display()),
+            ];
+            line.extend(args.iter().cloned());
+            if let Ok(parsed) = ExportLine::try_parse_from(&line) {
+                let _ = std::fs::create_dir_all(&out);
+                let _ = granflow::results::export::export(&parsed.args);
+            }
+        }
+        GisInput::Maps { plan, args } => {
+            std::fs::write(d.join("sweep-plan.toml"), plan).unwrap();
+            std::fs::write(d.join("plan.toml"), plan).unwrap();
+            let mut line = vec!["maps".to_string(), d.display().to_string()];
+            line.extend(args.iter().cloned());
+            if let Ok(parsed) = MapsLine::try_parse_from(&line) {
+                let _ = granflow::results::maps::maps(&parsed.args);
+            }
+        }
+    }
+    let took = start.elapsed();
+    prop_assert!(took < PER_INPUT, "took {took:?}");
+    Ok(())
+}
+
+/// A 2-D run (the radial collapse on 40 × 40 cells) sent SIGINT or SIGKILL `delay_ms`
+/// after its file appeared: it ends without a panic, and its file opens with a status that says
+/// how it ended (`interrupted` or `unfinished` when the signal came first).
+fn signal_a_raster_run(delay_ms: u64, kill: bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("radial.h5");
+    let scn = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/radial_collapse.toml");
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("granflow"))
+        .arg("run")
+        .arg(&scn)
+        .args(["--quiet", "--set", "domain.cells=[40,40]", "-o"])
+        .arg(&out)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // From the moment the file exists (a kill while it is being created is the
+    // output tests' case, not this one's).
+    let start = Instant::now();
+    while !out.exists() && start.elapsed() < PER_INPUT {
+        if child.try_wait().unwrap().is_some() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    std::thread::sleep(Duration::from_millis(delay_ms));
+    let signal = if kill { "-KILL" } else { "-INT" };
+    let _ = std::process::Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status();
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if start.elapsed() > PER_INPUT {
+            let _ = child.kill();
+            panic!("a 2-D run still going {PER_INPUT:?} after SIG{signal}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    if !out.exists() {
+        // Killed before the file was created.
+        return;
+    }
+    let file = rust_hdf5::H5File::options()
+        .no_locking()
+        .open(&out)
+        .unwrap_or_else(|e| panic!("SIG{signal} after {delay_ms} ms ({status}): {e}"));
+    let ended = file
+        .root_group()
+        .group("summary")
+        .and_then(|g| g.attr_string("status"))
+        .unwrap_or_else(|e| panic!("SIG{signal} after {delay_ms} ms ({status}): {e}"));
+    assert!(
+        [
+            "completed",
+            "interrupted",
+            "unfinished",
+            "stopped_at_rest",
+            "settled"
+        ]
+        .contains(&ended.as_str()),
+        "SIG{signal} after {delay_ms} ms: status {ended}"
+    );
+}
+
+/// Crafted GeoTIFFs, ESRI grids (with side-car `.prj`), release polygons (GeoJSON and
+/// shapefiles), run files for `export` and sweep plans for `maps`, with their command
+/// lines: each is read or refused, never a panic, an abort or a hang; and each round
+/// a 2-D run interrupted or killed at a moment of its own. The same time budget as
+/// the scenario fuzzing (`GRANFLOW_FUZZ_SECONDS`).
+#[test]
+fn gis_and_result_inputs_are_read_or_refused_without_panic_or_hang() {
+    let budget = std::env::var("GRANFLOW_FUZZ_SECONDS")
+        .ok()
+        .and_then(|s| s.parse::<f64>().ok());
+    let start = Instant::now();
+    let mut round = 0u32;
+    loop {
+        let config = Config {
+            cases: 64,
+            failure_persistence: None,
+            rng_algorithm: proptest::test_runner::RngAlgorithm::ChaCha,
+            ..Config::default()
+        };
+        let seed = [round.wrapping_add(101) as u8; 32];
+        let rng = proptest::test_runner::TestRng::from_seed(
+            proptest::test_runner::RngAlgorithm::ChaCha,
+            &seed,
+        );
+        let mut runner = TestRunner::new_with_rng(config, rng);
+        if let Err(e) = runner.run(&gis_input(), |input| exercise_gis(&input)) {
+            panic!("{e}");
+        }
+        // A moment in the first second of the run (start-up, the first snapshots, the
+        // steps between them), from the round number.
+        let moment = u64::from(round).wrapping_mul(0x9e37_79b9) % 1000;
+        signal_a_raster_run(moment, round % 3 == 2);
+        round += 1;
+        match budget {
+            Some(seconds) if start.elapsed().as_secs_f64() < seconds => continue,
+            None if round < 2 => continue,
+            _ => break,
+        }
+    }
+    eprintln!(
+        "fuzz (GIS and results): {round} rounds of 64 inputs in {:.1} s",
         start.elapsed().as_secs_f64()
     );
 }

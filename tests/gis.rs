@@ -509,7 +509,8 @@ fn geotiff_georeferencing_rules() {
     }
     std::fs::write(&p, &bytes).unwrap();
     let e = geotiff::read(&p).unwrap_err();
-    assert!(matches!(e, GisError::Tiff { .. }), "{e}");
+    assert!(matches!(e, GisError::UnsupportedTiff { .. }), "{e}");
+    assert!(e.to_string().contains("100000 x 100000 pixels"), "{e}");
     // Empty and garbage files.
     let p = write_text(d, "empty.tif", "");
     assert!(matches!(
@@ -992,7 +993,7 @@ fn shapefile_with_thickness_attribute_holes_and_prj() {
     );
     assert!(matches!(
         release::read(&p, ThicknessSource::Attribute("thick")),
-        Err(GisError::Shapefile { .. })
+        Err(GisError::MissingSidecar { .. })
     ));
 }
 
@@ -1059,4 +1060,258 @@ fn netcdf_layout_and_streaming_record_count() {
         NetCdfWriter::create(&p, &grid, &bad, "t"),
         Err(GisError::NetCdf { .. })
     ));
+}
+
+// ---------------------------------------------------------------- hostile files
+
+/// A 1.7 MB file may declare 40 000² pixels: the size is refused from the header,
+/// before any sample is decoded or allocated.
+#[test]
+fn a_geotiff_header_too_large_to_decode_is_refused_by_its_size() {
+    let dir = tmp();
+    let mut t = crate::common::crafted::Tiff::float32(1, 1);
+    (t.width, t.height, t.bits, t.sample_format, t.compression) = (40_000, 40_000, 8, 1, 8);
+    t.strip = vec![0x78, 0x9c, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01];
+    let p = dir.path().join("huge.tif");
+    std::fs::write(&p, t.bytes()).unwrap();
+    let e = geotiff::read(&p).unwrap_err();
+    let text = e.to_string();
+    assert!(matches!(e, GisError::UnsupportedTiff { .. }), "{text}");
+    assert!(text.contains("huge.tif"), "{text}");
+    assert!(text.contains("40000 x 40000 pixels"), "{text}");
+    assert!(text.contains("crop or coarsen"), "{text}");
+}
+
+/// The texts of refused GeoTIFFs say what is wrong: an identity transformation is no
+/// georeferencing, a sparse file (empty strips) is named as such.
+#[test]
+fn identity_transform_and_sparse_geotiffs_are_refused_with_their_own_reason() {
+    let dir = tmp();
+    let mut t = crate::common::crafted::Tiff::float32(3, 2);
+    t.scale = None;
+    t.tiepoint = None;
+    let mut identity = [0.0; 16];
+    for k in [0, 5, 10, 15] {
+        identity[k] = 1.0;
+    }
+    t.transform = Some(identity);
+    let p = dir.path().join("pixels.tif");
+    std::fs::write(&p, t.bytes()).unwrap();
+    let text = geotiff::read(&p).unwrap_err().to_string();
+    assert!(text.contains("no georeferencing"), "{text}");
+    assert!(text.contains("identity"), "{text}");
+    assert!(!text.contains("south to north"), "{text}");
+
+    let mut sparse = crate::common::crafted::Tiff::float32(3, 2);
+    sparse.compression = 8;
+    sparse.strip = Vec::new();
+    sparse.strip_byte_count = Some(0);
+    let p = dir.path().join("sparse.tif");
+    std::fs::write(&p, sparse.bytes()).unwrap();
+    let text = geotiff::read(&p).unwrap_err().to_string();
+    assert!(text.contains("sparse GeoTIFF"), "{text}");
+    assert!(!text.contains("corrupt"), "{text}");
+    // The crafted file itself is sound: with its strip it reads.
+    let p = dir.path().join("plain.tif");
+    std::fs::write(&p, crate::common::crafted::Tiff::float32(3, 2).bytes()).unwrap();
+    let r = geotiff::read(&p).unwrap();
+    assert_eq!((r.nx, r.ny, r.cell_size, r.y_top), (3, 2, 1.0, 2.0));
+}
+
+/// A FIFO where the `.prj` of a grid or a shapefile would be is refused, not waited on
+/// (a read would block until some writer opened it). Each read runs in a thread so
+/// that a hang fails the test instead of stalling it.
+#[cfg(unix)]
+#[test]
+fn a_fifo_side_car_file_is_refused_not_read() {
+    let dir = tmp();
+    let asc_path = write_text(
+        dir.path(),
+        "dem.asc",
+        "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 4\n",
+    );
+    let fifo = asc::prj_path(&asc_path);
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let shp = dir.path().join("dem.shp");
+    let square = vec![vec![
+        [0.0, 0.0],
+        [0.0, 1.0],
+        [1.0, 1.0],
+        [1.0, 0.0],
+        [0.0, 0.0],
+    ]];
+    std::fs::write(&shp, crate::common::crafted::polygon_shp(&[square])).unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let (a, s) = (asc_path.clone(), shp.clone());
+    std::thread::spawn(move || {
+        let r1 = asc::read(&a).map(|_| ()).map_err(|e| e.to_string());
+        let r2 = release::read(&s, ThicknessSource::Uniform(1.0))
+            .map(|_| ())
+            .map_err(|e| e.to_string());
+        let _ = tx.send((r1, r2));
+    });
+    let (r1, r2) = rx
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("reading beside a FIFO hung");
+    for r in [r1, r2] {
+        let e = r.unwrap_err();
+        assert!(
+            e.contains("dem.prj") && e.contains("not a regular file"),
+            "{e}"
+        );
+    }
+}
+
+/// A byte-order mark before the first key is not part of it.
+#[test]
+fn an_ascii_grid_with_a_byte_order_mark_reads() {
+    let dir = tmp();
+    let p = write_text(
+        dir.path(),
+        "bom.asc",
+        "\u{feff}ncols 2\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n",
+    );
+    let r = asc::read(&p).unwrap();
+    assert_eq!(r.values, vec![1.0, 2.0]);
+}
+
+/// Invalid polygons are refused naming the file and the feature, whatever their
+/// format: a bow-tie, a hole outside its ring, a zero-area ring (GeoJSON), and in a
+/// shapefile rings that all run the wrong way, a NaN vertex and rings that cancel.
+#[test]
+fn invalid_release_polygons_are_refused_naming_file_and_feature() {
+    let dir = tmp();
+    let ring = |pts: &[[f64; 2]]| {
+        let mut v: Vec<String> = pts
+            .iter()
+            .map(|p| format!("[{}, {}]", p[0], p[1]))
+            .collect();
+        v.push(v[0].clone());
+        format!("[{}]", v.join(", "))
+    };
+    let collection = |polygons: &[String]| {
+        let features: Vec<String> = polygons
+            .iter()
+            .map(|p| {
+                format!(
+                    r#"{{"type": "Feature", "properties": {{}}, "geometry": {{"type": "Polygon", "coordinates": {p}}}}}"#
+                )
+            })
+            .collect();
+        format!(
+            r#"{{"type": "FeatureCollection", "features": [{}]}}"#,
+            features.join(", ")
+        )
+    };
+    let good = format!(
+        "[{}]",
+        ring(&[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]])
+    );
+    let cases = [
+        (
+            "bowtie",
+            format!(
+                "[{}]",
+                ring(&[[0.0, 0.0], [10.0, 10.0], [10.0, 0.0], [0.0, 10.0]])
+            ),
+            "crosses or touches itself",
+        ),
+        (
+            "hole_outside",
+            format!(
+                "[{}, {}]",
+                ring(&[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]),
+                ring(&[[20.0, 20.0], [22.0, 20.0], [22.0, 22.0], [20.0, 22.0]])
+            ),
+            "hole 1 lies outside the exterior ring",
+        ),
+        (
+            "flat",
+            format!("[{}]", ring(&[[0.0, 0.0], [5.0, 5.0], [10.0, 10.0]])),
+            "encloses no area",
+        ),
+    ];
+    for (name, bad, words) in cases {
+        let p = write_text(
+            dir.path(),
+            &format!("{name}.geojson"),
+            &collection(&[good.clone(), bad]),
+        );
+        let e = release::read(&p, ThicknessSource::Uniform(1.0)).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            matches!(e, GisError::InvalidPolygon { feature: 1, .. }),
+            "{name}: {text}"
+        );
+        assert!(text.contains(&format!("{name}.geojson")), "{text}");
+        assert!(text.contains("feature 1"), "{text}");
+        assert!(text.contains(words), "{name}: {text}");
+    }
+    // Shapefiles: rings as written (clockwise is exterior in this format).
+    let cw = vec![
+        [0.0, 0.0],
+        [0.0, 10.0],
+        [10.0, 10.0],
+        [10.0, 0.0],
+        [0.0, 0.0],
+    ];
+    let ccw: Vec<[f64; 2]> = cw.iter().rev().copied().collect();
+    let nan = vec![
+        [0.0, 0.0],
+        [0.0, 10.0],
+        [f64::NAN, 10.0],
+        [10.0, 0.0],
+        [0.0, 0.0],
+    ];
+    let cases = [
+        ("misoriented", vec![ccw.clone()], "no exterior ring"),
+        ("nan_vertex", vec![nan], "not finite"),
+        ("cancelling", vec![cw.clone(), ccw], "cross or overlap"),
+    ];
+    for (name, rings, words) in cases {
+        let p = dir.path().join(format!("{name}.shp"));
+        std::fs::write(
+            &p,
+            crate::common::crafted::polygon_shp(&[vec![cw.clone()], rings]),
+        )
+        .unwrap();
+        let e = release::read(&p, ThicknessSource::Uniform(1.0)).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            matches!(e, GisError::InvalidPolygon { feature: 1, .. }),
+            "{name}: {text}"
+        );
+        assert!(text.contains(&format!("{name}.shp")), "{text}");
+        assert!(text.contains(words), "{name}: {text}");
+    }
+    // The valid shapefile of the same writer reads.
+    let p = dir.path().join("valid.shp");
+    std::fs::write(&p, crate::common::crafted::polygon_shp(&[vec![cw]])).unwrap();
+    let areas = release::read(&p, ThicknessSource::Uniform(1.0)).unwrap();
+    assert_eq!(areas.features[0].polygons[0].area(), 100.0);
+}
+
+/// A shapefile whose thickness attribute needs the `.dbf` that is missing says so in
+/// words (the library's own error is the bare `MissingDbf`).
+#[test]
+fn a_missing_dbf_is_named_in_words() {
+    let dir = tmp();
+    let p = dir.path().join("nodbf.shp");
+    let cw = vec![
+        [0.0, 0.0],
+        [0.0, 10.0],
+        [10.0, 10.0],
+        [10.0, 0.0],
+        [0.0, 0.0],
+    ];
+    std::fs::write(&p, crate::common::crafted::polygon_shp(&[vec![cw]])).unwrap();
+    let text = release::read(&p, ThicknessSource::Attribute("d"))
+        .unwrap_err()
+        .to_string();
+    assert!(text.contains("nodbf.dbf") && text.contains("`d`"), "{text}");
+    assert!(!text.contains("MissingDbf"), "{text}");
 }

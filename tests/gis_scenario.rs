@@ -630,3 +630,147 @@ fn a_cropped_and_coarsened_run_has_its_grid_and_its_volume() {
     let message = fails_at(&keyed, d, "domain.coarsen");
     assert!(message.contains("grid of a raster bed"), "{message}");
 }
+
+/// A DEM in a geographic CRS has coordinates in degrees, which the run would take as
+/// metres: refused naming the file, and so is a release polygon in one.
+#[test]
+fn inputs_in_a_geographic_crs_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_dem(&d.join("dem.asc"), (10, 8, 5.0), (0.0, 0.0), |_, _| 0.0);
+    fs::write(
+        d.join("dem.prj"),
+        r#"GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433],AUTHORITY["EPSG","4326"]]"#,
+    )
+    .unwrap();
+    let message = fails_at(&scenario("0.5", ""), d, "bed.b");
+    assert!(message.contains("dem.asc"), "{message}");
+    assert!(message.contains("geographic CRS (EPSG:4326)"), "{message}");
+    fs::remove_file(d.join("dem.prj")).unwrap();
+    write_polygon(
+        &d.join("release.geojson"),
+        &[[10.0, 10.0], [20.0, 10.0], [20.0, 20.0]],
+        Some(4326),
+    );
+    let polygon = r#"{ polygon = "release.geojson", thickness = 1, thickness_is = "vertical" }"#;
+    let message = fails_at(&scenario(polygon, ""), d, "initial.h.polygon");
+    assert!(message.contains("release.geojson"), "{message}");
+    assert!(message.contains("geographic CRS"), "{message}");
+}
+
+/// Rasters whose cells vanish in the round-off of their coordinates (cells of 5 m at
+/// x = 10¹⁷, of 10⁻³⁰⁰ m at x = 1, a corner at 10³⁰⁰) are refused naming the file,
+/// as a domain's keys are (they used to panic).
+#[test]
+fn rasters_whose_cells_vanish_in_round_off_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (cells, corner) in [
+        ((10, 8, 5.0), (1e17, 0.0)),
+        ((10, 8, 1e-300), (1.0, 0.0)),
+        ((10, 8, 1.0), (0.0, 1e300)),
+    ] {
+        write_dem(&d.join("dem.asc"), cells, corner, |_, _| 0.0);
+        let message = fails_at(&scenario("0.5", ""), d, "bed.b");
+        assert!(message.contains("dem.asc"), "{message}");
+        assert!(message.contains("round-off"), "{message}");
+        // Numbers in exponent form, not the 300 digits of 1e300.
+        assert!(!message.contains(&"0".repeat(20)), "{message}");
+    }
+}
+
+/// A polygon whose ring has no area is refused as such (it used to be "outside the
+/// raster", although it lay inside).
+#[test]
+fn a_zero_area_release_is_refused_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_dem(&d.join("dem.asc"), (10, 8, 5.0), (0.0, 0.0), |_, _| 0.0);
+    write_polygon(
+        &d.join("release.geojson"),
+        &[[10.0, 10.0], [20.0, 20.0], [30.0, 30.0]],
+        None,
+    );
+    let polygon = r#"{ polygon = "release.geojson", thickness = 1, thickness_is = "vertical" }"#;
+    let message = fails_at(&scenario(polygon, ""), d, "initial.h.polygon");
+    assert!(message.contains("release.geojson"), "{message}");
+    assert!(message.contains("feature 0"), "{message}");
+    assert!(message.contains("encloses no area"), "{message}");
+    assert!(!message.contains("outside the raster"), "{message}");
+}
+
+/// A raster run of one row records its cell sizes (dy is no NaN), and `export` places
+/// it by them: square cells export where they are, cells taller than wide are refused
+/// (a GeoTIFF needs square cells) instead of exported as squares in the wrong place.
+#[test]
+fn a_run_of_one_row_exports_where_it_is_or_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = |y_max: f64| {
+        format!(
+            "[domain]\nx_min = 0\nx_max = 10\ny_min = 0\ny_max = {y_max}\ncells = [10, 1]\ncoordinates = \"cartesian\"\n\n[rheology]\nlaw = \"coulomb\"\nmu_deg = 30\n\n[initial]\nh = \"if(x < 3, 1, 0)\"\n\n[time]\nt_end = 0.2\n\n[output]\nevery = 0.1\n"
+        )
+    };
+    fs::write(d.join("square.toml"), text(1.0)).unwrap();
+    fs::write(d.join("tall.toml"), text(2.0)).unwrap();
+    for name in ["square", "tall"] {
+        let (code, stderr) = granflow_in(d, &["run", &format!("{name}.toml"), "--quiet"]);
+        assert_eq!(code, Some(0), "{stderr}");
+        let f = rust_hdf5::H5File::open(d.join(format!("{name}.h5"))).unwrap();
+        let y = f.dataset("grid/y").unwrap();
+        let spacing: f64 = y.attr("spacing").unwrap().read_numeric().unwrap();
+        assert_eq!(spacing, if name == "square" { 1.0 } else { 2.0 });
+    }
+    let (code, stderr) = granflow_in(d, &["export", "square.h5", "--fields", "pft"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let r = granflow::gis::geotiff::read(&d.join("square_pft.tif")).unwrap();
+    assert_eq!((r.nx, r.ny, r.cell_size), (10, 1, 1.0));
+    assert_eq!((r.x_left, r.y_top), (0.0, 1.0));
+    let (code, stderr) = granflow_in(d, &["export", "tall.h5", "--fields", "pft"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("not square"), "{stderr}");
+    assert!(stderr.contains("dy = 2"), "{stderr}");
+    // A negative time is granflow's to refuse (the argument parser took `-1` for an
+    // option).
+    let (code, stderr) = granflow_in(d, &["export", "square.h5", "--time", "-1"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--time -1: outside the snapshots' times [0, 0.2] s"),
+        "{stderr}"
+    );
+}
+
+/// `scripts/check_output.py` accepts a run with wall cells (NaN by design in
+/// `/grid/b`, the snapshots and the maps): the bundled DEM scenario, coarsened.
+#[test]
+fn check_output_accepts_a_run_with_nodata_walls() {
+    let Some(python) = python_with_h5py() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let h5 = dir.path().join("walls.h5");
+    let scn = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/dem_release.toml");
+    let out = granflow()
+        .arg("run")
+        .arg(&scn)
+        .args(["--quiet", "--set", "domain.coarsen=2"])
+        .args(["--set", "time.t_end=2", "--set", "output.every=1", "-o"])
+        .arg(&h5)
+        .output()
+        .unwrap();
+    crate::common::assert_success(&out);
+    let f = rust_hdf5::H5File::open(&h5).unwrap();
+    let walls: i64 = f
+        .dataset("grid/b")
+        .unwrap()
+        .read_raw::<f64>()
+        .unwrap()
+        .iter()
+        .filter(|v| v.is_nan())
+        .count() as i64;
+    assert!(walls > 0, "the scenario has no wall cell");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/check_output.py");
+    let out = Command::new(python).arg(script).arg(&h5).output().unwrap();
+    let stdout = crate::common::assert_success(&out);
+    assert!(stdout.starts_with("OK"), "{stdout}");
+}

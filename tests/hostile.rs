@@ -392,3 +392,29 @@ fn huge_numbers_are_printed_short_and_arrays_of_tables_named() {
         "{stderr}"
     );
 }
+
+/// A run file of 2 MB may declare a grid of 200 000 × 50 000 cells (80 GB of maps):
+/// `export` refuses it by its sizes, read from the header, before reading any field.
+#[test]
+fn an_export_of_a_file_declaring_a_huge_grid_is_refused_by_its_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let h5 = dir.path().join("crafted.h5");
+    {
+        let f = rust_hdf5::H5File::create(&h5).unwrap();
+        f.set_attr_string("granflow_version", "0.1.0").unwrap();
+        f.set_attr_string("grid", "raster").unwrap();
+        let g = f.create_group("grid").unwrap();
+        for (name, n) in [("x", 200_000usize), ("y", 50_000)] {
+            let axis: Vec<f64> = (0..n).map(|i| i as f64 + 0.5).collect();
+            let ds = g.new_dataset::<f64>().shape([n]).create(name).unwrap();
+            ds.write_raw(&axis).unwrap();
+        }
+        let s = f.create_group("snapshots").unwrap();
+        let t = s.new_dataset::<f64>().shape([1]).create("t").unwrap();
+        t.write_raw(&[0.0]).unwrap();
+    }
+    let (code, stderr) = run_in(dir.path(), &["export", h5.to_str().unwrap()], MINUTE);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("crafted.h5"), "{stderr}");
+    assert!(stderr.contains("200000 x 50000 cells"), "{stderr}");
+}

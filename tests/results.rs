@@ -526,3 +526,67 @@ fn a_killed_run_keeps_the_maps_of_its_last_snapshot() {
     let pft = geotiff::read(&dir.path().join("killed_pft.tif")).unwrap();
     assert_eq!(pft.values, north_up(&h_max, 24));
 }
+
+/// `maps` compares the CRS of every run, not only each with the first: a first run
+/// without a CRS does not let runs in EPSG:2056 and EPSG:21781 mix into one map.
+#[test]
+fn maps_refuses_runs_in_two_crs_whatever_the_first_run_states() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut dem = Raster::filled(12, 8, 2_600_000.0, 1_200_080.0, 10.0, 0.0);
+    for (i, v) in dem.values.iter_mut().enumerate() {
+        *v = 100.0 - (i % 12) as f64;
+    }
+    let wkt = |code: u32| format!(r#"PROJCS["a projection",AUTHORITY["EPSG","{code}"]]"#);
+    for (name, crs) in [("a", None), ("b", Some(2056)), ("c", Some(21781))] {
+        asc::write(&dem, &d.join(format!("{name}.asc"))).unwrap();
+        if let Some(code) = crs {
+            fs::write(d.join(format!("{name}.prj")), wkt(code)).unwrap();
+        }
+    }
+    let scenario = r#"[domain]
+coordinates = "cartesian"
+
+[bed]
+b = { raster = "a.asc" }
+
+[rheology]
+law = "coulomb"
+mu_deg = 15.0
+
+[initial]
+h = "if((x - 2600040)^2 + (y - 1200040)^2 < 15^2, 2, 0)"
+
+[time]
+t_end = 0.5
+
+[output]
+every = 0.25
+"#;
+    fs::write(d.join("dem.toml"), scenario).unwrap();
+    fs::write(
+        d.join("crs.toml"),
+        "scenario = \"dem.toml\"\n\n[axes]\nbed.b = { raster = [\"a.asc\", \"b.asc\", \"c.asc\"] }\n",
+    )
+    .unwrap();
+    let out = d.join("runs");
+    assert_success(
+        &granflow()
+            .arg("sweep")
+            .arg(d.join("crs.toml"))
+            .args(["--quiet", "--jobs", "1", "--output"])
+            .arg(&out)
+            .output()
+            .unwrap(),
+    );
+    let refused = granflow()
+        .args(["maps", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("EPSG:2056") && err.contains("EPSG:21781"),
+        "{err}"
+    );
+}

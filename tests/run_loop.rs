@@ -1,6 +1,8 @@
 //! The generic run loop: stop rules decide how a run ends, and the sink is finished
 //! whatever ends it (also an output error).
 
+use std::path::Path;
+
 use crate::common::Case;
 use granflow::model::granular::Granular;
 use granflow::output::{
@@ -110,4 +112,121 @@ fn a_speed_bound_failure_names_the_fastest_cell() {
     assert_eq!((failure.x, failure.y), (Some(x), None), "{failure}");
     let message = failure.to_string();
     assert!(message.contains(&format!("at x = {x} m")), "{message}");
+}
+
+/// How a scenario's run ends: its status, or its failure's text.
+fn outcome_of(text: &str, sets: &[&str]) -> Result<String, String> {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let scn = granflow::scenario::load_str(text, Path::new("."), &sets).unwrap();
+    let mut sink = granflow::output::memory::MemorySink::default();
+    let result = if scn.domain.plane.is_some() {
+        granflow::setup::build_granular_2d(&scn, 1).run(&mut sink, &mut |_| {})
+    } else {
+        granflow::setup::build_granular(&scn).run(&mut sink, &mut |_| {})
+    };
+    match result {
+        Ok(summary) => Ok(summary.status),
+        Err(RunError::Solver(f)) => Err(f.to_string()),
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Material flowing in through an outflow end (u < 0 at the east end) grows the mass;
+/// an erodible bed is part of the initial mass and adds none, so the run fails the
+/// mass check with one as without one, on a line and on a raster.
+#[test]
+fn an_erodible_bed_does_not_switch_the_mass_check_off() {
+    let line = r#"[domain]
+x_min = 0
+x_max = 10
+cells = 50
+coordinates = "cartesian"
+
+[rheology]
+law = "coulomb"
+mu_deg = 0
+
+[initial]
+h = 1.0
+u = -1.0
+
+[boundary]
+right = "outflow"
+
+[time]
+t_end = 5
+"#;
+    let raster = line
+        .replace("cells = 50", "y_min = 0\ny_max = 2\ncells = [50, 10]")
+        .replace("right = \"outflow\"", "east = \"outflow\"");
+    for text in [line.to_string(), raster] {
+        for bed in ["0", "0.1"] {
+            let set = format!("initial.erodible_bed={bed}");
+            let failure = outcome_of(&text, &[&set]).unwrap_err();
+            assert!(failure.contains("the mass grew"), "{bed}: {failure}");
+        }
+    }
+}
+
+/// Cells that are each finite but whose total overflows (a domain of 10³⁰⁸ m holding
+/// 10⁴ m of material) fail the run naming the total, instead of ending `outflowed`.
+#[test]
+fn an_overflowing_total_mass_fails_the_run() {
+    let text = r#"[domain]
+x_min = 0
+x_max = 1.7e308
+cells = 10
+
+[rheology]
+law = "coulomb"
+mu_deg = 30
+
+[initial]
+h = 1e4
+
+[time]
+t_end = 1
+"#;
+    let failure = outcome_of(text, &[]).unwrap_err();
+    assert!(
+        failure.contains("the total mass of the initial state overflows"),
+        "{failure}"
+    );
+}
+
+/// An end time of 10¹⁰ s is only an upper bound for a run that stops at rest: it must
+/// not fail as a "collapsed" time step (the threshold was 10⁻¹⁰ × t_end = 1 s, above
+/// the ordinary CFL step).
+#[test]
+fn a_huge_end_time_is_no_time_step_collapse() {
+    let text = r#"[domain]
+x_min = 0
+x_max = 4
+cells = 40
+coordinates = "cartesian"
+
+[rheology]
+law = "coulomb"
+mu_deg = 35
+
+[initial]
+h = "if(x < 1, 0.2, 0)"
+
+[time]
+t_end = 1e10
+stop_at_rest = true
+
+[output]
+every = 1e6
+"#;
+    let status = outcome_of(text, &[]).unwrap();
+    assert_eq!(status, "stopped_at_rest");
+    // Without a rule that may end it, the same run would take 10¹² steps: refused
+    // at its first step as such, not as a collapse.
+    let failure = outcome_of(text, &["time.stop_at_rest=false"]).unwrap_err();
+    assert!(
+        failure.contains("more steps to reach time.t_end"),
+        "{failure}"
+    );
+    assert!(!failure.contains("collapsed"), "{failure}");
 }

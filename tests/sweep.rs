@@ -396,11 +396,11 @@ fn rerun_skips_completed_runs_and_force_reruns_them() {
 #[test]
 fn a_failing_run_is_recorded_and_the_others_go_on() {
     let tmp = TempDir::new().unwrap();
-    // A run of 1e9 s is valid input, but at the CFL step of about 2e-3 s it would take
-    // 5e11 steps: it fails at its first step.
+    // A run of 1e9 s that no stop rule can end is valid input, but at the CFL step of
+    // about 2e-3 s it would take 5e11 steps: it fails at its first step.
     let file = tmp.path().join("fail.toml");
     let text = format!(
-        "scenario = {:?}\nset = [\"domain.cells=60\"]\n[[zip]]\ntime.t_end = [0.4, 1e9, 0.3]\noutput.every = [0.1, 1e9, 0.1]\n",
+        "scenario = {:?}\nset = [\"domain.cells=60\"]\n[[zip]]\ntime.t_end = [0.4, 1e9, 0.3]\noutput.every = [0.1, 1e9, 0.1]\ntime.stop_at_rest = [true, false, true]\ntime.stop_when_settled = [true, false, true]\n",
         collapse().display().to_string()
     );
     fs::write(&file, text).unwrap();
@@ -414,7 +414,7 @@ fn a_failing_run_is_recorded_and_the_others_go_on() {
         "{status:?}"
     );
     assert!(
-        status[1].starts_with("failed: time step collapsed"),
+        status[1].starts_with("failed: at the CFL step"),
         "{status:?}"
     );
     assert!(
@@ -424,7 +424,7 @@ fn a_failing_run_is_recorded_and_the_others_go_on() {
     let failed = column(&out.join("summary.csv"), "run")[1].clone();
     let record = fs::read_to_string(out.join(format!("{failed}.result.toml"))).unwrap();
     assert!(
-        record.contains("status = \"failed: time step collapsed"),
+        record.contains("status = \"failed: at the CFL step"),
         "{record}"
     );
 

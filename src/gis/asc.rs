@@ -33,13 +33,11 @@ pub fn prj_path(path: &Path) -> PathBuf {
 
 /// Reads an ESRI ASCII grid and the `.prj` beside it, if any.
 pub fn read(path: &Path) -> Result<Raster> {
+    super::regular_if_present(path)?;
     let bytes = std::fs::read(path).map_err(io_err(path))?;
     let mut raster = parse(&bytes, path)?;
-    let prj = prj_path(path);
-    match std::fs::read_to_string(&prj) {
-        Ok(text) => raster.crs = Crs::from_wkt(&text),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-        Err(e) => return Err(io_err(&prj)(e)),
+    if let Some(text) = super::read_sidecar(&prj_path(path))? {
+        raster.crs = Crs::from_wkt(&text);
     }
     Ok(raster)
 }
@@ -71,6 +69,8 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Raster> {
             .count(),
         reason: "not text (invalid UTF-8)".into(),
     })?;
+    // A byte-order mark (some Windows editors write one) is not part of the first key.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let bad = |line: usize, reason: String| GisError::BadHeader {
         path: path.to_path_buf(),
         line,

@@ -53,6 +53,11 @@ const USER_DEFINED: u16 = 32767;
 const RASTER_PIXEL_IS_AREA: u16 = 1;
 const RASTER_PIXEL_IS_POINT: u16 = 2;
 
+/// Most pixels [`read`] decodes (1.6 GB as `f64`): the largest domain of a
+/// run (10⁷ cells) twenty times over, for DEMs that are cropped or coarsened (`domain.crop`,
+/// `domain.coarsen`) to it.
+pub const MAX_READ_CELLS: u64 = 200_000_000;
+
 /// Sample type of a written GeoTIFF.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SampleType {
@@ -91,6 +96,7 @@ fn tiff_err(path: &Path) -> impl FnOnce(TiffError) -> GisError + '_ {
 
 /// Reads a single-band GeoTIFF.
 pub fn read(path: &Path) -> Result<Raster> {
+    super::regular_if_present(path)?;
     let file = File::open(path).map_err(io_err(path))?;
     if file.metadata().map_err(io_err(path))?.len() == 0 {
         return Err(GisError::EmptyFile {
@@ -113,6 +119,17 @@ pub fn read(path: &Path) -> Result<Raster> {
         reason,
     };
     let (width, height) = dec.dimensions().map_err(tiff_err(path))?;
+    // Before anything is decoded: a header may promise any size (40 000² pixels in
+    // a 1.7 MB Deflate file), and the decoded samples and their f64 copy are allocated
+    // at once.
+    let cells = u64::from(width) * u64::from(height);
+    if cells > MAX_READ_CELLS {
+        return Err(unsupported(format!(
+            "{width} x {height} pixels ({cells} cells) is more than the {MAX_READ_CELLS} \
+             cells granflow reads (a run takes at most 10⁷): crop or coarsen it first \
+             (e.g. gdal_translate -projwin, gdalwarp -tr)"
+        )));
+    }
     match dec.colortype().map_err(tiff_err(path))? {
         ColorType::Gray(_) => {}
         ColorType::Multiband { num_samples, .. } => {
@@ -162,6 +179,26 @@ pub fn read(path: &Path) -> Result<Raster> {
         (x0, y0)
     };
 
+    // GDAL's sparse files (SPARSE_OK) leave blocks without data: offset and byte count
+    // 0, which the decoder would report as a corrupt stream.
+    for tag in [Tag::StripByteCounts, Tag::TileByteCounts] {
+        let counts = dec
+            .find_tag(tag)
+            .and_then(|v| v.map(|v| v.into_u64_vec()).transpose())
+            .map_err(tiff_err(path))?;
+        if let Some(empty) = counts.and_then(|c| c.iter().position(|&n| n == 0)) {
+            return Err(unsupported(format!(
+                "a sparse GeoTIFF: {} {empty} holds no data (blocks left empty, GDAL's \
+                 SPARSE_OK); granflow reads only complete files: write it out in full \
+                 first (e.g. gdal_translate in.tif out.tif)",
+                if tag == Tag::StripByteCounts {
+                    "strip"
+                } else {
+                    "tile"
+                }
+            )));
+        }
+    }
     let data = dec.read_image().map_err(tiff_err(path))?;
     let mut is_f32 = false;
     let values: Vec<f64> = match data {
@@ -256,6 +293,15 @@ fn georeference(
     let (x0, y0, sx, sy) = if let Some(m) = transform {
         if m.len() < 16 {
             return Err(not_geo("ModelTransformationTag has fewer than 16 values"));
+        }
+        let identity = [
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        if m[..16] == identity {
+            return Err(not_geo(
+                "the ModelTransformationTag is the identity (pixel coordinates, as written \
+                 by tools that had no georeferencing to store)",
+            ));
         }
         if m[1] != 0.0 || m[4] != 0.0 {
             return Err(GisError::Rotated {

@@ -26,7 +26,9 @@
 //! * [`release`]: release polygons from shapefiles and GeoJSON, rasterised by the
 //!   cell-centre or the area-fraction rule, released volume, slope-normal → vertical
 //!   thickness;
-//! * [`netcdf`]: a CF-1.8 NetCDF writer for time series of 2-D fields.
+//! * [`netcdf`]: a CF-1.8 NetCDF writer for time series of 2-D fields;
+//! * `validity`: the checks that refuse release polygons which are not simple areas
+//!   (self-crossing rings, holes outside their ring, rings without area).
 //!
 //! [`Raster::crop`] and [`Raster::coarsen`] cut and coarsen grids.
 
@@ -36,6 +38,7 @@ pub mod geotiff;
 pub mod netcdf;
 mod raster;
 pub mod release;
+mod validity;
 
 use std::path::PathBuf;
 
@@ -53,6 +56,10 @@ pub enum GisError {
         path: PathBuf,
         source: std::io::Error,
     },
+    #[error("{path}: no such file: {reason}")]
+    MissingSidecar { path: PathBuf, reason: String },
+    #[error("{path}: not a regular file (a FIFO, a device or a directory)")]
+    NotRegular { path: PathBuf },
     #[error("{path}: the file is empty (0 bytes)")]
     EmptyFile { path: PathBuf },
     #[error("{path}: the header has no `{key}` (an ESRI ASCII grid needs ncols, nrows, xllcorner or xllcenter, yllcorner or yllcenter, cellsize)")]
@@ -82,9 +89,9 @@ pub enum GisError {
         found: usize,
         line: usize,
     },
-    #[error("{path}: the cell size must be positive, got {value}")]
+    #[error("{path}: the cell size must be positive, got {}", short(.value))]
     NonPositiveCellSize { path: PathBuf, value: f64 },
-    #[error("{path}: cells are not square (dx = {dx}, dy = {dy}); granflow needs square cells: resample first (e.g. gdalwarp -tr D D)")]
+    #[error("{path}: cells are not square (dx = {}, dy = {}); granflow needs square cells: resample first (e.g. gdalwarp -tr D D)", short(.dx), short(.dy))]
     NonSquareCells { path: PathBuf, dx: f64, dy: f64 },
     #[error("{path}: {reason}")]
     BadGrid { path: PathBuf, reason: String },
@@ -134,9 +141,15 @@ pub enum GisError {
         feature: usize,
         kind: String,
     },
+    #[error("{path}: feature {feature} is not a valid polygon: {reason}")]
+    InvalidPolygon {
+        path: PathBuf,
+        feature: usize,
+        reason: String,
+    },
     #[error("{path}: no polygon (only Polygon and MultiPolygon geometries are release areas)")]
     NoPolygons { path: PathBuf },
-    #[error("release feature {feature} lies outside the raster: polygon x {px0} .. {px1}, y {py0} .. {py1}; raster x {rx0} .. {rx1}, y {ry0} .. {ry1} (wrong CRS or wrong file?)")]
+    #[error("release feature {feature} lies outside the raster: polygon x {} .. {}, y {} .. {}; raster x {} .. {}, y {} .. {} (wrong CRS or wrong file?)", short(.px0), short(.px1), short(.py0), short(.py1), short(.rx0), short(.rx1), short(.ry0), short(.ry1))]
     PolygonOutsideRaster {
         feature: usize,
         px0: f64,
@@ -150,7 +163,7 @@ pub enum GisError {
     },
     #[error("release feature {feature}: {percent:.3} % of its area lies outside the raster; that mass would be lost (extend the DEM or trim the polygon)")]
     PolygonPartlyOutside { feature: usize, percent: f64 },
-    #[error("CRS mismatch: {what_a} is EPSG:{a} but {what_b} is EPSG:{b}; granflow does not reproject: convert one of them first")]
+    #[error("CRS mismatch: EPSG:{a} ({what_a}) against EPSG:{b} ({what_b}); granflow does not reproject: convert one of them first")]
     CrsMismatch {
         what_a: String,
         a: u32,
@@ -159,7 +172,7 @@ pub enum GisError {
     },
     #[error("the rasters differ in grid ({reason}); they must share nx, ny, origin and cell size")]
     GridMismatch { reason: String },
-    #[error("crop box x {x0} .. {x1}, y {y0} .. {y1} contains no cell centre of the raster")]
+    #[error("crop box x {} .. {}, y {} .. {} contains no cell centre of the raster", short(.x0), short(.x1), short(.y0), short(.y1))]
     EmptyCrop { x0: f64, x1: f64, y0: f64, y1: f64 },
     #[error("cannot coarsen by {factor}: {reason}")]
     BadCoarsen { factor: usize, reason: String },
@@ -174,6 +187,61 @@ pub(crate) fn io_err(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> G
     move |source| GisError::Io {
         path: path.to_path_buf(),
         source,
+    }
+}
+
+/// `v` for a message: in exponent form when very large or small (`1e300`, not the 301
+/// digits of `{}`), as written otherwise.
+pub fn short_number(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && a.is_finite() && !(1e-5..1e16).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// [`short_number`] of a field, for the error texts.
+fn short(v: &f64) -> String {
+    short_number(*v)
+}
+
+/// Largest side-car file (`.prj`) read: a WKT is a few kB.
+const MAX_SIDECAR_BYTES: u64 = 1 << 20;
+
+/// Refuses `path` when it exists but is not a regular file (a FIFO would block the
+/// read for ever, a device would be read without end); `Ok(false)` when it does not
+/// exist.
+pub(crate) fn regular_if_present(path: &std::path::Path) -> Result<bool> {
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => Ok(true),
+        Ok(_) => Err(GisError::NotRegular {
+            path: path.to_path_buf(),
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
+        Err(e) => Err(io_err(path)(e)),
+    }
+}
+
+/// The text of the side-car file `path` (a `.prj`), `None` when there is none; one that
+/// is not a regular file or is larger than 1 MiB is refused.
+pub(crate) fn read_sidecar(path: &std::path::Path) -> Result<Option<String>> {
+    if !regular_if_present(path)? {
+        return Ok(None);
+    }
+    let len = std::fs::metadata(path).map_err(io_err(path))?.len();
+    if len > MAX_SIDECAR_BYTES {
+        return Err(GisError::BadGrid {
+            path: path.to_path_buf(),
+            reason: format!(
+                "{len} bytes is more than a side-car file may be ({MAX_SIDECAR_BYTES})"
+            ),
+        });
+    }
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok(Some(text)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(io_err(path)(e)),
     }
 }
 

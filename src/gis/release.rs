@@ -140,6 +140,25 @@ fn bad_thickness(path: &Path, feature: usize, value: String) -> GisError {
     }
 }
 
+/// Refuses a feature with a polygon that is not a simple area ([`super::validity`]).
+fn check_polygons(path: &Path, feature: usize, polygons: &[Polygon]) -> Result<()> {
+    for (k, p) in polygons.iter().enumerate() {
+        if let Some(reason) = super::validity::invalid_reason(p) {
+            let which = if polygons.len() > 1 {
+                format!("polygon {k}: ")
+            } else {
+                String::new()
+            };
+            return Err(GisError::InvalidPolygon {
+                path: path.to_path_buf(),
+                feature,
+                reason: format!("{which}{reason}"),
+            });
+        }
+    }
+    Ok(())
+}
+
 fn check_thickness(path: &Path, feature: usize, v: f64) -> Result<f64> {
     if v.is_finite() && v >= 0.0 {
         Ok(v)
@@ -158,6 +177,20 @@ pub fn read_shapefile(path: &Path, thickness: ThicknessSource) -> Result<Release
     if std::fs::metadata(path).map_err(io_err(path))?.len() == 0 {
         return Err(GisError::EmptyFile {
             path: path.to_path_buf(),
+        });
+    }
+    // The shapefile library opens these itself: a FIFO among them would block it.
+    let mut present = [false; 5];
+    for (seen, ext) in present.iter_mut().zip(["dbf", "shx", "prj", "cpg", "shp"]) {
+        *seen = super::regular_if_present(&path.with_extension(ext))?;
+    }
+    if let (ThicknessSource::Attribute(field), false) = (thickness, present[0]) {
+        return Err(GisError::MissingSidecar {
+            path: path.with_extension("dbf"),
+            reason: format!(
+                "the thickness attribute `{field}` is read from the shapefile's attribute \
+                 table, which is missing"
+            ),
         });
     }
     let mut features = Vec::new();
@@ -209,12 +242,9 @@ pub fn read_shapefile(path: &Path, thickness: ThicknessSource) -> Result<Release
             path: path.to_path_buf(),
         });
     }
-    let prj = path.with_extension("prj");
-    let crs = match std::fs::read_to_string(&prj) {
-        Ok(text) => Crs::from_wkt(&text),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Crs::default(),
-        Err(e) => return Err(io_err(&prj)(e)),
-    };
+    let crs = super::read_sidecar(&path.with_extension("prj"))?
+        .map(|text| Crs::from_wkt(&text))
+        .unwrap_or_default();
     Ok(ReleaseAreas { features, crs })
 }
 
@@ -243,7 +273,7 @@ fn shape_polygons(
         }
         out
     }
-    Ok(match shape {
+    let polygons = match shape {
         Shape::NullShape => None,
         Shape::Polygon(p) => Some(rings(p.into_inner(), |q| [q.x, q.y])),
         Shape::PolygonM(p) => Some(rings(p.into_inner(), |q| [q.x, q.y])),
@@ -255,11 +285,16 @@ fn shape_polygons(
                 kind: other.shapetype().to_string(),
             })
         }
-    })
+    };
+    if let Some(p) = &polygons {
+        check_polygons(path, feature, p)?;
+    }
+    Ok(polygons)
 }
 
 /// Reads GeoJSON release areas (see the [module docs](self)).
 pub fn read_geojson(path: &Path, thickness: ThicknessSource) -> Result<ReleaseAreas> {
+    super::regular_if_present(path)?;
     let bytes = std::fs::read(path).map_err(io_err(path))?;
     if bytes.is_empty() {
         return Err(GisError::EmptyFile {
@@ -303,6 +338,7 @@ pub fn read_geojson(path: &Path, thickness: ThicknessSource) -> Result<ReleaseAr
         if polygons.is_empty() {
             continue;
         }
+        check_polygons(path, i, &polygons)?;
         let h = match thickness {
             ThicknessSource::Uniform(h) => h,
             ThicknessSource::Attribute(field) => {

@@ -859,6 +859,8 @@ mod tests {
         raster.raster = Some(crate::output::RasterInfo {
             nx: 3,
             ny: 2,
+            dx: 1.0,
+            dy: 1.0,
             crs_epsg: None,
             crs_wkt: None,
             release: None,

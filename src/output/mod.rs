@@ -84,6 +84,10 @@ pub struct RunInfo {
 pub struct RasterInfo {
     pub nx: usize,
     pub ny: usize,
+    /// Cell sizes along x and y (m): an axis of one cell has no spacing to read from
+    /// its centres.
+    pub dx: f64,
+    pub dy: f64,
     /// EPSG code of the input rasters, when known.
     pub crs_epsg: Option<u32>,
     /// WKT of the input rasters (their `.prj`), when known.

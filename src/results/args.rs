@@ -46,7 +46,7 @@ pub struct ExportArgs {
     pub format: ExportFormat,
     /// Export the snapshot nearest this time (s; the earlier one on a tie) instead
     /// of the maps; an error outside the snapshots' times.
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Fields, comma-separated: maps pft, pfv, ppr, deposit, arrival_time (default:
     /// all); with --time, or in NetCDF, snapshot fields h, u, v, speed (default: h,
@@ -72,7 +72,12 @@ pub struct MapsArgs {
     #[arg(value_name = "SWEEP_DIR")]
     pub dir: PathBuf,
     /// Peak flow thickness (m) above which a cell counts as reached.
-    #[arg(long, default_value_t = 0.1, value_name = "METRES")]
+    #[arg(
+        long,
+        default_value_t = 0.1,
+        value_name = "METRES",
+        allow_negative_numbers = true
+    )]
     pub threshold: f64,
     /// Observed footprint: polygons (.geojson, .json, .shp) or a raster (.tif, .asc;
     /// cells > 0 observed) on the runs' grid. Adds each run's skill and ranks the runs.

@@ -157,7 +157,8 @@ pub fn nearest_snapshot(times: &[f64], t: f64) -> Result<usize, ResultsError> {
     let tol = 1e-9 * first.abs().max(last.abs()).max(1.0);
     if !t.is_finite() || t < first - tol || t > last + tol {
         return Err(ResultsError::input(format!(
-            "--time {t}: outside the snapshots' times [{}, {}] s ({} snapshots)",
+            "--time {}: outside the snapshots' times [{}, {}] s ({} snapshots)",
+            crate::gis::short_number(t),
             format_float(first),
             format_float(last),
             times.len()

@@ -105,12 +105,51 @@ pub fn observed_cells(path: &Path, grid: &Raster) -> Result<Vec<bool>, ResultsEr
     Ok(cells)
 }
 
+/// The grid every run of `done` shares, with the CRS they state: each run must be on
+/// the first run's grid, and every CRS known by an EPSG code must be the same one
+/// (compared across all runs, not only with the first: a first run without a CRS
+/// would otherwise let any two others mix). Runs without a CRS are not compared.
+fn common_grid<R>(done: &[(R, PathBuf)]) -> Result<Raster, ResultsError> {
+    let mut grid = RunFile::open(&done[0].1)?.grid().clone();
+    let mut known: Option<(&Path, crate::gis::Crs)> = None;
+    for (_, h5) in done {
+        let file = RunFile::open(h5)?;
+        let other = file.grid();
+        let mut unplaced = other.clone();
+        unplaced.crs = grid.crs.clone();
+        unplaced.check_same_grid(&grid).map_err(|e| {
+            ResultsError::input(format!(
+                "{}: not on the grid of {}: {e}",
+                h5.display(),
+                done[0].1.display()
+            ))
+        })?;
+        if other.crs.epsg.is_none() {
+            continue;
+        }
+        match &known {
+            Some((first, crs)) => crs
+                .check_same(
+                    &first.display().to_string(),
+                    &other.crs,
+                    &h5.display().to_string(),
+                )
+                .map_err(|e| ResultsError::input(e.to_string()))?,
+            None => known = Some((h5.as_path(), other.crs.clone())),
+        }
+    }
+    if let Some((_, crs)) = known {
+        grid.crs = crs;
+    }
+    Ok(grid)
+}
+
 /// Runs `granflow maps`.
 pub fn maps(args: &MapsArgs) -> Result<MapsReport, ResultsError> {
     if !(args.threshold.is_finite() && args.threshold >= 0.0) {
         return Err(ResultsError::input(format!(
             "--threshold {}: must be a finite number ≥ 0 (m)",
-            args.threshold
+            crate::gis::short_number(args.threshold)
         )));
     }
     let plan = Plan::read(&args.dir).map_err(ResultsError::input)?;
@@ -141,8 +180,7 @@ pub fn maps(args: &MapsArgs) -> Result<MapsReport, ResultsError> {
             done.len()
         )));
     }
-    let first = RunFile::open(&done[0].1)?;
-    let grid = first.grid().clone();
+    let grid = common_grid(&done)?;
     let (nx, ny) = (grid.nx, grid.ny);
     // File order (south row first), as the runs' maps.
     let observed = match &args.observed {
@@ -152,16 +190,8 @@ pub fn maps(args: &MapsArgs) -> Result<MapsReport, ResultsError> {
     let mut ensemble = Ensemble::new(nx * ny, args.threshold);
     let mut rows = Vec::new();
     let mut reached = vec![false; nx * ny];
-    drop(first);
     for (run, h5) in &done {
         let file = RunFile::open(h5)?;
-        file.grid().check_same_grid(&grid).map_err(|e| {
-            ResultsError::input(format!(
-                "{}: not on the grid of {}: {e}",
-                h5.display(),
-                done[0].1.display()
-            ))
-        })?;
         let pft = file.map("h_max")?;
         let pfv = file.map("speed_max")?;
         ensemble.add(&pft, &pfv);

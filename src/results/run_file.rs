@@ -19,6 +19,11 @@ use rust_hdf5::H5File;
 use super::ResultsError;
 use crate::gis::{Crs, Raster};
 
+/// Most cells (and values of one axis) a run file may declare: the largest raster
+/// domain of a run (`domain.cells`, 10⁷). A larger size is a damaged or crafted file,
+/// refused before it is read.
+pub const MAX_RUN_CELLS: usize = 10_000_000;
+
 /// An open raster run file.
 pub struct RunFile {
     path: PathBuf,
@@ -68,9 +73,20 @@ impl RunFile {
                     .into(),
             ));
         }
+        // Every size is checked against what a run can write before anything is read:
+        // a crafted file of 2 MB may declare a grid of 10¹⁰ cells.
         let read = |name: &str| -> Result<Vec<f64>, ResultsError> {
-            file.dataset(name)
-                .and_then(|d| d.read_raw::<f64>())
+            let ds = file
+                .dataset(name)
+                .map_err(|e| bad(format!("cannot read /{name}: {e}")))?;
+            let shape = ds.shape();
+            if shape.len() != 1 || shape[0] > MAX_RUN_CELLS {
+                return Err(bad(format!(
+                    "/{name} has shape {shape:?}; a run writes one axis of at most \
+                     {MAX_RUN_CELLS} values"
+                )));
+            }
+            ds.read_raw::<f64>()
                 .map_err(|e| bad(format!("cannot read /{name}: {e}")))
         };
         let x = read("grid/x")?;
@@ -79,11 +95,33 @@ impl RunFile {
         if nx == 0 || ny == 0 {
             return Err(bad("an empty grid".into()));
         }
-        let (dx, dy) = match (spacing(&x), spacing(&y)) {
-            (Some(dx), Some(dy)) => (dx, dy),
-            (Some(d), None) | (None, Some(d)) => (d, d),
-            (None, None) => return Err(bad("a grid of one cell has no cell size".into())),
+        if nx.saturating_mul(ny) > MAX_RUN_CELLS {
+            return Err(bad(format!(
+                "a grid of {nx} x {ny} cells; a run has at most {MAX_RUN_CELLS}"
+            )));
+        }
+        if !x.iter().chain(&y).all(|v| v.is_finite()) {
+            return Err(bad(
+                "the cell centres /grid/x, /grid/y are not all finite".into()
+            ));
+        }
+        // An axis of one cell has no spacing between centres: the cell size is the
+        // axis' `spacing` attribute (files without it cannot be placed).
+        let stored = |name: &str| -> Option<f64> {
+            let ds = file.dataset(name).ok()?;
+            let attr = ds.attr("spacing").ok()?;
+            attr.read_numeric::<f64>().ok()
         };
+        let axis_step = |axis: &[f64], name: &str, what: &str| {
+            spacing(axis).or_else(|| stored(name)).ok_or_else(|| {
+                bad(format!(
+                    "one {what} and no `spacing` attribute on /{name}: the cell size along \
+                     it is unknown (a file of an older granflow)"
+                ))
+            })
+        };
+        let dx = axis_step(&x, "grid/x", "column")?;
+        let dy = axis_step(&y, "grid/y", "row")?;
         if !(dx > 0.0 && dy > 0.0) || (dx - dy).abs() > 1e-9 * dx.max(dy) {
             return Err(bad(format!(
                 "cells are not square (dx = {dx}, dy = {dy}): GeoTIFF and ESRI ASCII grids need \
@@ -101,7 +139,7 @@ impl RunFile {
         {
             crs.epsg = Some(code);
         }
-        let mut grid = Raster::filled(nx, ny, x[0] - 0.5 * dx, y[ny - 1] + 0.5 * dx, dx, 0.0);
+        let mut grid = Raster::filled(nx, ny, x[0] - 0.5 * dx, y[ny - 1] + 0.5 * dy, dx, 0.0);
         grid.crs = crs;
         let times = read("snapshots/t")?;
         let coordinates = root.attr_string("coordinates").unwrap_or_default();

@@ -21,6 +21,7 @@ use evalexpr::{
 
 use super::compiled::Compiled;
 use super::error::ScenarioError;
+use crate::gis::short_number;
 
 /// Function names an expression may call.
 pub(crate) const FUNCTIONS: &[&str] = &[
@@ -865,6 +866,38 @@ struct RasterProfile {
     raster: crate::gis::Raster,
 }
 
+/// Refuses a raster whose cells vanish in the round-off of its coordinates (a cell of
+/// 5 m at x = 10¹⁷, of 10⁻³⁰⁰ m anywhere but next to 0) or whose far edges overflow:
+/// cell centres would not be distinct, and the grid built on them would not be the
+/// raster's. The bound is the one of a domain's keys ([`MIN_RELATIVE_DX`]).
+///
+/// [`MIN_RELATIVE_DX`]: super::validate::MIN_RELATIVE_DX
+fn check_round_off(r: &crate::gis::Raster) -> Result<(), String> {
+    let b = r.bbox();
+    let corners = [b.x_min, b.x_max, b.y_min, b.y_max];
+    if corners.iter().any(|v| !v.is_finite()) {
+        return Err(format!(
+            "its extent overflows (left edge {}, {} columns of {}; top edge {}, {} rows)",
+            short_number(r.x_left),
+            r.nx,
+            short_number(r.cell_size),
+            short_number(r.y_top),
+            r.ny
+        ));
+    }
+    let scale = corners.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if r.cell_size < super::validate::MIN_RELATIVE_DX * scale {
+        return Err(format!(
+            "cells of {} are at the round-off of its coordinates (up to {}): cell \
+             centres would not be distinct; check the header's cell size and corner (a \
+             corner in the wrong units?)",
+            short_number(r.cell_size),
+            short_number(scale)
+        ));
+    }
+    Ok(())
+}
+
 impl RasterProfile {
     /// Reads an ESRI ASCII grid (`.asc`) or a GeoTIFF (`.tif`, `.tiff`); errors are
     /// messages naming the file (the caller adds the key).
@@ -901,6 +934,8 @@ impl RasterProfile {
             }
         }
         .map_err(|e| format!("cannot read raster file: {e}"))?;
+        check_round_off(&raster)
+            .map_err(|reason| format!("raster file '{}': {reason}", full.display()))?;
         Ok(RasterProfile {
             path: path.to_owned(),
             raster,
@@ -915,10 +950,10 @@ impl RasterProfile {
             return Err(format!(
                 "raster \"{}\" covers x in [{}, {}], y in [{}, {}], not the point",
                 self.path.display(),
-                b.x_min,
-                b.x_max,
-                b.y_min,
-                b.y_max
+                short_number(b.x_min),
+                short_number(b.x_max),
+                short_number(b.y_min),
+                short_number(b.y_max)
             ));
         }
         // Fractional column and row of the point, counted from the first centre; a
@@ -950,8 +985,10 @@ impl RasterProfile {
                 None => {
                     let (cx, cy) = r.cell_centre(col, row);
                     return Err(format!(
-                        "raster \"{}\" has no value (nodata) in its cell centred at ({cx}, {cy})",
-                        self.path.display()
+                        "raster \"{}\" has no value (nodata) in its cell centred at ({}, {})",
+                        self.path.display(),
+                        short_number(cx),
+                        short_number(cy)
                     ));
                 }
             }

@@ -89,6 +89,8 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     info.raster = Some(RasterInfo {
         nx: grid.nx(),
         ny: grid.ny(),
+        dx: grid.dx(),
+        dy: grid.dy(),
         crs_epsg: plane.crs.epsg,
         crs_wkt: plane.crs.wkt.clone(),
         release: scn.release.as_ref().map(|r| ReleaseVolumes {

@@ -121,8 +121,8 @@ pub fn scenario_line(scn: &Scenario) -> Line {
     Line::new(&spec, scn.sampled.b.clone())
 }
 
-/// The stop rules' plain values: the optional rules of `[time]`, the run's speed bound
-/// and whether its mass is conserved (no erodible bed). `z`: the potential elevation
+/// The stop rules' plain values: the optional rules of `[time]` and the run's speed
+/// bound. `z`: the potential elevation
 /// (bed and plane) at the centres of the grid the run was built on.
 pub fn stop_options(scn: &Scenario, z: impl Iterator<Item = f64>) -> crate::stop::StopOptions {
     let time = &scn.time;
@@ -130,7 +130,6 @@ pub fn stop_options(scn: &Scenario, z: impl Iterator<Item = f64>) -> crate::stop
         at_rest: time.stop_at_rest,
         settled_fraction: time.stop_when_settled.then_some(time.settle_fraction),
         speed_bound: speed_bound(scn, z),
-        mass_conserved: !scn.initial.has_erodible_bed(),
     }
 }
 

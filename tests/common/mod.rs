@@ -2,6 +2,8 @@
 //! scenario texts loaded or refused at a key.
 #![allow(dead_code)]
 
+pub mod crafted;
+
 use granflow::grid::LineSpec;
 use granflow::model::granular::Granular;
 use granflow::output::memory::MemorySink;

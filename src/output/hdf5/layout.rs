@@ -143,9 +143,8 @@ fn write_raster_layout(
     file.set_attr_string("grid", "raster")?;
     file.set_attr_numeric("nx", &(nx as i64))?;
     file.set_attr_numeric("ny", &(ny as i64))?;
-    let spacing = |v: &[f64]| if v.len() > 1 { v[1] - v[0] } else { f64::NAN };
-    file.set_attr_numeric("dx", &spacing(&x))?;
-    file.set_attr_numeric("dy", &spacing(&y))?;
+    file.set_attr_numeric("dx", &r.dx)?;
+    file.set_attr_numeric("dy", &r.dy)?;
     if let Some(code) = r.crs_epsg {
         file.set_attr_numeric("crs_epsg", &(code as i64))?;
         // The same code as text, which every HDF5 reader (rust-hdf5 among them)
@@ -156,10 +155,13 @@ fn write_raster_layout(
         file.set_attr_string("crs_wkt", wkt)?;
     }
     let g = file.create_group("grid")?;
-    for (name, data) in [("x", &x), ("y", &y)] {
+    for (name, data, spacing) in [("x", &x, r.dx), ("y", &y, r.dy)] {
         let ds = g.new_dataset::<f64>().shape([data.len()]).create(name)?;
         ds.write_raw(data)?;
         units(&ds, "m")?;
+        // The cell size, which an axis of one cell cannot give by its centres.
+        let attr = ds.new_attr::<f64>().shape(()).create("spacing")?;
+        attr.write_numeric(&spacing)?;
     }
     for (name, data) in [("b", grid.b), ("h_bed", grid.h_bed)] {
         let ds = g.new_dataset::<f64>().shape([ny, nx]).create(name)?;

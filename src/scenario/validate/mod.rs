@@ -55,7 +55,7 @@ pub(crate) const MAX_CELLS: i64 = 10_000_000;
 pub(crate) const MAX_SCENARIO_BYTES: u64 = 64 << 20;
 /// Smallest Δx relative to the largest |x| of the domain: Δx is then known to about
 /// 2e-7 of itself (f64 round-off 2.2e-16 |x|).
-const MIN_RELATIVE_DX: f64 = 1e-9;
+pub(crate) const MIN_RELATIVE_DX: f64 = 1e-9;
 /// Largest number of snapshots a run may write (t_end / output.every).
 pub(crate) const MAX_SNAPSHOTS: f64 = 100_000.0;
 /// Largest accepted `model.layers`.

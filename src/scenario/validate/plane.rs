@@ -318,9 +318,12 @@ pub(super) fn profiles_fit(
                 key,
                 format!(
                     "the raster{file} covers x in [{}, {}], y in [{}, {}] but the domain is x in [{}, {}], y in [{}, {}]",
-                    b.x_min, b.x_max, b.y_min, b.y_max, x_span.0, x_span.1, plane.y_min, plane.y_max
+                    num(b.x_min), num(b.x_max), num(b.y_min), num(b.y_max), num(x_span.0), num(x_span.1), num(plane.y_min), num(plane.y_max)
                 ),
             );
+        }
+        if r.crs.is_geographic() {
+            return err(key, geographic(&file, &r.crs));
         }
         match &crs {
             Some((first, c)) => c
@@ -333,6 +336,14 @@ pub(super) fn profiles_fit(
         plane.crs = c;
     }
     Ok(())
+}
+
+/// The refusal of an input in a geographic CRS: its coordinates are degrees, which the
+/// model would take as metres (cells of 10⁻⁴ "m" on a DEM of 10 m spacing).
+pub(super) fn geographic(file: &str, crs: &Crs) -> String {
+    format!(
+        "the file{file} is in a geographic CRS ({crs}): its coordinates are degrees of longitude and latitude, not metres; reproject it to a projected CRS in metres first (e.g. gdalwarp -t_srs EPSG:<UTM zone>)"
+    )
 }
 
 /// `[boundary]`: `left`/`right` on a line; on a raster `west` (or `left`), `east` (or

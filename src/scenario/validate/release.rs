@@ -213,6 +213,12 @@ pub(super) fn rasterise(
         Some(p) => format!("the DEM ({})", p.display()),
         None => "the scenario's raster files".to_owned(),
     };
+    if keys.areas.crs.is_geographic() {
+        return err(
+            &polygon_key,
+            super::plane::geographic(&format!(" '{file}'"), &keys.areas.crs),
+        );
+    }
     plane
         .crs
         .check_same(&rasters, &keys.areas.crs, &format!("the release ({file})"))
