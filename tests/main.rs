@@ -32,6 +32,7 @@ mod submarine;
 mod submarine_paper;
 mod sweep;
 mod terrain_2d;
+mod terrain_2d_bed_normal;
 mod terrain_2d_io;
 mod terrain_2d_reference;
 mod terrain_2d_zones;

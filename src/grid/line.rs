@@ -106,7 +106,7 @@ impl Line {
         let theta = spec.slope_deg.to_radians();
         let (g_n, tan_theta) = match spec.coordinates {
             Coordinates::Local => (GRAVITY * theta.cos(), theta.tan()),
-            Coordinates::Cartesian => (GRAVITY, 0.0),
+            Coordinates::Cartesian | Coordinates::BedNormal => (GRAVITY, 0.0),
         };
         let x: Vec<f64> = (0..nx).map(|i| cell_centre(spec.x_min, dx, i)).collect();
         let plane = |x: f64| -x * tan_theta;

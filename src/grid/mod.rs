@@ -13,11 +13,15 @@
 //!   two-layer submarine model, Fernández-Nieto et al. 2008, §4), with the angle terms of each face.
 //!
 //! - [`Raster2d`] ([`raster`]): the uniform 2-D raster of the 2-D Savage–Hutter model,
-//!   row-major cells grouped in bands of whole rows (the tiles of its stages).
+//!   row-major cells grouped in bands of whole rows (the tiles of its stages), with the
+//!   bed's metric ([`BedMetric`], [`bed_metric`]) in the bed-normal frame.
 
+pub mod bed_metric;
 pub mod curved;
 pub mod line;
 pub mod raster;
+
+pub use bed_metric::BedMetric;
 
 pub use curved::CurvedLine;
 pub use line::{Line, LineSpec};
@@ -30,6 +34,10 @@ pub enum Coordinates {
     Local,
     /// Horizontal x, vertical z; the slope lives inside b(x) and gravity is g.
     Cartesian,
+    /// Terrain-following on a raster (`numerics::hydrostatic_2d`, docs/numerics.md): the
+    /// thickness normal to the local bed, the velocity tangent to it, g cos θ in the
+    /// pressure and the friction, on the DEM's horizontal grid ([`BedMetric`]).
+    BedNormal,
 }
 
 /// What happens at an edge of the domain.

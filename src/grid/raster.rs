@@ -26,7 +26,7 @@
 //! its neighbours, or the boundary rule at the domain's edge) and writes only its own
 //! rows; a decomposition across machines would exchange those halo rows.
 
-use super::{BoundaryKind, Coordinates, Grid, Point, Stencil};
+use super::{BedMetric, BoundaryKind, Coordinates, Grid, Point, Stencil};
 use crate::physics::GRAVITY;
 use std::ops::Range;
 
@@ -118,6 +118,8 @@ pub struct Raster2d {
     pub theta: f64,
     /// Wall cells (row-major, nx·ny), or empty when there is none.
     walls: Vec<bool>,
+    /// The bed's gradient, cos θ and curvature in the bed-normal frame, else `None`.
+    metric: Option<BedMetric>,
 }
 
 impl Raster2d {
@@ -188,8 +190,10 @@ impl Raster2d {
         let theta = spec.slope_deg.to_radians();
         let (g_n, tan_theta) = match spec.coordinates {
             Coordinates::Local => (GRAVITY * theta.cos(), theta.tan()),
-            Coordinates::Cartesian => (GRAVITY, 0.0),
+            Coordinates::Cartesian | Coordinates::BedNormal => (GRAVITY, 0.0),
         };
+        let metric = (spec.coordinates == Coordinates::BedNormal)
+            .then(|| BedMetric::new(nx, ny, dx, dy, &bed, &walls));
         let plane = |x: f64| -x * tan_theta;
         let xc: Vec<f64> = (0..nx).map(|i| spec.x(i)).collect();
         let yc: Vec<f64> = (0..ny).map(|j| spec.y(j)).collect();
@@ -233,6 +237,28 @@ impl Raster2d {
         let north: Vec<f64> = b_ghost[last..last + stride].to_vec();
         b_ghost[..stride].copy_from_slice(&south);
         b_ghost[(ny + 1) * stride..].copy_from_slice(&north);
+        if let Some(m) = &metric {
+            // In the bed-normal frame an outflow continues the bed's slope (the edge
+            // cell's gradient), so that a flow on a slope cut by the edge leaves it; a
+            // wall keeps the edge cell's bed. The potential is the bed.
+            let ghost = |kind: BoundaryKind, edge: f64, slope: f64| match kind {
+                BoundaryKind::Wall => edge,
+                BoundaryKind::Outflow => edge + slope,
+            };
+            for j in 0..ny {
+                let (c0, c1) = (j * nx, j * nx + nx - 1);
+                let row = (j + 1) * stride;
+                b_ghost[row] = ghost(spec.sides.west, bed[c0], -m.gx[c0] * dx);
+                b_ghost[row + nx + 1] = ghost(spec.sides.east, bed[c1], m.gx[c1] * dx);
+            }
+            for i in 0..nx {
+                let (c0, c1) = (i, (ny - 1) * nx + i);
+                b_ghost[i + 1] = ghost(spec.sides.south, bed[c0], -m.gy[c0] * dy);
+                b_ghost[(ny + 1) * stride + i + 1] =
+                    ghost(spec.sides.north, bed[c1], m.gy[c1] * dy);
+            }
+            z.copy_from_slice(&b_ghost);
+        }
         Ok(Raster2d {
             spec,
             dx,
@@ -245,7 +271,23 @@ impl Raster2d {
             g_n,
             theta,
             walls,
+            metric,
         })
+    }
+
+    /// The raster without the centrifugal term in the basal normal stress of the
+    /// bed-normal frame (`domain.curvature = false`; nothing changes in the others).
+    pub fn without_friction_curvature(mut self) -> Raster2d {
+        if let Some(m) = &mut self.metric {
+            m.in_friction = false;
+        }
+        self
+    }
+
+    /// The bed's metric in the bed-normal frame (`None` in the other frames).
+    #[inline(always)]
+    pub fn metric(&self) -> Option<&BedMetric> {
+        self.metric.as_ref()
     }
 
     pub fn spec(&self) -> &RasterSpec {

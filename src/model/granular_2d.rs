@@ -28,7 +28,7 @@ use crate::numerics::Stage;
 use crate::output::{OutputError, OutputSink, SnapshotView};
 use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, Voellmy};
 use crate::physics::shallow::{celerity, velocity};
-use crate::physics::Material;
+use crate::physics::{Material, GRAVITY};
 use crate::pipeline::Pipeline;
 use crate::state::State2d;
 
@@ -110,10 +110,18 @@ impl Granular2d {
             d.q_sum += qx + qy;
             d.h_max = d.h_max.max(h);
             let (u, v) = (velocity(h, qx), velocity(h, qy));
-            let speed2 = u * u + v * v;
+            // In the bed-normal frame the speed along the surface and the celerity
+            // √(g c h) of the normal thickness h = c H (docs/numerics.md).
+            let (speed2, wave) = match raster.metric() {
+                None => (u * u + v * v, celerity(g_n, h)),
+                Some(m) => {
+                    let c = m.cos[k];
+                    (m.speed(k, u, v).powi(2), celerity(GRAVITY * c * c, h))
+                }
+            };
             d.ke += h * speed2;
             d.max_speed2 = d.max_speed2.max(speed2);
-            d.signal = d.signal.max(u.abs().max(v.abs()) + celerity(g_n, h));
+            d.signal = d.signal.max(u.abs().max(v.abs()) + wave);
             // h − h_i ≤ h: without an erodible bed the first test decides.
             if h > self.front_threshold
                 && (!self.erodible || h - self.h_bed[k] > self.front_threshold)

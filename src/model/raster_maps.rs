@@ -14,6 +14,12 @@
 //!   cell by cell, so it costs no work per step: it is formed when the maps are
 //!   written.
 //!
+//! In the bed-normal frame (`domain.coordinates = "bed_normal"`) h in `h_max`, the
+//! flow threshold and `deposit` is the thickness normal to the bed, c H (the state's H
+//! per horizontal area times cos θ), and the speed is the speed along the surface
+//! √(uᵀ G u) ([`crate::grid::BedMetric`]), so that `ppr` is ρ|u|² of the flow along the
+//! bed: the meanings of AvaFrame's and RAMMS's pft, pfv and ppr.
+//!
 //! Over an erodible bed h_i (`initial.erodible_bed`, grains at rest on the bed), h
 //! above stands for the thickness above it, h − h_i, as for the front of a line: a bed
 //! at rest is no flow (its maps stay 0), and the deposit is negative where the flow
@@ -142,7 +148,7 @@ impl RasterMaps {
             .max_by(|&a, &b| s(a).total_cmp(&s(b)));
         let theta = match grid.coordinates() {
             Coordinates::Local => grid.theta,
-            Coordinates::Cartesian => 0.0,
+            Coordinates::Cartesian | Coordinates::BedNormal => 0.0,
         };
         let world = |k: usize| {
             let p = grid.centre(k);
@@ -206,6 +212,7 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         band_reached.clear();
         band_reached.resize(cells.div_ceil(chunk), 0);
         let (h, hu, hv, h_bed) = (&state.h, &state.hu, &state.hv, &h_bed[..]);
+        let metric = grid.metric();
         workers.bands3(
             chunk,
             (&mut h_max[..], &mut speed_max[..], &mut arrival[..]),
@@ -214,11 +221,14 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
                 let base = band * chunk;
                 for i in 0..h_max.len() {
                     let k = base + i;
-                    let above = if h_bed.is_empty() {
+                    let mut above = if h_bed.is_empty() {
                         h[k]
                     } else {
                         h[k] - h_bed[k]
                     };
+                    if let Some(m) = metric {
+                        above *= m.cos[k];
+                    }
                     // Nothing changes where there is no flow (h_max ≥ 0): such a
                     // cell costs the read of h alone, not of the maps.
                     if above <= 0.0 {
@@ -231,7 +241,10 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
                     if above > thr {
                         // √(hu² + hv²) rather than `hypot`: a libm call per wet cell
                         // was most of the tracker's cost; momenta are far from overflow.
-                        let speed = (hu[k] * hu[k] + hv[k] * hv[k]).sqrt() / h[k];
+                        let speed = match metric {
+                            None => (hu[k] * hu[k] + hv[k] * hv[k]).sqrt() / h[k],
+                            Some(m) => m.speed(k, hu[k] / h[k], hv[k] / h[k]),
+                        };
                         if speed > speed_max[i] {
                             speed_max[i] = speed;
                         }
@@ -257,7 +270,8 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
         let above = self.above(&state.h);
-        let values = self.values(grid, &above);
+        let normal = normal_thickness(grid, &above);
+        let values = self.values(grid, &normal);
         let maps = Self::fields(&values);
         let scalars = if self.h0.is_empty() {
             Vec::new()
@@ -278,8 +292,18 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         sink: &mut dyn OutputSink,
     ) -> Result<(), OutputError> {
         let above = self.above(&state.h);
-        let values = self.values(grid, &above);
+        let normal = normal_thickness(grid, &above);
+        let values = self.values(grid, &normal);
         sink.maps_so_far(&Self::fields(&values))
+    }
+}
+
+/// The thickness normal to the bed c H of the thicknesses per horizontal area `h` in
+/// the bed-normal frame; `h` itself in the other frames.
+fn normal_thickness<'a>(grid: &Raster2d, h: &'a [f64]) -> Cow<'a, [f64]> {
+    match grid.metric() {
+        None => Cow::Borrowed(h),
+        Some(m) => Cow::Owned(h.iter().zip(&m.cos).map(|(h, c)| h * c).collect()),
     }
 }
 

@@ -105,10 +105,49 @@ pub fn interface<M: Fn(f64, f64) -> f64>(
 #[allow(clippy::too_many_arguments)]
 pub fn interface_with_zoned_transverse_drive<M: Fn(f64, f64, f64) -> f64>(
     mu_of: M,
+    l: Side,
+    r: Side,
+    extra: f64,
+    drive_t: (f64, f64),
+    g_n: f64,
+    dx: f64,
+    dt: f64,
+) -> Option<(Interface, Side, Side)> {
+    let (sl, sr) = (l.sqrt_h, r.sqrt_h);
+    let disk = |drive: f64, mu: f64| {
+        let threshold = g_n * mu;
+        let drive_t = if drive_t == (0.0, 0.0) {
+            0.0
+        } else {
+            (sl * drive_t.0 + sr * drive_t.1) / (sl + sr)
+        };
+        if drive_t == 0.0 {
+            -drive.clamp(-threshold, threshold)
+        } else {
+            let magnitude = drive.hypot(drive_t);
+            if magnitude <= threshold {
+                -drive
+            } else {
+                -drive * (threshold / magnitude)
+            }
+        }
+    };
+    interface_with_friction(mu_of, l, r, extra, disk, g_n, dx, dt)
+}
+
+/// The interface with the friction that ΔC treats as bed given by `friction(d_n, μ)`:
+/// the friction force (per unit mass, along the face's normal) that the face sees
+/// against the normal drive d_n, for the face's μ. [`interface_with_zoned_transverse_drive`]
+/// passes the Euclidean disk; the bed-normal frame ([`super::hydrostatic_2d`]) the disk
+/// of the surface's metric, with its own normal stress.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn interface_with_friction<M: Fn(f64, f64, f64) -> f64, F: Fn(f64, f64) -> f64>(
+    mu_of: M,
     mut l: Side,
     mut r: Side,
     extra: f64,
-    drive_t: (f64, f64),
+    friction: F,
     g_n: f64,
     dx: f64,
     dt: f64,
@@ -176,22 +215,7 @@ pub fn interface_with_zoned_transverse_drive<M: Fn(f64, f64, f64) -> f64>(
     };
     let drive = u_base / dt - g_n * ((r.h + r.z) - (l.h + l.z) + extra) / dx;
     let mu = mu_of(u_roe.abs(), h_roe, drive);
-    let threshold = g_n * mu;
-    let drive_t = if drive_t == (0.0, 0.0) {
-        0.0
-    } else {
-        (sl * drive_t.0 + sr * drive_t.1) / (sl + sr)
-    };
-    let f = if drive_t == 0.0 {
-        -drive.clamp(-threshold, threshold)
-    } else {
-        let magnitude = drive.hypot(drive_t);
-        if magnitude <= threshold {
-            -drive
-        } else {
-            -drive * (threshold / magnitude)
-        }
-    };
+    let f = friction(drive, mu);
     let dz_c = dz - f * dx / g_n;
     let hc_minus = (l.h - dz_c.max(0.0)).max(0.0);
     let hc_plus = (r.h - (-dz_c).max(0.0)).max(0.0);

@@ -16,13 +16,22 @@
 //! Friction zones ([`CellFriction`]): where the scenario gives μ (or Voellmy's ξ) as a
 //! field, every cell carries its own law and the rule above uses the cell's; a
 //! uniform law is stored once and the loop is the one without zones.
+//!
+//! In the bed-normal frame ([`bed_normal_friction`]) the same rule acts on the speed
+//! along the surface |U| = √(uᵀ G u) of the horizontal velocity u = (hu, hv)/H, with
+//! the normal thickness h = c H and the basal normal stress per unit mass
+//! g_N = c (g + uᵀ∇²b u)₊ (gravity's normal part and the centrifugal part of the
+//! bed's curvature, zero where the flow would leave the bed; Bouchut & Westdickenberg
+//! 2004, the Coulomb term; docs/numerics.md): friction acts against the tangent
+//! velocity, so it scales u and keeps its direction.
 
 use super::workers::Workers;
 use super::{Stage, StageError};
 use crate::grid::raster::BAND_ROWS;
-use crate::grid::Raster2d;
+use crate::grid::{BedMetric, Raster2d};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
+use crate::physics::GRAVITY;
 use crate::state::State2d;
 use std::sync::Arc;
 
@@ -92,6 +101,32 @@ pub fn vector_friction<L: BasalFriction>(
     (qx * scale, qy * scale)
 }
 
+/// The discharge (H u, H v) after the friction step of cell `k` in the bed-normal
+/// frame, with H its thickness per horizontal area (module documentation).
+#[inline(always)]
+pub fn bed_normal_friction<L: BasalFriction>(
+    law: &L,
+    m: &BedMetric,
+    k: usize,
+    (qx, qy): (f64, f64),
+    h: f64,
+    dt: f64,
+) -> (f64, f64) {
+    if qx == 0.0 && qy == 0.0 {
+        return (qx, qy);
+    }
+    if h <= H_DRY {
+        return (0.0, 0.0);
+    }
+    let (u, v) = (qx / h, qy / h);
+    let c = m.cos[k];
+    let g_normal = c * (GRAVITY + m.normal_curvature(k, u, v)).max(0.0);
+    let h_n = c * h;
+    let q = h_n * m.speed(k, u, v);
+    let scale = law.friction_update(q, h_n, dt, g_normal) / q;
+    (qx * scale, qy * scale)
+}
+
 impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
     fn name(&self) -> &'static str {
         "friction"
@@ -100,6 +135,19 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
         let (g_n, chunk) = (raster.g_n, BAND_ROWS * raster.nx());
         let h = &state.h;
+        if let Some(m) = raster.metric() {
+            let friction = &self.friction;
+            self.workers
+                .bands2(chunk, &mut state.hu, &mut state.hv, |band, hu, hv| {
+                    let start = band * chunk;
+                    for (i, (qx, qy)) in hu.iter_mut().zip(hv.iter_mut()).enumerate() {
+                        let k = start + i;
+                        let law = friction.at(k);
+                        (*qx, *qy) = bed_normal_friction(&law, m, k, (*qx, *qy), h[k], dt);
+                    }
+                });
+            return Ok(());
+        }
         match &self.friction {
             CellFriction::Uniform(law) => {
                 let law = *law;

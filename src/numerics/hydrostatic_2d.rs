@@ -66,16 +66,17 @@
 //! h ≥ 0 for CFL ≤ ½ (the limiter and the run loop's retry catch the rest).
 
 use super::face::{
-    drained_fraction, interface_with_zoned_transverse_drive, layer_momentum_flux, mass_flux,
-    transverse_flux, Side,
+    drained_fraction, interface_with_friction, interface_with_zoned_transverse_drive,
+    layer_momentum_flux, mass_flux, transverse_flux, Interface, Side,
 };
 use super::friction_2d::CellFriction;
 use super::workers::Workers;
 use super::{Stage, StageError};
 use crate::grid::raster::BAND_ROWS;
-use crate::grid::Raster2d;
+use crate::grid::{BedMetric, Raster2d};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{velocity, H_DRY};
+use crate::physics::GRAVITY;
 use crate::state::State2d;
 
 /// What one face gives its two cells: mass flux, normal and tangential momentum
@@ -108,12 +109,23 @@ impl FaceFlux {
 /// disk threshold of ΔC, [`super::face::interface_with_zoned_transverse_drive`]) and the
 /// cell's speed |(u, v)| (for a friction law whose face threshold takes the cells'
 /// own speeds, [`BasalFriction::face_mu`]).
+///
+/// In the bed-normal frame `side.u` is the normal component of the horizontal
+/// velocity (which carries the mass), `side.u_base` and `t` the normal and tangential
+/// covariant components of the tangent velocity (the momenta the face carries,
+/// [`BedMetric::lower`]), `drive` the tangential covariant drive, `speed` the speed
+/// along the surface; `slope_t` is the bed's gradient along the face, `kappa` the
+/// cell's centrifugal term uᵀ∇²b u and `h_n` its thickness normal to the bed. In the
+/// other frames `side.u_base` = `side.u` and the last three are unused.
 #[derive(Debug, Clone, Copy)]
 struct FaceSide {
     side: Side,
     t: f64,
     drive: f64,
     speed: f64,
+    slope_t: f64,
+    kappa: f64,
+    h_n: f64,
 }
 
 /// A cell as its four faces see it, computed once per sweep: thickness, the
@@ -122,17 +134,27 @@ struct FaceSide {
 /// tangential to the x-faces) and the speed |(u, v)|. A view of a ghost row (under or
 /// over the raster) is the edge cell with the ghost's bed and potential and the
 /// boundary's sign on v; only its y-side is read.
+///
+/// (wx, wy) are the momenta per unit mass the faces carry: (u, v) in the flat frames,
+/// the covariant components G (u, v) in the bed-normal frame, where (gx, gy), `kappa`
+/// and `h_n` are the bed's gradient, uᵀ∇²b u and the normal thickness ([`FaceSide`]).
 #[derive(Debug, Clone, Copy, Default)]
 struct CellView {
     h: f64,
     u: f64,
     v: f64,
+    wx: f64,
+    wy: f64,
     sqrt_h: f64,
     b: f64,
     z: f64,
     drive_x: f64,
     drive_y: f64,
     speed: f64,
+    gx: f64,
+    gy: f64,
+    kappa: f64,
+    h_n: f64,
 }
 
 impl CellView {
@@ -140,10 +162,13 @@ impl CellView {
     #[inline(always)]
     fn x_side(&self) -> FaceSide {
         FaceSide {
-            side: self.side(self.u),
-            t: self.v,
+            side: self.side(self.u, self.wx),
+            t: self.wy,
             drive: self.drive_y,
             speed: self.speed,
+            slope_t: self.gy,
+            kappa: self.kappa,
+            h_n: self.h_n,
         }
     }
 
@@ -151,23 +176,27 @@ impl CellView {
     #[inline(always)]
     fn y_side(&self) -> FaceSide {
         FaceSide {
-            side: self.side(self.v),
-            t: self.u,
+            side: self.side(self.v, self.wy),
+            t: self.wx,
             drive: self.drive_x,
             speed: self.speed,
+            slope_t: self.gx,
+            kappa: self.kappa,
+            h_n: self.h_n,
         }
     }
 
-    /// The monolayer side with normal velocity `normal` ([`Side::monolayer`]).
+    /// The monolayer side with normal velocity `normal` and normal momentum per unit
+    /// mass `carried` ([`Side::monolayer`] where the two are equal).
     #[inline(always)]
-    fn side(&self, normal: f64) -> Side {
+    fn side(&self, normal: f64, carried: f64) -> Side {
         Side {
             h: self.h,
             u: normal,
             b: self.b,
             z: self.z,
             shear: 0.0,
-            u_base: normal,
+            u_base: carried,
             sqrt_h: self.sqrt_h,
         }
     }
@@ -357,14 +386,33 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
     /// single column or row).
     #[inline(always)]
     fn tangential_drive(&self, i: usize, j: usize, t: f64, along_x: bool) -> f64 {
+        let (lo, hi, d) = self.neighbours(i, j, along_x);
+        if let Some(m) = self.raster.metric() {
+            return self.covariant_drive(m, (i, j), t, along_x, (lo, hi, d));
+        }
+        if lo == hi {
+            return t / self.dt;
+        }
         let eta = self.h[j * self.nx + i] + self.raster.z[self.raster.ghost_index(i + 1, j + 1)];
+        let (e_lo, e_hi) = if along_x {
+            (self.surface_seen(lo, j, eta), self.surface_seen(hi, j, eta))
+        } else {
+            (self.surface_seen(i, lo, eta), self.surface_seen(i, hi, eta))
+        };
+        t / self.dt - self.raster.g_n * (e_hi - e_lo) / ((hi - lo) as f64 * d)
+    }
+
+    /// The neighbours (lo, hi) of cell (i, j) along an axis for a centred difference,
+    /// and the cell width along it: one-sided at the raster's edge and beside a wall
+    /// cell (nodata), lo = hi on a single column or row.
+    #[inline(always)]
+    fn neighbours(&self, i: usize, j: usize, along_x: bool) -> (usize, usize, f64) {
         let (k, n, d) = if along_x {
             (i, self.nx, self.raster.dx())
         } else {
             (j, self.ny, self.raster.dy())
         };
         let (mut lo, mut hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
-        // A wall neighbour (nodata) is an edge of the raster: one-sided there.
         let wall = |m: usize| {
             let c = if along_x {
                 j * self.nx + m
@@ -379,15 +427,34 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         if wall(hi) {
             hi = k;
         }
-        if lo == hi {
-            return t / self.dt;
-        }
-        let (e_lo, e_hi) = if along_x {
-            (self.surface_seen(lo, j, eta), self.surface_seen(hi, j, eta))
+        (lo, hi, d)
+    }
+
+    /// The tangential drive of the bed-normal frame: the covariant acceleration
+    /// t/Δt − g (c² ∂H + ∂b) along an axis of cell (i, j) with the covariant velocity
+    /// component `t` (the face's form, [`Self::bed_normal_face`]), H the thickness
+    /// per horizontal area; ∂H by the differences of [`Self::neighbours`] (a dry
+    /// neighbour has H = 0: the bed is smooth at the cell's scale, no step to emerge).
+    #[inline(always)]
+    fn covariant_drive(
+        &self,
+        m: &BedMetric,
+        (i, j): (usize, usize),
+        t: f64,
+        along_x: bool,
+        (lo, hi, d): (usize, usize, f64),
+    ) -> f64 {
+        let cell = j * self.nx + i;
+        let slope = if along_x { m.gx[cell] } else { m.gy[cell] };
+        let dh = if lo == hi {
+            0.0
+        } else if along_x {
+            (self.h[j * self.nx + hi] - self.h[j * self.nx + lo]) / ((hi - lo) as f64 * d)
         } else {
-            (self.surface_seen(i, lo, eta), self.surface_seen(i, hi, eta))
+            (self.h[hi * self.nx + i] - self.h[lo * self.nx + i]) / ((hi - lo) as f64 * d)
         };
-        t / self.dt - self.raster.g_n * (e_hi - e_lo) / ((hi - lo) as f64 * d)
+        let c = m.cos[cell];
+        t / self.dt - GRAVITY * (c * c * dh + slope)
     }
 
     /// The view of interior cell (i, j): the same values as [`Self::x_side`] and
@@ -398,17 +465,35 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         let g = self.raster.ghost_index(i + 1, j + 1);
         let h = self.h[cell];
         let (u, v) = (velocity(h, self.hu[cell]), velocity(h, self.hv[cell]));
-        CellView {
+        let mut view = CellView {
             h,
             u,
             v,
+            wx: u,
+            wy: v,
             sqrt_h: h.max(0.0).sqrt(),
             b: self.raster.b_ghost[g],
             z: self.raster.z[g],
-            drive_x: self.tangential_drive(i, j, u, true),
-            drive_y: self.tangential_drive(i, j, v, false),
-            speed: cell_speed(u, v),
+            drive_x: 0.0,
+            drive_y: 0.0,
+            speed: 0.0,
+            gx: 0.0,
+            gy: 0.0,
+            kappa: 0.0,
+            h_n: h,
+        };
+        if let Some(m) = self.raster.metric() {
+            (view.wx, view.wy) = m.lower(cell, u, v);
+            view.speed = m.speed(cell, u, v);
+            (view.gx, view.gy) = (m.gx[cell], m.gy[cell]);
+            view.kappa = m.normal_curvature(cell, u, v);
+            view.h_n = m.cos[cell] * h;
+        } else {
+            view.speed = cell_speed(u, v);
         }
+        view.drive_x = self.tangential_drive(i, j, view.wx, true);
+        view.drive_y = self.tangential_drive(i, j, view.wy, false);
+        view
     }
 
     /// The views of ghost-inclusive row `r` (0 and ny + 1 are ghosts: their y-sides
@@ -425,12 +510,18 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
                     h: y.side.h,
                     u: y.t,
                     v: y.side.u,
+                    wx: y.t,
+                    wy: y.side.u_base,
                     sqrt_h: y.side.sqrt_h,
                     b: y.side.b,
                     z: y.side.z,
                     drive_x: y.drive,
                     drive_y: 0.0,
                     speed: y.speed,
+                    gx: y.slope_t,
+                    gy: 0.0,
+                    kappa: y.kappa,
+                    h_n: y.h_n,
                 };
             }
         }
@@ -449,6 +540,9 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             (j * self.nx + c - 1, 1.0)
         };
         let g = self.raster.ghost_index(c, j + 1);
+        if let Some(m) = self.raster.metric() {
+            return self.covariant_side(m, cell, sign, g, true);
+        }
         let h = self.h[cell];
         let side = Side::monolayer(
             h,
@@ -462,6 +556,50 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             t: v,
             drive: self.tangential_drive(cell % self.nx, j, v, false),
             speed: cell_speed(side.u, v),
+            slope_t: 0.0,
+            kappa: 0.0,
+            h_n: h,
+        }
+    }
+
+    /// [`Self::x_side`] (`x_face`) or [`Self::y_side`] of `cell` in the bed-normal frame,
+    /// with the boundary's `sign` on the normal velocity and its momentum and the bed
+    /// at ghost-ring index `g`.
+    #[inline(always)]
+    fn covariant_side(
+        &self,
+        m: &BedMetric,
+        cell: usize,
+        sign: f64,
+        g: usize,
+        x_face: bool,
+    ) -> FaceSide {
+        let h = self.h[cell];
+        let (u, v) = (velocity(h, self.hu[cell]), velocity(h, self.hv[cell]));
+        let (wx, wy) = m.lower(cell, u, v);
+        let (normal, carried, t, slope_t) = if x_face {
+            (u, wx, wy, m.gy[cell])
+        } else {
+            (v, wy, wx, m.gx[cell])
+        };
+        let b = self.raster.b_ghost[g];
+        let (i, j) = (cell % self.nx, cell / self.nx);
+        FaceSide {
+            side: Side {
+                h,
+                u: sign * normal,
+                b,
+                z: b,
+                shear: 0.0,
+                u_base: sign * carried,
+                sqrt_h: h.max(0.0).sqrt(),
+            },
+            t,
+            drive: self.tangential_drive(i, j, t, !x_face),
+            speed: m.speed(cell, u, v),
+            slope_t,
+            kappa: m.normal_curvature(cell, u, v),
+            h_n: m.cos[cell] * h,
         }
     }
 
@@ -478,6 +616,9 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             ((r - 1) * self.nx + i, 1.0)
         };
         let g = self.raster.ghost_index(i + 1, r);
+        if let Some(m) = self.raster.metric() {
+            return self.covariant_side(m, cell, sign, g, false);
+        }
         let h = self.h[cell];
         let side = Side::monolayer(
             h,
@@ -491,6 +632,9 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             t: u,
             drive: self.tangential_drive(i, cell / self.nx, u, true),
             speed: cell_speed(u, side.u),
+            slope_t: 0.0,
+            kappa: 0.0,
+            h_n: h,
         }
     }
 
@@ -521,6 +665,9 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         d: f64,
         cells: C,
     ) -> FaceFlux {
+        if let Some(m) = self.raster.metric() {
+            return self.bed_normal_face(m, l, r, d, cells);
+        }
         let mu_of = |speed: f64, h: f64, drive: f64| self.face_mu(l, r, speed, h, drive, cells);
         let (g_n, dt) = (self.raster.g_n, self.dt);
         let drives = (l.drive, r.drive);
@@ -533,11 +680,82 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
                 FaceFlux {
                     h: mass_flux(&c, sl, sr),
                     qn: layer_momentum_flux(&c, c.h_minus, c.h_plus, sl.u, sr.u),
-                    qt: transverse_flux(&c, sl, sr, t_l, t_r),
-                    share_l: c.share_left,
-                    share_r: c.share_right,
-                    body_l: c.body_left,
-                    body_r: c.body_right,
+                    ..face_flux_rest(&c, sl, sr, t_l, t_r)
+                }
+            }
+        }
+    }
+
+    /// A face in the bed-normal frame (docs/numerics.md): the 1-D face kernel along the
+    /// face with the face's geometry. With the bed's slope ∂_n b = Δb/d across the face
+    /// and ∂_t b the mean of the cells' along it, c_f² = 1/(1 + |∇b|²): the kernel's
+    /// gravity is g c_f², its potential b/c_f² (Δz = Δb/c_f², the bed itself flat in
+    /// the face's plane: no step), its thickness H = h/c per horizontal area and its
+    /// velocity the horizontal normal component, so that its source g c_f² H̄ Δ(H + z)/d
+    /// is the covariant pressure and gravity g c H ∂_n(c H) + g H ∂_n b. ΔC treats as
+    /// bed the friction against the covariant drive d = (d_n, d_t) up to the disk
+    /// |d|_{G⁻¹} ≤ μ g_N in the surface's metric, with g_N = c_f (g + uᵀ∇²b u)₊ the
+    /// normal stress of the friction step (the mean of the cells' centrifugal terms).
+    /// The face carries the covariant momenta (normal and tangential) with the mass.
+    #[inline(always)]
+    fn bed_normal_face<C: Fn() -> (usize, usize) + Copy>(
+        &self,
+        _m: &BedMetric,
+        l: &FaceSide,
+        r: &FaceSide,
+        d: f64,
+        cells: C,
+    ) -> FaceFlux {
+        let db = r.side.b - l.side.b;
+        let (gn, gt) = (db / d, 0.5 * (l.slope_t + r.slope_t));
+        let inv_c2 = 1.0 + gn * gn + gt * gt;
+        let c2 = 1.0 / inv_c2;
+        let (gi_nn, gi_nt, gi_tt) = (1.0 - c2 * gn * gn, -c2 * gn * gt, 1.0 - c2 * gt * gt);
+        let g_normal = c2.sqrt() * (GRAVITY + 0.5 * (l.kappa + r.kappa)).max(0.0);
+        let ls = Side {
+            b: 0.0,
+            z: 0.0,
+            ..l.side
+        };
+        let rs = Side {
+            b: 0.0,
+            z: db * inv_c2,
+            ..r.side
+        };
+        let (wl, wr) = (ls.sqrt_h, rs.sqrt_h);
+        let friction = |drive: f64, mu: f64| {
+            let threshold = mu * g_normal;
+            let drive_t = (wl * l.drive + wr * r.drive) / (wl + wr);
+            let metric2 =
+                gi_nn * drive * drive + 2.0 * gi_nt * drive * drive_t + gi_tt * drive_t * drive_t;
+            let magnitude = metric2.max(0.0).sqrt();
+            if magnitude <= threshold {
+                -drive
+            } else {
+                -drive * (threshold / magnitude)
+            }
+        };
+        let mu_of = |_speed: f64, _h: f64, drive: f64| {
+            let law = match self.friction {
+                CellFriction::Uniform(law) => *law,
+                CellFriction::PerCell(laws) => {
+                    let (lo, hi) = cells();
+                    laws[if drive > 0.0 { lo } else { hi }]
+                }
+            };
+            let (speed, h) = (0.5 * (l.speed + r.speed), 0.5 * (l.h_n + r.h_n));
+            law.face_mu((l.speed, l.h_n), (r.speed, r.h_n), speed, h, g_normal)
+        };
+        let g_k = GRAVITY * c2;
+        match interface_with_friction(mu_of, ls, rs, 0.0, friction, g_k, d, self.dt) {
+            None => FaceFlux::default(),
+            Some((c, sl, sr)) => {
+                let t_l = if c.left_at_rest { 0.0 } else { l.t };
+                let t_r = if c.right_at_rest { 0.0 } else { r.t };
+                FaceFlux {
+                    h: mass_flux(&c, sl, sr),
+                    qn: transverse_flux(&c, sl, sr, sl.u_base, sr.u_base),
+                    ..face_flux_rest(&c, sl, sr, t_l, t_r)
                 }
             }
         }
@@ -667,6 +885,33 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         }
     }
 
+    /// The new state of `cell` from its four faces ([`update_cell`]). In the
+    /// bed-normal frame the faces carry the covariant momenta H G u: the cell's are
+    /// lowered, updated, given the geodesic source Δt H (∇b·u) ∇²b u of the
+    /// bed's curvature (the term that keeps a mass on a curved bed on it with its
+    /// energy, docs/numerics.md), and raised back to the horizontal discharges H u.
+    #[inline(always)]
+    fn update(&self, cell: usize, r: (f64, f64), faces: [&FaceFlux; 4]) -> (f64, f64, f64) {
+        let old = (self.h[cell], self.hu[cell], self.hv[cell]);
+        let Some(m) = self.raster.metric() else {
+            return update_cell(old, r, faces);
+        };
+        let (h, qx, qy) = old;
+        let (px, py) = m.lower(cell, qx, qy);
+        let (hn, mut px, mut py) = update_cell((h, px, py), r, faces);
+        if hn <= H_DRY {
+            return (hn, 0.0, 0.0);
+        }
+        if h > H_DRY {
+            let (u, v) = (qx / h, qy / h);
+            let s = self.dt * h * (m.gx[cell] * u + m.gy[cell] * v);
+            px += s * (m.hxx[cell] * u + m.hxy[cell] * v);
+            py += s * (m.hxy[cell] * u + m.hyy[cell] * v);
+        }
+        let (qu, qv) = m.raise(cell, px, py);
+        (hn, qu, qv)
+    }
+
     /// The four faces (west, east, south, north) of cell (i, j) of the limited pass,
     /// every flux scaled by its donor's draining factor in `theta` (a ghost donor
     /// has 1; a face beside a wall carries no mass and is not scaled). The sides and
@@ -724,6 +969,21 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         };
         // Ghost-inclusive column i + 1 and row j + 1.
         [x_face(i), x_face(i + 1), y_face(j), y_face(j + 1)]
+    }
+}
+
+/// The tangential flux and the pressure sources of a face (its mass and normal
+/// momentum fluxes left at zero).
+#[inline(always)]
+fn face_flux_rest(c: &Interface, sl: Side, sr: Side, t_l: f64, t_r: f64) -> FaceFlux {
+    FaceFlux {
+        h: 0.0,
+        qn: 0.0,
+        qt: transverse_flux(c, sl, sr, t_l, t_r),
+        share_l: c.share_left,
+        share_r: c.share_right,
+        body_l: c.body_left,
+        body_r: c.body_right,
     }
 }
 
@@ -816,13 +1076,12 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
                 ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
                     let cell = j * nx + i;
                     let local = cell - offset;
-                    let old = (ctx.h[cell], ctx.hu[cell], ctx.hv[cell]);
-                    let (hn, qu, qv) = update_cell(old, r, [w, e, so, no]);
+                    let (hn, qu, qv) = ctx.update(cell, r, [w, e, so, no]);
                     if hn < worst.0 {
                         worst = (hn, cell);
                     }
                     (h_new[local], hu_new[local], hv_new[local]) = (hn, qu, qv);
-                    let theta = draining_factor(old.0, r, [w, e, so, no]);
+                    let theta = draining_factor(ctx.h[cell], r, [w, e, so, no]);
                     drain[local] = theta;
                     drains[j - first_row] |= theta != 1.0;
                 });
@@ -902,8 +1161,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
                         let [w, e, so, no] = ctx.limited_faces::<WALLS>(theta, i, j);
                         let cell = j * nx + i;
                         let local = cell - offset;
-                        let old = (ctx.h[cell], ctx.hu[cell], ctx.hv[cell]);
-                        let (hn, qu, qv) = update_cell(old, r, [&w, &e, &so, &no]);
+                        let (hn, qu, qv) = ctx.update(cell, r, [&w, &e, &so, &no]);
                         (h_new[local], hu_new[local], hv_new[local]) = (hn, qu, qv);
                     }
                 }

@@ -58,6 +58,9 @@ pub struct Plane {
     pub y_max: f64,
     pub ny: usize,
     pub crs: crate::gis::Crs,
+    /// `domain.curvature`: the centrifugal term uᵀ∇²b u in the basal normal stress of
+    /// the bed-normal frame (default true).
+    pub curvature: bool,
 }
 
 impl Domain {

@@ -67,6 +67,8 @@ pub(crate) struct RawDomain {
     pub cells: Option<toml::Value>,
     pub slope_deg: Option<f64>,
     pub coordinates: Option<String>,
+    /// The centrifugal term in the friction's normal stress (bed-normal rasters).
+    pub curvature: Option<bool>,
     /// `[x_min, x_max, y_min, y_max]`: crop the raster bed's grid (raster domains).
     pub crop: Option<Vec<f64>>,
     /// Coarsen the raster bed's grid by this integer factor (raster domains).

@@ -37,26 +37,46 @@ pub fn scenario_raster(scn: &Scenario) -> Raster2d {
         coordinates: d.coordinates,
         slope_deg: d.slope_deg,
     };
-    Raster2d::with_walls(spec, scn.sampled.b.clone(), scn.sampled.wall.clone())
-        .unwrap_or_else(|e| panic!("a validated raster domain was refused: {e}"))
+    let raster = Raster2d::with_walls(spec, scn.sampled.b.clone(), scn.sampled.wall.clone())
+        .unwrap_or_else(|e| panic!("a validated raster domain was refused: {e}"));
+    if plane.curvature {
+        raster
+    } else {
+        raster.without_friction_curvature()
+    }
 }
 
 pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let grid = scenario_raster(scn);
     let plane = scn.domain.plane.as_ref().expect("a raster domain");
     let s = &scn.sampled;
+    // In the bed-normal frame the state holds H = h/c per horizontal area: a thickness
+    // given by an expression or a table is normal to the bed (a polygon release was
+    // converted by its `thickness_is` already), and so is the erodible bed's.
+    let per_area = |values: &[f64], normal: bool| -> Vec<f64> {
+        match grid.metric() {
+            Some(m) if normal => values.iter().zip(&m.cos).map(|(h, c)| h / c).collect(),
+            _ => values.to_vec(),
+        }
+    };
+    let h_flow = per_area(&s.h, scn.release.is_none());
+    let h_bed = per_area(&s.h_bed, true);
     // The erodible bed is grains at rest added under the flow (h = initial.h + h_i).
     let h: Vec<f64> = if scn.initial.has_erodible_bed() {
-        s.h.iter().zip(&s.h_bed).map(|(&h, &h_i)| h + h_i).collect()
+        h_flow
+            .iter()
+            .zip(&h_bed)
+            .map(|(&h, &h_i)| h + h_i)
+            .collect()
     } else {
-        s.h.clone()
+        h_flow
     };
     let state = State2d::from_velocities(h, &s.u, &s.v);
     // A pool that cannot be started falls back to one thread: the same bits, slower.
     let workers = Workers::new(threads).unwrap_or_else(|_| Workers::serial());
     let model = Granular2d::new(&grid, scn.output.front_threshold).with_workers(workers.clone());
     let (model, erodible) = if scn.initial.has_erodible_bed() {
-        (model.with_erodible_bed(s.h_bed.clone()), s.h_bed.clone())
+        (model.with_erodible_bed(h_bed.clone()), h_bed)
     } else {
         (model, Vec::new())
     };
@@ -79,7 +99,7 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     });
     let tan_theta = match grid.coordinates() {
         Coordinates::Local => grid.spec().slope_deg.to_radians().tan(),
-        Coordinates::Cartesian => 0.0,
+        Coordinates::Cartesian | Coordinates::BedNormal => 0.0,
     };
     let nx = grid.nx();
     let z = (0..grid.nx() * grid.ny()).map(|c| grid.bed()[c] - grid.x(c % nx) * tan_theta);

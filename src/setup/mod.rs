@@ -178,6 +178,7 @@ pub fn run_info(scn: &Scenario, pressure: &str, layers: usize) -> RunInfo {
         coordinates: match scn.domain.coordinates {
             Coordinates::Local => "local",
             Coordinates::Cartesian => "cartesian",
+            Coordinates::BedNormal => "bed_normal",
         }
         .to_string(),
         slope_deg: scn.domain.slope_deg,

@@ -30,7 +30,7 @@ pub fn normal_velocities(mesh: &Line, state: &LayeredState, w: &mut [f64]) {
     let two_dx = 2.0 * mesh.dx;
     let plane_slope = match mesh.coordinates {
         Coordinates::Local => mesh.theta.tan(),
-        Coordinates::Cartesian => 0.0,
+        Coordinates::Cartesian | Coordinates::BedNormal => 0.0,
     };
     let u = |j: usize, a: usize| velocity(state.h[j], state.hu[j * n + a]);
     for i in 0..nx {

@@ -435,7 +435,19 @@ fn domain(d: RawDomain) -> Res<Domain> {
             ),
         );
     }
-    let (coordinates, slope_deg) = frame(&d)?;
+    let (coordinates, slope_deg) = frame(&d, Coordinates::Local)?;
+    if d.curvature.is_some() {
+        return err(
+            "domain.curvature",
+            "the centrifugal term belongs to the bed-normal frame of raster domains",
+        );
+    }
+    if coordinates == Coordinates::BedNormal {
+        return err(
+            "domain.coordinates",
+            "\"bed_normal\" is a frame of raster (2-D) domains; a line takes \"local\" or \"cartesian\"",
+        );
+    }
     Ok(Domain {
         x_min,
         x_max,
@@ -446,15 +458,16 @@ fn domain(d: RawDomain) -> Res<Domain> {
     })
 }
 
-/// `domain.coordinates` and `domain.slope_deg`.
-fn frame(d: &RawDomain) -> Res<(Coordinates, f64)> {
+/// `domain.coordinates` (`default` where it is not given) and `domain.slope_deg`.
+fn frame(d: &RawDomain, default: Coordinates) -> Res<(Coordinates, f64)> {
     let coordinates = choice(
         "domain.coordinates",
         d.coordinates.as_deref(),
-        Coordinates::Local,
+        default,
         &[
             ("local", Coordinates::Local),
             ("cartesian", Coordinates::Cartesian),
+            ("bed_normal", Coordinates::BedNormal),
         ],
     )?;
     let slope_deg = finite("domain.slope_deg", d.slope_deg.unwrap_or(0.0))?;
@@ -467,11 +480,17 @@ fn frame(d: &RawDomain) -> Res<(Coordinates, f64)> {
             ),
         );
     }
-    if coordinates == Coordinates::Cartesian && slope_deg != 0.0 {
+    if coordinates != Coordinates::Local && slope_deg != 0.0 {
+        let name = if coordinates == Coordinates::Cartesian {
+            "cartesian"
+        } else {
+            "bed_normal"
+        };
         return err(
             "domain.slope_deg",
             format!(
-                "must be 0 with domain.coordinates = \"cartesian\" (put the slope in bed.b), got {}", num(slope_deg)
+                "must be 0 with domain.coordinates = \"{name}\" (put the slope in bed.b), got {}",
+                num(slope_deg)
             ),
         );
     }

@@ -15,6 +15,7 @@ use super::check::*;
 use super::zones::Field;
 use super::{frame, line_boundary, line_gauges, MAX_CELLS, MIN_RELATIVE_DX};
 use crate::gis::Crs;
+use crate::grid::Coordinates;
 
 const RASTER_HINT: &str =
     "give domain.y_min, domain.y_max and cells = [nx, ny] for a raster domain";
@@ -137,12 +138,23 @@ fn axis(lo_key: &str, hi_key: &str, lo: Option<f64>, hi: Option<f64>, n: usize) 
     Ok((lo, hi))
 }
 
+/// `domain.curvature`, which only the bed-normal frame takes.
+fn curvature(d: &RawDomain, coordinates: Coordinates) -> Res<bool> {
+    match d.curvature {
+        Some(_) if coordinates != Coordinates::BedNormal => err(
+            "domain.curvature",
+            "the centrifugal term belongs to domain.coordinates = \"bed_normal\" (the frame of DEM runs); the other frames have no curvature in the friction",
+        ),
+        c => Ok(c.unwrap_or(true)),
+    }
+}
+
 /// A raster domain given by its keys.
 pub(super) fn domain(d: RawDomain) -> Res<Domain> {
     let (nx, ny) = raster_cells(d.cells.as_ref())?;
     let (x_min, x_max) = axis("domain.x_min", "domain.x_max", d.x_min, d.x_max, nx)?;
     let (y_min, y_max) = axis("domain.y_min", "domain.y_max", d.y_min, d.y_max, ny)?;
-    let (coordinates, slope_deg) = frame(&d)?;
+    let (coordinates, slope_deg) = frame(&d, Coordinates::Local)?;
     Ok(Domain {
         x_min,
         x_max,
@@ -154,6 +166,7 @@ pub(super) fn domain(d: RawDomain) -> Res<Domain> {
             y_max,
             ny,
             crs: Crs::unknown(),
+            curvature: curvature(&d, coordinates)?,
         }),
     })
 }
@@ -172,7 +185,8 @@ pub(super) fn domain_of_raster(d: RawDomain, bed: &Profile) -> Res<Domain> {
             ),
         );
     }
-    let (coordinates, slope_deg) = frame(&d)?;
+    // A DEM's own grid: the terrain-following frame unless the scenario names another.
+    let (coordinates, slope_deg) = frame(&d, Coordinates::BedNormal)?;
     Ok(Domain {
         x_min: b.x_min,
         x_max: b.x_max,
@@ -184,6 +198,7 @@ pub(super) fn domain_of_raster(d: RawDomain, bed: &Profile) -> Res<Domain> {
             y_max: b.y_max,
             ny: r.ny,
             crs: r.crs.clone(),
+            curvature: curvature(&d, coordinates)?,
         }),
     })
 }
