@@ -110,7 +110,7 @@ fn line_pipeline<L: BasalFriction + 'static>(law: L, nx: usize) -> Pipeline<Line
     ])
 }
 
-fn law_pipeline(law: &FrictionLaw, nx: usize) -> Pipeline<Line, LayeredState> {
+pub(crate) fn law_pipeline(law: &FrictionLaw, nx: usize) -> Pipeline<Line, LayeredState> {
     let m = material();
     match *law {
         FrictionLaw::Coulomb { mu } => line_pipeline(Coulomb { mu }, nx),

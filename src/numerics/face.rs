@@ -132,14 +132,17 @@ pub fn interface_with_zoned_transverse_drive<M: Fn(f64, f64, f64) -> f64>(
             }
         }
     };
-    interface_with_friction(mu_of, l, r, extra, disk, g_n, dx, dt)
+    interface_with_friction(mu_of, l, r, extra, disk, (g_n, g_n), dx, dt)
 }
 
 /// The interface with the friction that ΔC treats as bed given by `friction(d_n, μ)`:
 /// the friction force (per unit mass, along the face's normal) that the face sees
 /// against the normal drive d_n, for the face's μ. [`interface_with_zoned_transverse_drive`]
 /// passes the Euclidean disk; the bed-normal frame ([`super::hydrostatic_2d`]) the disk
-/// of the surface's metric, with its own normal stress.
+/// of the surface's metric, with its own normal stress. `(g_n, g_wave)`: the gravity of
+/// the pressure and the drive, and that of the wave-speed bounds √(g_wave h) (the same
+/// but in the bed-normal frame, whose waves along a face's normal are slower by the
+/// metric's factor).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn interface_with_friction<M: Fn(f64, f64, f64) -> f64, F: Fn(f64, f64) -> f64>(
@@ -148,7 +151,7 @@ pub fn interface_with_friction<M: Fn(f64, f64, f64) -> f64, F: Fn(f64, f64) -> f
     mut r: Side,
     extra: f64,
     friction: F,
-    g_n: f64,
+    (g_n, g_wave): (f64, f64),
     dx: f64,
     dt: f64,
 ) -> Option<(Interface, Side, Side)> {
@@ -184,13 +187,13 @@ pub fn interface_with_friction<M: Fn(f64, f64, f64) -> f64, F: Fn(f64, f64) -> f
     let (sl, sr) = (l.sqrt_h, r.sqrt_h);
     let u_roe = (sl * l.u + sr * r.u) / (sl + sr);
     let h_roe = 0.5 * (l.h + r.h);
-    let c_roe = sheared_celerity(g_n, h_roe, 0.5 * (l.shear + r.shear));
+    let c_roe = sheared_celerity(g_wave, h_roe, 0.5 * (l.shear + r.shear));
     // √g √h reuses the √h of the Roe average (the monolayer's form).
     let side_celerity = |side: &Side, sqrt_h: f64| {
         if side.shear == 0.0 {
-            g_n.sqrt() * sqrt_h
+            g_wave.sqrt() * sqrt_h
         } else {
-            sheared_celerity(g_n, side.h, side.shear)
+            sheared_celerity(g_wave, side.h, side.shear)
         }
     };
     let s_left = (l.u - side_celerity(&l, sl)).min(u_roe - c_roe);

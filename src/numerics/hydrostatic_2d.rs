@@ -712,14 +712,22 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
         let c2 = 1.0 / inv_c2;
         let (gi_nn, gi_nt, gi_tt) = (1.0 - c2 * gn * gn, -c2 * gn * gt, 1.0 - c2 * gt * gt);
         let g_normal = c2.sqrt() * (GRAVITY + 0.5 * (l.kappa + r.kappa)).max(0.0);
+        // Absolute potentials (not Δb/c_f² on one side): a face and its mirror image
+        // then give the same bits with the sign changed, as in the other frames. The
+        // bed lies in the face's plane (b = 0: no step to reconstruct over) between two
+        // wet cells; beside a dry cell it is the potential itself, so that a dry cell
+        // whose bed stands above the wet one's surface is an emerging bed, as in the
+        // Cartesian system: it neither takes mass nor pushes the layer down.
+        let (zl, zr) = (l.side.b * inv_c2, r.side.b * inv_c2);
+        let step = l.side.h <= H_DRY || r.side.h <= H_DRY;
         let ls = Side {
-            b: 0.0,
-            z: 0.0,
+            b: if step { zl } else { 0.0 },
+            z: zl,
             ..l.side
         };
         let rs = Side {
-            b: 0.0,
-            z: db * inv_c2,
+            b: if step { zr } else { 0.0 },
+            z: zr,
             ..r.side
         };
         let (wl, wr) = (ls.sqrt_h, rs.sqrt_h);
@@ -746,8 +754,11 @@ impl<'a, L: BasalFriction> Ctx<'a, L> {
             let (speed, h) = (0.5 * (l.speed + r.speed), 0.5 * (l.h_n + r.h_n));
             law.face_mu((l.speed, l.h_n), (r.speed, r.h_n), speed, h, g_normal)
         };
+        // The kernel's gravity, and that of its wave speeds: along the face's normal
+        // the waves of H run at √(g c_f² H G⁻¹_nn) in horizontal coordinates.
         let g_k = GRAVITY * c2;
-        match interface_with_friction(mu_of, ls, rs, 0.0, friction, g_k, d, self.dt) {
+        let gravities = (g_k, g_k * gi_nn);
+        match interface_with_friction(mu_of, ls, rs, 0.0, friction, gravities, d, self.dt) {
             None => FaceFlux::default(),
             Some((c, sl, sr)) => {
                 let t_l = if c.left_at_rest { 0.0 } else { l.t };
