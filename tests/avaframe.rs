@@ -182,9 +182,15 @@ fn hockey_stick_on_20_m_cells_is_within_10_percent_of_avaframe() {
         ("area with pft > 0.1 m (m²)", ours.area, theirs.area),
     ];
     for (what, a, b) in diffs {
-        println!("{what}: granflow 20 m {a:.1}, AvaFrame 5 m {b:.1}, {:+.1} %", 100.0 * rel(a, b));
+        println!(
+            "{what}: granflow 20 m {a:.1}, AvaFrame 5 m {b:.1}, {:+.1} %",
+            100.0 * rel(a, b)
+        );
     }
     for (what, a, b) in diffs {
-        assert!(rel(a, b).abs() <= 0.10, "{what}: {a} against AvaFrame's {b}");
+        assert!(
+            rel(a, b).abs() <= 0.10,
+            "{what}: {a} against AvaFrame's {b}"
+        );
     }
 }
