@@ -60,6 +60,9 @@ SHORTENED = {
     r"^granflow run scenarios/hockey_channel\.toml .*domain\.cells=\[1000,1000\]": (
         "--set 'domain.cells=[100,100]'",
         "the 1000 x 1000 timing of docs/performance.md takes minutes on 2 cores"),
+    r"^granflow run scenarios/(hockey|helix)_channel\.toml --output": (
+        "--set time.t_end=10",
+        "AvaFrame's 5 m grid to the stop takes one to two minutes of CPU"),
 }
 
 NOT_RUN = {

@@ -7,6 +7,7 @@ mod common;
 
 mod analytic;
 mod architecture;
+mod avaframe;
 mod cli;
 mod conservation;
 mod dilatant;
