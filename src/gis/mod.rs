@@ -34,6 +34,7 @@ pub mod asc;
 mod crs;
 pub mod geotiff;
 pub mod netcdf;
+pub mod path;
 mod raster;
 pub mod release;
 
@@ -161,6 +162,10 @@ pub enum GisError {
     GridMismatch { reason: String },
     #[error("crop box x {x0} .. {x1}, y {y0} .. {y1} contains no cell centre of the raster")]
     EmptyCrop { x0: f64, x1: f64, y0: f64, y1: f64 },
+    #[error("{path}: {reason}")]
+    BadLine { path: PathBuf, reason: String },
+    #[error("cannot cut the raster: {0}")]
+    BadWindow(String),
     #[error("cannot coarsen by {factor}: {reason}")]
     BadCoarsen { factor: usize, reason: String },
     #[error("{path}: {reason}")]

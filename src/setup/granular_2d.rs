@@ -76,6 +76,7 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
             volume_on_walls: r.volume_on_walls,
         }),
         wall_cells: scn.sampled.wall.iter().filter(|&&w| w).count(),
+        geotransform: plane.geotransform,
     });
     let tan_theta = match grid.coordinates() {
         Coordinates::Local => grid.spec().slope_deg.to_radians().tan(),
@@ -90,6 +91,7 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let density = scn.material.phi * scn.material.rho_s;
     sim.set_tracker(Box::new(
         RasterMaps::new(cells, scn.output.front_threshold, density)
+            .with_path(scn.output.path.clone())
             .with_erodible_bed(erodible)
             .with_workers(workers),
     ));

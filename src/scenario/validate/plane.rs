@@ -154,6 +154,7 @@ pub(super) fn domain(d: RawDomain) -> Res<Domain> {
             y_max,
             ny,
             crs: Crs::unknown(),
+            geotransform: None,
         }),
     })
 }
@@ -184,6 +185,7 @@ pub(super) fn domain_of_raster(d: RawDomain, bed: &Profile) -> Res<Domain> {
             y_max: b.y_max,
             ny: r.ny,
             crs: r.crs.clone(),
+            geotransform: Some([r.x_left, r.y_top, r.cell_size]),
         }),
     })
 }
