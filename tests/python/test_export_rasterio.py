@@ -104,6 +104,9 @@ def main():
                                               for v in meta[source])
                         assert src.units[0] == units, (path, src.units, units)
                         assert src.descriptions[0] == description, (path, src.descriptions)
+                    if ext == "asc":
+                        # The DEM's CRS is known by its code alone: the .prj is made.
+                        assert src.crs is not None and src.crs.to_epsg() == 32632, (path, src.crs)
                     assert src.nodata == -9999.0, (path, src.nodata)
                     got = src.read(1).astype(np.float64)
                 expect = want if ext == "asc" else want.astype(np.float32).astype(np.float64)
