@@ -107,7 +107,11 @@ impl std::fmt::Display for Crs {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match (self.epsg, &self.wkt) {
             (Some(code), _) => write!(f, "EPSG:{code}"),
-            (None, Some(_)) => write!(f, "WKT without EPSG code"),
+            // The WKT's own name, e.g. `MGI_Austria_Lambert`, says more than nothing.
+            (None, Some(wkt)) => match wkt.split('"').nth(1).filter(|n| !n.is_empty()) {
+                Some(name) => write!(f, "\"{name}\" (WKT without EPSG code)"),
+                None => write!(f, "WKT without EPSG code"),
+            },
             (None, None) => write!(f, "unknown CRS"),
         }
     }
@@ -210,6 +214,10 @@ mod tests {
         let local =
             r#"LOCAL_CS["unnamed",UNIT["Meter",1.0],AXIS["Easting",EAST],AXIS["Northing",NORTH]]"#;
         assert!(Crs::from_wkt(local).is_local() && !Crs::from_wkt(wkt).is_local());
+        assert_eq!(
+            Crs::from_wkt(local).to_string(),
+            "\"unnamed\" (WKT without EPSG code)"
+        );
         let esri = r#"PROJCS["WGS_1984_UTM_Zone_32N",GEOGCS["GCS_WGS_1984",DATUM["D_WGS_1984",SPHEROID["WGS_1984",6378137.0,298.257223563]]],PROJECTION["Transverse_Mercator"]]"#;
         assert_eq!(Crs::from_wkt(esri).epsg, None);
     }

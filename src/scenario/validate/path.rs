@@ -93,7 +93,7 @@ pub(super) fn spec(
         );
     }
     let line = crate::gis::path::read(&base_dir.join(&file))
-        .map_err(|e| ScenarioError::at(&format!("{KEY}.line"), e.to_string()))?;
+        .map_err(|e| ScenarioError::at(format!("{KEY}.line"), e.to_string()))?;
     plane
         .crs
         .check_same(
@@ -101,7 +101,7 @@ pub(super) fn spec(
             &line.crs,
             &format!("the path ({})", file.display()),
         )
-        .map_err(|e| ScenarioError::at(&format!("{KEY}.line"), e.to_string()))?;
+        .map_err(|e| ScenarioError::at(format!("{KEY}.line"), e.to_string()))?;
     Ok(Some(PathSpec {
         file,
         line,

@@ -132,7 +132,7 @@ fn polygon_field(key: &str, t: &toml::Table, base_dir: &Path, domain: &Domain) -
     let path = PathBuf::from(file);
     let areas = polygons::read(&base_dir.join(&path), source).map_err(|e| {
         ScenarioError::at(
-            &format!("{key}.polygon"),
+            format!("{key}.polygon"),
             format!("cannot read the zone polygons: {e}"),
         )
     })?;
