@@ -32,7 +32,8 @@ Getting started:
   granflow run my_flow.toml --set domain.slope_deg=16 --output out/s16.h5
   granflow check my_flow.toml             validate without running
   granflow sweep slopes.toml --jobs 2     parameter sweep (docs/sweeps.md)
-  granflow run scenarios/dem_release.toml a 2-D run on a DEM from a release polygon
+  granflow init dem --from dem_release    a 2-D run on a DEM from a release polygon
+                                          (then: granflow run dem.toml)
   granflow export my_2d_run.h5            pft, pfv, ppr, … as GeoTIFF (docs/gis.md)
   granflow maps my_sweep/                 probability maps of a sweep (docs/gis.md)
 
