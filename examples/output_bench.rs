@@ -99,6 +99,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         wall_time_s: 0.0,
         status: "completed".into(),
         max_wave_amplitude: None,
+        spread: None,
         outflowed_fraction: 0.0,
         front_at_end_time: f64::NAN,
         max_speed_final: 0.0,

@@ -7,13 +7,21 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 /// Shown by `granflow --help` (not `-h`): the first hour of a new user.
 const LONG_ABOUT: &str = "\
-Shallow-layer simulator for dry granular flows (Savage–Hutter μ(I) family) along a 1-D
-slope profile: column collapses, avalanches and landslides on rigid or erodible beds,
-with five model families: the Savage–Hutter monolayer (Coulomb or μ(I) friction), the
-multilayer μ(I) model, the weakly non-hydrostatic model (monolayer or multilayer), the
-two-layer submarine-avalanche model (water over grains, and the waves it raises) and
-the compressible μ(I)–φ model with dilatancy. One TOML file per scenario; results in
-HDF5 (plus a CSV of the front position).";
+Shallow-layer simulator for dry granular flows (Savage–Hutter μ(I) family), in two
+settings:
+
+- along a 1-D slope profile: column collapses, avalanches and landslides on rigid or
+  erodible beds, with five model families: the Savage–Hutter monolayer (Coulomb or
+  μ(I) friction), the multilayer μ(I) model, the weakly non-hydrostatic model
+  (monolayer or multilayer), the two-layer submarine-avalanche model (water over
+  grains, and the waves it raises) and the compressible μ(I)–φ model with dilatancy;
+- in 2-D over terrain: the Savage–Hutter monolayer (Coulomb, Voellmy or μ(I)) on a
+  DEM (GeoTIFF or ESRI ASCII grid), released from polygons (shapefile or GeoJSON),
+  with the hazard maps of the run (peak flow thickness pft, peak flow velocity pfv,
+  peak pressure ppr, deposit, arrival time), its runout along the flow and travel
+  angle, exported to GeoTIFF, ESRI ASCII or NetCDF for a GIS.
+
+One TOML file per scenario; results in HDF5 (plus a CSV of the front position).";
 
 const AFTER_LONG_HELP: &str = "\
 Getting started:
@@ -24,6 +32,8 @@ Getting started:
   granflow run my_flow.toml --set domain.slope_deg=16 --output out/s16.h5
   granflow check my_flow.toml             validate without running
   granflow sweep slopes.toml --jobs 2     parameter sweep (docs/sweeps.md)
+  granflow init dem --from dem_release    a 2-D run on a DEM from a release polygon
+                                          (then: granflow run dem.toml)
   granflow export my_2d_run.h5            pft, pfv, ppr, … as GeoTIFF (docs/gis.md)
   granflow maps my_sweep/                 probability maps of a sweep (docs/gis.md)
 

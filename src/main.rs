@@ -114,6 +114,11 @@ fn run(args: &RunArgs) -> ExitCode {
         args.quiet,
         args.progress_every,
         scn.domain.cell_count(),
+    )
+    .with_settle(
+        scn.time
+            .stop_when_settled
+            .then_some(scn.time.settle_fraction),
     );
     let limit = (!args.force).then_some(OUTPUT_LIMIT);
     let threads = args

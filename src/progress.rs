@@ -72,6 +72,7 @@ impl Heartbeat {
                 t: 0.0,
                 t_end,
                 steps: 0,
+                energy: f64::NAN,
             },
             printed: now,
             warned: false,
@@ -197,6 +198,9 @@ pub struct RunProgress {
     cells: usize,
     estimated: bool,
     last_draw: u64,
+    /// `time.settle_fraction` when the run ends once settled (`time.stop_when_settled`):
+    /// the time left to t_end is then a bound, not an estimate.
+    settle: Option<f64>,
 }
 
 impl RunProgress {
@@ -234,7 +238,19 @@ impl RunProgress {
             cells,
             estimated: false,
             last_draw: 0,
+            settle: None,
         }
+    }
+
+    /// For a run that ends once its kinetic energy falls to `fraction` of its peak
+    /// (`time.stop_when_settled`; `None` otherwise): the display says that the time
+    /// to t_end is at most that, and how near the run is to settling.
+    pub fn with_settle(mut self, fraction: Option<f64>) -> Self {
+        self.settle = fraction;
+        if let (Some(_), Display::Bar(bar)) = (fraction, &self.display) {
+            bar.set_style(bar_style("at most {eta} to t_end"));
+        }
+        self
     }
 
     /// Called after every time step.
@@ -277,8 +293,11 @@ impl RunProgress {
                     self.last_draw = p.steps;
                     bar.set_position((1000.0 * p.t / p.t_end) as u64);
                     bar.set_message(format!(
-                        "t = {:.4} s / {} s, {} steps",
-                        p.t, p.t_end, p.steps
+                        "t = {:.4} s / {} s, {} steps{}",
+                        p.t,
+                        p.t_end,
+                        p.steps,
+                        settle_note(p, self.settle)
                     ));
                 }
             }
@@ -287,7 +306,8 @@ impl RunProgress {
                 if now.duration_since(*last) >= *every {
                     *last = now;
                     printed = true;
-                    crate::terminal::print_err(&format!("{}\n", progress_line(elapsed, &pace, p)));
+                    let line = progress_line(elapsed, &pace, p, self.settle);
+                    crate::terminal::print_err(&format!("{line}\n"));
                 }
             }
             Display::Hidden => {}
@@ -310,12 +330,40 @@ impl RunProgress {
 
 fn bar() -> ProgressBar {
     let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40.cyan/blue} {msg} [{elapsed_precise}, ETA {eta}]")
-            .expect("valid template"),
-    );
+    bar.set_style(bar_style("ETA {eta}"));
     bar.enable_steady_tick(Duration::from_millis(200));
     bar
+}
+
+/// The bar's style, `eta` saying what the time left is.
+fn bar_style(eta: &str) -> ProgressStyle {
+    ProgressStyle::with_template(&format!(
+        "{{bar:40.cyan/blue}} {{msg}} [{{elapsed_precise}}, {eta}]"
+    ))
+    .expect("valid template")
+}
+
+/// How near a run that ends once settled is to its end: `, kinetic energy 3.2 % of
+/// its peak (ends at 1 %)`; empty for a run without that end, or before any motion.
+pub fn settle_note(p: &Progress, settle: Option<f64>) -> String {
+    match settle {
+        Some(f) if p.energy.is_finite() => format!(
+            ", kinetic energy {} % of its peak (ends at {} %)",
+            percent(p.energy),
+            percent(f)
+        ),
+        _ => String::new(),
+    }
+}
+
+/// A fraction as a percentage with 2 significant digits (`3.2`, `0.0001`).
+fn percent(f: f64) -> String {
+    let v = 100.0 * f;
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (1 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
 }
 
 /// Wall time spent on `sim_s` of simulated time in `steps` steps.
@@ -331,18 +379,22 @@ pub fn remaining_s(pace: &Pace, p: &Progress) -> Option<f64> {
     (pace.sim_s > 0.0 && p.t_end > p.t).then(|| pace.wall_s * (p.t_end - p.t) / pace.sim_s)
 }
 
-/// One line for a log: simulated time, steps, elapsed and remaining wall time.
-pub fn progress_line(elapsed_s: f64, pace: &Pace, p: &Progress) -> String {
+/// One line for a log: simulated time, steps, elapsed and remaining wall time; for a
+/// run that ends once settled (`settle`, the fraction), the time to t_end is a bound
+/// and the line says how near the run is to settling.
+pub fn progress_line(elapsed_s: f64, pace: &Pace, p: &Progress, settle: Option<f64>) -> String {
+    let bound = if settle.is_some() { "at most" } else { "about" };
     let left = remaining_s(pace, p)
-        .map(|r| format!(", about {} to t_end", hms(r)))
+        .map(|r| format!(", {bound} {} to t_end", hms(r)))
         .unwrap_or_default();
+    let note = settle_note(p, settle);
     let t = if p.t != 0.0 && p.t.abs() < 1e-2 {
         format!("{:.3e}", p.t)
     } else {
         format!("{:.4}", p.t)
     };
     format!(
-        "granflow: t = {t} s of {} s ({:.1} %), {} steps, {} elapsed{left}",
+        "granflow: t = {t} s of {} s ({:.1} %), {} steps, {} elapsed{left}{note}",
         p.t_end,
         100.0 * p.t / p.t_end,
         p.steps,
@@ -385,7 +437,12 @@ mod tests {
     use super::*;
 
     fn p(t: f64, t_end: f64, steps: u64) -> Progress {
-        Progress { t, t_end, steps }
+        Progress {
+            t,
+            t_end,
+            steps,
+            energy: f64::NAN,
+        }
     }
 
     fn pace(wall_s: f64, sim_s: f64, steps: u64) -> Pace {
@@ -440,16 +497,33 @@ mod tests {
 
     #[test]
     fn a_line_says_where_the_run_is() {
-        let l = progress_line(65.0, &pace(65.0, 2.5, 1234), &p(2.5, 10.0, 1234));
+        let l = progress_line(65.0, &pace(65.0, 2.5, 1234), &p(2.5, 10.0, 1234), None);
         assert_eq!(
             l,
             "granflow: t = 2.5000 s of 10 s (25.0 %), 1234 steps, 0:01:05 elapsed, \
              about 0:03:15 to t_end"
         );
-        let early = progress_line(5.0, &pace(2.0, 1e-5, 10), &p(2e-5, 10.0, 11));
+        let early = progress_line(5.0, &pace(2.0, 1e-5, 10), &p(2e-5, 10.0, 11), None);
         assert!(
             early.starts_with("granflow: t = 2.000e-5 s of 10 s"),
             "{early}"
         );
+    }
+
+    /// A run that ends once settled: the time to t_end is a bound, and the line says
+    /// how far the kinetic energy is from the fraction that ends the run.
+    #[test]
+    fn a_run_that_ends_when_settled_says_its_time_left_is_a_bound() {
+        let mut now = p(2.5, 10.0, 1234);
+        now.energy = 0.032;
+        let l = progress_line(65.0, &pace(65.0, 2.5, 1234), &now, Some(0.01));
+        assert_eq!(
+            l,
+            "granflow: t = 2.5000 s of 10 s (25.0 %), 1234 steps, 0:01:05 elapsed, \
+             at most 0:03:15 to t_end, kinetic energy 3.2 % of its peak (ends at 1.0 %)"
+        );
+        now.energy = f64::NAN;
+        let still = progress_line(65.0, &pace(65.0, 2.5, 1234), &now, Some(1e-6));
+        assert!(still.ends_with("at most 0:03:15 to t_end"), "{still}");
     }
 }

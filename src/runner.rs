@@ -29,6 +29,9 @@ pub struct RunReport {
     pub front_csv: PathBuf,
     /// The gauge series, when the run has gauges.
     pub gauge_csv: Option<PathBuf>,
+    /// The XDMF description of the HDF5 file (ParaView, VisIt), written for raster
+    /// runs.
+    pub xmf: Option<PathBuf>,
 }
 
 /// Builds the run without executing it (`granflow check`).
@@ -73,6 +76,8 @@ pub fn run_to_files_threads(
             h5: h5.to_path_buf(),
             front_csv,
             gauge_csv: sink.inner.b.b.path().map(Path::to_path_buf),
+            xmf: Some(crate::output::xdmf::xdmf_path(h5))
+                .filter(|x| scn.domain.plane.is_some() && x.is_file()),
         }),
         Err(RunError::Output(e)) => Err(RunFailure::Output(e)),
         Err(error) => Err(RunFailure::Run {
@@ -179,12 +184,41 @@ impl fmt::Display for RunReport {
             s.steps,
             sig(s.wall_time_s)
         )?;
-        match s.status.as_str() {
-            "no_mass" => writeln!(f, "  runout        none (the initial state holds no mass)")?,
-            "outflowed" => writeln!(
+        match (s.status.as_str(), s.spread) {
+            ("no_mass", _) => {
+                writeln!(f, "  runout        none (the initial state holds no mass)")?
+            }
+            ("outflowed", _) => writeln!(
                 f,
                 "  runout        none (all the mass left through an outflow boundary)"
             )?,
+            // A raster run: the runout along the flow (not the front's advance in x).
+            (_, Some(sp)) => {
+                if sp.runout_length.is_nan() {
+                    writeln!(f, "  runout        none (no cell reached)")?;
+                } else {
+                    writeln!(
+                        f,
+                        "  runout        {} m along the flow from the top of the release, travel angle {}°",
+                        sig(sp.runout_length),
+                        sig(sp.travel_angle_deg)
+                    )?;
+                }
+                writeln!(f, "  area reached  {} m²", sig(sp.area_reached))?;
+                match (sp.path_runout_length, sp.path_runout_angle_deg) {
+                    (Some(l), Some(a)) if l.is_finite() => writeln!(
+                        f,
+                        "  path runout   {} m along output.path from the top of the release, runout angle {}°",
+                        sig(l),
+                        sig(a)
+                    )?,
+                    (Some(_), _) => writeln!(
+                        f,
+                        "  path runout   none (no cell over the threshold of output.path)"
+                    )?,
+                    (None, _) => {}
+                }
+            }
             _ if s.runout.is_nan() => writeln!(f, "  runout        none (no front)")?,
             // Wet or periodic domains have no front that moves: say so rather than
             // print a runout of "0.0000 m" as if it were measured.
@@ -225,8 +259,11 @@ impl fmt::Display for RunReport {
             self.h5.display(),
             self.front_csv.display()
         )?;
-        match &self.gauge_csv {
-            Some(g) => writeln!(f, ", {}", g.display()),
+        if let Some(g) = &self.gauge_csv {
+            write!(f, ", {}", g.display())?;
+        }
+        match &self.xmf {
+            Some(x) => writeln!(f, ", {} (for ParaView)", x.display()),
             None => writeln!(f),
         }
     }
@@ -269,6 +306,7 @@ mod tests {
             h5: "run.h5".into(),
             front_csv: "run_front.csv".into(),
             gauge_csv: None,
+            xmf: None,
         }
     }
 

@@ -19,7 +19,7 @@ use crate::grid::Grid;
 use crate::model::tracker::Tracker;
 use crate::model::{Diagnostics, Model};
 use crate::numerics::StageError;
-use crate::output::{GridData, OutputError, OutputSink, RunInfo, RunSummary, StepRecord};
+use crate::output::{GridData, OutputError, OutputSink, RunInfo, RunSummary, Spread, StepRecord};
 use crate::pipeline::Pipeline;
 use crate::stop::{FailureReason, SolverFailure, StepContext, StopRule, Verdict};
 
@@ -46,6 +46,9 @@ pub struct Progress {
     pub t: f64,
     pub t_end: f64,
     pub steps: u64,
+    /// The kinetic energy over its peak so far (NaN before any motion): how near the
+    /// run is to `time.stop_when_settled`'s end.
+    pub energy: f64,
 }
 
 /// Why a run did not complete.
@@ -454,6 +457,11 @@ impl<M: Model> Simulation<M> {
                 t: self.t,
                 t_end: cfg.t_end,
                 steps: self.steps,
+                energy: if tally.ke_peak > 0.0 {
+                    tally.last.kinetic_energy / tally.ke_peak
+                } else {
+                    f64::NAN
+                },
             });
             if let Some(status) = stop {
                 return Ok(status);
@@ -500,6 +508,10 @@ impl<M: Model> Simulation<M> {
             wall_time_s: tally.wall.elapsed().as_secs_f64(),
             status,
             max_wave_amplitude: tally.max_wave,
+            spread: self
+                .tracker
+                .as_ref()
+                .and_then(|t| Spread::from_scalars(&t.scalars(&self.grid, &self.state))),
             stage_times: self.stage_times(),
         }
     }

@@ -344,6 +344,25 @@ fn long_help_names_the_five_model_families_and_the_1d_profile() {
     }
 }
 
+/// The long help describes the 2-D side too: runs over a DEM from release polygons,
+/// the hazard maps and their export, and how to try one outside the clone.
+#[test]
+fn long_help_describes_the_2d_runs_over_terrain() {
+    let out = granflow().arg("--help").output().unwrap();
+    let help = crate::common::assert_success(&out);
+    for needle in [
+        "in 2-D over terrain",
+        "DEM",
+        "release",
+        "peak flow thickness pft",
+        "runout along the flow",
+        "GeoTIFF",
+        "granflow init dem --from dem_release",
+    ] {
+        assert!(help.contains(needle), "'{needle}' not in: {help}");
+    }
+}
+
 /// `cargo install` ignores Cargo.lock unless told: the README's install command must
 /// build the versions the tests ran with.
 #[test]

@@ -774,3 +774,127 @@ fn check_output_accepts_a_run_with_nodata_walls() {
     let stdout = crate::common::assert_success(&out);
     assert!(stdout.starts_with("OK"), "{stdout}");
 }
+
+/// `domain.coarsen` on a DEM whose cell size is not round (4.9977 m, corner at
+/// 1.8e5 m, as real survey grids are): the grid is trimmed to a multiple of each
+/// factor 2–6 by whole cells and coarsened, never a lost row and a panic. `check`
+/// exits 0 and names the coarse grid.
+#[test]
+fn coarsening_a_grid_of_non_round_cell_size_trims_whole_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cell = 4.9977;
+    write_dem(
+        &d.join("dem.asc"),
+        (37, 29, cell),
+        (180_123.4, 101_987.6),
+        |c, r| 0.3 * c as f64 + 0.1 * r as f64,
+    );
+    let h = r#"{ polygon = "release.geojson", thickness = 1.0, thickness_is = "vertical" }"#;
+    write_polygon(
+        &d.join("release.geojson"),
+        &[
+            [180_150.0, 102_050.0],
+            [180_220.0, 102_050.0],
+            [180_220.0, 102_100.0],
+            [180_150.0, 102_100.0],
+        ],
+        None,
+    );
+    for k in 2..=6usize {
+        let text = scenario(h, &format!("coarsen = {k}\n"));
+        let scn = load_in(&text, d).unwrap_or_else(|e| panic!("coarsen = {k}: {e}"));
+        let plane = scn.domain.plane.as_ref().unwrap();
+        assert_eq!((scn.domain.cells, plane.ny), (37 / k, 29 / k), "k = {k}");
+        // The top-left corner is kept and the cells are k times as wide.
+        let dx = (scn.domain.x_max - scn.domain.x_min) / (37 / k) as f64;
+        assert!((dx - k as f64 * cell).abs() < 1e-9, "k = {k}: {dx}");
+        assert!((scn.domain.x_min - 180_123.4).abs() < 1e-6, "k = {k}");
+        assert!(
+            (plane.y_max - (101_987.6 + 29.0 * cell)).abs() < 1e-6,
+            "k = {k}"
+        );
+        fs::write(d.join("s.toml"), &text).unwrap();
+        let (code, stderr) = granflow_in(d, &["check", "s.toml"]);
+        assert_eq!(code, Some(0), "coarsen = {k}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+}
+
+/// Whether a GeoTIFF has a GeoKey directory (34735).
+fn has_geo_keys(path: &Path) -> bool {
+    let file = std::io::BufReader::new(fs::File::open(path).unwrap());
+    let mut dec = tiff::decoder::Decoder::new(file).unwrap();
+    dec.find_tag(tiff::tags::Tag::GeoKeyDirectoryTag)
+        .unwrap()
+        .is_some()
+}
+
+/// The CRS of the inputs reaches the outputs, or the user is told: a DEM `.asc`
+/// without its `.prj` under a release that states EPSG:32632 runs in EPSG:32632 (a
+/// note says so) and its exports carry it (a GeoTIFF key, a `.prj` made from the
+/// code, NetCDF `crs_wkt`); without any CRS the GeoTIFF has no GeoKey directory
+/// (GDAL reads "no CRS", not a LOCAL_CS that `rio info` fails on) and `export` warns.
+/// The exported grid is the DEM's exactly (corner and cell size as read, in doubles),
+/// also for a cell size that is not round.
+#[test]
+fn the_crs_and_the_grid_of_the_inputs_reach_the_exports() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (x0, y0, cell) = (612_345.67, 5_123_456.7, 4.9977);
+    write_dem(&d.join("dem.asc"), (30, 20, cell), (x0, y0), |c, _| {
+        100.0 - 0.5 * c as f64
+    });
+    let ring =
+        [[20.0, 40.0], [45.0, 40.0], [45.0, 65.0], [20.0, 65.0]].map(|p| [p[0] + x0, p[1] + y0]);
+    write_polygon(&d.join("release.geojson"), &ring, Some(32632));
+    let h = r#"{ polygon = "release.geojson", thickness = 1.0, thickness_is = "vertical" }"#;
+    let text = scenario(h, "").replace("t_end = 1.0", "t_end = 0.5");
+    fs::write(d.join("s.toml"), &text).unwrap();
+    let (code, stderr) = granflow_in(d, &["check", "s.toml"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stderr.contains("states no CRS") && stderr.contains("EPSG:32632"),
+        "{stderr}"
+    );
+    let (code, stderr) = granflow_in(d, &["run", "s.toml", "--quiet", "--output", "r.h5"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    for format in ["geotiff", "asc", "netcdf"] {
+        let (code, stderr) = granflow_in(
+            d,
+            &["export", "r.h5", "--format", format, "-o", "out", "--quiet"],
+        );
+        assert_eq!(code, Some(0), "{format}: {stderr}");
+        assert!(!stderr.contains("warning"), "{format}: {stderr}");
+    }
+    let tif = granflow::gis::geotiff::read(&d.join("out/r_pft.tif")).unwrap();
+    assert_eq!(tif.crs.epsg, Some(32632));
+    assert_eq!(
+        (tif.x_left, tif.y_top, tif.cell_size),
+        (x0, y0 + 20.0 * cell, cell)
+    );
+    let dem = granflow::gis::asc::read(&d.join("dem.asc")).unwrap();
+    assert_eq!(
+        (tif.x_left, tif.y_top, tif.cell_size),
+        (dem.x_left, dem.y_top, dem.cell_size)
+    );
+    let asc = granflow::gis::asc::read(&d.join("out/r_pft.asc")).unwrap();
+    assert_eq!(asc.crs.epsg, Some(32632), "no .prj made from the code");
+    assert_eq!(
+        (asc.x_left, asc.y_top, asc.cell_size),
+        (dem.x_left, dem.y_top, dem.cell_size)
+    );
+    let nc = fs::read(d.join("out/r_maps.nc")).unwrap();
+    let nc = String::from_utf8_lossy(&nc);
+    assert!(nc.contains("crs_wkt") && nc.contains(r#"AUTHORITY["EPSG","32632"]"#));
+
+    // No CRS anywhere: no GeoKey directory, and a warning.
+    write_polygon(&d.join("release.geojson"), &ring, None);
+    let (code, stderr) = granflow_in(d, &["run", "s.toml", "--quiet", "--output", "u.h5"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let (code, stderr) = granflow_in(d, &["export", "u.h5", "-o", "out", "--quiet"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(stderr.contains("warning: the run has no CRS"), "{stderr}");
+    assert!(!has_geo_keys(&d.join("out/u_pft.tif")));
+    assert!(has_geo_keys(&d.join("out/r_pft.tif")));
+}

@@ -157,6 +157,66 @@ fn exported_maps_have_the_runs_grid_crs_and_values() {
     assert_eq!(ppr[k], 0.62 * 2500.0 * pfv[k] * pfv[k]);
 }
 
+/// The GDAL_METADATA tag (42112) of a GeoTIFF, if it has one.
+fn gdal_metadata(path: &Path) -> Option<String> {
+    let file = std::io::BufReader::new(fs::File::open(path).unwrap());
+    let mut dec = tiff::decoder::Decoder::new(file).unwrap();
+    dec.find_tag(tiff::tags::Tag::Unknown(42112))
+        .unwrap()
+        .map(|v| v.into_string().unwrap())
+}
+
+/// Every map of the run file says what it is and in which units (`description` and
+/// `units` attributes; `ppr` names its density), and the exported GeoTIFFs carry the
+/// same as the band's description and units, where GDAL and QGIS read them.
+#[test]
+fn maps_and_exported_bands_say_what_they_are_and_their_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let h5 = georeferenced_run(d);
+    let out = d.join("out");
+    assert_success(&export(&[
+        h5.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]));
+    let file = H5File::open(&h5).unwrap();
+    let attr = |ds: &str, name: &str| -> String {
+        file.dataset(ds)
+            .unwrap()
+            .attr(name)
+            .unwrap_or_else(|e| panic!("{ds} has no {name}: {e}"))
+            .read_string()
+            .unwrap()
+    };
+    for (field, dataset, units, words) in [
+        ("pft", "h_max", "m", "normal to the bed"),
+        ("pfv", "speed_max", "m/s", "along the bed surface"),
+        ("ppr", "ppr", "Pa", "rho = 1550 kg/m^3"),
+        ("deposit", "deposit", "m", "end of the run"),
+        ("arrival_time", "arrival_time", "s", "first exceeded"),
+    ] {
+        let ds = format!("maps/{dataset}");
+        assert_eq!(attr(&ds, "units"), units, "{ds}");
+        let description = attr(&ds, "description");
+        assert!(description.contains(words), "{ds}: {description}");
+        let xml = gdal_metadata(&out.join(format!("slope_{field}.tif")))
+            .unwrap_or_else(|| panic!("{field}: no GDAL_METADATA"));
+        assert!(
+            xml.contains(&format!(
+                r#"<Item name="DESCRIPTION" sample="0" role="description">{description}</Item>"#
+            )),
+            "{field}: {xml}"
+        );
+        assert!(
+            xml.contains(&format!(
+                r#"<Item name="UNITTYPE" sample="0" role="unittype">{units}</Item>"#
+            )),
+            "{field}: {xml}"
+        );
+    }
+}
+
 #[test]
 fn a_snapshot_is_exported_at_the_nearest_time() {
     let dir = tempfile::tempdir().unwrap();
@@ -404,6 +464,92 @@ fn two_runs_give_one_half_exactly_where_one_reaches() {
         ("0", "0", "1", "0")
     );
     assert_eq!((at("roc_distance"), at("rank")), ("0", "1"));
+}
+
+/// The skill of `granflow maps --observed` counts the domain's cells with data only:
+/// the wall cells of a DEM (nodata, here 6 rows added north of the grid) are no true
+/// negatives, so TP + FP + FN + TN is the area with data, and the same flow (walls
+/// there either way) has the same FPR on both DEMs.
+#[test]
+fn the_roc_leaves_the_wall_cells_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fpr_of = |name: &str, extra_rows: usize| -> (f64, f64) {
+        let sub = d.join(name);
+        fs::create_dir_all(&sub).unwrap();
+        let top = 0.8 + 0.1 * extra_rows as f64;
+        let mut dem = Raster::filled(24, 16 + extra_rows, -1.2, top, 0.1, 0.0);
+        dem.nodata = Some(-9999.0);
+        for v in &mut dem.values[..24 * extra_rows] {
+            *v = -9999.0;
+        }
+        asc::write(&dem, &sub.join("dem.asc")).unwrap();
+        let scenario = RADIAL
+            .replace(
+                "x_min = -1.2\nx_max = 1.2\ny_min = -0.8\ny_max = 0.8\ncells = [24, 16]\n",
+                "",
+            )
+            .replace(
+                "[rheology]",
+                "[bed]\nb = { raster = \"dem.asc\" }\n\n[rheology]",
+            );
+        fs::write(sub.join("radial.toml"), scenario).unwrap();
+        fs::write(
+            sub.join("ensemble.toml"),
+            "scenario = \"radial.toml\"\n\n[axes]\nrheology.mu_deg = [20]\n",
+        )
+        .unwrap();
+        fs::write(
+            sub.join("observed.geojson"),
+            r#"{"type": "Polygon", "coordinates": [[[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5], [-0.5, -0.5]]]}"#,
+        )
+        .unwrap();
+        assert_success(
+            &granflow()
+                .current_dir(&sub)
+                .args(["sweep", "ensemble.toml", "--quiet", "--output", "runs"])
+                .output()
+                .unwrap(),
+        );
+        assert_success(
+            &granflow()
+                .current_dir(&sub)
+                .args([
+                    "maps",
+                    "runs",
+                    "--threshold",
+                    "0.02",
+                    "--observed",
+                    "observed.geojson",
+                ])
+                .output()
+                .unwrap(),
+        );
+        let csv = fs::read_to_string(sub.join("runs/maps/runs.csv")).unwrap();
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let num = |c: &str| -> f64 {
+            row[header.iter().position(|h| *h == c).unwrap()]
+                .parse()
+                .unwrap()
+        };
+        let total = num("tp_area") + num("fp_area") + num("fn_area") + num("tn_area");
+        (total, num("fpr"))
+    };
+    let (plain, fpr_plain) = fpr_of("plain", 0);
+    let (walled, fpr_walled) = fpr_of("walled", 6);
+    let cell = 0.1 * 0.1;
+    assert!((plain - 384.0 * cell).abs() < 1e-9, "{plain}");
+    assert!((walled - 384.0 * cell).abs() < 1e-9, "{walled}");
+    assert!(
+        fpr_plain > 0.0,
+        "the run reaches beyond the observed square"
+    );
+    assert!(
+        (fpr_walled - fpr_plain).abs() < 1e-12,
+        "{fpr_walled} against {fpr_plain}"
+    );
 }
 
 #[test]

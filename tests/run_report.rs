@@ -197,3 +197,157 @@ fn a_table_whose_columns_do_not_say_which_is_the_bed_is_refused() {
         .unwrap();
     crate::common::assert_success(&out);
 }
+
+/// A DEM whose slope faces south (the flow goes to −y) and a release near its top:
+/// 20 × 48 cells of 5 m, a 30° slope for y > 100 m and flat below.
+fn south_facing(dir: &Path) -> std::path::PathBuf {
+    let (nx, ny, d) = (20, 48, 5.0);
+    let mut text = format!(
+        "ncols {nx}\nnrows {ny}\nxllcorner 0\nyllcorner 0\ncellsize {d}\nNODATA_value -9999\n"
+    );
+    for row in 0..ny {
+        let y = (ny - row) as f64 * d - 0.5 * d;
+        let b = (y - 100.0).max(0.0) * 30f64.to_radians().tan();
+        let line: Vec<String> = (0..nx).map(|_| format!("{b}")).collect();
+        text.push_str(&line.join(" "));
+        text.push('\n');
+    }
+    fs::write(dir.join("dem.asc"), text).unwrap();
+    let scn = dir.join("south.toml");
+    fs::write(
+        &scn,
+        r#"[domain]
+coordinates = "cartesian"
+
+[bed]
+b = { raster = "dem.asc" }
+
+[rheology]
+law = "coulomb"
+mu_deg = 22
+
+[initial]
+h = "if(abs(x - 50) < 15 && y > 190 && y < 220, 2, 0)"
+
+[time]
+t_end = 12
+
+[output]
+path = { line = "path.geojson", field = "pft", threshold = 0.001 }
+"#,
+    )
+    .unwrap();
+    // The thalweg: straight down the slope, from the top of the DEM to its foot.
+    fs::write(
+        dir.join("path.geojson"),
+        r#"{"type": "LineString", "coordinates": [[50, 235], [50, 120], [50, 5]]}"#,
+    )
+    .unwrap();
+    scn
+}
+
+/// A raster run's report and a raster sweep's table give the runout along the flow
+/// (here to the south, 100 m and more), its travel angle and the area reached, not the
+/// front's advance along x (zero on this slope); the report names the `.xmf` too.
+#[test]
+fn a_raster_run_reports_its_runout_along_the_flow() {
+    let dir = tempfile::tempdir().unwrap();
+    south_facing(dir.path());
+    let out = granflow()
+        .args(["run", "south.toml", "--progress", "none"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("  runout"))
+        .unwrap_or_else(|| panic!("no runout line: {stdout}"));
+    assert!(line.contains("m along the flow"), "{line}");
+    let runout: f64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(runout > 60.0 && runout < 240.0, "{line}");
+    let angle: f64 = line
+        .rsplit("travel angle ")
+        .next()
+        .unwrap()
+        .trim_end_matches('°')
+        .parse()
+        .unwrap();
+    assert!(angle > 10.0 && angle < 30.0, "{line}");
+    assert!(stdout.contains("  area reached  "), "{stdout}");
+    // Along the thalweg (output.path, pft > 1 mm as the runout above): the same runout
+    // to a cell or two, the line running with the flow.
+    let path_line = stdout
+        .lines()
+        .find(|l| l.starts_with("  path runout"))
+        .unwrap_or_else(|| panic!("no path runout line: {stdout}"));
+    let along: f64 = path_line
+        .split_whitespace()
+        .nth(2)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((along - runout).abs() <= 10.0, "{path_line} against {line}");
+    // The report lists every file the run wrote, the XDMF description included.
+    let output = stdout
+        .lines()
+        .find(|l| l.starts_with("  output"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!(output.contains("south.xmf"), "{output}");
+    assert!(dir.path().join("south.xmf").is_file());
+
+    // A friction sweep: the runout shortens as μ grows.
+    fs::write(
+        dir.path().join("sweep.toml"),
+        "scenario = \"south.toml\"\n\n[axes]\nrheology.mu_deg = [18, 26]\n",
+    )
+    .unwrap();
+    let out_dir = dir.path().join("out");
+    let out = granflow()
+        .args(["sweep", "sweep.toml", "--output", "out"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table: Vec<&str> = stdout
+        .lines()
+        .skip_while(|l| !l.contains("runout_m"))
+        .collect();
+    assert!(
+        table[0].contains("travel_deg")
+            && table[0].contains("area_m2")
+            && table[0].contains("path_m"),
+        "{stdout}"
+    );
+    let runout_m: Vec<f64> = table[1..3]
+        .iter()
+        .map(|l| l.split_whitespace().nth(1).unwrap().parse().unwrap())
+        .collect();
+    assert!(runout_m[0] > runout_m[1] && runout_m[1] > 30.0, "{stdout}");
+    let csv = fs::read_to_string(out_dir.join("summary.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = header
+        .iter()
+        .position(|&c| c == "runout_length")
+        .unwrap_or_else(|| panic!("{csv}"));
+    assert!(header.contains(&"path_runout_length"), "{csv}");
+    let lengths: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(lengths.len(), 2, "{csv}");
+    for (a, b) in lengths.iter().zip(&runout_m) {
+        assert!((a - b).abs() <= 1e-3 * a, "{csv} against {stdout}");
+    }
+}

@@ -527,3 +527,106 @@ fn a_gauge_on_a_wall_cell_is_refused() {
     let m = fails_at(&text("[[9.8, 5.5]]"), d, "output.gauges");
     assert!(m.contains("gauge 1") && m.contains("(10.5, 5.5)"), "{m}");
 }
+
+/// A GeoJSON file of one rectangle [x0, x1] × [y0, y1] with the property `v`.
+fn write_rectangle(path: &Path, [x0, x1, y0, y1]: [f64; 4], v: f64) {
+    fs::write(
+        path,
+        format!(
+            r#"{{"type": "FeatureCollection", "features": [{{"type": "Feature", "properties": {{"v": {v}}}, "geometry": {{"type": "Polygon", "coordinates": [[[{x0}, {y0}], [{x1}, {y0}], [{x1}, {y1}], [{x0}, {y1}], [{x0}, {y0}]]]}}}}]}}"#
+        ),
+    )
+    .unwrap();
+}
+
+/// Zones from polygons (AvaFrame's resistance and entrainment areas), rasterised as a
+/// release is: μ = 0.8 in a rectangle over x < 2 and 0.1 outside gives the bits of the
+/// expression `if(x < 2, 0.8, 0.1)` (cell-centre rule; the value from the feature's
+/// attribute or from `value`), and an erodible bed of 2 cm over 1.2 < x < 2.5 is the
+/// erodible raster of the same zone (area-fraction rule), with a note of its volume.
+/// Bad keys are refused by name.
+#[test]
+fn zones_from_polygons_are_rasterised_as_the_release_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_rectangle(&d.join("res.geojson"), [-1.0, 2.0, -1.0, 2.0], 0.8);
+    let coulomb = |mu: &str| plane(&format!("law = \"coulomb\"\nmu = {mu}"), TWO_CONES);
+    let expression = load_in(&coulomb("\"if(x < 2, 0.8, 0.1)\""), d).unwrap();
+    for mu in [
+        r#"{ polygon = "res.geojson", value = 0.8, outside = 0.1, rule = "cell_centre" }"#,
+        r#"{ polygon = "res.geojson", value_attribute = "v", outside = 0.1, rule = "cell_centre" }"#,
+    ] {
+        let zoned = load_in(&coulomb(mu), d).unwrap();
+        assert_eq!(
+            zoned.friction_zones.as_ref().unwrap().mu,
+            expression.friction_zones.as_ref().unwrap().mu,
+            "{mu}"
+        );
+        same_bits(&expression, &zoned, 40);
+    }
+
+    write_asc(&d.join("bed_layer.asc"), (80, 20, 0.05), |x, _| {
+        if x > 1.2 && x < 2.5 {
+            0.02
+        } else {
+            0.0
+        }
+    });
+    write_rectangle(&d.join("ent.geojson"), [1.2, 2.5, 0.0, 1.0], 0.02);
+    let erodible = |bed: &str| {
+        plane(
+            "law = \"coulomb\"\nmu_deg = 20.0",
+            &format!("h = \"if(x > 0.5 && x < 1.0, 0.3, 0)\"\nerodible_bed = {bed}"),
+        )
+    };
+    let raster = load_in(&erodible(r#"{ raster = "bed_layer.asc" }"#), d).unwrap();
+    let polygon = load_in(
+        &erodible(r#"{ polygon = "ent.geojson", thickness = 0.02, thickness_is = "vertical" }"#),
+        d,
+    )
+    .unwrap();
+    assert!(polygon.initial.has_erodible_bed());
+    let (a, b) = (&raster.sampled.h_bed, &polygon.sampled.h_bed);
+    assert_eq!(a.len(), b.len());
+    for k in 0..a.len() {
+        assert!(
+            (a[k] - b[k]).abs() < 1e-12,
+            "cell {k}: {} against {}",
+            a[k],
+            b[k]
+        );
+    }
+    assert!(
+        polygon
+            .notes
+            .iter()
+            .any(|n| n.contains("initial.erodible_bed") && n.contains("erodible volume 2.6")),
+        "{:?}",
+        polygon.notes
+    );
+
+    for (text, key) in [
+        (
+            coulomb(r#"{ polygon = "res.geojson", value = 0.8 }"#),
+            "rheology.mu.outside",
+        ),
+        (
+            coulomb(r#"{ polygon = "res.geojson", outside = 0.1 }"#),
+            "rheology.mu.value",
+        ),
+        (
+            coulomb(r#"{ polygon = "res.geojson", value = 0.8, outside = 0.1, colour = 1 }"#),
+            "rheology.mu.colour",
+        ),
+        (
+            coulomb(r#"{ polygon = "none.geojson", value = 0.8, outside = 0.1 }"#),
+            "rheology.mu.polygon",
+        ),
+        (
+            erodible(r#"{ polygon = "ent.geojson", thickness = 0.02 }"#),
+            "initial.erodible_bed.thickness_is",
+        ),
+    ] {
+        fails_at(&text, d, key);
+    }
+}

@@ -17,8 +17,10 @@
 //! The writer writes `xllcorner`/`yllcorner`, `cellsize`, `NODATA_value` when the raster
 //! has a finite nodata value (NaN cells are written as that value), every number in
 //! its shortest round-trip form (reading the file back gives the same `f64`s), and
-//! the `.prj` when the CRS has WKT text. A CRS known only by its EPSG code is not
-//! written (no WKT database here). The written `yllcorner` is the shortest decimal that
+//! the `.prj` when the CRS has WKT text or an EPSG code of WGS 84 (4326), its UTM
+//! zones (326xx, 327xx) or ETRS89's (258xx), whose WKT is made here. Any other CRS
+//! known only by its code gets no `.prj` (that needs the EPSG registry; `granflow
+//! export` warns). The written `yllcorner` is the shortest decimal that
 //! maps back to the same top edge, so a file read and written again is unchanged.
 
 use std::io::Write;
@@ -399,7 +401,7 @@ pub fn write(raster: &Raster, path: &Path) -> Result<()> {
     })();
     result.map_err(io_err(path))?;
     let prj = prj_path(path);
-    match &raster.crs.wkt {
+    match raster.crs.wkt_text() {
         Some(wkt) => std::fs::write(&prj, format!("{wkt}\n")).map_err(io_err(&prj))?,
         None => match std::fs::remove_file(&prj) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&prj)(e)),

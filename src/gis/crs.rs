@@ -46,6 +46,28 @@ impl Crs {
         }
     }
 
+    /// The WKT to write where a file needs one (an ESRI ASCII grid's `.prj`, a
+    /// NetCDF `crs_wkt`): the stated one, else one made from the EPSG code for the
+    /// systems `wkt_of_epsg` knows; `None` otherwise.
+    pub fn wkt_text(&self) -> Option<std::borrow::Cow<'_, str>> {
+        match (&self.wkt, self.epsg) {
+            (Some(wkt), _) => Some(std::borrow::Cow::Borrowed(wkt)),
+            (None, Some(code)) => wkt_of_epsg(code).map(std::borrow::Cow::Owned),
+            (None, None) => None,
+        }
+    }
+
+    /// Whether the WKT is an engineering (local) system, `LOCAL_CS[…]` or
+    /// `ENGCRS[…]`: coordinates in metres with no place on Earth, as some DEMs' `.prj`
+    /// say when their real CRS was lost.
+    pub fn is_local(&self) -> bool {
+        self.epsg.is_none()
+            && self.wkt.as_deref().is_some_and(|w| {
+                let root = w.trim_start().to_ascii_uppercase();
+                root.starts_with("LOCAL_CS") || root.starts_with("ENGCRS")
+            })
+    }
+
     /// True when neither a code nor a WKT is known.
     pub fn is_unknown(&self) -> bool {
         self.epsg.is_none() && self.wkt.is_none()
@@ -85,9 +107,41 @@ impl std::fmt::Display for Crs {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match (self.epsg, &self.wkt) {
             (Some(code), _) => write!(f, "EPSG:{code}"),
-            (None, Some(_)) => write!(f, "WKT without EPSG code"),
+            // The WKT's own name, e.g. `MGI_Austria_Lambert`, says more than nothing.
+            (None, Some(wkt)) => match wkt.split('"').nth(1).filter(|n| !n.is_empty()) {
+                Some(name) => write!(f, "\"{name}\" (WKT without EPSG code)"),
+                None => write!(f, "WKT without EPSG code"),
+            },
             (None, None) => write!(f, "unknown CRS"),
         }
+    }
+}
+
+/// WGS 84 (EPSG:4326) as WKT 1.
+const WGS84_GEOGCS: &str = r#"GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563,AUTHORITY["EPSG","7030"]],AUTHORITY["EPSG","6326"]],PRIMEM["Greenwich",0,AUTHORITY["EPSG","8901"]],UNIT["degree",0.0174532925199433,AUTHORITY["EPSG","9122"]],AUTHORITY["EPSG","4326"]]"#;
+
+/// ETRS89 (EPSG:4258) as WKT 1.
+const ETRS89_GEOGCS: &str = r#"GEOGCS["ETRS89",DATUM["European_Terrestrial_Reference_System_1989",SPHEROID["GRS 1980",6378137,298.257222101,AUTHORITY["EPSG","7019"]],AUTHORITY["EPSG","6258"]],PRIMEM["Greenwich",0,AUTHORITY["EPSG","8901"]],UNIT["degree",0.0174532925199433,AUTHORITY["EPSG","9122"]],AUTHORITY["EPSG","4258"]]"#;
+
+/// WKT 1 for an EPSG code without a database: WGS 84 (4326), its UTM zones (32601–
+/// 32660 north, 32701–32760 south) and ETRS89's (25828–25838), the systems a DEM
+/// known only by its code (a GeoTIFF's key) is most often in. `None` for the others:
+/// their parameters would need the EPSG registry.
+pub fn wkt_of_epsg(code: u32) -> Option<String> {
+    let utm = |geogcs: &str, base: &str, zone: u32, south: bool| {
+        let central = 6 * zone as i32 - 183;
+        let hemisphere = if south { 'S' } else { 'N' };
+        let false_northing = if south { 10_000_000 } else { 0 };
+        format!(
+            r#"PROJCS["{base} / UTM zone {zone}{hemisphere}",{geogcs},PROJECTION["Transverse_Mercator"],PARAMETER["latitude_of_origin",0],PARAMETER["central_meridian",{central}],PARAMETER["scale_factor",0.9996],PARAMETER["false_easting",500000],PARAMETER["false_northing",{false_northing}],UNIT["metre",1,AUTHORITY["EPSG","9001"]],AXIS["Easting",EAST],AXIS["Northing",NORTH],AUTHORITY["EPSG","{code}"]]"#
+        )
+    };
+    match code {
+        4326 => Some(WGS84_GEOGCS.to_owned()),
+        32601..=32660 => Some(utm(WGS84_GEOGCS, "WGS 84", code - 32600, false)),
+        32701..=32760 => Some(utm(WGS84_GEOGCS, "WGS 84", code - 32700, true)),
+        25828..=25838 => Some(utm(ETRS89_GEOGCS, "ETRS89", code - 25800, false)),
+        _ => None,
     }
 }
 
@@ -157,8 +211,39 @@ mod tests {
         let crs = Crs::from_wkt(wkt2);
         assert_eq!(crs.epsg, Some(4326));
         assert!(crs.is_geographic());
+        let local =
+            r#"LOCAL_CS["unnamed",UNIT["Meter",1.0],AXIS["Easting",EAST],AXIS["Northing",NORTH]]"#;
+        assert!(Crs::from_wkt(local).is_local() && !Crs::from_wkt(wkt).is_local());
+        assert_eq!(
+            Crs::from_wkt(local).to_string(),
+            "\"unnamed\" (WKT without EPSG code)"
+        );
         let esri = r#"PROJCS["WGS_1984_UTM_Zone_32N",GEOGCS["GCS_WGS_1984",DATUM["D_WGS_1984",SPHEROID["WGS_1984",6378137.0,298.257223563]]],PROJECTION["Transverse_Mercator"]]"#;
         assert_eq!(Crs::from_wkt(esri).epsg, None);
+    }
+
+    #[test]
+    fn wkt_made_from_a_code_names_that_code_at_its_root() {
+        for code in [4326, 32632, 32719, 25833] {
+            let wkt = wkt_of_epsg(code).unwrap();
+            let crs = Crs::from_wkt(&wkt);
+            assert_eq!(crs.epsg, Some(code), "{wkt}");
+            assert_eq!(crs.is_geographic(), code == 4326, "{wkt}");
+        }
+        let wkt = wkt_of_epsg(32632).unwrap();
+        assert!(wkt.contains(r#"PARAMETER["central_meridian",9]"#), "{wkt}");
+        let wkt = wkt_of_epsg(32719).unwrap();
+        assert!(
+            wkt.contains(r#"PARAMETER["central_meridian",-69]"#),
+            "{wkt}"
+        );
+        assert!(
+            wkt.contains(r#"PARAMETER["false_northing",10000000]"#),
+            "{wkt}"
+        );
+        assert_eq!(wkt_of_epsg(2056), None);
+        assert_eq!(Crs::from_epsg(2056).wkt_text(), None);
+        assert!(Crs::from_epsg(32632).wkt_text().is_some());
     }
 
     #[test]

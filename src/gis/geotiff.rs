@@ -26,9 +26,12 @@
 //! LZW is slower to write and compresses floats poorly), strips of about
 //! 1 MB, *PixelIsArea*, `ModelPixelScaleTag` + one tiepoint at the top-left corner, the
 //! EPSG code as `ProjectedCSTypeGeoKey` or `GeographicTypeGeoKey` (by
-//! [`Crs::is_geographic`]), `GDAL_NODATA` when the raster has nodata. A CRS with WKT but
+//! [`Crs::is_geographic`]), `GDAL_NODATA` when the raster has nodata; no GeoKey
+//! directory at all when the CRS is unknown or a `LOCAL_CS` (GDAL then reads "no CRS"). A CRS with WKT but
 //! no EPSG code is written as the `GTCitationGeoKey` text, which granflow reads back
-//! but other readers only display. BigTIFF is used past 4 GB.
+//! but other readers only display. BigTIFF is used past 4 GB. [`write_band`] also
+//! names the band: its description and units go into the `GDAL_METADATA` tag (42112)
+//! as GDAL writes them, so GDAL (rasterio's `descriptions`, `units`) and QGIS show them.
 
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Seek, Write};
@@ -44,6 +47,8 @@ use tiff::{ColorType, TiffError};
 
 use super::{io_err, nearly_equal, Crs, GisError, Raster, Result};
 
+/// GDAL's metadata tag (XML), where it keeps band descriptions and units.
+const GDAL_METADATA: u16 = 42112;
 const KEY_MODEL_TYPE: u16 = 1024;
 const KEY_RASTER_TYPE: u16 = 1025;
 const KEY_CITATION: u16 = 1026;
@@ -396,8 +401,51 @@ impl GeoKeys {
     }
 }
 
+/// What a band holds, written with it by [`write_band`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Band<'a> {
+    /// The band's description (GDAL's `GetDescription`), e.g. `pft: peak flow thickness`.
+    pub description: &'a str,
+    /// The unit of its values (GDAL's `GetUnitType`), e.g. `m`.
+    pub units: &'a str,
+}
+
+impl Band<'_> {
+    /// The `GDAL_METADATA` text: XML with the description and the units of band 0.
+    /// The tag is ASCII: other characters become `?`.
+    fn gdal_metadata(&self) -> String {
+        let text = |s: &str| -> String {
+            s.chars()
+                .map(|c| match c {
+                    '&' => "&amp;".to_string(),
+                    '<' => "&lt;".to_string(),
+                    '>' => "&gt;".to_string(),
+                    '"' => "&quot;".to_string(),
+                    c if c.is_ascii() && !c.is_ascii_control() => c.to_string(),
+                    _ => "?".to_string(),
+                })
+                .collect()
+        };
+        format!(
+            "<GDALMetadata>\n  <Item name=\"DESCRIPTION\" sample=\"0\" role=\"description\">{}</Item>\n  <Item name=\"UNITTYPE\" sample=\"0\" role=\"unittype\">{}</Item>\n</GDALMetadata>",
+            text(self.description),
+            text(self.units)
+        )
+    }
+}
+
 /// Writes `raster` as a single-band GeoTIFF (see the [module docs](self)).
 pub fn write(raster: &Raster, path: &Path, options: WriteOptions) -> Result<()> {
+    write_band(raster, path, options, None)
+}
+
+/// [`write()`], with the band's description and units when `band` is given.
+pub fn write_band(
+    raster: &Raster,
+    path: &Path,
+    options: WriteOptions,
+    band: Option<Band>,
+) -> Result<()> {
     raster.check().map_err(|reason| GisError::BadGrid {
         path: path.to_path_buf(),
         reason,
@@ -430,6 +478,7 @@ pub fn write(raster: &Raster, path: &Path, options: WriteOptions) -> Result<()> 
                 nx,
                 ny,
                 options.sample,
+                band,
             )
         })
     } else {
@@ -440,6 +489,7 @@ pub fn write(raster: &Raster, path: &Path, options: WriteOptions) -> Result<()> 
                 nx,
                 ny,
                 options.sample,
+                band,
             )
         })
     };
@@ -452,19 +502,22 @@ fn encode<W: Write + Seek, K: TiffKind>(
     nx: u32,
     ny: u32,
     sample: SampleType,
+    band: Option<Band>,
 ) -> std::result::Result<(), TiffError> {
     match sample {
         SampleType::F32 => {
             let data: Vec<f32> = raster.values.iter().map(|&v| v as f32).collect();
-            encode_as::<W, K, Gray32Float>(&mut enc, raster, nx, ny, &data)
+            encode_as::<W, K, Gray32Float>(&mut enc, (raster, band), nx, ny, &data)
         }
-        SampleType::F64 => encode_as::<W, K, Gray64Float>(&mut enc, raster, nx, ny, &raster.values),
+        SampleType::F64 => {
+            encode_as::<W, K, Gray64Float>(&mut enc, (raster, band), nx, ny, &raster.values)
+        }
     }
 }
 
 fn encode_as<W: Write + Seek, K: TiffKind, C: EncColor>(
     enc: &mut TiffEncoder<W, K>,
-    raster: &Raster,
+    (raster, band): (&Raster, Option<Band>),
     nx: u32,
     ny: u32,
     data: &[C::Inner],
@@ -480,10 +533,15 @@ where
         Tag::ModelTiepointTag,
         &[0.0, 0.0, 0.0, raster.x_left, raster.y_top, 0.0][..],
     )?;
-    let (keys, ascii) = geo_keys(&raster.crs);
-    dir.write_tag(Tag::GeoKeyDirectoryTag, &keys[..])?;
-    if let Some(ascii) = ascii {
-        dir.write_tag(Tag::GeoAsciiParamsTag, ascii.as_str())?;
+    // No CRS, no key directory: GDAL reads a directory without a model type as an
+    // unnamed LOCAL_CS, which `rio info` and others fail on; without one it reads
+    // "no CRS". (PixelIsArea, the only other key, is the default.)
+    if !(raster.crs.is_unknown() || raster.crs.is_local()) {
+        let (keys, ascii) = geo_keys(&raster.crs);
+        dir.write_tag(Tag::GeoKeyDirectoryTag, &keys[..])?;
+        if let Some(ascii) = ascii {
+            dir.write_tag(Tag::GeoAsciiParamsTag, ascii.as_str())?;
+        }
     }
     if let Some(nd) = raster.nodata {
         let text = if nd.is_nan() {
@@ -492,6 +550,9 @@ where
             format!("{nd}")
         };
         dir.write_tag(Tag::GdalNodata, text.as_str())?;
+    }
+    if let Some(band) = band {
+        dir.write_tag(Tag::Unknown(GDAL_METADATA), band.gdal_metadata().as_str())?;
     }
     image.write_data(data)
 }

@@ -36,6 +36,7 @@ pub mod asc;
 mod crs;
 pub mod geotiff;
 pub mod netcdf;
+pub mod path;
 mod raster;
 pub mod release;
 mod validity;
@@ -174,6 +175,10 @@ pub enum GisError {
     GridMismatch { reason: String },
     #[error("crop box x {} .. {}, y {} .. {} contains no cell centre of the raster", short(.x0), short(.x1), short(.y0), short(.y1))]
     EmptyCrop { x0: f64, x1: f64, y0: f64, y1: f64 },
+    #[error("{path}: {reason}")]
+    BadLine { path: PathBuf, reason: String },
+    #[error("cannot cut the raster: {0}")]
+    BadWindow(String),
     #[error("cannot coarsen by {factor}: {reason}")]
     BadCoarsen { factor: usize, reason: String },
     #[error("{path}: {reason}")]

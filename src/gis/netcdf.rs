@@ -14,7 +14,8 @@
 //!                 standard_name projection_x_coordinate (or longitude)
 //! double y(y)     cell centres, top row first (decreasing); axis "Y", ...
 //! double time(time)  units "s", axis "T", long_name "time since release"
-//! int crs         grid mapping: crs_wkt and spatial_ref (the WKT, when known),
+//! int crs         grid mapping: crs_wkt and spatial_ref (the WKT, when known or made
+//!                 from an EPSG code of WGS 84, its UTM zones or ETRS89 UTM),
 //!                 epsg_code "EPSG:n" (when known), GeoTransform (GDAL's 6 numbers),
 //!                 grid_mapping_name "latitude_longitude" for geographic CRS
 //! float FIELD(time, y, x)  units, long_name, [standard_name], grid_mapping "crs"
@@ -237,9 +238,9 @@ impl NetCdfWriter {
         if geographic {
             crs_attrs.push(("grid_mapping_name".to_string(), text("latitude_longitude")));
         }
-        if let Some(wkt) = &grid.crs.wkt {
-            crs_attrs.push(("crs_wkt".to_string(), text(wkt)));
-            crs_attrs.push(("spatial_ref".to_string(), text(wkt)));
+        if let Some(wkt) = grid.crs.wkt_text() {
+            crs_attrs.push(("crs_wkt".to_string(), text(&wkt)));
+            crs_attrs.push(("spatial_ref".to_string(), text(&wkt)));
         }
         if let Some(code) = grid.crs.epsg {
             crs_attrs.push((

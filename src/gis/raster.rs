@@ -200,13 +200,18 @@ impl Raster {
     /// same grid lines (nothing is resampled). Errors when no centre is inside.
     pub fn crop(&self, bbox: Bbox) -> Result<Raster> {
         let d = self.cell_size;
-        // Column c is kept when x_min <= centre_c <= x_max.
-        let c0 = ((bbox.x_min - self.x_left) / d - 0.5).ceil().max(0.0);
-        let c1 = ((bbox.x_max - self.x_left) / d - 0.5)
+        // Column c is kept when x_min <= centre_c <= x_max; a centre within 10⁻⁹ of a
+        // cell of an edge counts as on it (the edge may be a centre computed in
+        // floating point, one ulp off at 1e5 m).
+        const EDGE: f64 = 1e-9;
+        let c0 = ((bbox.x_min - self.x_left) / d - 0.5 - EDGE)
+            .ceil()
+            .max(0.0);
+        let c1 = ((bbox.x_max - self.x_left) / d - 0.5 + EDGE)
             .floor()
             .min(self.nx as f64 - 1.0);
-        let r0 = ((self.y_top - bbox.y_max) / d - 0.5).ceil().max(0.0);
-        let r1 = ((self.y_top - bbox.y_min) / d - 0.5)
+        let r0 = ((self.y_top - bbox.y_max) / d - 0.5 - EDGE).ceil().max(0.0);
+        let r1 = ((self.y_top - bbox.y_min) / d - 0.5 + EDGE)
             .floor()
             .min(self.ny as f64 - 1.0);
         if !(c0 <= c1 && r0 <= r1) {
@@ -218,18 +223,32 @@ impl Raster {
             });
         }
         let (c0, c1, r0, r1) = (c0 as usize, c1 as usize, r0 as usize, r1 as usize);
-        let nx = c1 - c0 + 1;
-        let ny = r1 - r0 + 1;
+        self.window(c0, r0, c1 - c0 + 1, r1 - r0 + 1)
+    }
+
+    /// The `nx` × `ny` cells from column `col0` and row `row0` (rows from the top), as
+    /// a new raster on the same grid lines. Indices, not coordinates: a cut by whole
+    /// cells cannot lose a row to rounding, as a box in metres can on a grid whose
+    /// cell size is not round (4.9977 m at 1.8e5 m). Errors when the window is empty
+    /// or leaves the grid.
+    pub fn window(&self, col0: usize, row0: usize, nx: usize, ny: usize) -> Result<Raster> {
+        if nx == 0 || ny == 0 || col0 + nx > self.nx || row0 + ny > self.ny {
+            return Err(GisError::BadWindow(format!(
+                "the window of {nx} x {ny} cells from column {col0}, row {row0} is not inside the {} x {} grid",
+                self.nx, self.ny
+            )));
+        }
+        let d = self.cell_size;
         let mut values = Vec::with_capacity(nx * ny);
-        for row in r0..=r1 {
-            let start = row * self.nx + c0;
+        for row in row0..row0 + ny {
+            let start = row * self.nx + col0;
             values.extend_from_slice(&self.values[start..start + nx]);
         }
         Ok(Raster {
             nx,
             ny,
-            x_left: self.x_left + c0 as f64 * d,
-            y_top: self.y_top - r0 as f64 * d,
+            x_left: self.x_left + col0 as f64 * d,
+            y_top: self.y_top - row0 as f64 * d,
             values,
             ..self.header_clone()
         })

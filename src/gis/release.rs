@@ -372,7 +372,7 @@ pub fn read_geojson(path: &Path, thickness: ThicknessSource) -> Result<ReleaseAr
     Ok(ReleaseAreas { features, crs })
 }
 
-fn geojson_crs(root: &Value) -> Crs {
+pub(super) fn geojson_crs(root: &Value) -> Crs {
     let name = root
         .get("crs")
         .and_then(|c| c.get("properties"))

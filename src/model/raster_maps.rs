@@ -42,6 +42,7 @@
 
 use std::borrow::Cow;
 
+use crate::gis::path::{PathField, PathSpec};
 use crate::grid::raster::{Raster2d, BAND_ROWS};
 use crate::grid::{Coordinates, Grid};
 use crate::model::tracker::Tracker;
@@ -68,6 +69,8 @@ pub struct RasterMaps {
     workers: Workers,
     /// Cells first reached in each band during one update (summed in band order).
     band_reached: Vec<usize>,
+    /// `output.path`: the runout along a thalweg line (`gis::path`).
+    path: Option<PathSpec>,
 }
 
 impl RasterMaps {
@@ -86,7 +89,57 @@ impl RasterMaps {
             area: Vec::new(),
             workers: Workers::serial(),
             band_reached: Vec::new(),
+            path: None,
         }
+    }
+
+    /// The runout is also measured along `path` (`output.path`).
+    pub fn with_path(mut self, path: Option<PathSpec>) -> RasterMaps {
+        self.path = path;
+        self
+    }
+
+    /// The runout along the path (`/summary` `path_*`), when there is one and the
+    /// flow reached a cell over its threshold.
+    fn path_runout(&self, grid: &Raster2d) -> Vec<(&'static str, f64)> {
+        let Some(spec) = &self.path else {
+            return Vec::new();
+        };
+        let values = match spec.field {
+            PathField::Pft => grid.mask_walls(&self.h_max).into_owned(),
+            PathField::Ppr => grid.mask_walls(&self.peak_pressure()).into_owned(),
+        };
+        let theta = match grid.coordinates() {
+            Coordinates::Local => grid.theta,
+            Coordinates::Cartesian | Coordinates::BedNormal => 0.0,
+        };
+        let cell = |k: usize| {
+            let p = grid.centre(k);
+            let b = grid.bed()[k];
+            [
+                p.x * theta.cos() + b * theta.sin(),
+                p.y,
+                -p.x * theta.sin() + b * theta.cos(),
+            ]
+        };
+        let found = crate::gis::path::runout(
+            &spec.line,
+            cell,
+            values.len(),
+            |k| values[k] > spec.threshold,
+            |k| self.h0[k] > self.threshold,
+        );
+        let Some(r) = found else {
+            return vec![("path_runout_length", f64::NAN)];
+        };
+        vec![
+            ("path_runout_s", r.runout_s),
+            ("path_release_top_s", r.top_s),
+            ("path_runout_length", r.length),
+            ("path_runout_angle_deg", r.angle_deg),
+            ("path_runout_x", r.runout_xy[0]),
+            ("path_runout_y", r.runout_xy[1]),
+        ]
     }
 
     /// The maps updated on the threads of `workers` (the step's pool): each cell's maps
@@ -272,17 +325,25 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         let above = self.above(&state.h);
         let normal = normal_thickness(grid, &above);
         let values = self.values(grid, &normal);
-        let maps = Self::fields(&values);
-        let scalars = if self.h0.is_empty() {
-            Vec::new()
-        } else {
-            self.runout(grid, &above)
-        };
+        let ppr = self.ppr_description();
+        let maps = Self::fields(&values, &ppr);
+        let mut scalars = self.scalars(grid, state);
+        scalars.push(("density", self.density));
         sink.maps(&RunMaps {
             maps: &maps,
             series: &[("area_reached", "m^2", &self.area)],
             scalars: &scalars,
         })
+    }
+
+    fn scalars(&self, grid: &Raster2d, state: &State2d) -> Vec<(&'static str, f64)> {
+        if self.h0.is_empty() {
+            Vec::new()
+        } else {
+            let mut s = self.runout(grid, &self.above(&state.h));
+            s.extend(self.path_runout(grid));
+            s
+        }
     }
 
     fn write_so_far(
@@ -294,7 +355,8 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         let above = self.above(&state.h);
         let normal = normal_thickness(grid, &above);
         let values = self.values(grid, &normal);
-        sink.maps_so_far(&Self::fields(&values))
+        let ppr = self.ppr_description();
+        sink.maps_so_far(&Self::fields(&values, &ppr))
     }
 }
 
@@ -329,19 +391,46 @@ impl RasterMaps {
         ]
     }
 
-    /// The maps with their names and units, in file order.
-    fn fields<'a>(values: &'a [Cow<'a, [f64]>; 5]) -> [CellField<'a>; 5] {
-        const NAMES: [(&str, &str); 5] = [
-            ("h_max", "m"),
-            ("speed_max", "m/s"),
-            ("ppr", "Pa"),
-            ("arrival_time", "s"),
-            ("deposit", "m"),
+    /// The maps with their names, units and descriptions, in file order; `ppr` is
+    /// described with the density the run used.
+    fn fields<'a>(values: &'a [Cow<'a, [f64]>; 5], ppr: &'a str) -> [CellField<'a>; 5] {
+        let names: [(&str, &str, &str); 5] = [
+            (
+                "h_max",
+                "m",
+                "peak flow thickness (pft): the largest flow thickness normal to the bed over the run",
+            ),
+            (
+                "speed_max",
+                "m/s",
+                "peak flow velocity (pfv): the largest flow speed along the bed surface over the run, where the thickness exceeds output.front_threshold",
+            ),
+            ("ppr", "Pa", ppr),
+            (
+                "arrival_time",
+                "s",
+                "arrival time: when the flow thickness first exceeded output.front_threshold (NaN where never reached)",
+            ),
+            (
+                "deposit",
+                "m",
+                "deposit: the flow thickness normal to the bed at the end of the run (at the snapshot's time while it runs)",
+            ),
         ];
         std::array::from_fn(|i| CellField {
-            name: NAMES[i].0,
-            units: NAMES[i].1,
+            name: names[i].0,
+            units: names[i].1,
+            description: names[i].2,
             data: &values[i],
         })
+    }
+
+    /// The description of the `ppr` map, which names the density. Descriptions are
+    /// ASCII, as the units are: a GeoTIFF export copies them into an ASCII tag.
+    fn ppr_description(&self) -> String {
+        format!(
+            "peak pressure (ppr): the largest rho |u|^2 over the run, in Pa (1 kPa = 1000 Pa), with the flow density rho = {} kg/m^3 (material.phi x material.rho_s)",
+            self.density
+        )
     }
 }

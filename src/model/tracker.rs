@@ -15,6 +15,11 @@ pub trait Tracker<G, S>: Send {
     /// Hands what was gathered to `sink` ([`OutputSink::maps`]); `state` is the final
     /// one (the last accepted state, as the run ended).
     fn write(&self, grid: &G, state: &S, sink: &mut dyn OutputSink) -> Result<(), OutputError>;
+    /// The end-of-run numbers derived from what was gathered (`/summary` scalars such
+    /// as `runout_length`), `state` being the final one. The default has none.
+    fn scalars(&self, _grid: &G, _state: &S) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
     /// Hands the maps as they stand to `sink` ([`OutputSink::maps_so_far`]); called
     /// with every snapshot, `state` being the snapshot's. The default writes nothing.
     fn write_so_far(

@@ -755,6 +755,7 @@ mod tests {
             let extra = [CellField {
                 name: "static_interface",
                 units: "m",
+                description: "",
                 data: &s,
             }];
             sink.snapshot(&view(t, &data, &extra)).unwrap();
@@ -775,6 +776,7 @@ mod tests {
         let field = |name: &'static str, data: &'static [f64]| CellField {
             name,
             units: "m",
+            description: "",
             data,
         };
         let cases: [(&[CellField], &str); 4] = [
@@ -865,6 +867,7 @@ mod tests {
             crs_wkt: None,
             release: None,
             wall_cells: 0,
+            geotransform: None,
         });
         let x = [0.5, 1.5, 2.5, 0.5, 1.5, 2.5];
         let y = [0.5, 0.5, 0.5, 1.5, 1.5, 1.5];
@@ -882,6 +885,7 @@ mod tests {
         let map = |name: &'static str, data: &'static [f64]| CellField {
             name,
             units: "m",
+            description: "",
             data,
         };
         let read = |name: &str| {

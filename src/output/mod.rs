@@ -96,6 +96,9 @@ pub struct RasterInfo {
     pub release: Option<ReleaseVolumes>,
     /// Number of wall cells (nodata cells of the DEM).
     pub wall_cells: usize,
+    /// (x of the west edge, y of the north edge, cell size) of the DEM the grid is,
+    /// exactly as read; `None` for a grid given by the scenario's keys.
+    pub geotransform: Option<[f64; 3]>,
 }
 
 /// The volumes of a rasterised release polygon (m³), `/summary` attributes
@@ -130,6 +133,8 @@ pub struct CellField<'a> {
     pub name: &'static str,
     /// The `units` attribute.
     pub units: &'static str,
+    /// The `description` attribute: what the values are, in words (none when empty).
+    pub description: &'a str,
     /// nx values.
     pub data: &'a [f64],
 }
@@ -228,9 +233,47 @@ pub struct RunSummary {
     /// Largest speed of the material at the end (m/s).
     #[serde(default = "nan")]
     pub max_speed_final: f64,
+    /// Raster runs: the runout along the flow, the travel angle and the area reached
+    /// (the `/summary` numbers of the maps, written there with them). `None` for
+    /// 1-D runs, whose `runout` is the front's advance.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spread: Option<Spread>,
     /// (stage name, wall seconds), written as `time_<stage>_s`.
     #[serde(skip)]
     pub stage_times: Vec<(String, f64)>,
+}
+
+/// How far a raster run went, as a practitioner reports it (`/summary`
+/// `runout_length`, `travel_angle_deg`, `area_reached`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Spread {
+    /// Horizontal distance from the top of the release to the runout point, along the
+    /// main flow direction (m).
+    pub runout_length: f64,
+    /// Heim's travel angle, atan(drop / runout_length) (degrees).
+    pub travel_angle_deg: f64,
+    /// Area of the cells the flow reached (m²).
+    pub area_reached: f64,
+    /// With `output.path`: the runout along the path, from the top of the release (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path_runout_length: Option<f64>,
+    /// With `output.path`: the runout angle along the path (degrees).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path_runout_angle_deg: Option<f64>,
+}
+
+impl Spread {
+    /// From the `/summary` scalars of a raster run's maps; `None` when they are absent.
+    pub fn from_scalars(scalars: &[(&str, f64)]) -> Option<Spread> {
+        let get = |name: &str| scalars.iter().find(|(n, _)| *n == name).map(|&(_, v)| v);
+        Some(Spread {
+            runout_length: get("runout_length")?,
+            travel_angle_deg: get("travel_angle_deg")?,
+            area_reached: get("area_reached")?,
+            path_runout_length: get("path_runout_length"),
+            path_runout_angle_deg: get("path_runout_angle_deg"),
+        })
+    }
 }
 
 fn nan() -> f64 {
@@ -253,6 +296,7 @@ impl RunSummary {
             outflowed_fraction: f64::NAN,
             front_at_end_time: f64::NAN,
             max_speed_final: f64::NAN,
+            spread: None,
             stage_times: Vec::new(),
         }
     }

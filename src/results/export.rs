@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 
 use super::args::{ExportArgs, ExportFormat, RasterFormat};
 use super::run_file::{north_up, RunFile};
-use super::{write_raster, ResultsError};
+use super::{write_raster_band, ResultsError};
+use crate::gis::geotiff::Band;
 use crate::gis::netcdf::{FieldSpec, NetCdfWriter};
 use crate::sweep::naming::format_float;
 
@@ -36,19 +37,19 @@ pub const MAP_FIELDS: [Field; 5] = [
         name: "pft",
         source: "h_max",
         units: "m",
-        long_name: "peak flow thickness",
+        long_name: "peak flow thickness normal to the bed",
     },
     Field {
         name: "pfv",
         source: "speed_max",
         units: "m/s",
-        long_name: "peak flow velocity",
+        long_name: "peak flow speed along the bed surface",
     },
     Field {
         name: "ppr",
         source: "ppr",
         units: "Pa",
-        long_name: "peak pressure",
+        long_name: "peak pressure rho |u|^2",
     },
     Field {
         name: "deposit",
@@ -70,7 +71,7 @@ pub const SNAPSHOT_FIELDS: [Field; 4] = [
         name: "h",
         source: "h",
         units: "m",
-        long_name: "flow thickness",
+        long_name: "flow thickness normal to the bed",
     },
     Field {
         name: "u",
@@ -91,6 +92,29 @@ pub const SNAPSHOT_FIELDS: [Field; 4] = [
         long_name: "flow speed",
     },
 ];
+
+/// A GeoTIFF band's description: the run file's `description` attribute of the map
+/// when it has one, else the field's name and long name.
+fn band_description(f: &Field, stored: Option<&str>) -> String {
+    stored.map_or_else(|| format!("{}: {}", f.name, f.long_name), str::to_owned)
+}
+
+/// What a GIS will not know of the files' CRS: none at all, or (ESRI ASCII grids,
+/// whose `.prj` is WKT) a code whose WKT granflow cannot make.
+pub fn crs_warning(crs: &crate::gis::Crs, format: ExportFormat) -> Option<String> {
+    if crs.is_unknown() || crs.is_local() {
+        return Some(
+            "the run has no CRS (its DEM stated none, and no release file gave one): the files are written without one; give the DEM its .prj and run again"
+                .to_owned(),
+        );
+    }
+    match (format, crs.epsg) {
+        (ExportFormat::Asc, Some(code)) if crs.wkt_text().is_none() => Some(format!(
+            "the run's CRS is EPSG:{code}, known by its code alone: an ESRI ASCII grid keeps a CRS only as WKT in its .prj, which granflow makes for WGS 84 and UTM zones only, so the .asc files have no .prj; export as GeoTIFF (the default), or copy the DEM's .prj beside each .asc"
+        )),
+        _ => None,
+    }
+}
 
 /// The maps and snapshot fields asked for by `--fields` (or the defaults), checked
 /// against `--time` and the format.
@@ -199,6 +223,9 @@ pub fn export(args: &ExportArgs) -> Result<Vec<PathBuf>, ResultsError> {
         std::fs::create_dir_all(&dir)
             .map_err(|e| ResultsError::failure(format!("cannot create {}: {e}", dir.display())))?;
     }
+    if let Some(w) = crs_warning(&run.grid().crs, args.format) {
+        crate::terminal::print_err(&format!("warning: {w}\n"));
+    }
     let stem = crate::output::run_stem(&args.run);
     let (nx, ny) = (run.grid().nx, run.grid().ny);
     let time_tag = |k: usize| format!("_t{}", format_float(run.times()[k]));
@@ -213,14 +240,42 @@ pub fn export(args: &ExportArgs) -> Result<Vec<PathBuf>, ResultsError> {
         for f in &maps {
             let path = dir.join(format!("{stem}_{}.{ext}", f.name));
             let values = north_up(&run.map(f.source)?, nx, ny);
-            write_raster(run.grid(), values, format, args.float64, &path)?;
+            // The run file's own description (it names ppr's density), else ours.
+            let text = run.map_description(f.source);
+            let description = band_description(f, text.as_deref());
+            let band = Band {
+                description: &description,
+                units: f.units,
+            };
+            write_raster_band(
+                run.grid(),
+                values,
+                (format, args.float64),
+                &path,
+                Some(band),
+            )?;
             written.push(path);
         }
         if let Some(k) = frame {
             for f in &snaps {
                 let path = dir.join(format!("{stem}_{}{}.{ext}", f.name, time_tag(k)));
                 let values = north_up(&snapshot_values(&run, f, k)?, nx, ny);
-                write_raster(run.grid(), values, format, args.float64, &path)?;
+                let description = format!(
+                    "{} at t = {} s",
+                    band_description(f, None),
+                    format_float(run.times()[k])
+                );
+                let band = Band {
+                    description: &description,
+                    units: f.units,
+                };
+                write_raster_band(
+                    run.grid(),
+                    values,
+                    (format, args.float64),
+                    &path,
+                    Some(band),
+                )?;
                 written.push(path);
             }
         }

@@ -204,9 +204,18 @@ pub fn maps(args: &MapsArgs) -> Result<MapsReport, ResultsError> {
             name: run.name.clone(),
             values: run.values.clone(),
             area: count as f64 * grid.cell_area(),
-            skill: observed
-                .as_ref()
-                .map(|o| skill(&reached, o, grid.cell_area())),
+            // Wall (nodata) cells, NaN in pft, are no cells of the domain: counted,
+            // they would be true negatives, and FPR would depend on how much of the
+            // DEM is nodata.
+            skill: observed.as_ref().map(|o| {
+                let (sim, obs): (Vec<bool>, Vec<bool>) = pft
+                    .iter()
+                    .zip(reached.iter().zip(o))
+                    .filter(|(p, _)| !p.is_nan())
+                    .map(|(_, (&s, &o))| (s, o))
+                    .unzip();
+                skill(&sim, &obs, grid.cell_area())
+            }),
             rank: None,
         });
     }
@@ -239,6 +248,16 @@ pub fn maps(args: &MapsArgs) -> Result<MapsReport, ResultsError> {
             args.float64,
             &path,
         )?;
+        files.push(path);
+    }
+    if let Some(o) = &observed {
+        // The footprint as the runs' cells see it (1 observed, 0 not), for plots.
+        let path = out.join(format!("observed.{}", args.format.extension()));
+        let cells = o
+            .iter()
+            .map(|&c| f64::from(u8::from(c)))
+            .collect::<Vec<_>>();
+        write_raster(&grid, north_up(&cells, nx, ny), args.format, false, &path)?;
         files.push(path);
     }
     let write = |name: &str, text: String| -> Result<PathBuf, ResultsError> {

@@ -73,6 +73,18 @@ pub fn write_raster(
     float64: bool,
     path: &std::path::Path,
 ) -> Result<(), ResultsError> {
+    write_raster_band(grid, values, (format, float64), path, None)
+}
+
+/// [`write_raster`], a GeoTIFF's band described by `band` (an ESRI ASCII grid has no
+/// place for it).
+pub fn write_raster_band(
+    grid: &crate::gis::Raster,
+    values: Vec<f64>,
+    (format, float64): (RasterFormat, bool),
+    path: &std::path::Path,
+    band: Option<crate::gis::geotiff::Band>,
+) -> Result<(), ResultsError> {
     use crate::gis::geotiff::{self, Compression, SampleType, WriteOptions};
     let mut raster = crate::gis::Raster {
         values,
@@ -86,7 +98,7 @@ pub fn write_raster(
         }
     }
     let written = match format {
-        RasterFormat::Geotiff => geotiff::write(
+        RasterFormat::Geotiff => geotiff::write_band(
             &raster,
             path,
             WriteOptions {
@@ -97,6 +109,7 @@ pub fn write_raster(
                 },
                 compression: Compression::Deflate,
             },
+            band,
         ),
         RasterFormat::Asc => crate::gis::asc::write(&raster, path),
     };

@@ -140,6 +140,13 @@ impl RunFile {
             crs.epsg = Some(code);
         }
         let mut grid = Raster::filled(nx, ny, x[0] - 0.5 * dx, y[ny - 1] + 0.5 * dy, dx, 0.0);
+        if let Some([x_left, d, y_top]) = root
+            .attr_string("geotransform")
+            .ok()
+            .and_then(|t| exact_grid(&t, &grid))
+        {
+            (grid.x_left, grid.cell_size, grid.y_top) = (x_left, d, y_top);
+        }
         grid.crs = crs;
         let times = read("snapshots/t")?;
         let coordinates = root.attr_string("coordinates").unwrap_or_default();
@@ -198,6 +205,13 @@ impl RunFile {
             .map_err(|e| self.bad(format!("cannot read /maps/{name}: {e}")))
     }
 
+    /// The `description` attribute of `/maps/<name>`, when the file has one (files of
+    /// granflow before it had none).
+    pub fn map_description(&self, name: &str) -> Option<String> {
+        let ds = self.file.dataset(&format!("maps/{name}")).ok()?;
+        ds.attr("description").ok()?.read_string().ok()
+    }
+
     /// Frame `k` of `/snapshots/<name>` in the file's order (row 0 south).
     pub fn frame(&self, name: &str, k: usize) -> Result<Vec<f64>, ResultsError> {
         let ds = self
@@ -214,6 +228,28 @@ impl RunFile {
         ds.read_slice::<f64>(&[k, 0, 0], &[1, self.ny, self.nx])
             .map_err(|e| self.bad(format!("cannot read /snapshots/{name}[{k}]: {e}")))
     }
+}
+
+/// The DEM's grid from the `geotransform` attribute (`x₀ Δ 0 y₀ 0 −Δ`, exact doubles)
+/// as (x₀, Δ, y₀), when it is that of `grid` (from the cell centres) to 10⁻⁶ of a cell:
+/// the centres give the grid only to rounding.
+fn exact_grid(text: &str, grid: &Raster) -> Option<[f64; 3]> {
+    let v: Vec<f64> = text
+        .split_whitespace()
+        .map(str::parse)
+        .collect::<Result<_, _>>()
+        .ok()?;
+    let &[x0, d, rx, y0, ry, minus_d] = v.as_slice() else {
+        return None;
+    };
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * grid.cell_size;
+    (rx == 0.0
+        && ry == 0.0
+        && minus_d == -d
+        && close(d, grid.cell_size)
+        && close(x0, grid.x_left)
+        && close(y0, grid.y_top))
+    .then_some([x0, d, y0])
 }
 
 /// The values of a (ny, nx) field stored south row first, reordered north row first

@@ -1,4 +1,5 @@
-//! A simulated footprint against an observed one, cell by cell over the whole domain:
+//! A simulated footprint against an observed one, cell by cell over the domain's cells
+//! with data (`granflow maps` leaves the wall cells out: nodata of the DEM, NaN in pft):
 //! a cell is simulated when the run's pft exceeds the threshold, observed when the footprint
 //! covers it (the confusion matrix of a binary classifier, Fawcett 2006, §2). With
 //! the cell area A,
@@ -10,7 +11,8 @@
 //! - the distance to the perfect point (0, 1), d = √((1 − TPR)² + FPR²), by which
 //!   the runs are ranked (smallest first).
 //!
-//! FPR depends on the domain's extent (TN grows with it): compare runs on one grid.
+//! FPR depends on the domain's extent (TN grows with it), not on its nodata cells:
+//! compare runs on one grid.
 
 /// The skill of one run.
 #[derive(Debug, Clone, Copy, PartialEq)]

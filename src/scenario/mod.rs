@@ -24,6 +24,7 @@ pub use validate::{load_file, load_file_within, load_str, load_str_within};
 
 use std::path::PathBuf;
 
+pub use crate::gis::path::{PathField, PathSpec};
 pub use crate::gis::release::CoverageRule;
 pub use crate::gis::Crs;
 pub use crate::grid::{BoundaryKind, Coordinates};
@@ -61,6 +62,11 @@ pub struct Plane {
     /// `domain.curvature`: the centrifugal term uᵀ∇²b u in the basal normal stress of
     /// the bed-normal frame (default true).
     pub curvature: bool,
+    /// (x of the west edge, y of the north edge, cell size) of the raster bed whose
+    /// grid the domain is, exactly as read (after `domain.crop` and `domain.coarsen`),
+    /// so that the outputs sit on the DEM's very grid; `None` for a domain given by
+    /// its keys.
+    pub geotransform: Option<[f64; 3]>,
 }
 
 impl Domain {
@@ -197,6 +203,8 @@ pub struct OutputSpec {
     pub gauges_y: Vec<f64>,
     /// Gauge interval (s); `None`: every time step.
     pub gauge_every: Option<f64>,
+    /// The path along which a raster run's runout is measured (`output.path`).
+    pub path: Option<PathSpec>,
 }
 
 /// The profiles at the cell centres x_i = x_min + (i + ½)Δx (on a raster domain at

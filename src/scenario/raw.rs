@@ -168,4 +168,6 @@ pub(crate) struct RawOutput {
     /// Positions `[x, …]` on a line, points `[[x, y], …]` on a raster.
     pub gauges: Option<toml::Value>,
     pub gauge_every: Option<f64>,
+    /// `{ line = "path.shp", field = "pft" | "ppr", threshold = … }` (raster runs).
+    pub path: Option<toml::Value>,
 }

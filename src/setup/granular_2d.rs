@@ -98,6 +98,7 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
             volume_on_walls: r.volume_on_walls,
         }),
         wall_cells: scn.sampled.wall.iter().filter(|&&w| w).count(),
+        geotransform: plane.geotransform,
     });
     let tan_theta = match grid.coordinates() {
         Coordinates::Local => grid.spec().slope_deg.to_radians().tan(),
@@ -112,6 +113,7 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let density = scn.material.phi * scn.material.rho_s;
     sim.set_tracker(Box::new(
         RasterMaps::new(cells, scn.output.front_threshold, density)
+            .with_path(scn.output.path.clone())
             .with_erodible_bed(erodible)
             .with_workers(workers),
     ));

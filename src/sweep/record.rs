@@ -213,6 +213,13 @@ mod tests {
                 steps: 12,
                 wall_time_s: 2.5e-7,
                 max_wave_amplitude: None,
+                spread: Some(crate::output::Spread {
+                    runout_length: 2852.25,
+                    travel_angle_deg: f64::NAN,
+                    area_reached: 1.0 / 3.0,
+                    path_runout_length: Some(2956.5),
+                    path_runout_angle_deg: None,
+                }),
                 outflowed_fraction: 0.0,
                 front_at_end_time: f64::NAN,
                 max_speed_final: 0.0,
@@ -235,6 +242,12 @@ mod tests {
             r.summary.wall_time_s.to_bits()
         );
         assert_eq!(back.parameters, r.parameters);
+        let (a, b) = (back.summary.spread.unwrap(), r.summary.spread.unwrap());
+        assert_eq!(
+            (a.runout_length, a.area_reached, a.path_runout_length),
+            (b.runout_length, b.area_reached, b.path_runout_length)
+        );
+        assert!(a.travel_angle_deg.is_nan() && a.path_runout_angle_deg.is_none());
         assert!(!back.is_ok());
         // No temporary file left behind.
         let names: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();

@@ -13,6 +13,7 @@ use std::fmt::Write;
 
 use super::naming::{format_float, short_names};
 use super::record::RunRecord;
+use crate::output::Spread;
 
 pub const SUMMARY_FILE: &str = "summary.csv";
 
@@ -70,6 +71,21 @@ pub const METRICS: [&str; 8] = [
     "status",
 ];
 
+/// The run's runout along the flow, travel angle and area reached, if it is a
+/// raster run.
+fn spread(row: &Row) -> Option<Spread> {
+    row.record.as_ref()?.summary.spread
+}
+
+/// The run's runout along its path (`output.path`): length and angle.
+fn path(row: &Row) -> Option<(f64, f64)> {
+    let s = spread(row)?;
+    Some((
+        s.path_runout_length?,
+        s.path_runout_angle_deg.unwrap_or(f64::NAN),
+    ))
+}
+
 /// The run's wave amplitude, if it has one.
 fn wave(row: &Row) -> Option<f64> {
     row.record.as_ref()?.summary.max_wave_amplitude
@@ -79,6 +95,8 @@ fn wave(row: &Row) -> Option<f64> {
 pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
     let mut out = String::new();
     let waves = rows.iter().any(|r| wave(r).is_some());
+    let spreads = rows.iter().any(|r| spread(r).is_some());
+    let paths = rows.iter().any(|r| path(r).is_some());
     let header: Vec<String> = ["index", "run"]
         .iter()
         .map(|s| s.to_string())
@@ -86,6 +104,20 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
         .chain(METRICS.iter().map(|s| s.to_string()))
         .chain(["outflowed_fraction".to_string()])
         .chain(waves.then(|| "max_wave_amplitude".to_string()))
+        .chain(
+            spreads
+                .then_some(["runout_length", "travel_angle_deg", "area_reached"])
+                .into_iter()
+                .flatten()
+                .map(str::to_string),
+        )
+        .chain(
+            paths
+                .then_some(["path_runout_length", "path_runout_angle_deg"])
+                .into_iter()
+                .flatten()
+                .map(str::to_string),
+        )
         .collect();
     out.push_str(&header.join(","));
     out.push('\n');
@@ -119,6 +151,20 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
         if waves {
             fields.push(wave(row).map_or_else(String::new, format_float));
         }
+        if spreads {
+            match spread(row) {
+                Some(s) => fields.extend(
+                    [s.runout_length, s.travel_angle_deg, s.area_reached].map(format_float),
+                ),
+                None => fields.extend(std::iter::repeat_n(String::new(), 3)),
+            }
+        }
+        if paths {
+            match path(row) {
+                Some((l, a)) => fields.extend([l, a].map(format_float)),
+                None => fields.extend(std::iter::repeat_n(String::new(), 2)),
+            }
+        }
         out.push_str(&fields.join(","));
         out.push('\n');
     }
@@ -129,9 +175,19 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
 pub fn to_table(axes: &[String], rows: &[Row]) -> String {
     let keys: Vec<&str> = axes.iter().map(String::as_str).collect();
     let mut header: Vec<String> = short_names(&keys);
+    // Raster runs: the runout along the flow and its travel angle and area, not the
+    // front's advance in x.
+    let spreads = rows.iter().any(|r| spread(r).is_some());
+    header.push("runout_m".to_string());
+    if spreads {
+        header.extend(["travel_deg", "area_m2"].map(str::to_string));
+    }
+    let paths = rows.iter().any(|r| path(r).is_some());
+    if paths {
+        header.extend(["path_m", "path_deg"].map(str::to_string));
+    }
     header.extend(
         [
-            "runout_m",
             "stop_time_s",
             "settled_s",
             "h_max_final_m",
@@ -156,16 +212,39 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
     for row in rows {
         let mut line = row.values.clone();
         match &row.record {
-            Some(r) => line.extend([
-                num(r.summary.runout),
-                num(r.summary.stop_time),
-                num(r.summary.settled_time),
-                num(r.summary.h_max_final),
-                r.summary.steps.to_string(),
-                format!("{:.2}", r.summary.wall_time_s),
-                num(100.0 * r.summary.outflowed_fraction),
-            ]),
-            None => line.extend(std::iter::repeat_n(String::new(), 7)),
+            Some(r) => line.extend(
+                match (spreads, r.summary.spread) {
+                    (false, _) => vec![num(r.summary.runout)],
+                    (true, Some(s)) => vec![
+                        num(s.runout_length),
+                        num(s.travel_angle_deg),
+                        num(s.area_reached),
+                    ],
+                    (true, None) => vec![num(r.summary.runout), "-".into(), "-".into()],
+                }
+                .into_iter()
+                .chain(
+                    paths
+                        .then(|| {
+                            let (l, a) = path(row).unwrap_or((f64::NAN, f64::NAN));
+                            [num(l), num(a)]
+                        })
+                        .into_iter()
+                        .flatten(),
+                )
+                .chain([
+                    num(r.summary.stop_time),
+                    num(r.summary.settled_time),
+                    num(r.summary.h_max_final),
+                    r.summary.steps.to_string(),
+                    format!("{:.2}", r.summary.wall_time_s),
+                    num(100.0 * r.summary.outflowed_fraction),
+                ]),
+            ),
+            None => line.extend(std::iter::repeat_n(
+                String::new(),
+                7 + if spreads { 2 } else { 0 } + if paths { 2 } else { 0 },
+            )),
         }
         let status: String = row.status().chars().take(70).collect();
         line.push(status.replace('\n', " "));
@@ -219,6 +298,7 @@ mod tests {
                 steps: 125,
                 wall_time_s: 0.019,
                 max_wave_amplitude: None,
+                spread: None,
                 outflowed_fraction: 0.25,
                 front_at_end_time: f64::NAN,
                 max_speed_final: 0.0,

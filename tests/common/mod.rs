@@ -122,6 +122,7 @@ impl Case {
                 gauges: Vec::new(),
                 gauges_y: Vec::new(),
                 gauge_every: None,
+                path: None,
             },
             submarine: None,
             sampled: Sampled::default(),

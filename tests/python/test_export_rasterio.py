@@ -8,7 +8,7 @@
    RUN_pft.tif etc. with the run's origin (from /grid/x, /grid/y in the HDF5 file, read
    with h5py), cell size, CRS and the values of /maps (Float32-rounded in the GeoTIFF,
    exact in the grid), -9999 where the file holds NaN (the arrival time of cells never
-   reached).
+   reached); each GeoTIFF band's description and units are those of its HDF5 map.
 2. The NetCDF export opened by xarray: coordinates x, y (cell centres, north row
    first) and time, units, and values equal to /snapshots (Float32-rounded).
 3. `granflow maps` over a two-run sweep: rasterio opens pft_probability.tif on the same
@@ -77,6 +77,8 @@ def main():
         with h5py.File(h5, "r") as f:
             x, y = f["grid/x"][:], f["grid/y"][:]
             maps = {k: f["maps"][k][:] for k in f["maps"]}
+            meta = {k: (f["maps"][k].attrs["units"], f["maps"][k].attrs["description"])
+                    for k in f["maps"]}
             t = f["snapshots/t"][:]
             h = f["snapshots/h"][:]
             assert f.attrs["crs"] in ("EPSG:32632", b"EPSG:32632"), f.attrs["crs"]
@@ -97,6 +99,14 @@ def main():
                         d_cell, 0.0, origin[0], 0.0, -d_cell, origin[1]), (path, t_)
                     if ext == "tif":
                         assert src.crs.to_epsg() == 32632, (path, src.crs)
+                        # The band says what it is and its units, as the HDF5 map does.
+                        units, description = (str(v.decode() if isinstance(v, bytes) else v)
+                                              for v in meta[source])
+                        assert src.units[0] == units, (path, src.units, units)
+                        assert src.descriptions[0] == description, (path, src.descriptions)
+                    if ext == "asc":
+                        # The DEM's CRS is known by its code alone: the .prj is made.
+                        assert src.crs is not None and src.crs.to_epsg() == 32632, (path, src.crs)
                     assert src.nodata == -9999.0, (path, src.nodata)
                     got = src.read(1).astype(np.float64)
                 expect = want if ext == "asc" else want.astype(np.float32).astype(np.float64)

@@ -130,6 +130,7 @@ impl Model for Dilatant {
         let extra = [CellField {
             name: "phi",
             units: "1",
+            description: "solid volume fraction of the grains",
             data: &s.phi[1..=nx],
         }];
         sink.snapshot(&SnapshotView {

@@ -102,6 +102,7 @@ impl Model for Granular {
         let extra = [CellField {
             name: "static_interface",
             units: "m",
+            description: "elevation of the interface between the static and the flowing grains",
             data: &interface,
         }];
         sink.snapshot(&SnapshotView {

@@ -149,21 +149,25 @@ impl Model for Submarine {
             CellField {
                 name: "h_water",
                 units: "m",
+                description: "water layer thickness",
                 data: &s.h1[1..=nx],
             },
             CellField {
                 name: "u_water",
                 units: "m/s",
+                description: "depth-averaged velocity of the water layer",
                 data: &u1,
             },
             CellField {
                 name: "eta",
                 units: "m",
+                description: "water surface elevation",
                 data: &eta,
             },
             CellField {
                 name: "interface",
                 units: "m",
+                description: "elevation of the interface between grains and water",
                 data: &interface,
             },
         ];
@@ -176,11 +180,14 @@ impl Model for Submarine {
                 extra.push(CellField {
                     name: W_WATER[a],
                     units: "m/s",
+                    description: "vertical velocity of the water at a level",
                     data: &w[a * nx..(a + 1) * nx],
                 });
                 extra.push(CellField {
                     name: P_WATER[a],
                     units: "m2/s2",
+                    description:
+                        "non-hydrostatic pressure of the water per unit density at a level",
                     data: &p[a * nx..(a + 1) * nx],
                 });
             }

@@ -154,6 +154,12 @@ fn write_raster_layout(
     if let Some(wkt) = &r.crs_wkt {
         file.set_attr_string("crs_wkt", wkt)?;
     }
+    if let Some([x_left, y_top, d]) = r.geotransform {
+        // GDAL's order (x₀, Δx, 0, y₀, 0, −Δy), each number in the shortest text that
+        // reads back to the same double: the DEM's grid exactly, which /grid/x, /grid/y
+        // (cell centres) give only to rounding.
+        file.set_attr_string("geotransform", &format!("{x_left} {d} 0 {y_top} 0 {}", -d))?;
+    }
     let g = file.create_group("grid")?;
     for (name, data, spacing) in [("x", &x, r.dx), ("y", &y, r.dy)] {
         let ds = g.new_dataset::<f64>().shape([data.len()]).create(name)?;
@@ -206,6 +212,7 @@ pub(super) fn write_map_fields(
             let ds = g.new_dataset::<f64>().shape([ny, nx]).create(field.name)?;
             ds.write_raw(field.data)?;
             units(&ds, field.units)?;
+            description(&ds, field.description)?;
         }
     } else {
         for field in fields {
@@ -277,7 +284,7 @@ pub(super) fn create_cell_fields(
     }
     let group = file.root_group().group("snapshots")?;
     for field in fields {
-        match raster {
+        let ds = match raster {
             Some((nx, ny)) => frames(
                 &group,
                 field.name,
@@ -286,7 +293,8 @@ pub(super) fn create_cell_fields(
                 &[Dim::Y, Dim::X],
             )?,
             None => frames(&group, field.name, &[nx], field.units, &[Dim::X])?,
-        }
+        };
+        description(&ds, field.description)?;
     }
     Ok(())
 }
@@ -548,7 +556,7 @@ fn frames(
     frame: &[usize],
     unit: &str,
     axes: &[Dim],
-) -> rust_hdf5::Result<()> {
+) -> rust_hdf5::Result<H5Dataset> {
     let dims: Vec<usize> = std::iter::once(0).chain(frame.iter().copied()).collect();
     let chunk: Vec<usize> = std::iter::once(1).chain(frame.iter().copied()).collect();
     let max: Vec<Option<usize>> = std::iter::once(None)
@@ -561,7 +569,8 @@ fn frames(
         .max_shape(&max)
         .create(name)?;
     units(&ds, unit)?;
-    label_axes(&ds, name, axes)
+    label_axes(&ds, name, axes)?;
+    Ok(ds)
 }
 
 fn units(ds: &H5Dataset, unit: &str) -> rust_hdf5::Result<()> {
@@ -569,6 +578,17 @@ fn units(ds: &H5Dataset, unit: &str) -> rust_hdf5::Result<()> {
         .shape(())
         .create("units")?
         .write_string(unit)
+}
+
+/// The `description` attribute, when there is one.
+fn description(ds: &H5Dataset, text: &str) -> rust_hdf5::Result<()> {
+    if text.is_empty() {
+        return Ok(());
+    }
+    ds.new_attr::<VarLenUnicode>()
+        .shape(())
+        .create("description")?
+        .write_string(text)
 }
 
 /// The step records as the columns of [`STEP_DATASETS`].

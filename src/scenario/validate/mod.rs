@@ -11,6 +11,7 @@ use rayon::prelude::*;
 mod check;
 mod dilatant;
 mod granular;
+mod path;
 mod plane;
 mod release;
 mod resample;
@@ -235,7 +236,7 @@ fn validate(
     };
     let material = material(raw.material.unwrap_or_default())?;
     let mut raw_rheology = section("rheology", raw.rheology)?;
-    let fields = zones::take(&mut raw_rheology, base_dir)?;
+    let fields = zones::take(&mut raw_rheology, base_dir, &domain)?;
     let mut friction = rheology(&raw_rheology, law_overridden, &mut notes)?;
     let mut fields = zones::used(fields, &friction, &domain)?;
     let raw_model = raw.model.unwrap_or_default();
@@ -267,7 +268,13 @@ fn validate(
     let mut raw_initial = section("initial", raw.initial)?;
     let raw_w = raw_initial.w.is_some();
     plane::raster_keys(&domain, &model, &raw_initial, raw.submarine.is_some())?;
-    let release_keys = release::take(&mut raw_initial, domain.plane.is_some(), base_dir)?;
+    let raster = domain.plane.is_some();
+    let release_keys = release::take(("initial.h", &mut raw_initial.h), raster, base_dir)?;
+    let erodible_keys = release::take(
+        ("initial.erodible_bed", &mut raw_initial.erodible_bed),
+        raster,
+        base_dir,
+    )?;
     let mut initial = initial(raw_initial, base_dir)?;
     if let (Some(r), Some(original)) = (&resample, &original_grid) {
         r.profile("initial.h", &mut initial.h, original)?;
@@ -285,6 +292,9 @@ fn validate(
         plane::some_cell_has_bed(&domain, &sampled, &bed)?;
     }
     let friction_zones = zones::sample(&fields, &mut friction, &domain, &sampled)?;
+    if let Some(keys) = &release_keys {
+        release::adopt_crs(keys, &mut domain, &bed, &mut notes);
+    }
     let release = match release_keys {
         Some(keys) => Some(release::rasterise(
             keys,
@@ -295,6 +305,14 @@ fn validate(
         )?),
         None => None,
     };
+    if let Some(keys) = erodible_keys {
+        let bed_polygons =
+            release::rasterise(keys, &domain, &bed, &mut sampled, &mut initial.erodible_bed)?;
+        notes.push(format!(
+            "initial.erodible_bed: {}",
+            bed_polygons.describe().replace("released", "erodible")
+        ));
+    }
     let submarine = submarine::submarine(
         raw.submarine,
         &model,
@@ -307,7 +325,8 @@ fn validate(
     let boundary = plane::boundary(raw.boundary.unwrap_or_default(), &domain)?;
     let time = time(section("time", raw.time)?)?;
     let raw_output = raw.output.unwrap_or_default();
-    let output = output(&raw_output, &time, &domain, default_output)?;
+    let mut output = output(&raw_output, &time, &domain, default_output)?;
+    output.path = path::spec(raw_output.path.as_ref(), &domain, base_dir)?;
     plane::gauges_off_walls(&output, &domain, &sampled)?;
     let dilatancy = dilatancy(
         raw.dilatancy.as_ref(),
@@ -640,6 +659,7 @@ fn output(o: &RawOutput, time: &TimeSpec, domain: &Domain, default_file: &str) -
         gauges,
         gauges_y,
         gauge_every,
+        path: None,
     })
 }
 
@@ -898,6 +918,7 @@ t_end = 2.0
                 gauges: Vec::new(),
                 gauges_y: Vec::new(),
                 gauge_every: None,
+                path: None,
             }
         );
         assert_eq!(s.base_dir, PathBuf::from("."));

@@ -167,6 +167,7 @@ pub(super) fn domain(d: RawDomain) -> Res<Domain> {
             ny,
             crs: Crs::unknown(),
             curvature: curvature(&d, coordinates)?,
+            geotransform: None,
         }),
     })
 }
@@ -199,6 +200,7 @@ pub(super) fn domain_of_raster(d: RawDomain, bed: &Profile) -> Res<Domain> {
             ny: r.ny,
             crs: r.crs.clone(),
             curvature: curvature(&d, coordinates)?,
+            geotransform: Some([r.x_left, r.y_top, r.cell_size]),
         }),
     })
 }

@@ -1,8 +1,10 @@
-//! A release polygon as the initial thickness of a raster run:
+//! A release polygon as the initial thickness of a raster run, and in the same way
+//! polygons of an erodible bed (AvaFrame's entrainment areas):
 //!
 //! ```toml
 //! [initial]
 //! h = { polygon = "release.geojson", thickness = 1.5, thickness_is = "normal" }
+//! erodible_bed = { polygon = "ENT/ent.shp", thickness = 0.3, thickness_is = "normal" }
 //! ```
 //!
 //! Keys: `polygon` (a `.shp` or a GeoJSON file, relative to the scenario), the
@@ -21,13 +23,10 @@ use std::path::{Path, PathBuf};
 
 use super::super::error::ScenarioError;
 use super::super::profile::Profile;
-use super::super::raw::RawInitial;
 use super::super::{CoverageRule, Domain, ReleaseSummary, Sampled, ThicknessIs};
 use super::check::*;
 use crate::gis::release::{self as polygons, ReleaseAreas, ThicknessSource};
 use crate::gis::Raster;
-
-const KEY: &str = "initial.h";
 
 /// Largest accepted polygon file (bytes): a bound, so that a wrong path is refused at
 /// once instead of read until memory runs out.
@@ -36,6 +35,8 @@ const MAX_POLYGON_BYTES: u64 = 256 << 20;
 /// The keys of a release polygon, with its features read.
 #[derive(Debug)]
 pub(super) struct ReleaseKeys {
+    /// The scenario key: `initial.h` or `initial.erodible_bed`.
+    key: &'static str,
     /// As written in the scenario.
     file: PathBuf,
     areas: ReleaseAreas,
@@ -43,29 +44,30 @@ pub(super) struct ReleaseKeys {
     rule: CoverageRule,
 }
 
-/// Whether `initial.h` is a release polygon (`{ polygon = … }`).
+/// Whether a key is given as polygons (`{ polygon = … }`).
 fn is_polygon(v: Option<&toml::Value>) -> bool {
     matches!(v, Some(toml::Value::Table(t)) if t.contains_key("polygon"))
 }
 
-/// When `initial.h` is a release polygon: its keys checked and its file read, and
-/// `initial.h` replaced by 0 (the rasterised thickness takes its place after
-/// sampling, [`rasterise`]).
+/// When the thickness `KEY` (`initial.h` or `initial.erodible_bed`, held in `slot`)
+/// is given as polygons: its keys checked and its file read, and the key replaced by
+/// 0 (the rasterised thickness takes its place after sampling, [`rasterise`]).
 pub(super) fn take(
-    initial: &mut RawInitial,
+    (key, slot): (&'static str, &mut Option<toml::Value>),
     raster_domain: bool,
     base_dir: &Path,
 ) -> Res<Option<ReleaseKeys>> {
-    if !is_polygon(initial.h.as_ref()) {
+    let what = what(key);
+    if !is_polygon(slot.as_ref()) {
         return Ok(None);
     }
-    let Some(toml::Value::Table(t)) = initial.h.replace(toml::Value::Float(0.0)) else {
+    let Some(toml::Value::Table(t)) = slot.replace(toml::Value::Float(0.0)) else {
         unreachable!("is_polygon saw a table")
     };
     if !raster_domain {
         return err(
-            "initial.h.polygon",
-            "a release polygon needs a raster (2-D) domain (domain.y_min, domain.y_max, or the grid of a raster bed)",
+            &format!("{key}.polygon"),
+            format!("{what} needs a raster (2-D) domain (domain.y_min, domain.y_max, or the grid of a raster bed)"),
         );
     }
     const ALLOWED: &str = "polygon, thickness, thickness_attribute, thickness_is, rule";
@@ -74,8 +76,8 @@ pub(super) fn take(
         .find(|k| !ALLOWED.split(", ").any(|a| a == k.as_str()))
     {
         return err(
-            &format!("{KEY}.{other}"),
-            format!("unknown key '{other}' in a release polygon (allowed: {ALLOWED})"),
+            &format!("{key}.{other}"),
+            format!("unknown key '{other}' in {what} (allowed: {ALLOWED})"),
         );
     }
     let string = |name: &str| -> Res<Option<&str>> {
@@ -83,14 +85,14 @@ pub(super) fn take(
             None => Ok(None),
             Some(toml::Value::String(s)) => Ok(Some(s.as_str())),
             Some(other) => err(
-                &format!("{KEY}.{name}"),
+                &format!("{key}.{name}"),
                 format!("must be a string, found {}", other.type_str()),
             ),
         }
     };
     let file = string("polygon")?.expect("is_polygon saw the key");
     if file.trim().is_empty() {
-        return err(&format!("{KEY}.polygon"), "must be a file name, got \"\"");
+        return err(&format!("{key}.polygon"), "must be a file name, got \"\"");
     }
     let thickness = match t.get("thickness") {
         None => None,
@@ -98,7 +100,7 @@ pub(super) fn take(
         Some(toml::Value::Float(f)) => Some(*f),
         Some(other) => {
             return err(
-                &format!("{KEY}.thickness"),
+                &format!("{key}.thickness"),
                 format!("must be a number (m), found {}", other.type_str()),
             )
         }
@@ -107,18 +109,18 @@ pub(super) fn take(
     let source = match (thickness, attribute) {
         (Some(_), Some(_)) => {
             return err(
-                &format!("{KEY}.thickness_attribute"),
+                &format!("{key}.thickness_attribute"),
                 "give either thickness (the same for every feature) or thickness_attribute (a field of each feature), not both",
             )
         }
         (None, None) => {
             return err(
-                &format!("{KEY}.thickness"),
-                "a release polygon needs thickness = <m> or thickness_attribute = \"<field>\"",
+                &format!("{key}.thickness"),
+                format!("{what} needs thickness = <m> or thickness_attribute = \"<field>\""),
             )
         }
         (Some(h), None) => {
-            let key = format!("{KEY}.thickness");
+            let key = format!("{key}.thickness");
             non_negative(&key, h)?;
             magnitude_at_most(&key, h, MAX_THICKNESS, "m", THICKNESS_WHY)?;
             ThicknessSource::Uniform(h)
@@ -130,13 +132,13 @@ pub(super) fn take(
         Some("normal") => ThicknessIs::Normal,
         Some(other) => {
             return err(
-                &format!("{KEY}.thickness_is"),
+                &format!("{key}.thickness_is"),
                 format!("must be \"vertical\" or \"normal\" (to the slope), got \"{other}\""),
             )
         }
         None => {
             return err(
-                &format!("{KEY}.thickness_is"),
+                &format!("{key}.thickness_is"),
                 "say how the thickness is measured: \"vertical\", or \"normal\" to the slope (divided by cos θ of the bed's slope; the released volumes differ by that factor)",
             )
         }
@@ -146,13 +148,13 @@ pub(super) fn take(
         Some("cell_centre") => CoverageRule::CellCentre,
         Some(other) => {
             return err(
-                &format!("{KEY}.rule"),
+                &format!("{key}.rule"),
                 format!("must be \"area_fraction\" or \"cell_centre\", got \"{other}\""),
             )
         }
     };
     let full = base_dir.join(file);
-    let polygon_key = format!("{KEY}.polygon");
+    let polygon_key = format!("{key}.polygon");
     match std::fs::metadata(&full) {
         Ok(meta) if !meta.is_file() => {
             return err(
@@ -180,6 +182,7 @@ pub(super) fn take(
         )
     })?;
     Ok(Some(ReleaseKeys {
+        key,
         file: PathBuf::from(file),
         areas,
         thickness_is,
@@ -187,7 +190,45 @@ pub(super) fn take(
     }))
 }
 
-/// Rasterises the release onto the domain's cells: sets `sampled.h` and `initial_h`
+/// A DEM that states no CRS (an ESRI ASCII grid without its `.prj`) under a release
+/// that states one: the run takes the release's CRS for its outputs, with a note that
+/// says so, rather than writing rasters a GIS cannot place.
+pub(super) fn adopt_crs(
+    keys: &ReleaseKeys,
+    domain: &mut Domain,
+    bed: &Profile,
+    notes: &mut Vec<String>,
+) {
+    let Some(plane) = domain.plane.as_mut() else {
+        return;
+    };
+    let none = |c: &crate::gis::Crs| c.is_unknown() || c.is_local();
+    if !none(&plane.crs) || none(&keys.areas.crs) {
+        return;
+    }
+    let dem = bed.raster_path().map_or_else(
+        || "the domain".to_owned(),
+        |p| format!("the DEM '{}'", p.display()),
+    );
+    notes.push(format!(
+        "{dem} states no CRS (no .prj beside an ESRI ASCII grid, or a LOCAL_CS); the outputs take the CRS of the release '{}', {}: check that the DEM is in it",
+        keys.file.display(),
+        keys.areas.crs
+    ));
+    plane.crs = keys.areas.crs.clone();
+}
+
+/// "a release polygon" or "an erodible-bed polygon", for messages.
+fn what(key: &str) -> &'static str {
+    if key == "initial.h" {
+        "a release polygon"
+    } else {
+        "an erodible-bed polygon"
+    }
+}
+
+/// Rasterises the polygons onto the domain's cells: sets the thickness they give
+/// (`sampled.h` for the release, `sampled.h_bed` for an erodible bed) and `profile`
 /// (a raster profile of the same values, so that sampling it again gives them) and
 /// returns the summary.
 pub(super) fn rasterise(
@@ -195,17 +236,18 @@ pub(super) fn rasterise(
     domain: &Domain,
     bed: &Profile,
     sampled: &mut Sampled,
-    initial_h: &mut Profile,
+    profile: &mut Profile,
 ) -> Res<ReleaseSummary> {
     let plane = domain.plane.as_ref().expect("checked by take");
-    let polygon_key = format!("{KEY}.polygon");
+    let polygon_key = format!("{}.polygon", keys.key);
+    let what = what(keys.key);
     let (nx, ny) = (domain.cells, plane.ny);
     let dx = (domain.x_max - domain.x_min) / nx as f64;
     let dy = (plane.y_max - plane.y_min) / ny as f64;
     if (dx - dy).abs() > 1e-9 * dx.max(dy) {
         return err(
             &polygon_key,
-            format!("a release polygon is rasterised on square cells; the domain's are Δx = {dx} m by Δy = {dy} m (choose domain.cells so that they are equal)"),
+            format!("{what} is rasterised on square cells; the domain's are Δx = {dx} m by Δy = {dy} m (choose domain.cells so that they are equal)"),
         );
     }
     let file = keys.file.display().to_string();
@@ -221,7 +263,7 @@ pub(super) fn rasterise(
     }
     plane
         .crs
-        .check_same(&rasters, &keys.areas.crs, &format!("the release ({file})"))
+        .check_same(&rasters, &keys.areas.crs, &format!("the polygons ({file})"))
         .map_err(|e| ScenarioError::at(&polygon_key, e.to_string()))?;
     // The domain as a GIS raster: row 0 at the top (north), the bed as its values,
     // NaN (nodata) on the wall cells.
@@ -249,16 +291,21 @@ pub(super) fn rasterise(
         }
     }
     thickness.nodata = None;
+    let target = if keys.key == "initial.h" {
+        &mut sampled.h
+    } else {
+        &mut sampled.h_bed
+    };
     for j in 0..ny {
         for i in 0..nx {
-            sampled.h[j * nx + i] = thickness.values[(ny - 1 - j) * nx + i];
+            target[j * nx + i] = thickness.values[(ny - 1 - j) * nx + i];
         }
     }
-    let volume = sampled.h.iter().sum::<f64>() * dx * dy;
+    let volume = target.iter().sum::<f64>() * dx * dy;
     if volume <= 0.0 && release.volume_on_nodata > 0.0 {
         return err(
             &polygon_key,
-            format!("{file}: the whole release lies on wall (nodata) cells of the DEM"),
+            format!("{file}: the whole of {what} lies on wall (nodata) cells of the DEM"),
         );
     }
     let area = keys
@@ -268,7 +315,7 @@ pub(super) fn rasterise(
         .flat_map(|f| &f.polygons)
         .map(polygons::Polygon::area)
         .sum();
-    *initial_h = Profile::from_raster(&keys.file, thickness);
+    *profile = Profile::from_raster(&keys.file, thickness);
     Ok(ReleaseSummary {
         file: keys.file,
         features: keys.areas.features.len(),

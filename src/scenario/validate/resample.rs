@@ -136,16 +136,11 @@ impl Resample {
                     r.nx - nx,
                     r.ny - ny
                 ));
-                let d = r.cell_size;
-                let keep = Bbox {
-                    x_min: r.x_left,
-                    x_max: r.x_left + (nx as f64 - 0.5) * d,
-                    y_min: r.y_top - (ny as f64 - 0.5) * d,
-                    y_max: r.y_top,
-                };
+                // By index: a box in metres loses a row to rounding on grids
+                // whose cell size is not round.
                 r = r
-                    .crop(keep)
-                    .expect("the trimmed grid keeps at least one cell");
+                    .window(0, 0, nx, ny)
+                    .expect("the trimmed grid is inside the grid");
             }
             r = r
                 .coarsen(k)
