@@ -416,7 +416,8 @@ class Checker:
             frame = frame.decode() if isinstance(frame, bytes) else str(frame)
             if frame == "bed_normal" and nx > 1 and ny > 1:
                 by, bx = np.gradient(f["grid/b"][:], float(f.attrs["dy"]), float(f.attrs["dx"]))
-                peak = peak / np.sqrt(1.0 + bx**2 + by**2)
+                cos = 1.0 / np.sqrt(1.0 + bx**2 + by**2)
+                peak = peak * (cos[~walls] if walls.any() else cos.ravel())
             known = np.isfinite(peak)
             if not (m["h_max"][known] >= peak[known] * (1.0 - 1e-12)).all():
                 self.fail("/maps/h_max is below a snapshot's h somewhere")
