@@ -20,9 +20,14 @@ const OUTFLOW: BoundaryKind = BoundaryKind::Outflow;
 /// A plane of slope θ along x as a DEM (b = −x tan θ), nx × 3 cells of Δx (walls
 /// along its sides, outflow at its ends).
 fn dem_plane(theta: f64, nx: usize, dx: f64) -> Raster2d {
+    dem_plane_from(theta, nx, dx, OUTFLOW)
+}
+
+/// [`dem_plane`] with the upslope (west) end of kind `west`.
+fn dem_plane_from(theta: f64, nx: usize, dx: f64, west: BoundaryKind) -> Raster2d {
     let tan = theta.tan();
     let sides = Sides {
-        west: OUTFLOW,
+        west,
         east: OUTFLOW,
         south: WALL,
         north: WALL,
@@ -485,23 +490,7 @@ fn a_y_invariant_run_on_a_dem_plane_is_the_local_frame_line() {
 fn a_layer_leaves_through_an_outflow_edge_that_cuts_the_slope() {
     let mu = 0.5f64;
     let theta = (1.01 * mu).atan();
-    let tan = theta.tan();
-    let sides = Sides {
-        west: WALL,
-        east: OUTFLOW,
-        south: WALL,
-        north: WALL,
-    };
-    let r = raster(
-        60,
-        3,
-        (0.0, 120.0),
-        (0.0, 6.0),
-        sides,
-        Coordinates::BedNormal,
-        0.0,
-        move |x, _| -x * tan,
-    );
+    let r = dem_plane_from(theta, 60, 2.0, WALL);
     let mut s = at_rest(&r, |_| 0.5);
     let (h0, mass0): (f64, f64) = (s.h[0], s.h.iter().sum());
     let law = FrictionLaw::Coulomb { mu };
