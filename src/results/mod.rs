@@ -9,12 +9,14 @@
 //! - [`export`]: `granflow export`;
 //! - [`ensemble`]: the per-cell statistics of an ensemble of runs;
 //! - [`skill`]: a run's footprint against an observed one (areas, ROC point);
-//! - [`maps`]: `granflow maps`.
+//! - [`maps`]: `granflow maps`;
+//! - [`publish`]: how both put their files in place (never a user's file, never half).
 
 pub mod args;
 pub mod ensemble;
 pub mod export;
 pub mod maps;
+pub mod publish;
 pub mod run_file;
 pub mod skill;
 
@@ -64,9 +66,10 @@ impl std::fmt::Display for ResultsError {
 impl std::error::Error for ResultsError {}
 
 /// Writes `values` (north row first, NaN for no value) on `grid`'s cells as a GeoTIFF
-/// (Float32, or Float64 when `float64`; Deflate) or an ESRI ASCII grid, NaN becoming
-/// [`NODATA`].
+/// (Float32, or Float64 when `float64`; Deflate) or an ESRI ASCII grid (with its `.prj`,
+/// see [`publish`]), NaN becoming [`NODATA`], through `publish`.
 pub fn write_raster(
+    publish: &mut publish::Publish,
     grid: &crate::gis::Raster,
     values: Vec<f64>,
     format: RasterFormat,
@@ -74,6 +77,7 @@ pub fn write_raster(
     path: &std::path::Path,
 ) -> Result<(), ResultsError> {
     use crate::gis::geotiff::{self, Compression, SampleType, WriteOptions};
+    use publish::Owner;
     let mut raster = crate::gis::Raster {
         values,
         nodata: Some(NODATA),
@@ -85,20 +89,40 @@ pub fn write_raster(
             *v = NODATA;
         }
     }
-    let written = match format {
-        RasterFormat::Geotiff => geotiff::write(
-            &raster,
-            path,
-            WriteOptions {
+    let failure = |e: crate::gis::GisError| ResultsError::failure(e.to_string());
+    match format {
+        RasterFormat::Geotiff => publish.write(path, &Owner::Geotiff, |tmp| {
+            let options = WriteOptions {
                 sample: if float64 {
                     SampleType::F64
                 } else {
                     SampleType::F32
                 },
                 compression: Compression::Deflate,
-            },
-        ),
-        RasterFormat::Asc => crate::gis::asc::write(&raster, path),
-    };
-    written.map_err(|e| ResultsError::failure(e.to_string()))
+            };
+            geotiff::write(&raster, tmp, options).map_err(failure)
+        }),
+        RasterFormat::Asc => {
+            use crate::gis::asc;
+            let grid_owner = Owner::AscHeader(asc::header(&raster));
+            publish.write(path, &grid_owner, |tmp| {
+                asc::write_grid(&raster, tmp).map_err(failure)
+            })?;
+            let prj = asc::prj_path(path);
+            let text = raster.crs.wkt.as_ref().map(|w| format!("{w}\n"));
+            let owner = Owner::Prj {
+                text: text.clone(),
+                grid: path.to_path_buf(),
+                grid_owner: Box::new(grid_owner),
+            };
+            match text {
+                Some(text) => publish.write(&prj, &owner, |tmp| {
+                    std::fs::write(tmp, text).map_err(|e| {
+                        ResultsError::failure(format!("cannot write {}: {e}", tmp.display()))
+                    })
+                }),
+                None => publish.remove(&prj, &owner),
+            }
+        }
+    }
 }
