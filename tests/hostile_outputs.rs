@@ -472,6 +472,12 @@ fn export_replaces_only_its_own_files_and_keeps_a_user_s_prj() {
             assert_eq!(code, 0, "{format}: {stderr}");
         }
     }
+    // Also those of the same run on another grid.
+    run_radial(d, &radial(30, 20, "0.2"));
+    for format in ["geotiff", "asc", "netcdf"] {
+        let (code, stderr) = export(&["--format", format]);
+        assert_eq!(code, 0, "{format} on another grid: {stderr}");
+    }
     let hidden: Vec<_> = fs::read_dir(d)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -370,8 +370,9 @@ pub fn write(raster: &Raster, path: &Path) -> Result<()> {
 }
 
 /// The header lines [`write_grid`] writes for `raster` (`ncols` to `cellsize`, and
-/// `NODATA_value` when the raster has a finite one).
-pub fn header(raster: &Raster) -> String {
+/// `NODATA_value` when the raster has a finite one). `granflow export` tells its own
+/// grids by this layout (`crate::results::publish`).
+fn header(raster: &Raster) -> String {
     let mut header = format!(
         "ncols         {}\nnrows         {}\nxllcorner     {}\nyllcorner     {}\ncellsize      {}\n",
         raster.nx,

@@ -104,7 +104,7 @@ pub fn write_raster(
         }),
         RasterFormat::Asc => {
             use crate::gis::asc;
-            let grid_owner = Owner::AscHeader(asc::header(&raster));
+            let grid_owner = Owner::Asc;
             publish.write(path, &grid_owner, |tmp| {
                 asc::write_grid(&raster, tmp).map_err(failure)
             })?;

@@ -25,8 +25,9 @@ use super::ResultsError;
 pub enum Owner {
     /// A GeoTIFF whose `Software` tag names granflow.
     Geotiff,
-    /// An ESRI ASCII grid whose header is the one granflow writes for this grid.
-    AscHeader(String),
+    /// An ESRI ASCII grid whose header has the layout granflow writes (its keys padded
+    /// to 14 characters; other programs pad them otherwise), on any grid.
+    Asc,
     /// A `.prj` holding exactly this text, or standing beside a grid of granflow's
     /// (the path of that grid and how to tell it).
     Prj {
@@ -45,7 +46,19 @@ impl Owner {
     pub fn owns(&self, path: &Path) -> bool {
         match self {
             Owner::Geotiff => crate::gis::geotiff::written_by_granflow(path),
-            Owner::AscHeader(head) => head_is(path, head.as_bytes()),
+            Owner::Asc => {
+                let mut head = Vec::new();
+                let read = std::fs::File::open(path)
+                    .and_then(|f| f.take(1024).read_to_end(&mut head))
+                    .is_ok();
+                let text = String::from_utf8_lossy(&head);
+                read && text
+                    .lines()
+                    .zip(ASC_KEYS)
+                    .filter(|(line, key)| line.starts_with(key))
+                    .count()
+                    == ASC_KEYS.len()
+            }
             Owner::Prj {
                 text,
                 grid,
@@ -69,6 +82,16 @@ impl Owner {
         }
     }
 }
+
+/// The first lines of an ESRI ASCII grid as granflow writes them, up to their values.
+const ASC_KEYS: [&str; 6] = [
+    "ncols         ",
+    "nrows         ",
+    "xllcorner     ",
+    "yllcorner     ",
+    "cellsize      ",
+    "NODATA_value  ",
+];
 
 fn head_is(path: &Path, head: &[u8]) -> bool {
     let mut buf = Vec::new();
