@@ -17,6 +17,7 @@ use granflow::gis::geotiff::{self, Compression, SampleType, WriteOptions};
 use granflow::gis::netcdf::{FieldSpec, NetCdfWriter};
 use granflow::gis::release::{rasterise, CoverageRule, Polygon, ReleaseAreas, ReleaseFeature};
 use granflow::gis::{asc, Crs, Raster};
+use granflow::results::publish::Publish;
 use granflow::results::{write_raster, RasterFormat};
 
 const NX: usize = 4000;
@@ -140,7 +141,10 @@ fn main() {
     ] {
         let path = dir.path().join(format!("pft.{}", format.extension()));
         let (tw, _) = best(3, || {
-            write_raster(&r, pft.clone(), format, false, &path).expect("write")
+            // As export writes it: aside, synced, then renamed into place.
+            let mut publish = Publish::new(true);
+            write_raster(&mut publish, &r, pft.clone(), format, false, &path).expect("write");
+            publish.commit().expect("rename")
         });
         println!("{name:<28} {tw:>9.3} {:>9} {:>9.1}", "-", mb(&path));
     }

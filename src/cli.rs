@@ -107,8 +107,9 @@ pub struct RunArgs {
     /// --progress-every seconds (auto); or force one of them, or none.
     #[arg(long, value_enum, default_value_t = ProgressMode::Auto, value_name = "MODE")]
     pub progress: ProgressMode,
-    /// Seconds between two progress lines (--progress lines, or auto in a pipe).
-    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    /// Seconds between two progress lines (--progress lines, or auto in a pipe); 0 for
+    /// a line after every step, at most 1e6.
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS", value_parser = progress_interval)]
     pub progress_every: f64,
     /// Replace the output files even when they are not granflow outputs (or are the
     /// scenario itself).
@@ -118,8 +119,9 @@ pub struct RunArgs {
     /// of failing.
     #[arg(long)]
     pub wait: bool,
-    /// Threads of a raster (2-D) run; default: the machine's cores. The results are
-    /// the same bits whatever the count. 1-D runs use one thread.
+    /// Threads of a raster (2-D) run; default, and at most: the threads the machine
+    /// runs at once. The results are the same bits whatever the count. 1-D runs use
+    /// one thread.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
 }
@@ -127,6 +129,42 @@ pub struct RunArgs {
 /// The default of `--threads`: the machine's cores.
 pub fn default_threads() -> usize {
     std::thread::available_parallelism().map_or(1, usize::from)
+}
+
+/// The threads a run uses for `--threads asked` on a machine that runs `available`
+/// threads at once: more would only slow the run down (each step waits for every
+/// thread) and delay a Ctrl-C while the pool starts, so the count is bounded, with a
+/// note saying so.
+pub fn bounded_threads(asked: Option<u16>, available: usize) -> (usize, Option<String>) {
+    let available = available.max(1);
+    match asked.map(usize::from) {
+        None => (available, None),
+        Some(n) if n <= available => (n, None),
+        Some(n) => (
+            available,
+            Some(format!(
+                "note: --threads {n} is more than the {available} threads this machine runs at once; using {available}"
+            )),
+        ),
+    }
+}
+
+/// The largest `--progress-every` (s): about 11.6 days, beyond any run that shows
+/// progress; `--progress none` shows none.
+const PROGRESS_EVERY_MAX: f64 = 1e6;
+
+/// Parses `--progress-every`: a finite number of seconds in [0, 1e6].
+fn progress_interval(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| "not a number of seconds".to_owned())?;
+    if !(0.0..=PROGRESS_EVERY_MAX).contains(&v) {
+        return Err(format!(
+            "must be between 0 (a line after every step) and {PROGRESS_EVERY_MAX} seconds; --progress none shows no progress"
+        ));
+    }
+    Ok(v)
 }
 
 /// How `granflow run` shows its progress.

@@ -1,7 +1,7 @@
 //! The commands that help a user find their way: `granflow scenarios`, `granflow init`
 //! and `granflow completions`. Each returns the process exit code.
 
-use std::io::Write;
+use std::fmt::Write;
 
 use clap::CommandFactory;
 
@@ -11,7 +11,6 @@ use crate::terminal::{print_out, EXIT_BAD_INPUT, EXIT_FAILURE};
 
 /// `granflow scenarios [--show NAME]`.
 pub fn scenarios(args: &ScenariosArgs) -> u8 {
-    let mut out = std::io::stdout().lock();
     if let Some(name) = &args.show {
         let Some(b) = catalog::find(name) else {
             crate::terminal::print_err(&format!(
@@ -19,7 +18,7 @@ pub fn scenarios(args: &ScenariosArgs) -> u8 {
             ));
             return EXIT_BAD_INPUT;
         };
-        let _ = out.write_all(b.toml.as_bytes());
+        print_out(b.toml);
         return 0;
     }
     let width = catalog::BUNDLED
@@ -27,6 +26,7 @@ pub fn scenarios(args: &ScenariosArgs) -> u8 {
         .map(|b| b.name.len())
         .max()
         .unwrap_or(0);
+    let mut out = String::new();
     for b in catalog::BUNDLED {
         let _ = writeln!(out, "{:width$}  {}", b.name, b.description());
     }
@@ -35,6 +35,7 @@ pub fn scenarios(args: &ScenariosArgs) -> u8 {
         "\nCopy one to edit and run it:  granflow init my_run --from collapse\n\
          Print one:                    granflow scenarios --show collapse"
     );
+    print_out(&out);
     0
 }
 

@@ -2,10 +2,12 @@
 //!
 //! Two sweeps into one directory, or two runs into one HDF5 file, would interleave their
 //! writes and leave corrupt files that both processes report as complete. So a `run`
-//! locks `<file>.h5.lock` and a sweep locks `DIR/sweep.lock` (one per shard,
-//! `DIR/sweep.shard-K-of-N.lock`, so the shards of a job array still run side by side)
-//! before touching anything. The second process fails at once with a message naming
-//! the holder (pid, host, start time, command), or waits with `--wait`.
+//! locks `<file>.h5.lock` and the file's device and inode ([`lock_output`]), and a
+//! sweep locks `DIR/sweep.lock` (a shard holds it shared beside its own
+//! `DIR/sweep.shard-K-of-N.lock`, so the shards of a job array run side by side but
+//! never beside the whole sweep) before touching anything. The second process fails
+//! at once with a message naming the holder (pid, host, start time, command), or waits
+//! with `--wait`.
 //!
 //! The lock is the operating system's advisory whole-file lock (`flock` on Unix,
 //! `LockFileEx` on Windows, through `std::fs::File::try_lock`), not the mere existence
@@ -17,6 +19,14 @@
 //! blocked on it: that process would then hold a lock on a deleted file while a third
 //! one creates a new file and locks that. So after locking, the holder checks that the
 //! path still names the file it locked, and starts over if not.
+//!
+//! A lock file sits in a directory other users may write (a shared project folder,
+//! the temporary directory), so it is never opened through a symbolic link, and a file
+//! at its name that granflow did not make (anything but a regular file that is empty or
+//! holds a holder's description) is refused, never truncated or removed: a new lock
+//! file is created exclusively (`O_CREAT | O_EXCL`, which does not follow links), an
+//! existing one is opened only when it is a regular file and still the file just looked
+//! at.
 //!
 //! File systems without locks (some network mounts) answer "unsupported": the run then
 //! goes on without a lock, with a warning.
@@ -36,6 +46,9 @@ pub enum LockError {
         holder: String,
         path: PathBuf,
     },
+    /// Something granflow did not make is in the way of the lock file.
+    #[error("{path} {reason}; granflow did not make it and will neither use nor remove it (remove it yourself, or choose another output)")]
+    NotOurs { path: PathBuf, reason: String },
     #[error("cannot lock {path}: {message}")]
     Io { path: PathBuf, message: String },
 }
@@ -46,6 +59,8 @@ pub struct Lock {
     /// `None` when the file system has no locks and the run goes on without.
     file: Option<File>,
     path: PathBuf,
+    /// Held shared ([`acquire_shared`]).
+    shared: bool,
 }
 
 impl Lock {
@@ -56,19 +71,26 @@ impl Lock {
 
 impl Drop for Lock {
     fn drop(&mut self) {
-        if self.file.is_some() {
-            // Remove while still holding the lock (see the module docs).
-            let _ = std::fs::remove_file(&self.path);
+        if let Some(file) = &self.file {
+            // A shared holder removes the file only when it is the last one: when the
+            // lock turns exclusive.
+            if self.shared && file.try_lock().is_err() {
+                return;
+            }
+            // Remove while still holding the lock (see the module docs), and only the
+            // file locked: never one put in its place.
+            if still_at(file, &self.path) {
+                let _ = std::fs::remove_file(&self.path);
+            }
         }
     }
 }
 
-/// The lock files of the output file `output`, in the order to take them: always
-/// `<file>.lock` beside the file `output` resolves to (symbolic links followed, the
-/// directory canonical), so every spelling of the path locks the same file; and when
-/// the file exists with more than one hard link, `granflow-<device>-<inode>.lock` in
-/// the temporary directory, which every link shares.
-pub fn lock_paths(output: &Path) -> Vec<PathBuf> {
+/// The lock file named after the output file `output`: `<file>.lock` beside the file
+/// `output` resolves to (symbolic links followed, the directory canonical), so every
+/// spelling of the path through links and `..` locks the same file, also on a file
+/// system shared by several machines.
+pub fn name_lock_path(output: &Path) -> PathBuf {
     let resolved = resolve_links(output);
     let mut name = resolved
         .file_name()
@@ -79,21 +101,65 @@ pub fn lock_paths(output: &Path) -> Vec<PathBuf> {
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
-    let mut paths = vec![dir.join(name)];
+    dir.join(name)
+}
+
+/// Locks the output file `output` of a run for `what` (see [`acquire`]): first its
+/// [`name_lock_path`]; then, with the file created when missing (empty, as the run
+/// would create it), the lock named by its device and inode in the temporary
+/// directory, `granflow-<device>-<inode>.lock`. Every name of the file shares that
+/// one, also a hard link made after the run started, which no name lock can see.
+pub fn lock_output(
+    output: &Path,
+    what: &str,
+    wait: bool,
+    on_wait: &mut dyn FnMut(&str),
+) -> Result<OutputLock, LockError> {
+    let mut locks = vec![acquire(&name_lock_path(output), what, wait, on_wait)?];
+    let created = !output.exists();
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;
-        if let Ok(m) = std::fs::metadata(&resolved) {
-            if m.is_file() && m.nlink() > 1 {
-                paths.push(std::env::temp_dir().join(format!(
-                    "granflow-{}-{}.lock",
-                    m.dev(),
-                    m.ino()
-                )));
+        let io = |e: std::io::Error| LockError::Io {
+            path: output.to_path_buf(),
+            message: e.to_string(),
+        };
+        // Opened without truncating: the run replaces the contents in place (same
+        // inode), after its own checks.
+        let file = OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(output)
+            .map_err(io)?;
+        let m = file.metadata().map_err(io)?;
+        let path = std::env::temp_dir().join(format!("granflow-{}-{}.lock", m.dev(), m.ino()));
+        locks.push(acquire_as(&path, what, wait, on_wait, Mode::IN_SHARED_DIR)?);
+    }
+    Ok(OutputLock {
+        _locks: locks,
+        created: created.then(|| output.to_path_buf()),
+    })
+}
+
+/// The locks of a run's output file ([`lock_output`]), released on drop.
+#[derive(Debug)]
+pub struct OutputLock {
+    _locks: Vec<Lock>,
+    /// The output file when [`lock_output`] created it (empty).
+    created: Option<PathBuf>,
+}
+
+impl OutputLock {
+    /// Removes the output file this lock created when nothing was written to it (a run
+    /// that failed before it began): a failed start leaves no empty file behind.
+    pub fn remove_if_unwritten(&self) {
+        if let Some(path) = &self.created {
+            if std::fs::metadata(path).is_ok_and(|m| m.is_file() && m.len() == 0) {
+                let _ = std::fs::remove_file(path);
             }
         }
     }
-    paths
 }
 
 /// `path` with its symbolic links followed (also a dangling last one), at most 40 deep.
@@ -122,20 +188,67 @@ pub fn acquire(
     wait: bool,
     on_wait: &mut dyn FnMut(&str),
 ) -> Result<Lock, LockError> {
+    acquire_as(path, what, wait, on_wait, Mode::default())
+}
+
+/// How [`acquire_as`] takes a lock.
+#[derive(Debug, Clone, Copy, Default)]
+struct Mode {
+    /// Shared ([`acquire_shared`]) rather than exclusive.
+    shared: bool,
+    /// The lock file lies in a directory every user shares (the temporary directory):
+    /// it is made writable by all, so that a file left by one user's killed run, whose
+    /// inode another user's file has taken since, cannot lock that user out.
+    in_shared_dir: bool,
+}
+
+impl Mode {
+    const IN_SHARED_DIR: Mode = Mode {
+        shared: false,
+        in_shared_dir: true,
+    };
+}
+
+/// [`acquire`] shared: any number of shared holders at once, none beside an exclusive
+/// one (the shards of a sweep beside each other, never beside the whole sweep). The
+/// first shared holder describes itself; the last one removes the file.
+pub fn acquire_shared(
+    path: &Path,
+    what: &str,
+    wait: bool,
+    on_wait: &mut dyn FnMut(&str),
+) -> Result<Lock, LockError> {
+    let mode = Mode {
+        shared: true,
+        in_shared_dir: false,
+    };
+    acquire_as(path, what, wait, on_wait, mode)
+}
+
+fn acquire_as(
+    path: &Path,
+    what: &str,
+    wait: bool,
+    on_wait: &mut dyn FnMut(&str),
+    mode: Mode,
+) -> Result<Lock, LockError> {
+    let shared = mode.shared;
     let io = |e: std::io::Error| LockError::Io {
         path: path.to_path_buf(),
         message: e.to_string(),
     };
     let mut waited = false;
     loop {
-        let mut file = OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(path)
-            .map_err(io)?;
-        match file.try_lock() {
+        let Some(mut file) = open_lock_file(path, mode.in_shared_dir)? else {
+            // Removed between a look and an open: look again.
+            continue;
+        };
+        let tried = if shared {
+            file.try_lock_shared()
+        } else {
+            file.try_lock()
+        };
+        match tried {
             Ok(()) => {}
             Err(TryLockError::WouldBlock) => {
                 let holder = describe_holder(&mut file);
@@ -150,7 +263,11 @@ pub fn acquire(
                     on_wait(&holder);
                     waited = true;
                 }
-                file.lock().map_err(io)?;
+                if shared {
+                    file.lock_shared().map_err(io)?;
+                } else {
+                    file.lock().map_err(io)?;
+                }
             }
             Err(TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
                 crate::terminal::print_err(&format!(
@@ -160,6 +277,7 @@ pub fn acquire(
                 return Ok(Lock {
                     file: None,
                     path: path.to_path_buf(),
+                    shared,
                 });
             }
             Err(TryLockError::Error(e)) => return Err(io(e)),
@@ -168,14 +286,105 @@ pub fn acquire(
             // The previous holder removed the file between our open and our lock.
             continue;
         }
-        file.set_len(0).map_err(io)?;
-        file.seek(SeekFrom::Start(0)).map_err(io)?;
-        file.write_all(holder_text().as_bytes()).map_err(io)?;
-        file.flush().map_err(io)?;
-        return Ok(Lock {
+        if !holds_a_description(&mut file) {
+            return Err(LockError::NotOurs {
+                path: path.to_path_buf(),
+                reason: "exists and is not a granflow lock file".to_owned(),
+            });
+        }
+        let undescribed = file.metadata().is_ok_and(|m| m.len() == 0);
+        let lock = Lock {
             file: Some(file),
             path: path.to_path_buf(),
+            shared,
+        };
+        // The description only serves the message of a second process: a disk too
+        // full to hold it leaves the lock undescribed, not a failure (and the lock's
+        // drop still removes the file). Shared holders keep the first one's.
+        if !shared || undescribed {
+            let _ = lock.describe();
+        }
+        return Ok(lock);
+    }
+}
+
+/// Opens the lock file `path` for reading and writing: created exclusively when
+/// missing; when present, opened only if it is a regular file, not a symbolic link
+/// (nor a directory, FIFO, …), and the open reached that very file. `None` when it
+/// vanished in between.
+fn open_lock_file(path: &Path, for_all: bool) -> Result<Option<File>, LockError> {
+    let io = |e: std::io::Error| LockError::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    match OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create_new(true)
+        .open(path)
+    {
+        Ok(file) => {
+            #[cfg(unix)]
+            if for_all {
+                use std::os::unix::fs::PermissionsExt;
+                // On the open file: the umask does not apply, and no link is followed.
+                let _ = file.set_permissions(std::fs::Permissions::from_mode(0o666));
+            }
+            #[cfg(not(unix))]
+            let _ = for_all;
+            return Ok(Some(file));
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+        Err(e) => return Err(io(e)),
+    }
+    let seen = match std::fs::symlink_metadata(path) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(io(e)),
+    };
+    if !seen.file_type().is_file() {
+        let kind = if seen.file_type().is_symlink() {
+            "is a symbolic link"
+        } else if seen.is_dir() {
+            "is a directory"
+        } else {
+            "is not a regular file"
+        };
+        return Err(LockError::NotOurs {
+            path: path.to_path_buf(),
+            reason: kind.to_owned(),
         });
+    }
+    let file = match OpenOptions::new().read(true).write(true).open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(io(e)),
+    };
+    // A link swapped in between the look and the open: look again.
+    Ok(still_at(&file, path).then_some(file))
+}
+
+/// Whether a lock file holds what granflow writes there: nothing yet (a holder
+/// between its creation and its description, or a disk that was full), or a
+/// holder's description.
+fn holds_a_description(file: &mut File) -> bool {
+    let mut head = Vec::new();
+    if file.seek(SeekFrom::Start(0)).is_err() || file.take(6).read_to_end(&mut head).is_err() {
+        return false;
+    }
+    head.is_empty() || head == b"pid = "
+}
+
+impl Lock {
+    /// Writes the holder's description into the lock file.
+    fn describe(&self) -> std::io::Result<()> {
+        let Some(mut file) = self.file.as_ref() else {
+            return Ok(());
+        };
+        file.set_len(0)?;
+        file.seek(SeekFrom::Start(0))?;
+        file.write_all(holder_text().as_bytes())?;
+        file.flush()
     }
 }
 
@@ -184,7 +393,7 @@ fn still_at(file: &File, path: &Path) -> bool {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;
-        match (file.metadata(), std::fs::metadata(path)) {
+        match (file.metadata(), std::fs::symlink_metadata(path)) {
             (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
             _ => false,
         }
@@ -312,6 +521,46 @@ mod tests {
             text.contains(&format!("pid = {}", std::process::id())),
             "{text}"
         );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_link_or_a_foreign_file_at_the_name_is_refused_and_left_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("x.lock");
+        let victim = dir.path().join("victim");
+        std::fs::write(&victim, "data").unwrap();
+        std::os::unix::fs::symlink(&victim, &path).unwrap();
+        let e = acquire(&path, "x", false, &mut |_| {}).unwrap_err();
+        assert!(matches!(e, LockError::NotOurs { .. }), "{e}");
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "data");
+        std::fs::remove_file(&path).unwrap();
+        std::os::unix::fs::symlink(dir.path().join("missing"), &path).unwrap();
+        assert!(acquire(&path, "x", false, &mut |_| {}).is_err());
+        assert!(!dir.path().join("missing").exists());
+        std::fs::remove_file(&path).unwrap();
+        std::fs::write(&path, "notes").unwrap();
+        let e = acquire(&path, "x", false, &mut |_| {}).unwrap_err();
+        assert!(e.to_string().contains("not a granflow lock file"), "{e}");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "notes");
+    }
+
+    #[test]
+    fn shared_holders_share_and_keep_out_an_exclusive_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("x.lock");
+        let a = acquire_shared(&path, "x", false, &mut |_| {}).unwrap();
+        let b = acquire_shared(&path, "x", false, &mut |_| {}).unwrap();
+        let e = acquire(&path, "x", false, &mut |_| {}).unwrap_err();
+        assert!(matches!(e, LockError::Busy { .. }), "{e}");
+        drop(a);
+        assert!(path.exists(), "removed while shared by another");
+        assert!(acquire(&path, "x", false, &mut |_| {}).is_err());
+        drop(b);
+        assert!(!path.exists());
+        let whole = acquire(&path, "x", false, &mut |_| {}).unwrap();
+        assert!(acquire_shared(&path, "x", false, &mut |_| {}).is_err());
+        drop(whole);
     }
 
     #[test]

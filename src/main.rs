@@ -8,7 +8,7 @@ use clap::Parser;
 use granflow::cli::{Cli, Command, RunArgs, ScenarioArgs};
 use granflow::discover;
 use granflow::interrupt;
-use granflow::lock::{self, Lock, LockError};
+use granflow::lock::{self, LockError, OutputLock};
 use granflow::output::budget::OUTPUT_LIMIT;
 use granflow::progress::RunProgress;
 use granflow::runner;
@@ -55,11 +55,10 @@ fn check(args: &ScenarioArgs) -> ExitCode {
     }
 }
 
-/// Locks the output file for the whole run (see `granflow::lock`): `<file>.lock` next
-/// to the file the output path resolves to (through symbolic links), and, when the file
-/// has other hard links, a lock named by its device and inode, so that two spellings
-/// of one file cannot be written at once.
-fn lock_output(output: &Path, wait: bool) -> Result<Vec<Lock>, ExitCode> {
+/// Locks the output file for the whole run (see `granflow::lock::lock_output`): by the
+/// name it resolves to and by its device and inode, so that no two names of one file
+/// are written at once.
+fn lock_output(output: &Path, wait: bool) -> Result<OutputLock, ExitCode> {
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         // The sink would create it anyway; the lock file needs it first.
         if let Err(e) = std::fs::create_dir_all(dir) {
@@ -68,21 +67,16 @@ fn lock_output(output: &Path, wait: bool) -> Result<Vec<Lock>, ExitCode> {
         }
     }
     let what = format!("the output file {}", output.display());
-    let mut locks = Vec::new();
-    for path in lock::lock_paths(output) {
-        let lock = lock::acquire(&path, &what, wait, &mut |holder| {
-            print_err(&format!("waiting: {what} is in use ({holder})\n"));
-        })
-        .map_err(|e| {
-            print_err(&format!("error: {e}\n"));
-            match e {
-                LockError::Busy { .. } => ExitCode::from(EXIT_BAD_INPUT),
-                LockError::Io { .. } => ExitCode::from(EXIT_FAILURE),
-            }
-        })?;
-        locks.push(lock);
-    }
-    Ok(locks)
+    lock::lock_output(output, &what, wait, &mut |holder| {
+        print_err(&format!("waiting: {what} is in use ({holder})\n"));
+    })
+    .map_err(|e| {
+        print_err(&format!("error: {e}\n"));
+        match e {
+            LockError::Busy { .. } | LockError::NotOurs { .. } => ExitCode::from(EXIT_BAD_INPUT),
+            LockError::Io { .. } => ExitCode::from(EXIT_FAILURE),
+        }
+    })
 }
 
 fn run(args: &RunArgs) -> ExitCode {
@@ -104,7 +98,7 @@ fn run(args: &RunArgs) -> ExitCode {
         print_err(&format!("error: {e}\n"));
         return ExitCode::from(EXIT_BAD_INPUT);
     }
-    let _lock = match lock_output(&output, args.wait) {
+    let lock = match lock_output(&output, args.wait) {
         Ok(lock) => lock,
         Err(code) => return code,
     };
@@ -121,9 +115,11 @@ fn run(args: &RunArgs) -> ExitCode {
             .then_some(scn.time.settle_fraction),
     );
     let limit = (!args.force).then_some(OUTPUT_LIMIT);
-    let threads = args
-        .threads
-        .map_or_else(granflow::cli::default_threads, usize::from);
+    let (threads, note) =
+        granflow::cli::bounded_threads(args.threads, granflow::cli::default_threads());
+    if let Some(note) = note {
+        print_err(&format!("{note}\n"));
+    }
     let result =
         runner::run_to_files_threads(&scn, &output, limit, threads, &mut |p| progress.update(&p));
     progress.finish();
@@ -154,6 +150,7 @@ fn run(args: &RunArgs) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
+            lock.remove_if_unwritten();
             print_err(&format!("error: {e}\n"));
             ExitCode::from(EXIT_FAILURE)
         }
@@ -163,9 +160,13 @@ fn run(args: &RunArgs) -> ExitCode {
 /// `granflow export`: the files written, one per line (unless `--quiet`).
 fn export(args: &granflow::results::ExportArgs) -> ExitCode {
     match granflow::results::export::export(args) {
-        Ok(files) => {
+        Ok(exported) => {
+            if let Some(warning) = &exported.warning {
+                // Said even with --quiet: the files are not what their names promise.
+                print_err(&format!("{warning}\n"));
+            }
             if !args.quiet {
-                for f in files {
+                for f in exported.files {
                     print_out(&format!("{}\n", f.display()));
                 }
             }
@@ -203,7 +204,7 @@ fn maps(args: &granflow::results::MapsArgs) -> ExitCode {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match &cli.command {
+    let code = match &cli.command {
         Command::Run(args) => run(args),
         Command::Check(args) => check(args),
         Command::Sweep(args) => ExitCode::from(granflow::sweep::main(args)),
@@ -212,5 +213,10 @@ fn main() -> ExitCode {
         Command::Export(args) => export(args),
         Command::Maps(args) => maps(args),
         Command::Completions(args) => ExitCode::from(discover::completions(args)),
+    };
+    if granflow::terminal::stdout_failed() && code == ExitCode::SUCCESS {
+        // What the command printed is lost: not a success (already said on stderr).
+        return ExitCode::from(EXIT_FAILURE);
     }
+    code
 }

@@ -3,9 +3,18 @@
 //! Before a run starts, each file it would write (the HDF5 file, its `_front.csv`,
 //! with gauges its `_gauges.csv`, and for a raster run its `.xmf`) is checked: an
 //! existing file is replaced only when it is what granflow writes there (an HDF5 file
-//! with granflow's root attributes; a front CSV by its `t,x` header; a gauge CSV by its
-//! `t,eta_` header; an XDMF file by its first lines) and is not the scenario itself. Anything else needs `--force`. An output name ending in a path separator
-//! names a directory, never a file, and is refused before anything is created.
+//! whose root group carries the attribute `granflow_version`, read as HDF5, wherever
+//! it lies in the file; a front CSV by its `t,x` header; a gauge CSV by its `t,eta_`
+//! header; an XDMF file by its first lines) and is not the scenario itself. Anything
+//! else needs `--force`. An output name ending in a path separator names a directory,
+//! never a file, and is refused before anything is created.
+//!
+//! The output file itself may be a symbolic link (the run writes where it points); a
+//! dangling link at a companion file's name is refused: writing through it would
+//! create a file elsewhere, or fail after the run began. `<file>.reserve` (the room the HDF5 writer holds, [`crate::output::hdf5::space`])
+//! is removed before the run only when it is a regular file of zeros, left by an
+//! earlier run; anything else there needs `--force` (which removes the name, never
+//! what a link points to).
 
 use std::io::Read;
 use std::path::Path;
@@ -17,13 +26,13 @@ use crate::output::{front_csv_path, gauge_csv_path};
 /// offset 0).
 const HDF5_SIGNATURE: &[u8; 8] = b"\x89HDF\r\n\x1a\n";
 
-/// The name of a root attribute granflow writes at the start of every run
+/// The root attribute granflow writes at the start of every run
 /// (docs/output-format.md): its presence tells granflow's files from other HDF5 files.
-const GRANFLOW_MARK: &[u8] = b"granflow_version";
+const GRANFLOW_MARK: &str = "granflow_version";
 
-/// How far into an HDF5 file (from its start, and from its end) the mark is looked for:
-/// the root attributes are written when the run begins, and again when it ends.
-const MARK_WINDOW: u64 = 4 << 20;
+/// The largest `<file>.reserve` read to see that it holds only zeros: the reserve and
+/// a claim in flight when its run was killed.
+const RESERVE_READ_LIMIT: u64 = 256 << 20;
 
 /// Checks that writing `h5` (and its front CSV, its gauge CSV when `gauges`, its XDMF
 /// file when `xdmf`) for the scenario file `scenario` would not replace anything it
@@ -43,16 +52,36 @@ pub fn check_outputs(
             h5.join("run.h5").display()
         ));
     }
+    let csv = front_csv_path(h5);
+    let gauge_csv = gauge_csv_path(h5);
+    let xmf = xdmf_path(h5);
+    for (companion, what) in [
+        (csv.as_path(), "front CSV"),
+        (gauge_csv.as_path(), "gauge CSV"),
+        (xmf.as_path(), "XDMF file"),
+    ] {
+        if dangling(companion) {
+            return Err(format!(
+                "the {what} '{}' is a symbolic link to a file that does not exist; refusing to create a file through it (remove the link or choose another --output)",
+                companion.display()
+            ));
+        }
+    }
     if force {
         return Ok(());
     }
-    let csv = front_csv_path(h5);
+    let reserve = crate::output::hdf5::space::reserve_path(h5);
+    if std::fs::symlink_metadata(&reserve).is_ok() && !zeros_only(&reserve) {
+        return Err(format!(
+            "'{}' exists and is not the room granflow reserves there (a regular file of zeros); refusing to remove it (remove it yourself, or --force)",
+            reserve.display()
+        ));
+    }
     let gauge_csv = gauge_csv_path(h5);
     let mut targets = vec![(h5, "HDF5 output"), (csv.as_path(), "front CSV")];
     if gauges {
         targets.push((gauge_csv.as_path(), "gauge CSV"));
     }
-    let xmf = xdmf_path(h5);
     if xdmf {
         targets.push((xmf.as_path(), "XDMF file"));
     }
@@ -100,20 +129,43 @@ fn starts_with(path: &Path, head: &[u8]) -> bool {
         && buf == head
 }
 
-/// Whether the file holds [`GRANFLOW_MARK`] in its first or last [`MARK_WINDOW`] bytes.
+/// Whether the HDF5 file's root group carries [`GRANFLOW_MARK`] (read as HDF5: a copy
+/// of the name in another object, or in raw bytes, does not count).
 fn holds_mark(path: &Path) -> bool {
-    use std::io::{Seek, SeekFrom};
+    // A damaged file must give "not ours", never a panic of the reader.
+    std::panic::catch_unwind(|| {
+        rust_hdf5::H5File::options()
+            .no_locking()
+            .open(path)
+            .is_ok_and(|f| f.root_group().attr_string(GRANFLOW_MARK).is_ok())
+    })
+    .unwrap_or(false)
+}
+
+/// Whether `path` is a symbolic link whose target does not exist.
+fn dangling(path: &Path) -> bool {
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) && !path.exists()
+}
+
+/// Whether `path` is a regular file (not a link) holding only zero bytes.
+fn zeros_only(path: &Path) -> bool {
+    let Ok(meta) = std::fs::symlink_metadata(path) else {
+        return false;
+    };
+    if !meta.file_type().is_file() || meta.len() > RESERVE_READ_LIMIT {
+        return false;
+    }
     let Ok(mut file) = std::fs::File::open(path) else {
         return false;
     };
-    let len = file.metadata().map_or(0, |m| m.len());
-    let mut window = |start: u64| -> bool {
-        let mut buf = Vec::new();
-        file.seek(SeekFrom::Start(start)).is_ok()
-            && (&mut file).take(MARK_WINDOW).read_to_end(&mut buf).is_ok()
-            && buf.windows(GRANFLOW_MARK.len()).any(|w| w == GRANFLOW_MARK)
-    };
-    window(0) || (len > MARK_WINDOW && window(len - MARK_WINDOW))
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        match file.read(&mut buf) {
+            Ok(0) => return true,
+            Ok(n) if buf[..n].iter().all(|&b| b == 0) => {}
+            _ => return false,
+        }
+    }
 }
 
 /// Whether `a` and `b` name the same existing file (whatever their spelling).

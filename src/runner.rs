@@ -69,7 +69,7 @@ pub fn run_to_files_threads(
 ) -> Result<RunReport, RunFailure> {
     let mut sim = build_threads(scn, threads);
     let front_csv = front_csv_path(h5);
-    let mut sink = Budgeted::new(create_run_sinks(h5)?, limit, h5);
+    let mut sink = Budgeted::new(create_run_sinks(h5)?, limit, h5).watching_pace(scn.time.t_end);
     match sim.run(&mut sink, progress) {
         Ok(summary) => Ok(RunReport {
             summary,

@@ -16,6 +16,7 @@ mod gauges;
 mod gis;
 mod gis_scenario;
 mod hostile;
+mod hostile_outputs;
 mod multilayer;
 mod newcomer;
 mod nh_multilayer;

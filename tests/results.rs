@@ -736,3 +736,35 @@ every = 0.25
         "{err}"
     );
 }
+
+#[test]
+fn maps_replaces_only_its_own_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = sweep(dir.path(), "material.d_s = [1e-3, 2e-3]");
+    let o = out.to_str().unwrap();
+    let maps = |extra: &[&str]| {
+        granflow()
+            .args(["maps", o, "-q"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    fs::create_dir_all(out.join("maps")).unwrap();
+    let mine = "my notes on these runs\n";
+    fs::write(out.join("maps/runs.csv"), mine).unwrap();
+    let refused = maps(&[]);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("runs.csv") && stderr.contains("--force"),
+        "{stderr}"
+    );
+    assert_eq!(fs::read_to_string(out.join("maps/runs.csv")).unwrap(), mine);
+    // Nothing else was written either.
+    assert_eq!(fs::read_dir(out.join("maps")).unwrap().count(), 1);
+    assert_success(&maps(&["--force"]));
+    // Its own files are replaced without --force, in both formats.
+    assert_success(&maps(&[]));
+    assert_success(&maps(&["--format", "asc"]));
+    assert_success(&maps(&["--format", "asc"]));
+}

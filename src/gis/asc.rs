@@ -356,9 +356,42 @@ fn number(v: f64) -> String {
     s
 }
 
-/// Writes `raster` as an ESRI ASCII grid, and its WKT (if any) as the `.prj` beside it;
-/// a stale `.prj` there is removed when the raster has no WKT.
+/// Writes `raster` as an ESRI ASCII grid, and its WKT (if any, or one made from its
+/// EPSG code) as the `.prj` beside it; a stale `.prj` there is removed when the raster
+/// has none.
 pub fn write(raster: &Raster, path: &Path) -> Result<()> {
+    write_grid(raster, path)?;
+    let prj = prj_path(path);
+    match raster.crs.wkt_text() {
+        Some(wkt) => std::fs::write(&prj, format!("{wkt}\n")).map_err(io_err(&prj))?,
+        None => match std::fs::remove_file(&prj) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&prj)(e)),
+            _ => {}
+        },
+    }
+    Ok(())
+}
+
+/// The header lines [`write_grid`] writes for `raster` (`ncols` to `cellsize`, and
+/// `NODATA_value` when the raster has a finite one). `granflow export` tells its own
+/// grids by this layout (`crate::results::publish`).
+fn header(raster: &Raster) -> String {
+    let mut header = format!(
+        "ncols         {}\nnrows         {}\nxllcorner     {}\nyllcorner     {}\ncellsize      {}\n",
+        raster.nx,
+        raster.ny,
+        number(raster.x_left),
+        number(yll_corner(raster)),
+        number(raster.cell_size)
+    );
+    if let Some(nd) = raster.nodata.filter(|v| v.is_finite()) {
+        header.push_str(&format!("NODATA_value  {}\n", number(nd)));
+    }
+    header
+}
+
+/// Writes `raster` as an ESRI ASCII grid, without the `.prj`.
+pub fn write_grid(raster: &Raster, path: &Path) -> Result<()> {
     raster.check().map_err(|reason| GisError::BadGrid {
         path: path.to_path_buf(),
         reason,
@@ -371,17 +404,7 @@ pub fn write(raster: &Raster, path: &Path) -> Result<()> {
     }
     let file = std::fs::File::create(path).map_err(io_err(path))?;
     let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
-    let mut header = format!(
-        "ncols         {}\nnrows         {}\nxllcorner     {}\nyllcorner     {}\ncellsize      {}\n",
-        raster.nx,
-        raster.ny,
-        number(raster.x_left),
-        number(yll_corner(raster)),
-        number(raster.cell_size)
-    );
-    if let Some(nd) = nodata {
-        header.push_str(&format!("NODATA_value  {}\n", number(nd)));
-    }
+    let header = header(raster);
     let mut line = String::with_capacity(raster.nx * 12);
     let result = (|| -> std::io::Result<()> {
         out.write_all(header.as_bytes())?;
@@ -399,16 +422,7 @@ pub fn write(raster: &Raster, path: &Path) -> Result<()> {
         }
         out.flush()
     })();
-    result.map_err(io_err(path))?;
-    let prj = prj_path(path);
-    match raster.crs.wkt_text() {
-        Some(wkt) => std::fs::write(&prj, format!("{wkt}\n")).map_err(io_err(&prj))?,
-        None => match std::fs::remove_file(&prj) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(io_err(&prj)(e)),
-            _ => {}
-        },
-    }
-    Ok(())
+    result.map_err(io_err(path))
 }
 
 #[cfg(test)]

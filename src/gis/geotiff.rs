@@ -434,6 +434,21 @@ impl Band<'_> {
     }
 }
 
+/// The `Software` tag of the GeoTIFF files granflow writes.
+pub const SOFTWARE: &str = concat!("granflow ", env!("CARGO_PKG_VERSION"));
+
+/// Whether `path` is a TIFF file whose `Software` tag says granflow wrote it (read from
+/// the directory only, no image data).
+pub fn written_by_granflow(path: &Path) -> bool {
+    let Ok(file) = File::open(path) else {
+        return false;
+    };
+    tiff::decoder::Decoder::new(std::io::BufReader::new(file))
+        .ok()
+        .and_then(|mut d| d.get_tag_ascii_string(Tag::Software).ok())
+        .is_some_and(|s| s.starts_with("granflow "))
+}
+
 /// Writes `raster` as a single-band GeoTIFF (see the [module docs](self)).
 pub fn write(raster: &Raster, path: &Path, options: WriteOptions) -> Result<()> {
     write_band(raster, path, options, None)
@@ -528,6 +543,8 @@ where
     let mut image = enc.new_image::<C>(nx, ny)?;
     let d = raster.cell_size;
     let dir = image.encoder();
+    // Tells granflow's files from others when an export would replace one.
+    dir.write_tag(Tag::Software, SOFTWARE)?;
     dir.write_tag(Tag::ModelPixelScaleTag, &[d, d, 0.0][..])?;
     dir.write_tag(
         Tag::ModelTiepointTag,

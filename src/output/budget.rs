@@ -5,6 +5,15 @@
 //! write, validation refuses an estimate above [`OUTPUT_LIMIT`] (naming the key), and
 //! [`Budgeted`] holds the run to the limit while it goes, for what no estimate
 //! foresees (the number of CFL steps). `--force` lifts both.
+//!
+//! The step records, and the gauge rows of a run recording its gauges at every step
+//! (no `output.gauge_every`), come at the pace of the time step, which no key fixes:
+//! the estimate counts one per snapshot, a lower bound. So [`Budgeted`] also watches
+//! that pace: once [`PACE_STEPS`] steps have run, it extrapolates the bytes per
+//! simulated second of those records to `t_end`, and when that passes the limit it
+//! warns at once, rather than let the run stop at the limit hours later. A warning,
+//! not a refusal: the time step usually grows as a flow slows, so the extrapolation
+//! is an upper estimate.
 
 use super::{
     CellField, GaugeRecord, GridData, OutputError, OutputSink, RunInfo, RunMaps, RunSummary,
@@ -136,6 +145,9 @@ pub fn size(bytes: f64) -> String {
     }
 }
 
+/// Steps after which the pace of the per-step records is extrapolated (module docs).
+pub const PACE_STEPS: u64 = 200;
+
 /// Passes everything to `inner` while the bytes counted stay within `limit`; the call
 /// that would pass it fails instead, and the run ends with that error (the file is
 /// finished as after any output failure). `finish` always goes through.
@@ -145,6 +157,15 @@ pub struct Budgeted<S> {
     limit: Option<u64>,
     written: u64,
     path: String,
+    /// The run's end time, for the extrapolation of the per-step records (module docs).
+    t_end: Option<f64>,
+    steps: u64,
+    /// Bytes of step records and gauge rows so far.
+    per_step: u64,
+    /// Bytes of gauge rows so far.
+    gauge_rows: u64,
+    /// The warning of the extrapolation, once given.
+    warning: Option<String>,
 }
 
 impl<S> Budgeted<S> {
@@ -155,7 +176,50 @@ impl<S> Budgeted<S> {
             limit,
             written: 0,
             path: path.display().to_string(),
+            t_end: None,
+            steps: 0,
+            per_step: 0,
+            gauge_rows: 0,
+            warning: None,
         }
+    }
+
+    /// Extrapolates the per-step records of a run ending at `t_end` and warns on
+    /// stderr when they would pass the limit (module docs).
+    pub fn watching_pace(mut self, t_end: f64) -> Self {
+        self.t_end = Some(t_end);
+        self
+    }
+
+    /// The warning given when the pace of the per-step records would pass the limit.
+    pub fn pace_warning(&self) -> Option<&str> {
+        self.warning.as_deref()
+    }
+
+    /// After a step at time `t`: the extrapolation, once [`PACE_STEPS`] steps have run.
+    fn watch_pace(&mut self, t: f64) {
+        let (Some(limit), Some(t_end)) = (self.limit, self.t_end) else {
+            return;
+        };
+        if self.steps != PACE_STEPS || !(t > 0.0 && t < t_end) {
+            return;
+        }
+        let rest = self.per_step as f64 / t * (t_end - t);
+        if self.written as f64 + rest <= limit as f64 {
+            return;
+        }
+        let cure = if 2 * self.gauge_rows > self.per_step {
+            "record the gauges at fixed times (output.gauge_every)"
+        } else {
+            "use a coarser grid or a shorter time.t_end"
+        };
+        let text = format!(
+            "warning: at the pace of its first {PACE_STEPS} steps (t = {t:.3e} s), this run's step records and gauge rows would come to about {} by t_end = {t_end} s, more than the output limit of {}: it will stop with a write error when it reaches the limit; {cure}, or pass --force to lift the limit",
+            size(self.written as f64 + rest),
+            size(limit as f64)
+        );
+        crate::terminal::print_err(&format!("{text}\n"));
+        self.warning = Some(text);
     }
 
     fn spend(&mut self, bytes: u64) -> Result<(), OutputError> {
@@ -193,6 +257,9 @@ impl<S: OutputSink> OutputSink for Budgeted<S> {
 
     fn step(&mut self, rec: &StepRecord) -> Result<(), OutputError> {
         self.spend(STEP_BYTES)?;
+        self.steps += 1;
+        self.per_step += STEP_BYTES;
+        self.watch_pace(rec.t);
         self.inner.step(rec)
     }
 
@@ -224,7 +291,10 @@ impl<S: OutputSink> OutputSink for Budgeted<S> {
 
     fn gauges(&mut self, rec: &GaugeRecord) -> Result<(), OutputError> {
         let values = 1 + rec.eta.len() + rec.h_grains.len();
-        self.spend(GAUGE_VALUE_BYTES * values as u64)?;
+        let bytes = GAUGE_VALUE_BYTES * values as u64;
+        self.spend(bytes)?;
+        self.per_step += bytes;
+        self.gauge_rows += bytes;
         self.inner.gauges(rec)
     }
 }

@@ -55,7 +55,7 @@ use std::path::{Path, PathBuf};
 
 use rust_hdf5::H5File;
 
-pub use layout::stage_attr_name;
+pub use layout::{stage_attr_name, UNFINISHED};
 
 use layout::GaugeRows;
 use space::{DiskSpace, Space};

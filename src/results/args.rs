@@ -60,6 +60,10 @@ pub struct ExportArgs {
     /// GeoTIFF samples as Float64 (the file's values exactly) instead of Float32.
     #[arg(long)]
     pub float64: bool,
+    /// Replace files of the same names that granflow did not write (without it, only
+    /// granflow's own earlier exports are replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Do not list the files written.
     #[arg(long, short)]
     pub quiet: bool,
@@ -96,6 +100,10 @@ pub struct MapsArgs {
     /// GeoTIFF samples as Float64 instead of Float32.
     #[arg(long)]
     pub float64: bool,
+    /// Replace files of the same names that granflow did not write (without it, only
+    /// granflow's own earlier maps are replaced).
+    #[arg(long)]
+    pub force: bool,
     /// No table.
     #[arg(long, short)]
     pub quiet: bool,

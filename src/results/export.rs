@@ -14,6 +14,7 @@
 use std::path::{Path, PathBuf};
 
 use super::args::{ExportArgs, ExportFormat, RasterFormat};
+use super::publish::{Owner, Publish};
 use super::run_file::{north_up, RunFile};
 use super::{write_raster_band, ResultsError};
 use crate::gis::geotiff::Band;
@@ -207,10 +208,48 @@ fn snapshot_values(run: &RunFile, field: &Field, k: usize) -> Result<Vec<f64>, R
     run.frame(field.source, k)
 }
 
-/// Runs `granflow export`; returns the files written.
-pub fn export(args: &ExportArgs) -> Result<Vec<PathBuf>, ResultsError> {
+/// What `granflow export` wrote, and what to warn about.
+#[derive(Debug)]
+pub struct Exported {
+    pub files: Vec<PathBuf>,
+    /// Set when the run did not end normally: its maps are those of the part it ran.
+    pub warning: Option<String>,
+}
+
+/// The warning for maps exported from a run that did not end normally (status
+/// `unfinished`, `interrupted` or `failed: …`): they are not a final deposit.
+fn status_warning(run: &RunFile) -> Option<String> {
+    let status = run.status().unwrap_or_else(|| "unknown".to_owned());
+    if crate::sweep::record::status_is_ok(&status) {
+        return None;
+    }
+    let t = run
+        .times()
+        .last()
+        .map_or_else(|| "?".to_owned(), |&t| format_float(t));
+    let why = if status == crate::output::hdf5::UNFINISHED {
+        "it is still running, or was killed".to_owned()
+    } else {
+        format!("its status is `{status}`")
+    };
+    Some(format!(
+        "warning: {} did not end normally ({why}): what is exported is the state of the run up to its last snapshot (t = {t} s), not a final deposit",
+        run.path().display()
+    ))
+}
+
+/// Runs `granflow export`.
+pub fn export(args: &ExportArgs) -> Result<Exported, ResultsError> {
     let (maps, snaps) = choose_fields(&args.fields, args.time.is_some(), args.format)?;
     let run = RunFile::open(&args.run)?;
+    // A snapshot is what it says at its time; the maps of a run that stopped early
+    // are not its final deposit.
+    let warning = if maps.is_empty() {
+        None
+    } else {
+        status_warning(&run)
+    };
+    let done = |files| Exported { files, warning };
     let frame = args
         .time
         .map(|t| nearest_snapshot(run.times(), t))
@@ -229,7 +268,7 @@ pub fn export(args: &ExportArgs) -> Result<Vec<PathBuf>, ResultsError> {
     let stem = crate::output::run_stem(&args.run);
     let (nx, ny) = (run.grid().nx, run.grid().ny);
     let time_tag = |k: usize| format!("_t{}", format_float(run.times()[k]));
-    let mut written = Vec::new();
+    let mut publish = Publish::new(args.force);
     let raster = match args.format {
         ExportFormat::Geotiff => Some(RasterFormat::Geotiff),
         ExportFormat::Asc => Some(RasterFormat::Asc),
@@ -248,13 +287,13 @@ pub fn export(args: &ExportArgs) -> Result<Vec<PathBuf>, ResultsError> {
                 units: f.units,
             };
             write_raster_band(
+                &mut publish,
                 run.grid(),
                 values,
                 (format, args.float64),
                 &path,
                 Some(band),
             )?;
-            written.push(path);
         }
         if let Some(k) = frame {
             for f in &snaps {
@@ -270,16 +309,16 @@ pub fn export(args: &ExportArgs) -> Result<Vec<PathBuf>, ResultsError> {
                     units: f.units,
                 };
                 write_raster_band(
+                    &mut publish,
                     run.grid(),
                     values,
                     (format, args.float64),
                     &path,
                     Some(band),
                 )?;
-                written.push(path);
             }
         }
-        return Ok(written);
+        return publish.commit().map(done);
     }
     let title = format!("granflow run {}", args.run.display());
     let nc_err = |e: crate::gis::GisError| ResultsError::failure(e.to_string());
@@ -297,34 +336,36 @@ pub fn export(args: &ExportArgs) -> Result<Vec<PathBuf>, ResultsError> {
                 0..run.times().len(),
             ),
         };
-        let mut nc =
-            NetCdfWriter::create(&path, run.grid(), &specs(&snaps), &title).map_err(nc_err)?;
-        for k in frames {
-            let values = snaps
-                .iter()
-                .map(|f| Ok(north_up(&snapshot_values(&run, f, k)?, nx, ny)))
-                .collect::<Result<Vec<_>, ResultsError>>()?;
-            let slabs: Vec<&[f64]> = values.iter().map(Vec::as_slice).collect();
-            nc.write_frame(run.times()[k], &slabs).map_err(nc_err)?;
-        }
-        nc.finish().map_err(nc_err)?;
-        written.push(path);
+        publish.write(&path, &Owner::NetCdf, |tmp| {
+            let mut nc =
+                NetCdfWriter::create(tmp, run.grid(), &specs(&snaps), &title).map_err(nc_err)?;
+            for k in frames {
+                let values = snaps
+                    .iter()
+                    .map(|f| Ok(north_up(&snapshot_values(&run, f, k)?, nx, ny)))
+                    .collect::<Result<Vec<_>, ResultsError>>()?;
+                let slabs: Vec<&[f64]> = values.iter().map(Vec::as_slice).collect();
+                nc.write_frame(run.times()[k], &slabs).map_err(nc_err)?;
+            }
+            nc.finish().map_err(nc_err)
+        })?;
     }
     if !maps.is_empty() {
         let path = dir.join(format!("{stem}_maps.nc"));
-        let mut nc =
-            NetCdfWriter::create(&path, run.grid(), &specs(&maps), &title).map_err(nc_err)?;
-        let values = maps
-            .iter()
-            .map(|f| Ok(north_up(&run.map(f.source)?, nx, ny)))
-            .collect::<Result<Vec<_>, ResultsError>>()?;
-        let slabs: Vec<&[f64]> = values.iter().map(Vec::as_slice).collect();
-        let t = run.times().last().copied().unwrap_or(0.0);
-        nc.write_frame(t, &slabs).map_err(nc_err)?;
-        nc.finish().map_err(nc_err)?;
-        written.push(path);
+        publish.write(&path, &Owner::NetCdf, |tmp| {
+            let mut nc =
+                NetCdfWriter::create(tmp, run.grid(), &specs(&maps), &title).map_err(nc_err)?;
+            let values = maps
+                .iter()
+                .map(|f| Ok(north_up(&run.map(f.source)?, nx, ny)))
+                .collect::<Result<Vec<_>, ResultsError>>()?;
+            let slabs: Vec<&[f64]> = values.iter().map(Vec::as_slice).collect();
+            let t = run.times().last().copied().unwrap_or(0.0);
+            nc.write_frame(t, &slabs).map_err(nc_err)?;
+            nc.finish().map_err(nc_err)
+        })?;
     }
-    Ok(written)
+    publish.commit().map(done)
 }
 
 #[cfg(test)]

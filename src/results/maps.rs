@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 
 use super::args::MapsArgs;
 use super::ensemble::Ensemble;
+use super::publish::{Owner, Publish};
 use super::run_file::{north_up, RunFile};
 use super::skill::{skill, Skill};
 use super::{write_raster, ResultsError};
@@ -144,6 +145,9 @@ fn common_grid<R>(done: &[(R, PathBuf)]) -> Result<Raster, ResultsError> {
     Ok(grid)
 }
 
+/// The first words of `ensemble.toml`, which tell granflow's from a user's file.
+const MAPS_HEAD: &str = "# Written by `granflow maps`";
+
 /// Runs `granflow maps`.
 pub fn maps(args: &MapsArgs) -> Result<MapsReport, ResultsError> {
     if !(args.threshold.is_finite() && args.threshold >= 0.0) {
@@ -233,22 +237,22 @@ pub fn maps(args: &MapsArgs) -> Result<MapsReport, ResultsError> {
     let out = args.output.clone().unwrap_or_else(|| args.dir.join("maps"));
     std::fs::create_dir_all(&out)
         .map_err(|e| ResultsError::failure(format!("cannot create {}: {e}", out.display())))?;
-    let mut files = Vec::new();
     let probability = ensemble.probability();
     let area = |keep: &dyn Fn(f64) -> bool| {
         probability.iter().filter(|&&p| keep(p)).count() as f64 * grid.cell_area()
     };
     let areas = [area(&|p| p > 0.0), area(&|p| p >= 0.5), area(&|p| p >= 1.0)];
+    let mut publish = Publish::new(args.force);
     for (name, values) in ensemble.maps() {
         let path = out.join(format!("{name}.{}", args.format.extension()));
         write_raster(
+            &mut publish,
             &grid,
             north_up(&values, nx, ny),
             args.format,
             args.float64,
             &path,
         )?;
-        files.push(path);
     }
     if let Some(o) = &observed {
         // The footprint as the runs' cells see it (1 observed, 0 not), for plots.
@@ -257,18 +261,24 @@ pub fn maps(args: &MapsArgs) -> Result<MapsReport, ResultsError> {
             .iter()
             .map(|&c| f64::from(u8::from(c)))
             .collect::<Vec<_>>();
-        write_raster(&grid, north_up(&cells, nx, ny), args.format, false, &path)?;
-        files.push(path);
+        write_raster(
+            &mut publish,
+            &grid,
+            north_up(&cells, nx, ny),
+            args.format,
+            false,
+            &path,
+        )?;
     }
-    let write = |name: &str, text: String| -> Result<PathBuf, ResultsError> {
+    let mut write = |name: &str, head: &'static str, text: String| {
         let path = out.join(name);
-        std::fs::write(&path, text)
-            .map_err(|e| ResultsError::failure(format!("cannot write {}: {e}", path.display())))?;
-        Ok(path)
+        publish.write(&path, &Owner::TextHead(head), |tmp| {
+            std::fs::write(tmp, text)
+                .map_err(|e| ResultsError::failure(format!("cannot write {}: {e}", tmp.display())))
+        })
     };
-    files.push(write("runs.csv", runs_csv(&plan.axes, &rows))?);
-    let mut meta =
-        String::from("# Written by `granflow maps`: what the maps in this directory are.\n");
+    write("runs.csv", "index,run,", runs_csv(&plan.axes, &rows))?;
+    let mut meta = format!("{MAPS_HEAD}: what the maps in this directory are.\n");
     let _ = writeln!(meta, "sweep = {:?}", args.dir.display().to_string());
     let _ = writeln!(meta, "threshold = {}", format_float(args.threshold));
     let _ = writeln!(meta, "runs = {}", rows.len());
@@ -276,7 +286,8 @@ pub fn maps(args: &MapsArgs) -> Result<MapsReport, ResultsError> {
     if let Some(o) = &args.observed {
         let _ = writeln!(meta, "observed = {:?}", o.display().to_string());
     }
-    files.push(write("ensemble.toml", meta)?);
+    write("ensemble.toml", MAPS_HEAD, meta)?;
+    let files = publish.commit()?;
     Ok(MapsReport {
         dir: out,
         threshold: args.threshold,

@@ -9,12 +9,14 @@
 //! - [`export`]: `granflow export`;
 //! - [`ensemble`]: the per-cell statistics of an ensemble of runs;
 //! - [`skill`]: a run's footprint against an observed one (areas, ROC point);
-//! - [`maps`]: `granflow maps`.
+//! - [`maps`]: `granflow maps`;
+//! - [`publish`]: how both put their files in place (never a user's file, never half).
 
 pub mod args;
 pub mod ensemble;
 pub mod export;
 pub mod maps;
+pub mod publish;
 pub mod run_file;
 pub mod skill;
 
@@ -64,21 +66,24 @@ impl std::fmt::Display for ResultsError {
 impl std::error::Error for ResultsError {}
 
 /// Writes `values` (north row first, NaN for no value) on `grid`'s cells as a GeoTIFF
-/// (Float32, or Float64 when `float64`; Deflate) or an ESRI ASCII grid, NaN becoming
-/// [`NODATA`].
+/// (Float32, or Float64 when `float64`; Deflate) or an ESRI ASCII grid (with its `.prj`,
+/// see [`publish`]), NaN becoming [`NODATA`], through `publish`.
 pub fn write_raster(
+    publish: &mut publish::Publish,
     grid: &crate::gis::Raster,
     values: Vec<f64>,
     format: RasterFormat,
     float64: bool,
     path: &std::path::Path,
 ) -> Result<(), ResultsError> {
-    write_raster_band(grid, values, (format, float64), path, None)
+    write_raster_band(publish, grid, values, (format, float64), path, None)
 }
 
 /// [`write_raster`], a GeoTIFF's band described by `band` (an ESRI ASCII grid has no
-/// place for it).
+/// place for it). The `.prj` of a grid is the CRS's WKT, or one made from its EPSG
+/// code ([`crate::gis::Crs::wkt_text`]).
 pub fn write_raster_band(
+    publish: &mut publish::Publish,
     grid: &crate::gis::Raster,
     values: Vec<f64>,
     (format, float64): (RasterFormat, bool),
@@ -86,6 +91,7 @@ pub fn write_raster_band(
     band: Option<crate::gis::geotiff::Band>,
 ) -> Result<(), ResultsError> {
     use crate::gis::geotiff::{self, Compression, SampleType, WriteOptions};
+    use publish::Owner;
     let mut raster = crate::gis::Raster {
         values,
         nodata: Some(NODATA),
@@ -97,21 +103,40 @@ pub fn write_raster_band(
             *v = NODATA;
         }
     }
-    let written = match format {
-        RasterFormat::Geotiff => geotiff::write_band(
-            &raster,
-            path,
-            WriteOptions {
+    let failure = |e: crate::gis::GisError| ResultsError::failure(e.to_string());
+    match format {
+        RasterFormat::Geotiff => publish.write(path, &Owner::Geotiff, |tmp| {
+            let options = WriteOptions {
                 sample: if float64 {
                     SampleType::F64
                 } else {
                     SampleType::F32
                 },
                 compression: Compression::Deflate,
-            },
-            band,
-        ),
-        RasterFormat::Asc => crate::gis::asc::write(&raster, path),
-    };
-    written.map_err(|e| ResultsError::failure(e.to_string()))
+            };
+            geotiff::write_band(&raster, tmp, options, band).map_err(failure)
+        }),
+        RasterFormat::Asc => {
+            use crate::gis::asc;
+            let grid_owner = Owner::Asc;
+            publish.write(path, &grid_owner, |tmp| {
+                asc::write_grid(&raster, tmp).map_err(failure)
+            })?;
+            let prj = asc::prj_path(path);
+            let text = raster.crs.wkt_text().map(|w| format!("{w}\n"));
+            let owner = Owner::Prj {
+                text: text.clone(),
+                grid: path.to_path_buf(),
+                grid_owner: Box::new(grid_owner),
+            };
+            match text {
+                Some(text) => publish.write(&prj, &owner, |tmp| {
+                    std::fs::write(tmp, text).map_err(|e| {
+                        ResultsError::failure(format!("cannot write {}: {e}", tmp.display()))
+                    })
+                }),
+                None => publish.remove(&prj, &owner),
+            }
+        }
+    }
 }

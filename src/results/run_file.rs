@@ -176,6 +176,17 @@ impl RunFile {
         &self.times
     }
 
+    /// The run's `/summary` `status` (`unfinished` while it runs or when its writer was
+    /// killed; `None` in a file without one).
+    pub fn status(&self) -> Option<String> {
+        self.file
+            .root_group()
+            .group("summary")
+            .ok()?
+            .attr_string("status")
+            .ok()
+    }
+
     /// The `coordinates` attribute (`cartesian` or `local`).
     pub fn coordinates(&self) -> &str {
         &self.coordinates

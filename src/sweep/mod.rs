@@ -403,30 +403,39 @@ fn execute(
     });
 }
 
-/// Locks the output directory for this sweep: `DIR/sweep.lock`, or one lock per shard
-/// (`DIR/sweep.shard-K-of-N.lock`) so that the shards of a job array share a directory.
-fn lock_dir(dir: &Path, opts: &SweepOptions) -> Result<crate::lock::Lock, SweepError> {
-    let (file, what) = if opts.shard.is_partial() {
-        let (k, n) = (opts.shard.k, opts.shard.n);
-        (
-            format!("sweep.shard-{k}-of-{n}.lock"),
-            format!("shard {k}/{n} of the sweep directory {}", dir.display()),
-        )
-    } else {
-        (
-            "sweep.lock".to_owned(),
-            format!("the sweep directory {}", dir.display()),
-        )
-    };
-    crate::lock::acquire(&dir.join(file), &what, opts.wait, &mut |holder| {
+/// Locks the output directory for this sweep: `DIR/sweep.lock`, exclusively for a
+/// whole sweep; a shard holds it shared, so that the shards of a job array run side by
+/// side but never beside the whole sweep, and holds `DIR/sweep.shard-K-of-N.lock`
+/// exclusively, so that one shard does not run twice.
+fn lock_dir(dir: &Path, opts: &SweepOptions) -> Result<Vec<crate::lock::Lock>, SweepError> {
+    use crate::lock::{acquire, acquire_shared, LockError};
+    let whole = format!("the sweep directory {}", dir.display());
+    let on_wait = |what: &str, holder: &str| {
         if !opts.quiet {
             print_err(&format!("waiting: {what} is in use ({holder})\n"));
         }
-    })
-    .map_err(|e| match e {
-        crate::lock::LockError::Busy { .. } => SweepError::Input(e.to_string()),
-        crate::lock::LockError::Io { .. } => SweepError::Io(e.to_string()),
-    })
+    };
+    let error = |e: LockError| match e {
+        LockError::Busy { .. } | LockError::NotOurs { .. } => SweepError::Input(e.to_string()),
+        LockError::Io { .. } => SweepError::Io(e.to_string()),
+    };
+    let path = dir.join("sweep.lock");
+    if !opts.shard.is_partial() {
+        let lock = acquire(&path, &whole, opts.wait, &mut |h| on_wait(&whole, h));
+        return lock.map(|l| vec![l]).map_err(error);
+    }
+    let (k, n) = (opts.shard.k, opts.shard.n);
+    let shard = format!("shard {k}/{n} of the sweep directory {}", dir.display());
+    let dir_lock =
+        acquire_shared(&path, &whole, opts.wait, &mut |h| on_wait(&whole, h)).map_err(error)?;
+    let shard_lock = acquire(
+        &dir.join(format!("sweep.shard-{k}-of-{n}.lock")),
+        &shard,
+        opts.wait,
+        &mut |h| on_wait(&shard, h),
+    )
+    .map_err(error)?;
+    Ok(vec![dir_lock, shard_lock])
 }
 
 /// Runs a sweep (or one shard of it).

@@ -9,10 +9,18 @@
 //! status (`failed: … write error …`) of a run whose disk is full.
 //!
 //! [`DiskSpace`] claims real room: it writes the claimed bytes as zeros past the
-//! reserve in a file beside the output (`<file>.reserve`), then truncates them away,
-//! so the filesystem has shown it can hold them (tmpfs, quotas and delayed allocation
-//! alike) and the batch can use them. Another process may take the room in between;
-//! the sink then reports the failed batch and leaves the file alone. [`LimitedDisk`]
+//! reserve in a file beside the output, then truncates them away, so the filesystem
+//! has shown it can hold them (tmpfs, quotas and delayed allocation alike) and the
+//! batch can use them. Another process may take the room in between; the sink then
+//! reports the failed batch and leaves the file alone.
+//!
+//! That file is created as `<file>.reserve`, exclusively (never through a symbolic
+//! link), and on Unix its name is removed at once: the open file keeps the room, and
+//! the kernel gives it back when the process ends however it ends (`kill -9`
+//! included), so nothing is left beside the output. A `<file>.reserve` found there
+//! (left by a version that kept the name) is removed only when it is a regular file
+//! of zeros; `granflow run` refuses anything else there without `--force`
+//! ([`crate::overwrite`]). [`LimitedDisk`]
 //! is a disk of a given size, for tests of the full-disk path on any machine.
 
 use std::fs::{File, OpenOptions};
@@ -40,32 +48,68 @@ pub struct DiskSpace {
     file: Option<File>,
     /// Bytes of the reserve now held in the file.
     held: u64,
+    /// Whether the file still has its name (not on Unix), to remove at the end.
+    keeps_name: bool,
+}
+
+/// `<output>.reserve`.
+pub fn reserve_path(output: &Path) -> PathBuf {
+    let mut name = output.as_os_str().to_owned();
+    name.push(".reserve");
+    PathBuf::from(name)
 }
 
 impl DiskSpace {
-    /// Creates `<output>.reserve` holding [`RESERVE_BYTES`].
+    /// Creates the reserve file of `output` (module docs) holding [`RESERVE_BYTES`].
     pub fn new(output: &Path) -> std::io::Result<DiskSpace> {
-        let mut name = output.as_os_str().to_owned();
-        name.push(".reserve");
         let mut space = DiskSpace {
-            path: PathBuf::from(name),
+            path: reserve_path(output),
             file: None,
             held: 0,
+            keeps_name: false,
         };
-        space.write_zeros(RESERVE_BYTES)?;
+        let filled = space.write_zeros(RESERVE_BYTES);
+        if let Err(e) = filled {
+            space.release();
+            return Err(e);
+        }
         space.held = RESERVE_BYTES;
         Ok(space)
     }
 
-    /// Writes `n` zero bytes after the held ones (creating the file when needed).
-    fn write_zeros(&mut self, n: u64) -> std::io::Result<()> {
-        if self.file.is_none() {
-            let f = OpenOptions::new()
-                .create(true)
-                .truncate(true)
+    /// Creates the file exclusively, without a name on Unix (module docs).
+    fn open_fresh(&mut self) -> std::io::Result<File> {
+        let file = loop {
+            match OpenOptions::new()
                 .read(true)
                 .write(true)
-                .open(&self.path)?;
+                .create_new(true)
+                .open(&self.path)
+            {
+                Ok(f) => break f,
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    // Removes the name only (a symbolic link, not its target); what
+                    // may be removed was checked before the run (module docs).
+                    std::fs::remove_file(&self.path)?;
+                }
+                Err(e) => return Err(e),
+            }
+        };
+        #[cfg(unix)]
+        {
+            self.keeps_name = std::fs::remove_file(&self.path).is_err();
+        }
+        #[cfg(not(unix))]
+        {
+            self.keeps_name = true;
+        }
+        Ok(file)
+    }
+
+    /// Writes `n` zero bytes after the held ones.
+    fn write_zeros(&mut self, n: u64) -> std::io::Result<()> {
+        if self.file.is_none() {
+            let f = self.open_fresh()?;
             self.file = Some(f);
         }
         let file = self.file.as_mut().expect("opened above");
@@ -94,7 +138,9 @@ impl Space for DiskSpace {
     fn release(&mut self) {
         self.file = None;
         self.held = 0;
-        let _ = std::fs::remove_file(&self.path);
+        if std::mem::take(&mut self.keeps_name) {
+            let _ = std::fs::remove_file(&self.path);
+        }
     }
 }
 
