@@ -1050,7 +1050,7 @@ fn drained_upwind(
 
 /// Films thinner than this (m, thickness per horizontal area) have their velocity
 /// desingularised in the bed-normal frame ([`desingularised`]).
-pub const H_FILM: f64 = 1e-6;
+const H_FILM: f64 = 1e-6;
 
 /// The factor 2H²/(H² + max(H², ε²)) (ε = [`H_FILM`]) on the discharge of a cell of
 /// thickness `h`: 1 (to the bit) for H ≥ ε, the velocity q/H otherwise replaced by
