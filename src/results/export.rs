@@ -276,45 +276,32 @@ pub fn export(args: &ExportArgs) -> Result<Exported, ResultsError> {
     };
     if let Some(format) = raster {
         let ext = format.extension();
+        // One band: its file, values (north row first) and description.
+        let mut band = |path: PathBuf, values: Vec<f64>, f: &Field, description: String| {
+            let band = Band {
+                description: &description,
+                units: f.units,
+            };
+            let options = (format, args.float64);
+            write_raster_band(&mut publish, run.grid(), values, options, &path, Some(band))
+        };
         for f in &maps {
             let path = dir.join(format!("{stem}_{}.{ext}", f.name));
             let values = north_up(&run.map(f.source)?, nx, ny);
             // The run file's own description (it names ppr's density), else ours.
             let text = run.map_description(f.source);
-            let description = band_description(f, text.as_deref());
-            let band = Band {
-                description: &description,
-                units: f.units,
-            };
-            write_raster_band(
-                &mut publish,
-                run.grid(),
-                values,
-                (format, args.float64),
-                &path,
-                Some(band),
-            )?;
+            band(path, values, f, band_description(f, text.as_deref()))?;
         }
         if let Some(k) = frame {
             for f in &snaps {
                 let path = dir.join(format!("{stem}_{}{}.{ext}", f.name, time_tag(k)));
                 let values = north_up(&snapshot_values(&run, f, k)?, nx, ny);
-                let description = format!(
-                    "{} at t = {} s",
-                    band_description(f, None),
-                    format_float(run.times()[k])
-                );
-                let band = Band {
-                    description: &description,
-                    units: f.units,
-                };
-                write_raster_band(
-                    &mut publish,
-                    run.grid(),
+                let t = format_float(run.times()[k]);
+                band(
+                    path,
                     values,
-                    (format, args.float64),
-                    &path,
-                    Some(band),
+                    f,
+                    format!("{} at t = {t} s", band_description(f, None)),
                 )?;
             }
         }
