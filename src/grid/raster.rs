@@ -275,6 +275,15 @@ impl Raster2d {
         })
     }
 
+    /// The slope θ (radians) of the reference plane of the local frame; 0 in the frames
+    /// without one (Cartesian, bed-normal: the terrain is all in the bed).
+    pub fn plane_theta(&self) -> f64 {
+        match self.spec.coordinates {
+            Coordinates::Local => self.theta,
+            Coordinates::Cartesian | Coordinates::BedNormal => 0.0,
+        }
+    }
+
     /// The raster without the centrifugal term in the basal normal stress of the
     /// bed-normal frame (`domain.curvature = false`; nothing changes in the others).
     pub fn without_friction_curvature(mut self) -> Raster2d {

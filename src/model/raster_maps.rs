@@ -44,7 +44,7 @@ use std::borrow::Cow;
 
 use crate::gis::path::{PathField, PathSpec};
 use crate::grid::raster::{Raster2d, BAND_ROWS};
-use crate::grid::{Coordinates, Grid};
+use crate::grid::Grid;
 use crate::model::tracker::Tracker;
 use crate::numerics::workers::Workers;
 use crate::output::{CellField, OutputError, OutputSink, RunMaps};
@@ -109,10 +109,7 @@ impl RasterMaps {
             PathField::Pft => grid.mask_walls(&self.h_max).into_owned(),
             PathField::Ppr => grid.mask_walls(&self.peak_pressure()).into_owned(),
         };
-        let theta = match grid.coordinates() {
-            Coordinates::Local => grid.theta,
-            Coordinates::Cartesian | Coordinates::BedNormal => 0.0,
-        };
+        let theta = grid.plane_theta();
         let cell = |k: usize| {
             let p = grid.centre(k);
             let b = grid.bed()[k];
@@ -199,10 +196,7 @@ impl RasterMaps {
         let front = (0..self.arrival.len())
             .filter(|&k| self.arrival[k].is_finite())
             .max_by(|&a, &b| s(a).total_cmp(&s(b)));
-        let theta = match grid.coordinates() {
-            Coordinates::Local => grid.theta,
-            Coordinates::Cartesian | Coordinates::BedNormal => 0.0,
-        };
+        let theta = grid.plane_theta();
         let world = |k: usize| {
             let p = grid.centre(k);
             let b = grid.bed()[k];

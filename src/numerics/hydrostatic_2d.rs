@@ -340,15 +340,23 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         drive: f64,
         cells: impl Fn() -> (usize, usize),
     ) -> f64 {
-        let law = match self.friction {
+        let (cell_l, cell_r) = ((l.speed, l.side.h), (r.speed, r.side.h));
+        let law = self.face_law(drive, cells);
+        law.face_mu(cell_l, cell_r, speed, h, self.raster.g_n)
+    }
+
+    /// The friction law of a face between `cells` (lower and higher index): the one
+    /// law, or with friction zones that of the cell the normal drive `drive` pushes
+    /// mass out of (the cell whose friction holds that mass).
+    #[inline(always)]
+    fn face_law(&self, drive: f64, cells: impl Fn() -> (usize, usize)) -> L {
+        match self.friction {
             CellFriction::Uniform(law) => *law,
             CellFriction::PerCell(laws) => {
                 let (lo, hi) = cells();
                 laws[if drive > 0.0 { lo } else { hi }]
             }
-        };
-        let (cell_l, cell_r) = ((l.speed, l.side.h), (r.speed, r.side.h));
-        law.face_mu(cell_l, cell_r, speed, h, self.raster.g_n)
+        }
     }
 
     /// The cells (row-major) of the x-face between ghost-inclusive columns `c` and
@@ -666,7 +674,8 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
                 FaceFlux {
                     h: mass_flux(&c, sl, sr),
                     qn: layer_momentum_flux(&c, c.h_minus, c.h_plus, sl.u, sr.u),
-                    ..face_flux_rest(&c, sl, sr, t_l, t_r)
+                    qt: transverse_flux(&c, sl, sr, t_l, t_r),
+                    ..face_sources(&c)
                 }
             }
         }
@@ -735,13 +744,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             }
         };
         let mu_of = |_speed: f64, _h: f64, drive: f64| {
-            let law = match self.friction {
-                CellFriction::Uniform(law) => *law,
-                CellFriction::PerCell(laws) => {
-                    let (lo, hi) = cells();
-                    laws[if drive > 0.0 { lo } else { hi }]
-                }
-            };
+            let law = self.face_law(drive, cells);
             let (speed, h) = (0.5 * (l.speed + r.speed), 0.5 * (hn_l + hn_r));
             law.face_mu((l.speed, hn_l), (r.speed, hn_r), speed, h, g_normal)
         };
@@ -754,10 +757,8 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             Some((c, sl, sr)) => {
                 let t_l = if c.left_at_rest { 0.0 } else { l.t };
                 let t_r = if c.right_at_rest { 0.0 } else { r.t };
-                // The tangential momentum goes with the mass, upwind: a film beside a
-                // thick cell whose HLL mass flux the neighbour's velocity decides
-                // exports only its own momentum (with HLL's form it exported the
-                // neighbour's and raced off the other way).
+                // Both momenta go with the mass (HLL's form, or the donor's own where
+                // the face drains it: `drained_upwind`).
                 let h = mass_flux(&c, sl, sr);
                 let drain = self.dt / d;
                 FaceFlux {
@@ -766,8 +767,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
                         .unwrap_or_else(|| transverse_flux(&c, sl, sr, sl.u_base, sr.u_base)),
                     qt: drained_upwind(h, drain, (sl.h, sr.h), (t_l, t_r))
                         .unwrap_or_else(|| transverse_flux(&c, sl, sr, t_l, t_r)),
-
-                    ..face_flux_rest(&c, sl, sr, t_l, t_r)
+                    ..face_sources(&c)
                 }
             }
         }
@@ -988,14 +988,14 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     }
 }
 
-/// The tangential flux and the pressure sources of a face (its mass and normal
-/// momentum fluxes left at zero).
+/// The pressure sources of a face and their gravity parts (its fluxes left at zero,
+/// for the frame's own).
 #[inline(always)]
-fn face_flux_rest(c: &Interface, sl: Side, sr: Side, t_l: f64, t_r: f64) -> FaceFlux {
+fn face_sources(c: &Interface) -> FaceFlux {
     FaceFlux {
         h: 0.0,
         qn: 0.0,
-        qt: transverse_flux(c, sl, sr, t_l, t_r),
+        qt: 0.0,
         share_l: c.share_left,
         share_r: c.share_right,
         body_l: c.body_left,

@@ -6,7 +6,7 @@
 //! Everything that can be wrong with the scenario was refused by its validation.
 
 use crate::grid::raster::{Raster2d, RasterSpec, Sides};
-use crate::grid::{Coordinates, Grid};
+use crate::grid::Grid;
 use crate::model::granular_2d::{pipeline_on, pipeline_with_zones, Granular2d};
 use crate::model::raster_maps::RasterMaps;
 use crate::numerics::workers::Workers;
@@ -100,10 +100,7 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
         wall_cells: scn.sampled.wall.iter().filter(|&&w| w).count(),
         geotransform: plane.geotransform,
     });
-    let tan_theta = match grid.coordinates() {
-        Coordinates::Local => grid.spec().slope_deg.to_radians().tan(),
-        Coordinates::Cartesian | Coordinates::BedNormal => 0.0,
-    };
+    let tan_theta = grid.plane_theta().tan();
     let nx = grid.nx();
     let z = (0..grid.nx() * grid.ny()).map(|c| grid.bed()[c] - grid.x(c % nx) * tan_theta);
     let rules = crate::stop::default_rules(super::stop_options(scn, z));
