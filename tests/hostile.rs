@@ -9,19 +9,19 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn bin() -> PathBuf {
+pub(crate) fn bin() -> PathBuf {
     assert_cmd::cargo::cargo_bin("granflow")
 }
 
-fn scenario(name: &str) -> PathBuf {
+pub(crate) fn scenario(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("scenarios")
         .join(name)
 }
 
 /// (exit code, stderr) of `granflow ARGS…` run in `cwd`, killed (and the test failed)
-/// after `limit`.
-fn run_in(cwd: &Path, args: &[&str], limit: Duration) -> (i32, String) {
+/// after `limit`; a panic fails the test too.
+pub(crate) fn run_in(cwd: &Path, args: &[&str], limit: Duration) -> (i32, String) {
     let mut child = Command::new(bin())
         .args(args)
         .current_dir(cwd)
@@ -44,7 +44,7 @@ fn run_in(cwd: &Path, args: &[&str], limit: Duration) -> (i32, String) {
 }
 
 /// The exit code, or `None` (the child killed) when it runs longer than `limit`.
-fn wait_for(child: &mut Child, limit: Duration) -> Option<i32> {
+pub(crate) fn wait_for(child: &mut Child, limit: Duration) -> Option<i32> {
     let start = Instant::now();
     loop {
         if let Some(status) = child.try_wait().unwrap() {
@@ -59,7 +59,7 @@ fn wait_for(child: &mut Child, limit: Duration) -> Option<i32> {
     }
 }
 
-const MINUTE: Duration = Duration::from_secs(60);
+pub(crate) const MINUTE: Duration = Duration::from_secs(60);
 
 #[test]
 fn an_output_rate_that_would_fill_the_disk_is_refused_naming_the_key() {

@@ -4,62 +4,11 @@
 //! Nothing a user did not ask to replace is touched, and nothing is left behind.
 
 use std::fs;
-use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-const MINUTE: Duration = Duration::from_secs(60);
-
-fn bin() -> PathBuf {
-    assert_cmd::cargo::cargo_bin("granflow")
-}
-
-fn scenario(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenarios")
-        .join(name)
-}
-
-/// (exit code, stderr) of `granflow ARGS…` run in `cwd`; the test fails when it runs
-/// longer than `limit` or panics.
-fn run_in(cwd: &Path, args: &[&str], limit: Duration) -> (i32, String) {
-    let mut child = Command::new(bin())
-        .args(args)
-        .current_dir(cwd)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let code = wait_for(&mut child, limit)
-        .unwrap_or_else(|| panic!("granflow {args:?} still running after {limit:?}"));
-    let mut stderr = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut stderr)
-        .unwrap();
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    (code, stderr)
-}
-
-/// The exit code, or `None` (the child killed) when it runs longer than `limit`.
-fn wait_for(child: &mut Child, limit: Duration) -> Option<i32> {
-    let start = Instant::now();
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            return Some(status.code().unwrap_or(-1));
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            return None;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
+use super::hostile::{bin, run_in, scenario, MINUTE};
 
 /// `granflow run collapse.toml` for `t_end` seconds (never stopping at rest) into
 /// `output`, with `extra` arguments.
