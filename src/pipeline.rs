@@ -20,6 +20,12 @@ impl<G, S> Pipeline<G, S> {
         Pipeline { stages, times }
     }
 
+    /// Appends `stage` after the others.
+    pub fn push(&mut self, stage: Box<dyn Stage<G, S>>) {
+        self.stages.push(stage);
+        self.times.push(Duration::ZERO);
+    }
+
     /// Names of the stages, in order.
     pub fn names(&self) -> Vec<&'static str> {
         self.stages.iter().map(|s| s.name()).collect()

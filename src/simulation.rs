@@ -161,6 +161,12 @@ impl<M: Model> Simulation<M> {
         self.rules.push(rule);
     }
 
+    /// Appends a stage to the run's step, after the model's (a sub-step of one's own,
+    /// e.g. a test's).
+    pub fn push_stage(&mut self, stage: Box<dyn crate::numerics::Stage<M::Grid, M::State>>) {
+        self.pipeline.push(stage);
+    }
+
     /// Names of the stages, in order.
     pub fn stage_names(&self) -> Vec<&'static str> {
         self.pipeline.names()

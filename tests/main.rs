@@ -36,6 +36,7 @@ mod terrain_2d;
 mod terrain_2d_bed_normal;
 mod terrain_2d_io;
 mod terrain_2d_reference;
+mod terrain_2d_tiles;
 mod terrain_2d_zones;
 mod water_nh;
 mod well_balanced;

@@ -17,7 +17,6 @@
 //! no other term sees it. The front, the maps ([`crate::model::raster_maps`]) and
 //! `/grid/h_bed` count h − h_i.
 
-use crate::grid::raster::BAND_ROWS;
 use crate::grid::Raster2d;
 use crate::model::granular::pipeline::{with_law, WithLaw};
 use crate::model::{first_maximum, Diagnostics, Model};
@@ -30,6 +29,7 @@ use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFrictio
 use crate::physics::shallow::{celerity, velocity};
 use crate::physics::{Material, GRAVITY};
 use crate::pipeline::Pipeline;
+use crate::state::tiles::Tiles;
 use crate::state::State2d;
 
 /// Per-cell friction coefficients of a raster run (row-major, one per cell), where the
@@ -86,12 +86,32 @@ impl Granular2d {
         self
     }
 
-    /// The diagnostics of the cells `cells` of `state` (one band).
-    fn band_diagnostics(
+    /// The diagnostics of the cells of band `band` of `state`: every cell while its
+    /// tiles are unknown, else those of its visited tiles (non-empty or stepped,
+    /// `state::tiles`), in row-major order either way (the cells left out are +0 and add
+    /// nothing).
+    fn band_diagnostics(&self, raster: &Raster2d, state: &State2d, band: usize) -> BandDiagnostics {
+        let nx = raster.nx();
+        let rows = raster.band_rows(band);
+        if !state.tiles.is_known() {
+            let cells = rows.start * nx..rows.end * nx;
+            return self.cells_diagnostics(raster, state, std::iter::once(cells));
+        }
+        let tiles = &state.tiles;
+        let ranges = rows.flat_map(|j| {
+            tiles
+                .band_columns(band, Tiles::is_visited)
+                .map(move |c| j * nx + c.start..j * nx + c.end)
+        });
+        self.cells_diagnostics(raster, state, ranges)
+    }
+
+    /// The diagnostics of the cells `cells` of `state`, in that order.
+    fn cells_diagnostics(
         &self,
         raster: &Raster2d,
         state: &State2d,
-        cells: std::ops::Range<usize>,
+        cells: impl Iterator<Item = std::ops::Range<usize>>,
     ) -> BandDiagnostics {
         let g_n = raster.g_n;
         let nx = raster.nx();
@@ -104,7 +124,7 @@ impl Granular2d {
             h_max: 0.0,
             front: f64::NEG_INFINITY,
         };
-        for k in cells {
+        for k in cells.flatten() {
             let (h, qx, qy) = (state.h[k], state.hu[k], state.hv[k]);
             d.mass += h;
             d.q_sum += qx + qy;
@@ -234,13 +254,13 @@ impl Model for Granular2d {
         "granular"
     }
 
-    /// The sums (mass, kinetic energy) are formed band by band ([`BAND_ROWS`] rows)
-    /// and the bands' sums added in band order: the same bits on any number of threads.
+    /// The sums (mass, kinetic energy) are formed band by band ([`crate::grid::raster::BAND_ROWS`] rows)
+    /// and the bands' sums added in band order: the same bits on any number of threads,
+    /// and with the tiles the step skips left out (they hold +0).
     fn diagnose(&self, raster: &Raster2d, state: &State2d) -> Diagnostics {
-        let (cells, chunk) = (state.h.len(), BAND_ROWS * raster.nx());
-        let bands = self.workers.map_bands(cells.div_ceil(chunk), |k| {
-            self.band_diagnostics(raster, state, k * chunk..((k + 1) * chunk).min(cells))
-        });
+        let bands = self
+            .workers
+            .map_bands(raster.bands(), |k| self.band_diagnostics(raster, state, k));
         let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
         let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
         let mut front = f64::NEG_INFINITY;
@@ -275,12 +295,31 @@ impl Model for Granular2d {
     }
 
     /// The copy in chunks of 2¹⁴ values (128 kB) on the run's threads: a plain copy
-    /// is bound by memory bandwidth, which two cores share but do not halve.
+    /// is bound by memory bandwidth, which two cores share but do not halve. Once the
+    /// backup holds a copy of the state with known tiles, only the tiles the last step
+    /// changed (its stepped tiles, `state::tiles`) differ between the two: they alone
+    /// are copied.
     fn save_state(&self, backup: &mut State2d, state: &State2d) {
-        let chunk = 1 << 14;
-        self.workers.copy(chunk, &mut backup.h, &state.h);
-        self.workers.copy(chunk, &mut backup.hu, &state.hu);
-        self.workers.copy(chunk, &mut backup.hv, &state.hv);
+        if !(state.tiles.is_known() && backup.tiles.known_as(&state.tiles)) {
+            let chunk = 1 << 14;
+            self.workers.copy(chunk, &mut backup.h, &state.h);
+            self.workers.copy(chunk, &mut backup.hu, &state.hu);
+            self.workers.copy(chunk, &mut backup.hv, &state.hv);
+            backup.tiles.clone_from(&state.tiles);
+            return;
+        }
+        let tiles = &state.tiles;
+        let nx = tiles.nx();
+        for &t in tiles.stepped() {
+            let (rows, cols) = tiles.cells(t as usize);
+            for j in rows {
+                let cells = j * nx + cols.start..j * nx + cols.end;
+                backup.h[cells.clone()].copy_from_slice(&state.h[cells.clone()]);
+                backup.hu[cells.clone()].copy_from_slice(&state.hu[cells.clone()]);
+                backup.hv[cells.clone()].copy_from_slice(&state.hv[cells]);
+            }
+        }
+        backup.tiles.clone_from(tiles);
     }
 
     /// The first cell with the largest u² + v² (the speed of [`Self::diagnose`]).

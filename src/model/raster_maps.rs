@@ -49,6 +49,7 @@ use crate::model::tracker::Tracker;
 use crate::numerics::workers::Workers;
 use crate::output::{CellField, OutputError, OutputSink, RunMaps};
 use crate::state::layered_2d::State2d;
+use crate::state::tiles::Tiles;
 
 /// The maps of one raster run (allocated once, updated in place).
 #[derive(Debug, Clone)]
@@ -259,15 +260,27 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         band_reached.clear();
         band_reached.resize(cells.div_ceil(chunk), 0);
         let (h, hu, hv, h_bed) = (&state.h, &state.hu, &state.hv, &h_bed[..]);
-        let metric = grid.metric();
+        let (metric, tiles, nx) = (grid.metric(), &state.tiles, grid.nx());
         workers.bands3(
             chunk,
             (&mut h_max[..], &mut speed_max[..], &mut arrival[..]),
             &mut band_reached[..],
             |band, (h_max, speed_max, arrival), reached| {
                 let base = band * chunk;
-                for i in 0..h_max.len() {
-                    let k = base + i;
+                // Only the cells of the tiles the last step changed (all before the
+                // first step, `state::tiles`): the maps of the others stand.
+                let rows = grid.band_rows(band);
+                let all = (!tiles.is_known()).then(|| rows.start * nx..rows.end * nx);
+                let stepped = tiles.is_known().then(|| {
+                    rows.flat_map(|j| {
+                        tiles
+                            .band_columns(band, Tiles::is_stepped)
+                            .map(move |c| j * nx + c.start..j * nx + c.end)
+                    })
+                });
+                let cells = all.into_iter().chain(stepped.into_iter().flatten());
+                for k in cells.flatten() {
+                    let i = k - base;
                     let mut above = if h_bed.is_empty() {
                         h[k]
                     } else {

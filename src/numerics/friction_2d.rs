@@ -32,6 +32,7 @@ use crate::grid::{BedMetric, Raster2d};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
 use crate::physics::GRAVITY;
+use crate::state::tiles::Tiles;
 use crate::state::State2d;
 use std::sync::Arc;
 
@@ -132,46 +133,36 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
         "friction"
     }
 
+    /// Over the stepped tiles only (`state::tiles`): a cell outside them holds no
+    /// discharge, which the friction leaves as it is.
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
-        let (g_n, chunk) = (raster.g_n, BAND_ROWS * raster.nx());
-        let h = &state.h;
-        if let Some(m) = raster.metric() {
-            let friction = &self.friction;
-            self.workers
-                .bands2(chunk, &mut state.hu, &mut state.hv, |band, hu, hv| {
-                    let start = band * chunk;
-                    for (i, (qx, qy)) in hu.iter_mut().zip(hv.iter_mut()).enumerate() {
-                        let k = start + i;
-                        let law = friction.at(k);
-                        (*qx, *qy) = bed_normal_friction(&law, m, k, (*qx, *qy), h[k], dt);
+        let (g_n, nx, chunk) = (raster.g_n, raster.nx(), BAND_ROWS * raster.nx());
+        state.ensure_tiles(nx, raster.ny());
+        let State2d { h, hu, hv, tiles } = state;
+        let (h, tiles, friction) = (&*h, &*tiles, &self.friction);
+        let metric = raster.metric();
+        self.workers.bands2(chunk, hu, hv, |band, hu, hv| {
+            let start = band * chunk;
+            let rows = raster.band_rows(band);
+            for cols in tiles.band_columns(band, Tiles::is_stepped) {
+                for j in rows.clone() {
+                    for k in j * nx + cols.start..j * nx + cols.end {
+                        let (qx, qy) = (&mut hu[k - start], &mut hv[k - start]);
+                        (*qx, *qy) = match (metric, friction) {
+                            (Some(m), _) => {
+                                bed_normal_friction(&friction.at(k), m, k, (*qx, *qy), h[k], dt)
+                            }
+                            (None, CellFriction::Uniform(law)) => {
+                                vector_friction(law, *qx, *qy, h[k], dt, g_n)
+                            }
+                            (None, CellFriction::PerCell(laws)) => {
+                                vector_friction(&laws[k], *qx, *qy, h[k], dt, g_n)
+                            }
+                        };
                     }
-                });
-            return Ok(());
-        }
-        match &self.friction {
-            CellFriction::Uniform(law) => {
-                let law = *law;
-                self.workers
-                    .bands2(chunk, &mut state.hu, &mut state.hv, |k, hu, hv| {
-                        let h = &h[k * chunk..k * chunk + hu.len()];
-                        for ((qx, qy), &h) in hu.iter_mut().zip(hv.iter_mut()).zip(h) {
-                            (*qx, *qy) = vector_friction(&law, *qx, *qy, h, dt, g_n);
-                        }
-                    });
+                }
             }
-            CellFriction::PerCell(laws) => {
-                self.workers
-                    .bands2(chunk, &mut state.hu, &mut state.hv, |k, hu, hv| {
-                        let cells = k * chunk..k * chunk + hu.len();
-                        let (h, laws) = (&h[cells.clone()], &laws[cells]);
-                        for (((qx, qy), &h), law) in
-                            hu.iter_mut().zip(hv.iter_mut()).zip(h).zip(laws)
-                        {
-                            (*qx, *qy) = vector_friction(law, *qx, *qy, h, dt, g_n);
-                        }
-                    });
-            }
-        }
+        });
         Ok(())
     }
 }

@@ -70,6 +70,7 @@ use super::face::{
     layer_momentum_flux, mass_flux, transverse_flux, Interface, Side,
 };
 use super::friction_2d::CellFriction;
+use super::workers::Disjoint;
 use super::workers::Workers;
 use super::{Stage, StageError};
 use crate::grid::raster::BAND_ROWS;
@@ -77,7 +78,10 @@ use crate::grid::{BedMetric, Raster2d};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{velocity, H_DRY};
 use crate::physics::GRAVITY;
+use crate::state::tiles::{Tiles, TILE_COLS};
 use crate::state::State2d;
+use std::ops::Range;
+use std::sync::Mutex;
 
 /// What one face gives its two cells: mass flux, normal and tangential momentum
 /// fluxes, the pressure sources of the lower-index (l) and higher-index (r) cell and
@@ -199,21 +203,17 @@ fn cell_speed(u: f64, v: f64) -> f64 {
     u.hypot(v)
 }
 
-/// One band's scratch: the y-faces under and over the current row, the views of
-/// the rows under and over them, and the smallest new thickness of the band with
-/// its cell.
+/// One thread's scratch for the tile it sweeps: the y-faces under and over the
+/// current row of the tile and the views of the rows under and over them ([`TILE_COLS`]
+/// each).
 #[derive(Debug, Clone)]
-struct BandScratch {
+struct TileScratch {
     below: Vec<FaceFlux>,
     above: Vec<FaceFlux>,
     /// The views of the ghost-inclusive rows under and over the y-faces `above`
     /// (each row's computed once per sweep).
     lower: Vec<CellView>,
     upper: Vec<CellView>,
-    worst: (f64, usize),
-    /// Whether each row of the band has a draining cell (θ ≠ 1), from the unlimited
-    /// pass.
-    drains: [bool; BAND_ROWS],
 }
 
 /// The 2-D hydrostatic step, generic over the basal friction law (used in ΔC).
@@ -224,31 +224,37 @@ pub struct HydrostaticStep2d<L: BasalFriction> {
     h_new: Vec<f64>,
     hu_new: Vec<f64>,
     hv_new: Vec<f64>,
-    /// Draining factors per cell, from the unlimited pass's faces.
+    /// Draining factors per cell, from the unlimited pass's faces: 1 outside a step,
+    /// and within one wherever the unlimited pass did not write a θ ≠ 1.
     drain: Vec<f64>,
-    /// Whether each row has a draining cell (gathered from the bands' scratch).
-    row_drains: Vec<bool>,
-    scratch: Vec<BandScratch>,
+    /// Per tile: the smallest new thickness and its cell (first in cell order), and
+    /// whether it has a draining cell (false outside a step).
+    tile_worst: Vec<(f64, usize)>,
+    tile_drains: Vec<bool>,
+    /// One scratch per thread (each locked by its own thread only).
+    scratch: Vec<Mutex<TileScratch>>,
 }
 
 impl<L: BasalFriction> HydrostaticStep2d<L> {
-    /// The step on `raster` with one friction law `law`, its bands run by `workers`.
+    /// The step on `raster` with one friction law `law`, its tiles run by `workers`.
     pub fn new(law: L, raster: &Raster2d, workers: Workers) -> Self {
         Self::with_friction(CellFriction::Uniform(law), raster, workers)
     }
 
-    /// The step on `raster` with the friction of its cells (friction zones), its bands
+    /// The step on `raster` with the friction of its cells (friction zones), its tiles
     /// run by `workers`.
     pub fn with_friction(friction: CellFriction<L>, raster: &Raster2d, workers: Workers) -> Self {
-        let (nx, cells) = (raster.nx(), raster.nx() * raster.ny());
-        let band = BandScratch {
-            below: vec![FaceFlux::default(); nx],
-            above: vec![FaceFlux::default(); nx],
-            lower: vec![CellView::default(); nx],
-            upper: vec![CellView::default(); nx],
-            worst: (f64::INFINITY, 0),
-            drains: [false; BAND_ROWS],
+        let cells = raster.nx() * raster.ny();
+        let tiles = raster.nx().div_ceil(TILE_COLS) * raster.ny().div_ceil(BAND_ROWS);
+        let scratch = TileScratch {
+            below: vec![FaceFlux::default(); TILE_COLS],
+            above: vec![FaceFlux::default(); TILE_COLS],
+            lower: vec![CellView::default(); TILE_COLS],
+            upper: vec![CellView::default(); TILE_COLS],
         };
+        let scratch = (0..workers.threads())
+            .map(|_| Mutex::new(scratch.clone()))
+            .collect();
         HydrostaticStep2d {
             friction,
             workers,
@@ -256,24 +262,22 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             hu_new: vec![0.0; cells],
             hv_new: vec![0.0; cells],
             drain: vec![1.0; cells],
-            row_drains: vec![false; raster.ny()],
-            scratch: vec![band; raster.bands()],
+            tile_worst: vec![(f64::INFINITY, 0); tiles],
+            tile_drains: vec![false; tiles],
+            scratch,
         }
     }
 
     /// Bytes of scratch per cell that the step holds (new state, draining factors,
-    /// face and view rows), for the memory budget of `docs/performance.md`.
+    /// per-tile results, the threads' face and view rows), for the memory budget of
+    /// `docs/performance.md`.
     pub fn bytes_per_cell(&self) -> f64 {
         let cells = self.h_new.len() as f64;
-        let rows: usize = self
-            .scratch
-            .iter()
-            .map(|s| {
-                (s.below.len() + s.above.len()) * std::mem::size_of::<FaceFlux>()
-                    + (s.lower.len() + s.upper.len()) * std::mem::size_of::<CellView>()
-            })
-            .sum();
-        (4.0 * 8.0 * cells + rows as f64) / cells
+        let per_tile = std::mem::size_of::<(f64, usize)>() + std::mem::size_of::<bool>();
+        let rows = self.scratch.len()
+            * TILE_COLS
+            * (2 * std::mem::size_of::<FaceFlux>() + 2 * std::mem::size_of::<CellView>());
+        (4.0 * 8.0 * cells + (per_tile * self.tile_worst.len() + rows) as f64) / cells
     }
 }
 
@@ -503,15 +507,15 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     }
 
     /// The views of ghost-inclusive row `r` (0 and ny + 1 are ghosts: their y-sides
-    /// are those of [`Self::y_side`]).
-    fn views(&self, r: usize, row: &mut [CellView]) {
+    /// are those of [`Self::y_side`]) from column `c0` on.
+    fn views(&self, r: usize, c0: usize, row: &mut [CellView]) {
         if r >= 1 && r <= self.ny {
-            for (i, view) in row.iter_mut().enumerate() {
-                *view = self.view(i, r - 1);
+            for (k, view) in row.iter_mut().enumerate() {
+                *view = self.view(c0 + k, r - 1);
             }
         } else {
-            for (i, view) in row.iter_mut().enumerate() {
-                let y = self.y_side(i, r);
+            for (k, view) in row.iter_mut().enumerate() {
+                let y = self.y_side(c0 + k, r);
                 *view = CellView {
                     h: y.side.h,
                     u: y.t,
@@ -827,16 +831,17 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     }
 
     /// The y-faces between two ghost-inclusive rows, the upper one `r + 1`, from
-    /// their views.
+    /// their views, from column `c0` on.
     fn y_faces<const WALLS: bool>(
         &self,
-        r: usize,
+        (r, c0): (usize, usize),
         lower: &[CellView],
         upper: &[CellView],
         row: &mut [FaceFlux],
     ) {
         let dy = self.raster.dy();
-        for (i, ((f, lo), hi)) in row.iter_mut().zip(lower).zip(upper).enumerate() {
+        for (k, ((f, lo), hi)) in row.iter_mut().zip(lower).zip(upper).enumerate() {
+            let i = c0 + k;
             let walls = if WALLS {
                 (self.y_wall(i, r), self.y_wall(i, r + 1))
             } else {
@@ -847,30 +852,42 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         }
     }
 
-    /// Sweeps the rows of band `k`: for every cell, calls `cell(i, j, west, east,
-    /// south, north)` with its four faces. `s` holds the face and view rows.
+    /// Sweeps tile (`rows`, `cols`): for every cell, calls `cell(i, j, west, east,
+    /// south, north)` with its four faces. `s` holds the face and view rows. The faces
+    /// on the tile's edges are computed from the same views as the neighbouring
+    /// tile's (the same operations on the same data): the same bits.
     #[inline(always)]
     fn sweep<
         const WALLS: bool,
         F: FnMut(usize, usize, &FaceFlux, &FaceFlux, &FaceFlux, &FaceFlux),
     >(
         &self,
-        k: usize,
-        s: &mut BandScratch,
+        (rows, cols): (Range<usize>, Range<usize>),
+        s: &mut TileScratch,
         mut cell: F,
     ) {
         let (nx, dx) = (self.nx, self.raster.dx());
-        let rows = self.raster.band_rows(k);
-        self.views(rows.start, &mut s.lower);
-        self.views(rows.start + 1, &mut s.upper);
-        self.y_faces::<WALLS>(rows.start, &s.lower, &s.upper, &mut s.below);
+        let (c0, c1) = (cols.start, cols.end);
+        let w = c1 - c0;
+        let TileScratch {
+            below,
+            above,
+            lower,
+            upper,
+        } = s;
+        let (mut below, mut above) = (&mut below[..w], &mut above[..w]);
+        let (mut lower, mut upper) = (&mut lower[..w], &mut upper[..w]);
+        self.views(rows.start, c0, lower);
+        self.views(rows.start + 1, c0, upper);
+        self.y_faces::<WALLS>((rows.start, c0), lower, upper, below);
         for j in rows {
-            std::mem::swap(&mut s.lower, &mut s.upper);
-            self.views(j + 2, &mut s.upper);
-            self.y_faces::<WALLS>(j + 1, &s.lower, &s.upper, &mut s.above);
-            // The row's own views (`s.lower`, ghost-inclusive row j + 1) for its
-            // interior columns, the edge ghosts from [`Self::x_side`].
-            let row = &s.lower;
+            std::mem::swap(&mut lower, &mut upper);
+            self.views(j + 2, c0, upper);
+            self.y_faces::<WALLS>((j + 1, c0), lower, upper, above);
+            // The row's own views (`lower`, ghost-inclusive row j + 1) for the tile's
+            // columns; beyond them the neighbours' views, or the edge ghosts from
+            // [`Self::x_side`].
+            let row = &*lower;
             let x_face = |left: FaceSide, right: FaceSide, c: usize| {
                 let walls = if WALLS {
                     (self.x_wall(c, j), self.x_wall(c + 1, j))
@@ -879,21 +896,27 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
                 };
                 self.face::<WALLS, _>(left, right, walls, (dx, true), || self.x_cells(c, j))
             };
-            let mut left = self.x_side(0, j);
+            let mut left = if c0 == 0 {
+                self.x_side(0, j)
+            } else {
+                self.view(c0 - 1, j).x_side()
+            };
             let mut right = row[0].x_side();
-            let mut west = x_face(left, right, 0);
-            for i in 0..nx {
-                let next = if i + 1 < nx {
-                    row[i + 1].x_side()
+            let mut west = x_face(left, right, c0);
+            for i in c0..c1 {
+                let next = if i + 1 < c1 {
+                    row[i + 1 - c0].x_side()
+                } else if i + 1 < nx {
+                    self.view(i + 1, j).x_side()
                 } else {
                     self.x_side(nx + 1, j)
                 };
                 (left, right) = (right, next);
                 let east = x_face(left, right, i + 1);
-                cell(i, j, &west, &east, &s.below[i], &s.above[i]);
+                cell(i, j, &west, &east, &below[i - c0], &above[i - c0]);
                 west = east;
             }
-            std::mem::swap(&mut s.below, &mut s.above);
+            std::mem::swap(&mut below, &mut above);
         }
     }
 
@@ -933,19 +956,24 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     /// has 1; a face beside a wall carries no mass and is not scaled). The sides and
     /// fluxes are those of [`Self::sweep`] (the same operations on the same data).
     #[inline(always)]
-    fn limited_faces<const WALLS: bool>(&self, theta: &[f64], i: usize, j: usize) -> [FaceFlux; 4] {
+    fn limited_faces<const WALLS: bool>(
+        &self,
+        theta: &impl Fn(usize) -> f64,
+        i: usize,
+        j: usize,
+    ) -> [FaceFlux; 4] {
         let (nx, ny) = (self.nx, self.ny);
         let (dx, dy) = (self.raster.dx(), self.raster.dy());
         let x_theta = |c: usize| {
             if c >= 1 && c <= nx {
-                theta[j * nx + c - 1]
+                theta(j * nx + c - 1)
             } else {
                 1.0
             }
         };
         let y_theta = |r: usize| {
             if r >= 1 && r <= ny {
-                theta[(r - 1) * nx + i]
+                theta((r - 1) * nx + i)
             } else {
                 1.0
             }
@@ -1076,21 +1104,52 @@ fn draining_factor(h: f64, (rx, ry): (f64, f64), [w, e, so, no]: [&FaceFlux; 4])
     }
 }
 
-/// The smallest value of `h_new` and its index (the first in order), `offset` added.
-fn first_minimum(h_new: &[f64], offset: usize) -> (f64, usize) {
-    let mut worst = (f64::INFINITY, 0usize);
-    for (k, &h) in h_new.iter().enumerate() {
-        if h < worst.0 {
-            worst = (h, offset + k);
-        }
+/// The smaller of two (thickness, cell) pairs, the lower cell on a tie: the first
+/// minimum in cell order, whatever order the tiles are combined in.
+#[inline(always)]
+fn first_of(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
+    if b.0 < a.0 || (b.0 == a.0 && b.1 < a.1) {
+        b
+    } else {
+        a
     }
-    worst
+}
+
+/// The per-tile and per-cell outputs of a pass, written by the tile tasks at their own
+/// tile's indices.
+struct Outputs<'a> {
+    h: Disjoint<'a, f64>,
+    hu: Disjoint<'a, f64>,
+    hv: Disjoint<'a, f64>,
+    drain: Disjoint<'a, f64>,
+    worst: Disjoint<'a, (f64, usize)>,
+    drains: Disjoint<'a, bool>,
 }
 
 impl<L: BasalFriction> HydrostaticStep2d<L> {
-    /// The unlimited update pass into the new-state buffers (the thickness
-    /// unclipped), with every cell's draining factor from the same faces; returns the
-    /// smallest new thickness and its cell, first in cell order.
+    /// The outputs of a pass and the read-only data the tasks share.
+    fn outputs(
+        &mut self,
+    ) -> (
+        Outputs<'_>,
+        &CellFriction<L>,
+        &[Mutex<TileScratch>],
+        &Workers,
+    ) {
+        let out = Outputs {
+            h: Disjoint::new(&mut self.h_new),
+            hu: Disjoint::new(&mut self.hu_new),
+            hv: Disjoint::new(&mut self.hv_new),
+            drain: Disjoint::new(&mut self.drain),
+            worst: Disjoint::new(&mut self.tile_worst),
+            drains: Disjoint::new(&mut self.tile_drains),
+        };
+        (out, &self.friction, &self.scratch, &self.workers)
+    }
+
+    /// The unlimited update pass over the stepped tiles into the new-state buffers
+    /// (the thickness unclipped), with the draining factors θ ≠ 1 from the same faces;
+    /// returns the smallest new thickness and its cell, first in cell order.
     fn update_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
         match (raster.walls().is_empty(), raster.metric().is_some()) {
             (true, false) => self.update_pass_with::<false, false>(raster, dt, state),
@@ -1110,39 +1169,38 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     ) -> (f64, usize) {
         let nx = raster.nx();
         let r = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx::<L, BN>::new(&self.friction, raster, state, dt);
-        let outputs = (
-            self.h_new.as_mut_slice(),
-            self.hu_new.as_mut_slice(),
-            self.hv_new.as_mut_slice(),
-            self.drain.as_mut_slice(),
-        );
-        self.workers.bands4(
-            BAND_ROWS * nx,
-            outputs,
-            &mut self.scratch,
-            |k, (h_new, hu_new, hv_new, drain), s| {
-                let offset = k * BAND_ROWS * nx;
-                let first_row = k * BAND_ROWS;
-                let mut worst = (f64::INFINITY, 0usize);
-                let mut drains = [false; BAND_ROWS];
-                ctx.sweep::<WALLS, _>(k, s, |i, j, w, e, so, no| {
-                    let cell = j * nx + i;
-                    let local = cell - offset;
-                    let (hn, qu, qv) = ctx.update(cell, r, [w, e, so, no]);
-                    if hn < worst.0 {
-                        worst = (hn, cell);
+        let tiles = &state.tiles;
+        let (out, friction, scratch, workers) = self.outputs();
+        let ctx = Ctx::<L, BN>::new(friction, raster, state, dt);
+        workers.tiles(tiles.stepped(), |thread, t| {
+            let mut s = scratch[thread].lock().expect("a thread's own scratch");
+            let mut worst = (f64::INFINITY, 0usize);
+            let mut drains = false;
+            ctx.sweep::<WALLS, _>(tiles.cells(t), &mut s, |i, j, w, e, so, no| {
+                let cell = j * nx + i;
+                let (hn, qu, qv) = ctx.update(cell, r, [w, e, so, no]);
+                if hn < worst.0 {
+                    worst = (hn, cell);
+                }
+                let theta = draining_factor(ctx.h[cell], r, [w, e, so, no]);
+                // SAFETY: `cell` is in tile t, this task's alone.
+                unsafe {
+                    out.h.set(cell, hn);
+                    out.hu.set(cell, qu);
+                    out.hv.set(cell, qv);
+                    if theta != 1.0 {
+                        out.drain.set(cell, theta);
+                        drains = true;
                     }
-                    (h_new[local], hu_new[local], hv_new[local]) = (hn, qu, qv);
-                    let theta = draining_factor(ctx.h[cell], r, [w, e, so, no]);
-                    drain[local] = theta;
-                    drains[j - first_row] |= theta != 1.0;
-                });
-                s.worst = worst;
-                s.drains = drains;
-            },
-        );
-        self.worst()
+                }
+            });
+            // SAFETY: entry t is this task's alone.
+            unsafe {
+                out.worst.set(t, worst);
+                out.drains.set(t, drains);
+            }
+        });
+        self.worst(tiles)
     }
 
     /// The limited pass: every flux leaving a cell scaled by the cell's draining
@@ -1169,72 +1227,82 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     ) -> (f64, usize) {
         let (nx, ny) = (raster.nx(), raster.ny());
         let r = (dt / raster.dx(), dt / raster.dy());
-        let ctx = Ctx::<L, BN>::new(&self.friction, raster, state, dt);
-        for (k, s) in self.scratch.iter().enumerate() {
-            let rows = raster.band_rows(k);
-            let n = rows.len();
-            self.row_drains[rows].copy_from_slice(&s.drains[..n]);
-        }
-        let theta = self.drain.as_slice();
-        // A row changes only if it or a row next to it has a draining cell.
-        let row_drains = self.row_drains.as_slice();
-        let near = |j: usize| {
-            row_drains[j] || (j > 0 && row_drains[j - 1]) || (j + 1 < ny && row_drains[j + 1])
-        };
-        let outputs = (
-            self.h_new.as_mut_slice(),
-            self.hu_new.as_mut_slice(),
-            self.hv_new.as_mut_slice(),
-        );
-        self.workers.bands3(
-            BAND_ROWS * nx,
-            outputs,
-            &mut self.scratch,
-            |k, (h_new, hu_new, hv_new), s| {
-                let offset = k * BAND_ROWS * nx;
-                // A band with no row that changes keeps the unlimited pass's values
-                // and with them its smallest thickness (`s.worst`, in cell order).
-                if !raster.band_rows(k).any(near) {
-                    return;
-                }
-                for j in raster.band_rows(k) {
-                    if !near(j) {
-                        continue;
-                    }
-                    let row = &theta[j * nx..(j + 1) * nx];
-                    let below = (j > 0).then(|| &theta[(j - 1) * nx..j * nx]);
-                    let above = (j + 1 < ny).then(|| &theta[(j + 1) * nx..(j + 2) * nx]);
-                    for i in 0..nx {
-                        let affected = row[i] != 1.0
-                            || (i > 0 && row[i - 1] != 1.0)
-                            || (i + 1 < nx && row[i + 1] != 1.0)
-                            || below.is_some_and(|b| b[i] != 1.0)
-                            || above.is_some_and(|a| a[i] != 1.0);
-                        if !affected {
-                            continue;
-                        }
-                        let [w, e, so, no] = ctx.limited_faces::<WALLS>(theta, i, j);
-                        let cell = j * nx + i;
-                        let local = cell - offset;
+        let tiles = &state.tiles;
+        let cols = tiles.cols();
+        let rows_of_tiles = tiles.count() / cols.max(1);
+        let (out, friction, _, workers) = self.outputs();
+        let ctx = Ctx::<L, BN>::new(friction, raster, state, dt);
+        // A tile changes only if it or a tile next to it has a draining cell (the
+        // flags are false outside the stepped tiles).
+        // SAFETY (reads of `drains` and `drain`): this pass writes neither.
+        let drains = |t: usize| unsafe { out.drains.get(t) };
+        let theta = |k: usize| unsafe { out.drain.get(k) };
+        workers.tiles(tiles.stepped(), |_, t| {
+            let (band, col) = (t / cols, t % cols);
+            let near = drains(t)
+                || (col > 0 && drains(t - 1))
+                || (col + 1 < cols && drains(t + 1))
+                || (band > 0 && drains(t - cols))
+                || (band + 1 < rows_of_tiles && drains(t + cols));
+            if !near {
+                return;
+            }
+            let (rows, columns) = tiles.cells(t);
+            let mut worst = (f64::INFINITY, 0usize);
+            for j in rows {
+                for i in columns.clone() {
+                    let cell = j * nx + i;
+                    let affected = theta(cell) != 1.0
+                        || (i > 0 && theta(cell - 1) != 1.0)
+                        || (i + 1 < nx && theta(cell + 1) != 1.0)
+                        || (j > 0 && theta(cell - nx) != 1.0)
+                        || (j + 1 < ny && theta(cell + nx) != 1.0);
+                    if affected {
+                        let [w, e, so, no] = ctx.limited_faces::<WALLS>(&theta, i, j);
                         let (hn, qu, qv) = ctx.update(cell, r, [&w, &e, &so, &no]);
-                        (h_new[local], hu_new[local], hv_new[local]) = (hn, qu, qv);
+                        // SAFETY: `cell` is in tile t, this task's alone.
+                        unsafe {
+                            out.h.set(cell, hn);
+                            out.hu.set(cell, qu);
+                            out.hv.set(cell, qv);
+                        }
+                    }
+                    // SAFETY: as above.
+                    let hn = unsafe { out.h.get(cell) };
+                    if hn < worst.0 {
+                        worst = (hn, cell);
                     }
                 }
-                s.worst = first_minimum(h_new, offset);
-            },
-        );
-        self.worst()
+            }
+            // SAFETY: entry t is this task's alone.
+            unsafe { out.worst.set(t, worst) };
+        });
+        self.worst(tiles)
     }
 
-    /// The smallest new thickness over the bands, combined in band order.
-    fn worst(&self) -> (f64, usize) {
-        let mut worst = (f64::INFINITY, 0usize);
-        for s in &self.scratch {
-            if s.worst.0 < worst.0 {
-                worst = s.worst;
+    /// The smallest new thickness over the stepped tiles, first in cell order.
+    fn worst(&self, tiles: &Tiles) -> (f64, usize) {
+        tiles
+            .stepped()
+            .iter()
+            .fold((f64::INFINITY, 0usize), |w, &t| {
+                first_of(w, self.tile_worst[t as usize])
+            })
+    }
+
+    /// Resets the draining factors and flags of the tiles that drained to 1 and false
+    /// (their values outside a step).
+    fn reset_drains(&mut self, tiles: &Tiles, nx: usize) {
+        for &t in tiles.stepped() {
+            let t = t as usize;
+            if self.tile_drains[t] {
+                self.tile_drains[t] = false;
+                let (rows, cols) = tiles.cells(t);
+                for j in rows {
+                    self.drain[j * nx + cols.start..j * nx + cols.end].fill(1.0);
+                }
             }
         }
-        worst
     }
 }
 
@@ -1244,10 +1312,13 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
     }
 
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
+        let nx = raster.nx();
+        state.refresh_tiles(nx, raster.ny());
         let mut worst = self.update_pass(raster, dt, state);
         if worst.0 < 0.0 {
             worst = self.limited_pass(raster, dt, state);
         }
+        self.reset_drains(&state.tiles, nx);
         let tolerance = -1e-14 * (1.0 + state.h[worst.1].abs());
         if worst.0 < tolerance {
             return Err(StageError::NegativeThickness {
@@ -1255,23 +1326,27 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
                 h: worst.0,
             });
         }
-        // Round-off below zero, kept for the test above, is clipped now (in the bands
-        // that have it).
-        if worst.0 < 0.0 {
-            let chunk = BAND_ROWS * raster.nx();
-            for (band, s) in self.h_new.chunks_mut(chunk).zip(&self.scratch) {
-                if s.worst.0 < 0.0 {
-                    for h in band {
-                        if *h < 0.0 {
-                            *h = 0.0;
+        // The new state of the stepped tiles, with round-off below zero (kept for the
+        // test above) clipped; the other tiles are unchanged.
+        let State2d { h, hu, hv, tiles } = state;
+        for &t in tiles.stepped() {
+            let (rows, cols) = tiles.cells(t as usize);
+            let clip = self.tile_worst[t as usize].0 < 0.0;
+            for j in rows {
+                let cells = j * nx + cols.start..j * nx + cols.end;
+                if clip {
+                    for v in &mut self.h_new[cells.clone()] {
+                        if *v < 0.0 {
+                            *v = 0.0;
                         }
                     }
                 }
+                h[cells.clone()].copy_from_slice(&self.h_new[cells.clone()]);
+                hu[cells.clone()].copy_from_slice(&self.hu_new[cells.clone()]);
+                hv[cells.clone()].copy_from_slice(&self.hv_new[cells]);
             }
         }
-        std::mem::swap(&mut state.h, &mut self.h_new);
-        std::mem::swap(&mut state.hu, &mut self.hu_new);
-        std::mem::swap(&mut state.hv, &mut self.hv_new);
+        tiles.mark_pending();
         Ok(())
     }
 }

@@ -161,3 +161,81 @@ impl Workers {
         }
     }
 }
+
+impl Workers {
+    /// The number of threads (1 when serial): the run's tasks index per-thread scratch
+    /// with [`Self::tiles`]'s first argument, below it.
+    pub fn threads(&self) -> usize {
+        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
+    }
+
+    /// Calls `f(thread, t)` for every tile `t` of `tiles`, `thread` < [`Self::threads`]
+    /// the index of the thread that runs it (for its scratch). Each tile is one task
+    /// (`with_max_len(1)`): the threads share the tiles wherever the flow is, and a
+    /// thread that runs out of work steals single tiles.
+    pub fn tiles<F>(&self, tiles: &[u32], f: F)
+    where
+        F: Fn(usize, usize) + Sync + Send,
+    {
+        match &self.pool {
+            None => tiles.iter().for_each(|&t| f(0, t as usize)),
+            Some(pool) => pool.install(|| {
+                tiles
+                    .par_iter()
+                    .with_max_len(1)
+                    .for_each(|&t| f(rayon::current_thread_index().unwrap_or(0), t as usize))
+            }),
+        }
+    }
+}
+
+/// A slice that the tasks of one parallel call write at disjoint indices (each task
+/// its own tile's cells, which are not contiguous in a row-major array).
+///
+/// The caller of [`Disjoint::set`] and [`Disjoint::get`] guarantees that while the
+/// parallel call runs, no index written by one task is read or written by another:
+/// the tiles of a stepped set are disjoint, and a task touches its own tile's cells and
+/// its own entry of per-tile arrays only.
+pub struct Disjoint<'a, T> {
+    ptr: *mut T,
+    len: usize,
+    _slice: std::marker::PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: the tasks access disjoint indices (the type's contract), so sharing the
+// pointer between threads is sharing `&mut` to disjoint parts of the slice.
+unsafe impl<T: Send> Send for Disjoint<'_, T> {}
+unsafe impl<T: Send> Sync for Disjoint<'_, T> {}
+
+impl<'a, T: Copy> Disjoint<'a, T> {
+    /// The slice `s`, borrowed for the parallel call.
+    pub fn new(s: &'a mut [T]) -> Self {
+        Disjoint {
+            ptr: s.as_mut_ptr(),
+            len: s.len(),
+            _slice: std::marker::PhantomData,
+        }
+    }
+
+    /// Writes `v` at index `i` (bounds-checked).
+    ///
+    /// # Safety
+    /// No other task reads or writes index `i` during the parallel call.
+    #[inline(always)]
+    pub unsafe fn set(&self, i: usize, v: T) {
+        assert!(i < self.len, "index {i} out of {}", self.len);
+        // SAFETY: in bounds (checked), and exclusive to this task (the caller's contract).
+        unsafe { *self.ptr.add(i) = v }
+    }
+
+    /// Reads index `i` (bounds-checked).
+    ///
+    /// # Safety
+    /// No other task writes index `i` during the parallel call.
+    #[inline(always)]
+    pub unsafe fn get(&self, i: usize) -> T {
+        assert!(i < self.len, "index {i} out of {}", self.len);
+        // SAFETY: in bounds (checked), and not written by another task (the contract).
+        unsafe { *self.ptr.add(i) }
+    }
+}

@@ -3,13 +3,28 @@
 //! physical cells only, row-major (cell = j·nx + i). The boundary rules (a wall
 //! mirrors h and reverses the normal discharge, an outflow copies the edge cell) are
 //! applied by the stages at the edge faces, so the state needs no ghost ring.
+//!
+//! The state carries its active tiles ([`Tiles`]): which tiles of cells a step visits.
+//! Code that writes h, hu or hv outside the stages calls [`State2d::touch`] so that the
+//! next step classifies every tile again.
 
-/// h, hu, hv per cell (nx·ny each, row-major).
-#[derive(Debug, PartialEq)]
+use super::tiles::Tiles;
+
+/// h, hu, hv per cell (nx·ny each, row-major), and the active tiles.
+#[derive(Debug)]
 pub struct State2d {
     pub h: Vec<f64>,
     pub hu: Vec<f64>,
     pub hv: Vec<f64>,
+    /// The tiles the stages visit (`state::tiles`).
+    pub tiles: Tiles,
+}
+
+/// Two states are equal when their fields are (the tiles are derived from them).
+impl PartialEq for State2d {
+    fn eq(&self, other: &Self) -> bool {
+        self.h == other.h && self.hu == other.hu && self.hv == other.hv
+    }
 }
 
 impl State2d {
@@ -19,6 +34,7 @@ impl State2d {
             h: vec![0.0; cells],
             hu: vec![0.0; cells],
             hv: vec![0.0; cells],
+            tiles: Tiles::unknown(),
         }
     }
 
@@ -28,7 +44,32 @@ impl State2d {
         assert!(h.len() == u.len() && h.len() == v.len());
         let hu = h.iter().zip(u).map(|(h, u)| h * u).collect();
         let hv = h.iter().zip(v).map(|(h, v)| h * v).collect();
-        State2d { h, hu, hv }
+        State2d {
+            h,
+            hu,
+            hv,
+            tiles: Tiles::unknown(),
+        }
+    }
+
+    /// Forgets the active tiles after h, hu or hv were written outside the stages: the
+    /// next step classifies every tile.
+    pub fn touch(&mut self) {
+        self.tiles.touch();
+    }
+
+    /// Classifies the tiles that changed since the last refresh (every tile if unknown)
+    /// on a raster of `nx` × `ny` cells and builds the stepped set (`state::tiles`).
+    pub fn refresh_tiles(&mut self, nx: usize, ny: usize) {
+        self.tiles.refresh((nx, ny), &self.h, &self.hu, &self.hv);
+    }
+
+    /// Classifies the tiles if they are unknown (a stage that follows another in the
+    /// step keeps the set the step began with).
+    pub fn ensure_tiles(&mut self, nx: usize, ny: usize) {
+        if !self.tiles.known_for(nx, ny) {
+            self.refresh_tiles(nx, ny);
+        }
     }
 
     /// Number of cells.
@@ -45,6 +86,7 @@ impl Clone for State2d {
             h: self.h.clone(),
             hu: self.hu.clone(),
             hv: self.hv.clone(),
+            tiles: self.tiles.clone(),
         }
     }
 
@@ -52,6 +94,7 @@ impl Clone for State2d {
         self.h.clone_from(&source.h);
         self.hu.clone_from(&source.hu);
         self.hv.clone_from(&source.hv);
+        self.tiles.clone_from(&source.tiles);
     }
 }
 

@@ -6,7 +6,7 @@
 //! - [`LayeredState`] ([`layered`]): the granular family, N layers of fixed fractions,
 //!   with tracers and the non-hydrostatic pressure;
 //! - [`State2d`] ([`layered_2d`]): the 2-D Savage–Hutter model on a raster, h, hu, hv
-//!   over the physical cells;
+//!   over the physical cells, with its active tiles ([`tiles`]);
 //! - [`TwoLayerState`] ([`two_layer`]): water over grains (Fernández-Nieto et al. 2008),
 //!   with the water's layers and non-hydrostatic pressure ([`WaterColumn`],
 //!   [`water_column`]) when the water is non-hydrostatic;
@@ -15,6 +15,7 @@
 pub mod dilatant;
 pub mod layered;
 pub mod layered_2d;
+pub mod tiles;
 pub mod two_layer;
 pub mod water_column;
 
