@@ -19,12 +19,14 @@
 //! without walls. The bed of a wall cell is NaN in [`Grid::bed`] (written as such) and
 //! 0 in the ghost-ring arrays, which no face reads there.
 //!
-//! Tiles. The cells are grouped in bands of [`BAND_ROWS`] whole rows (the last band
-//! may be shorter): the unit of work of the 2-D stages, whatever the thread count, so
-//! that every per-band reduction is summed in the same order and a run gives the same
-//! bits on 1, 2 or 4 threads. A band reads one row of halo on each side (the rows of
-//! its neighbours, or the boundary rule at the domain's edge) and writes only its own
-//! rows; a decomposition across machines would exchange those halo rows.
+//! Bands and tiles. The cells are grouped in bands of [`BAND_ROWS`] whole rows (the last
+//! band may be shorter), and each band in tiles of `state::tiles::TILE_COLS` columns:
+//! the units of work of the 2-D stages whatever the thread count, so that every
+//! per-band reduction is summed in the same order and a run gives the same bits on 1,
+//! 2 or 4 threads. A tile reads one row and one column of halo on each side (its
+//! neighbours' cells, or the boundary rule at the domain's edge) and writes only its
+//! own cells; a decomposition across machines would exchange those halos. Which tiles
+//! a step visits is the state's (`state::tiles`).
 
 use super::{BedMetric, BoundaryKind, Coordinates, Grid, Point, Stencil};
 use crate::physics::GRAVITY;

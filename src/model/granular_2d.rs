@@ -126,6 +126,10 @@ impl Granular2d {
         };
         for k in cells.flatten() {
             let (h, qx, qy) = (state.h[k], state.hu[k], state.hv[k]);
+            // An empty cell (every bit +0) changes no sum or extremum.
+            if h.to_bits() | qx.to_bits() | qy.to_bits() == 0 {
+                continue;
+            }
             d.mass += h;
             d.q_sum += qx + qy;
             d.h_max = d.h_max.max(h);

@@ -40,26 +40,32 @@
 //! is compiled twice, with and without this test, and a raster without wall cells
 //! runs the code without it.
 //!
-//! Work is done by bands of whole rows ([`crate::grid::raster`]): a band computes the
-//! y-faces under and over each of its rows (one row of halo on each side) and the
-//! x-faces along them, and writes its rows of the new state into the step's own
-//! buffers, which are swapped with the state's at the end (no copy). The y-faces at the
-//! edge between two bands are computed by both, with the same operations on the same
-//! data. Each cell is seen by its four faces through one view computed once per sweep
-//! (velocities, √h, bed, potential, its drives along x and y and its speed): a y-face
-//! reads the views of the rows under and over it, an x-face those of its row.
-//! Memory: the new state (3 values per cell), the draining factors (1) and, per band,
-//! two rows of y-faces and two rows of cell views.
+//! Work follows the flow: only the stepped tiles of the state (`state::tiles`: tiles of
+//! 16 rows × 32 columns with a live cell, and their neighbours across an edge with
+//! one) are swept; every other cell is dry with dry neighbours, which a sweep would
+//! leave unchanged to the bit. A tile is one task on the run's threads: it computes
+//! the y-faces under and over each of its rows (one row of halo on each side) and the
+//! x-faces along them (one column of halo on each side), and writes its cells of the
+//! new state into the step's own buffers, which are copied into the state's stepped
+//! tiles at the end. The faces on the edge between two tiles are computed by both,
+//! with the same operations on the same data. Each cell is seen by its four faces
+//! through one view computed once per sweep (velocities, √h, bed, potential, its
+//! drives along x and y and its speed): a y-face reads the views of the rows under and
+//! over it, an x-face those of its row. Memory: the new state (3 values per cell), the
+//! draining factors (1), per tile its smallest new thickness and flags, and per thread
+//! two rows of y-faces and two rows of cell views of a tile's width.
 //!
 //! The limiter in two passes. The unlimited pass writes the new state and, from the
-//! same four faces, every cell's draining factor θ = min(1, h/(Δt outflow)). Only if
-//! some new thickness is negative, the limited pass follows: a face's fluxes times its
-//! donor's θ differ from the unlimited ones only where θ ≠ 1 (a flux times 1 is the
-//! flux), so it recomputes just the cells next to a draining cell (the cell and its
-//! four neighbours), face by face, and keeps the unlimited values elsewhere: the same
-//! bits as a full second pass, at the cost of the fronts only. The unlimited pass
-//! records which rows hold a draining cell, so the limited pass visits only the rows
-//! next to one, and a band with none keeps its smallest thickness too.
+//! same four faces, every cell's draining factor θ = min(1, h/(Δt outflow)) where it is
+//! not 1 (θ is 1 outside a step). Only if some new thickness is negative, the limited
+//! pass follows: a face's fluxes times its donor's θ differ from the unlimited ones
+//! only where θ ≠ 1 (a flux times 1 is the flux), so it recomputes just the cells next
+//! to a draining cell (the cell and its four neighbours), face by face, and keeps the
+//! unlimited values elsewhere: the same bits as a full second pass, at the cost of the
+//! fronts only. The unlimited pass records which tiles hold a draining cell, so the
+//! limited pass visits only the tiles next to one. The smallest new thickness is
+//! combined over tiles as the first minimum in cell order, whatever order the threads
+//! finish in: the same bits on any thread count.
 //!
 //! The CFL step: with the per-cell signal speed s = max(|u|, |v|) + √(g_n h) and
 //! Δt = CFL · min(Δx, Δy)/s, Δt (s_x/Δx + s_y/Δy) ≤ 2 CFL; the unsplit update keeps
@@ -231,6 +237,8 @@ pub struct HydrostaticStep2d<L: BasalFriction> {
     /// whether it has a draining cell (false outside a step).
     tile_worst: Vec<(f64, usize)>,
     tile_drains: Vec<bool>,
+    /// Per tile: its wet cells (h > H_DRY) at the start of the step.
+    tile_wet: Vec<u32>,
     /// One scratch per thread (each locked by its own thread only).
     scratch: Vec<Mutex<TileScratch>>,
 }
@@ -264,6 +272,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             drain: vec![1.0; cells],
             tile_worst: vec![(f64::INFINITY, 0); tiles],
             tile_drains: vec![false; tiles],
+            tile_wet: vec![0; tiles],
             scratch,
         }
     }
@@ -1124,6 +1133,7 @@ struct Outputs<'a> {
     drain: Disjoint<'a, f64>,
     worst: Disjoint<'a, (f64, usize)>,
     drains: Disjoint<'a, bool>,
+    wet: Disjoint<'a, u32>,
 }
 
 impl<L: BasalFriction> HydrostaticStep2d<L> {
@@ -1143,6 +1153,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             drain: Disjoint::new(&mut self.drain),
             worst: Disjoint::new(&mut self.tile_worst),
             drains: Disjoint::new(&mut self.tile_drains),
+            wet: Disjoint::new(&mut self.tile_wet),
         };
         (out, &self.friction, &self.scratch, &self.workers)
     }
@@ -1175,9 +1186,10 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         workers.tiles(tiles.stepped(), |thread, t| {
             let mut s = scratch[thread].lock().expect("a thread's own scratch");
             let mut worst = (f64::INFINITY, 0usize);
-            let mut drains = false;
+            let (mut drains, mut wet) = (false, 0u32);
             ctx.sweep::<WALLS, _>(tiles.cells(t), &mut s, |i, j, w, e, so, no| {
                 let cell = j * nx + i;
+                wet += u32::from(ctx.h[cell] > H_DRY);
                 let (hn, qu, qv) = ctx.update(cell, r, [w, e, so, no]);
                 if hn < worst.0 {
                     worst = (hn, cell);
@@ -1198,6 +1210,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             unsafe {
                 out.worst.set(t, worst);
                 out.drains.set(t, drains);
+                out.wet.set(t, wet);
             }
         });
         self.worst(tiles)
@@ -1346,6 +1359,12 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
                 hv[cells.clone()].copy_from_slice(&self.hv_new[cells]);
             }
         }
+        let wet: u64 = tiles
+            .stepped()
+            .iter()
+            .map(|&t| u64::from(self.tile_wet[t as usize]))
+            .sum();
+        tiles.count_updates(tiles.stepped_cells() as u64, wet);
         tiles.mark_pending();
         Ok(())
     }

@@ -1,14 +1,15 @@
-//! Threads inside one run: the bands (tiles of whole rows, [`crate::grid::raster`]) of
-//! a 2-D stage run on a rayon pool that the stages of one pipeline share and own.
+//! Threads inside one run: the tiles and bands of a 2-D stage run on a rayon pool that
+//! the stages of one pipeline share and own.
 //!
-//! With one thread there is no pool and the bands run in order on the caller's thread
-//! (no rayon at all). With more, each band is one task (`with_max_len(1)`: a thread
-//! that runs out of work steals single bands, so the dry and wet bands of a run
-//! balance to within one band). The partition into bands does
-//! not depend on the number of threads, each band writes only its own cells, and every
-//! reduction over bands (the smallest new thickness of the step) is combined in band
-//! order: the results are the same bits for 1, 2 or 4 threads. Each band owns its
-//! scratch (allocated once by the stage), so no task allocates.
+//! With one thread there is no pool and the work runs in order on the caller's thread
+//! (no rayon at all). With more, each tile (the hyperbolic step, [`Workers::tiles`]) or
+//! band of rows (the friction step, the diagnostics, the maps) is one task
+//! (`with_max_len(1)`: a thread that runs out of work steals single tasks, so the dry
+//! and wet parts of a run balance). The partition does not depend on the number of
+//! threads, each task writes only its own cells, and every reduction is combined in a
+//! fixed order (band order for sums) or by an order-free rule (the first minimum in
+//! cell order): the results are the same bits for 1, 2 or 4 threads. Scratch is
+//! allocated once by the stage (per band or per thread), so no task allocates.
 
 use rayon::prelude::*;
 use std::sync::Arc;

@@ -73,6 +73,10 @@ pub struct Tiles {
     pending: bool,
     /// Every tile is stepped (the full sweep, for comparison).
     every: bool,
+    /// Cell updates of the accepted steps: in stepped tiles, and of wet cells (h > H_DRY
+    /// at the start of the step).
+    updates: u64,
+    wet_updates: u64,
 }
 
 // `Clone` by hand: the run loop copies the state into its backup every step, and the
@@ -90,6 +94,7 @@ impl Clone for Tiles {
         self.stepped_flag.clone_from(&source.stepped_flag);
         self.stepped.clone_from(&source.stepped);
         (self.pending, self.every) = (source.pending, source.every);
+        (self.updates, self.wet_updates) = (source.updates, source.wet_updates);
     }
 }
 
@@ -182,15 +187,30 @@ impl Tiles {
 
     /// The fraction of the raster's cells in stepped tiles.
     pub fn stepped_fraction(&self) -> f64 {
-        let cells: usize = self
-            .stepped
+        self.stepped_cells() as f64 / (self.nx * self.ny).max(1) as f64
+    }
+
+    /// Counts a step's cell updates: `stepped` cells in stepped tiles, `wet` of them wet.
+    pub fn count_updates(&mut self, stepped: u64, wet: u64) {
+        self.updates += stepped;
+        self.wet_updates += wet;
+    }
+
+    /// The cell updates counted so far ([`Self::count_updates`]): (in stepped tiles,
+    /// of wet cells).
+    pub fn updates(&self) -> (u64, u64) {
+        (self.updates, self.wet_updates)
+    }
+
+    /// The number of cells in the stepped tiles.
+    pub fn stepped_cells(&self) -> usize {
+        self.stepped
             .iter()
             .map(|&t| {
                 let (r, c) = self.cells(t as usize);
                 r.len() * c.len()
             })
-            .sum();
-        cells as f64 / (self.nx * self.ny).max(1) as f64
+            .sum()
     }
 
     /// Marks the stepped tiles as changed by a stage (they are re-classified at the
