@@ -25,14 +25,12 @@
 //! 2004, the Coulomb term; docs/numerics.md): friction acts against the tangent
 //! velocity, so it scales u and keeps its direction.
 
-use super::workers::Workers;
+use super::workers::{Disjoint, Workers};
 use super::{Stage, StageError};
-use crate::grid::raster::BAND_ROWS;
 use crate::grid::{BedMetric, Raster2d};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
 use crate::physics::GRAVITY;
-use crate::state::tiles::Tiles;
 use crate::state::State2d;
 use std::sync::Arc;
 
@@ -133,32 +131,34 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
         "friction"
     }
 
-    /// Over the stepped tiles only (`state::tiles`): a cell outside them holds no
-    /// discharge, which the friction leaves as it is.
+    /// Over the stepped tiles only (`state::tiles`), one task per tile: a cell outside
+    /// them holds no discharge, which the friction leaves as it is.
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
-        let (g_n, nx, chunk) = (raster.g_n, raster.nx(), BAND_ROWS * raster.nx());
+        let (g_n, nx) = (raster.g_n, raster.nx());
         state.ensure_tiles(nx, raster.ny());
         let State2d { h, hu, hv, tiles } = state;
         let (h, tiles, friction) = (&*h, &*tiles, &self.friction);
+        let (hu, hv) = (Disjoint::new(hu), Disjoint::new(hv));
         let metric = raster.metric();
-        self.workers.bands2(chunk, hu, hv, |band, hu, hv| {
-            let start = band * chunk;
-            let rows = raster.band_rows(band);
-            for cols in tiles.band_columns(band, Tiles::is_stepped) {
-                for j in rows.clone() {
-                    for k in j * nx + cols.start..j * nx + cols.end {
-                        let (qx, qy) = (&mut hu[k - start], &mut hv[k - start]);
-                        (*qx, *qy) = match (metric, friction) {
-                            (Some(m), _) => {
-                                bed_normal_friction(&friction.at(k), m, k, (*qx, *qy), h[k], dt)
-                            }
-                            (None, CellFriction::Uniform(law)) => {
-                                vector_friction(law, *qx, *qy, h[k], dt, g_n)
-                            }
-                            (None, CellFriction::PerCell(laws)) => {
-                                vector_friction(&laws[k], *qx, *qy, h[k], dt, g_n)
-                            }
-                        };
+        self.workers.tiles(tiles.stepped(), |_, t| {
+            let (rows, cols) = tiles.cells(t);
+            for j in rows {
+                for k in j * nx + cols.start..j * nx + cols.end {
+                    // SAFETY: cell k is in tile t, this task's alone.
+                    let q = unsafe { (hu.get(k), hv.get(k)) };
+                    let (qx, qy) = match (metric, friction) {
+                        (Some(m), _) => bed_normal_friction(&friction.at(k), m, k, q, h[k], dt),
+                        (None, CellFriction::Uniform(law)) => {
+                            vector_friction(law, q.0, q.1, h[k], dt, g_n)
+                        }
+                        (None, CellFriction::PerCell(laws)) => {
+                            vector_friction(&laws[k], q.0, q.1, h[k], dt, g_n)
+                        }
+                    };
+                    // SAFETY: as above.
+                    unsafe {
+                        hu.set(k, qx);
+                        hv.set(k, qy);
                     }
                 }
             }
