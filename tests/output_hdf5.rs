@@ -102,6 +102,7 @@ impl Synth {
             wall_time_s: 0.75,
             status: status.into(),
             max_wave_amplitude: None,
+            wet: None,
             spread: None,
             outflowed_fraction: 0.0,
             front_at_end_time: f64::NAN,

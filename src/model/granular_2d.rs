@@ -27,7 +27,7 @@ use crate::numerics::workers::Workers;
 use crate::numerics::Stage;
 use crate::output::{OutputError, OutputSink, SnapshotView};
 use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, Voellmy};
-use crate::physics::shallow::{celerity, velocity};
+use crate::physics::shallow::{celerity, velocity, H_DRY};
 use crate::physics::{Material, GRAVITY};
 use crate::pipeline::Pipeline;
 use crate::state::State2d;
@@ -66,6 +66,8 @@ struct BandDiagnostics {
     signal: f64,
     h_max: f64,
     front: f64,
+    /// Cells with h > H_DRY.
+    wet: usize,
 }
 
 impl Granular2d {
@@ -103,9 +105,11 @@ impl Granular2d {
             signal: 0.0,
             h_max: 0.0,
             front: f64::NEG_INFINITY,
+            wet: 0,
         };
         for k in cells {
             let (h, qx, qy) = (state.h[k], state.hu[k], state.hv[k]);
+            d.wet += usize::from(h > H_DRY);
             d.mass += h;
             d.q_sum += qx + qy;
             d.h_max = d.h_max.max(h);
@@ -244,6 +248,7 @@ impl Model for Granular2d {
         let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
         let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
         let mut front = f64::NEG_INFINITY;
+        let wet_cells = bands.iter().map(|b| b.wet).sum();
         for b in &bands {
             mass += b.mass;
             ke += b.ke;
@@ -271,6 +276,7 @@ impl Model for Granular2d {
             front_x: if front.is_finite() { front } else { f64::NAN },
             h_max,
             non_finite_at,
+            wet_cells: Some(wet_cells),
         }
     }
 

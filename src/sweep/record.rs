@@ -213,6 +213,7 @@ mod tests {
                 steps: 12,
                 wall_time_s: 2.5e-7,
                 max_wave_amplitude: None,
+                wet: None,
                 spread: Some(crate::output::Spread {
                     runout_length: 2852.25,
                     travel_angle_deg: f64::NAN,

@@ -298,6 +298,7 @@ mod tests {
                 steps: 125,
                 wall_time_s: 0.019,
                 max_wave_amplitude: None,
+                wet: None,
                 spread: None,
                 outflowed_fraction: 0.25,
                 front_at_end_time: f64::NAN,

@@ -431,6 +431,13 @@ pub(super) fn write_summary(
     if let Some(a) = summary.max_wave_amplitude {
         set("max_wave_amplitude", a)?;
     }
+    if let Some(w) = &summary.wet {
+        group.set_attr_numeric("flow_cells", &(w.flow_cells as i64))?;
+        set("wet_fraction_mean", w.mean_fraction)?;
+        set("wet_fraction_peak", w.peak_fraction)?;
+        set("wet_cell_updates_per_s", w.wet_updates_per_s)?;
+        set("cell_updates_per_s", w.cell_updates_per_s)?;
+    }
     for (stage, seconds) in &summary.stage_times {
         set(&stage_attr_name(stage), *seconds)?;
     }
