@@ -548,6 +548,7 @@ impl<M: Model> Simulation<M> {
             runout: tally.last.front_x - tally.front0,
             stop_time: tally.rest_since.unwrap_or(f64::NAN),
             settled_time: tally.settled_since.unwrap_or(f64::NAN),
+            settle_fraction: self.config.settle_fraction,
             h_max_final: tally.last.h_max,
             t_end: self.t,
             steps: self.steps,

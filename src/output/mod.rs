@@ -10,6 +10,7 @@ pub mod csv;
 pub mod gauges;
 pub mod hdf5;
 pub mod memory;
+pub mod stop_reason;
 pub mod tee;
 pub mod xdmf;
 
@@ -212,6 +213,10 @@ pub struct RunSummary {
     /// whose mass creeps long after it has practically stopped.
     #[serde(default = "nan")]
     pub settled_time: f64,
+    /// `time.settle_fraction` of the run (what `settled_time` and the status `settled`
+    /// count from), NaN for a run that never got going.
+    #[serde(default = "nan")]
+    pub settle_fraction: f64,
     pub h_max_final: f64,
     pub t_end: f64,
     pub steps: u64,
@@ -311,6 +316,7 @@ impl RunSummary {
             runout: f64::NAN,
             stop_time: f64::NAN,
             settled_time: f64::NAN,
+            settle_fraction: f64::NAN,
             h_max_final: f64::NAN,
             t_end: f64::NAN,
             steps: 0,

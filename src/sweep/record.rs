@@ -208,6 +208,7 @@ mod tests {
                 runout: 0.1 + 0.2,
                 stop_time: f64::NAN,
                 settled_time: f64::NAN,
+                settle_fraction: 1e-6,
                 h_max_final: 1.0 / 3.0,
                 t_end: 1e300,
                 steps: 12,

@@ -293,6 +293,7 @@ mod tests {
                 runout: 0.832,
                 stop_time: f64::NAN,
                 settled_time: 0.8125,
+                settle_fraction: 1e-6,
                 h_max_final: 0.0417,
                 t_end: 1.4258,
                 steps: 125,

@@ -428,6 +428,11 @@ pub(super) fn write_summary(
     set("max_speed_final", summary.max_speed_final)?;
     group.set_attr_numeric("steps", &(summary.steps as i64))?;
     group.set_attr_string("status", &summary.status)?;
+    group.set_attr_string(
+        "stop_reason",
+        &crate::output::stop_reason::stop_reason(summary),
+    )?;
+    set("settle_fraction", summary.settle_fraction)?;
     if let Some(a) = summary.max_wave_amplitude {
         set("max_wave_amplitude", a)?;
     }
