@@ -377,8 +377,7 @@ fn a_raster_run_reports_its_wet_fraction_and_its_rate_on_wet_cells() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     let progress = stderr
         .lines()
-        .filter(|l| l.starts_with("granflow: t = "))
-        .last()
+        .rfind(|l| l.starts_with("granflow: t = "))
         .unwrap_or_else(|| panic!("no progress line: {stderr}"));
     assert!(
         progress.contains("% of 960 cells, ") && progress.ends_with(" wet-cell updates/s"),
