@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 
 use crate::output::budget::{Budgeted, OUTPUT_LIMIT};
 use crate::output::csv::front_csv_path;
+pub use crate::output::stop_reason::sig;
+use crate::output::stop_reason::stop_reason;
 use crate::output::{create_run_sinks, OutputError, RunSummary};
 use crate::scenario::Scenario;
 use crate::setup::{build, build_threads, Run};
@@ -94,53 +96,14 @@ pub const OUTFLOW_WARNING_FRACTION: f64 = 0.01;
 /// at the boundary) and is not reported.
 const ROUND_OFF_FRACTION: f64 = 1e-9;
 
-/// A speed at or below this (m/s) is rest to round-off in the report: a lake at rest
-/// keeps speeds of order 1e-15 m/s from the rounding of its fluxes.
-const ROUND_OFF_SPEED: f64 = 1e-10;
-
 impl RunReport {
-    /// The report's first line: the status, its one time and why the run ended there,
-    /// with the state of motion at the end when the status does not say it.
+    /// The report's first line: the status, its one time and why the run ended there
+    /// ([`stop_reason`], also `/summary` `stop_reason`).
     pub fn status_line(&self) -> String {
         let s = &self.summary;
-        let t = sig(s.t_end);
-        let motion = || -> String {
-            if !s.stop_time.is_nan() {
-                format!("at rest since t = {} s", sig(s.stop_time))
-            } else if s.max_speed_final <= ROUND_OFF_SPEED {
-                format!(
-                    "at rest to round-off (largest speed {} m/s)",
-                    sig(s.max_speed_final)
-                )
-            } else if !s.settled_time.is_nan() {
-                format!(
-                    "settled since t = {} s (kinetic energy at most time.settle_fraction × its peak), largest speed {} m/s",
-                    sig(s.settled_time),
-                    sig(s.max_speed_final)
-                )
-            } else {
-                format!(
-                    "still moving (largest speed {} m/s)",
-                    sig(s.max_speed_final)
-                )
-            }
-        };
-        let why = match s.status.as_str() {
-            "completed" => format!("reached time.t_end; {}", motion()),
-            "stopped_at_rest" => {
-                "every speed is zero (time.stop_at_rest ends the run at rest)".to_owned()
-            }
-            "settled" => format!(
-                "the kinetic energy fell to time.settle_fraction × its peak (time.stop_when_settled); largest speed {} m/s",
-                sig(s.max_speed_final)
-            ),
-            "outflowed" => "all the mass left through an outflow boundary".to_owned(),
-            "no_mass" => "the initial state holds no mass".to_owned(),
-            "interrupted" => format!("stopped by Ctrl-C or SIGTERM; {}", motion()),
-            _ => String::new(),
-        };
+        let why = stop_reason(s);
         let sep = if why.is_empty() { "" } else { ": " };
-        format!("granflow: {} at t = {t} s{sep}{why}", s.status)
+        format!("granflow: {} at t = {} s{sep}{why}", s.status, sig(s.t_end))
     }
 
     /// Warnings on the result: mass lost through outflow boundaries, a front that
@@ -184,6 +147,17 @@ impl fmt::Display for RunReport {
             s.steps,
             sig(s.wall_time_s)
         )?;
+        if let Some(w) = &s.wet {
+            writeln!(
+                f,
+                "  wet cells     {} % of {} on average, {} % at most; {:.3e} wet-cell updates/s ({:.3e} on all cells)",
+                pct(w.mean_fraction),
+                w.flow_cells,
+                pct(w.peak_fraction),
+                w.wet_updates_per_s,
+                w.cell_updates_per_s
+            )?;
+        }
         match (s.status.as_str(), s.spread) {
             ("no_mass", _) => {
                 writeln!(f, "  runout        none (the initial state holds no mass)")?
@@ -269,24 +243,6 @@ impl fmt::Display for RunReport {
     }
 }
 
-/// `v` with four significant digits: plain decimals between 1e-3 and 1e5, exponent
-/// form outside (so t_end = 1e-5 s is not printed as 0.0000).
-pub fn sig(v: f64) -> String {
-    if !v.is_finite() {
-        return format!("{v}");
-    }
-    if v == 0.0 {
-        return "0".to_owned();
-    }
-    let a = v.abs();
-    if (1e-3..1e5).contains(&a) {
-        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
-        format!("{v:.decimals$}")
-    } else {
-        format!("{v:.3e}")
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -341,6 +297,39 @@ mod tests {
         }
     }
 
+    /// The reason names the fraction of the peak kinetic energy the run stopped at (or
+    /// settled below), the interruption or the failure.
+    #[test]
+    fn the_report_says_why_the_run_stopped() {
+        let mut settled = report("settled", f64::NAN, 1.949, 0.016);
+        settled.summary.settle_fraction = 0.01;
+        assert_eq!(
+            settled.status_line(),
+            "granflow: settled at t = 2.000 s: the kinetic energy fell to 0.01 × its peak \
+             (time.settle_fraction, time.stop_when_settled); largest speed 0.01600 m/s"
+        );
+        let mut completed = report("completed", f64::NAN, 1.949, 0.016);
+        completed.summary.settle_fraction = 1e-6;
+        assert_eq!(
+            completed.status_line(),
+            "granflow: completed at t = 2.000 s: reached time.t_end; settled since t = 1.949 s \
+             (kinetic energy at most 1e-6 × its peak, time.settle_fraction), largest speed \
+             0.01600 m/s"
+        );
+        let interrupted = report("interrupted", f64::NAN, f64::NAN, 0.3);
+        assert_eq!(
+            interrupted.status_line(),
+            "granflow: interrupted at t = 2.000 s: stopped by Ctrl-C or SIGTERM; still moving \
+             (largest speed 0.3000 m/s)"
+        );
+        let failed = report("failed: time step collapsed", f64::NAN, f64::NAN, 0.3);
+        assert_eq!(
+            stop_reason(&failed.summary),
+            "time step collapsed",
+            "the reason of a failure is the failure's"
+        );
+    }
+
     #[test]
     fn outflow_and_a_front_at_the_domain_end_are_reported() {
         let mut r = report("stopped_at_rest", 1.5, 1.0, 0.0);
@@ -371,6 +360,28 @@ mod tests {
         assert!(r.to_string().contains("outflowed     0.500 %"));
         r.summary.outflowed_fraction = 1e-16;
         assert!(!r.to_string().contains("outflowed"));
+    }
+
+    /// A raster run's report says where its time went: 2 % of its cells wet on average.
+    #[test]
+    fn the_report_says_the_wet_fraction_and_the_rate_on_wet_cells() {
+        let mut r = report("completed", f64::NAN, f64::NAN, 0.3);
+        assert!(!r.to_string().contains("wet cells"));
+        r.summary.wet = Some(crate::output::WetCells {
+            flow_cells: 40_000,
+            mean_fraction: 0.0213,
+            peak_fraction: 0.045,
+            wet_updates_per_s: 1.5e6,
+            cell_updates_per_s: 7.04e7,
+        });
+        let text = r.to_string();
+        assert!(
+            text.contains(
+                "  wet cells     2.13 % of 40000 on average, 4.50 % at most; 1.500e6 \
+                 wet-cell updates/s (7.040e7 on all cells)"
+            ),
+            "{text}"
+        );
     }
 
     #[test]

@@ -19,7 +19,9 @@ use crate::grid::Grid;
 use crate::model::tracker::Tracker;
 use crate::model::{Diagnostics, Model};
 use crate::numerics::StageError;
-use crate::output::{GridData, OutputError, OutputSink, RunInfo, RunSummary, Spread, StepRecord};
+use crate::output::{
+    GridData, OutputError, OutputSink, RunInfo, RunSummary, Spread, StepRecord, WetCells,
+};
 use crate::pipeline::Pipeline;
 use crate::stop::{FailureReason, SolverFailure, StepContext, StopRule, Verdict};
 
@@ -49,6 +51,13 @@ pub struct Progress {
     /// The kinetic energy over its peak so far (NaN before any motion): how near the
     /// run is to `time.stop_when_settled`'s end.
     pub energy: f64,
+    /// Cells holding material after the step (`None`: the model does not count them).
+    pub wet_cells: Option<usize>,
+    /// Cells material can occupy ([`Grid::flow_cells`]): the wet fraction's denominator.
+    pub flow_cells: usize,
+    /// Wet-cell updates so far: over the steps taken, the sum of the cells wet at the
+    /// start of each (NaN when the model does not count them).
+    pub wet_updates: f64,
 }
 
 /// Why a run did not complete.
@@ -100,6 +109,10 @@ struct Tally {
     settled_since: Option<f64>,
     /// First time the front stood in the last cell (the domain's downstream end).
     front_at_end: Option<f64>,
+    /// Wet-cell updates so far (see [`Progress::wet_updates`]).
+    wet_updates: f64,
+    /// Most cells wet at once.
+    wet_peak: usize,
 }
 
 impl Tally {
@@ -322,6 +335,12 @@ impl<M: Model> Simulation<M> {
             ke_peak: d0.kinetic_energy,
             settled_since: None,
             front_at_end: None,
+            wet_updates: if d0.wet_cells.is_some() {
+                0.0
+            } else {
+                f64::NAN
+            },
+            wet_peak: d0.wet_cells.unwrap_or(0),
         };
         tally.settle(&d0, 0.0, self.config.settle_fraction);
         tally.front_end(&d0, 0.0, self.x_last());
@@ -395,6 +414,8 @@ impl<M: Model> Simulation<M> {
         // Time of the last snapshot written (run_loop wrote the one of t = 0).
         let mut snapshot_t = self.t;
         while self.t < cfg.t_end {
+            // The cells this step updates where the material is.
+            let wet_before = tally.last.wet_cells.unwrap_or(0) as f64;
             let dt = self.step(next_output - self.t)?;
             if dt == 0.0 {
                 // Ctrl-C inside the step: the state is that of the last accepted step,
@@ -450,6 +471,8 @@ impl<M: Model> Simulation<M> {
             };
             tally.settle(&d, self.t, cfg.settle_fraction);
             tally.front_end(&d, self.t, self.x_last());
+            tally.wet_updates += wet_before;
+            tally.wet_peak = tally.wet_peak.max(d.wet_cells.unwrap_or(0));
             tally.last = d;
             if at_output || stop.is_some() {
                 self.snapshot(sink)?;
@@ -468,6 +491,9 @@ impl<M: Model> Simulation<M> {
                 } else {
                     f64::NAN
                 },
+                wet_cells: d.wet_cells,
+                flow_cells: self.grid.flow_cells(),
+                wet_updates: tally.wet_updates,
             });
             if let Some(status) = stop {
                 return Ok(status);
@@ -500,7 +526,27 @@ impl<M: Model> Simulation<M> {
         }
     }
 
+    /// Where the run's work went: its wet fraction and its cell updates per second of
+    /// `wall_s`, for a model that counts its wet cells.
+    fn wet_summary(&self, tally: &Tally, wall_s: f64) -> Option<WetCells> {
+        tally.last.wet_cells?;
+        let flow = self.grid.flow_cells() as f64;
+        let steps = self.steps as f64;
+        Some(WetCells {
+            flow_cells: self.grid.flow_cells(),
+            mean_fraction: if self.steps > 0 {
+                tally.wet_updates / (steps * flow)
+            } else {
+                f64::NAN
+            },
+            peak_fraction: tally.wet_peak as f64 / flow,
+            wet_updates_per_s: tally.wet_updates / wall_s,
+            cell_updates_per_s: steps * flow / wall_s,
+        })
+    }
+
     fn summary(&self, tally: &Tally, status: String) -> RunSummary {
+        let wall_time_s = tally.wall.elapsed().as_secs_f64();
         RunSummary {
             outflowed_fraction: self.outflowed_fraction(tally),
             front_at_end_time: tally.front_at_end.unwrap_or(f64::NAN),
@@ -508,11 +554,13 @@ impl<M: Model> Simulation<M> {
             runout: tally.last.front_x - tally.front0,
             stop_time: tally.rest_since.unwrap_or(f64::NAN),
             settled_time: tally.settled_since.unwrap_or(f64::NAN),
+            settle_fraction: self.config.settle_fraction,
             h_max_final: tally.last.h_max,
             t_end: self.t,
             steps: self.steps,
-            wall_time_s: tally.wall.elapsed().as_secs_f64(),
+            wall_time_s,
             status,
+            wet: self.wet_summary(tally, wall_time_s),
             max_wave_amplitude: tally.max_wave,
             spread: self
                 .tracker

@@ -483,6 +483,7 @@ mod tests {
                     front_x: 0.0,
                     h_max: 1.0,
                     non_finite_at: None,
+                    wet_cells: None,
                 };
                 rule.check(&StepContext {
                     t: k as f64,
@@ -509,6 +510,7 @@ mod tests {
             front_x: 0.0,
             h_max: 1.0,
             non_finite_at: Some(1),
+            wet_cells: None,
         };
         let ctx = StepContext {
             t: 0.5,
@@ -594,6 +596,7 @@ mod tests {
             front_x: 0.0,
             h_max: 1.0,
             non_finite_at: None,
+            wet_cells: None,
         }
     }
 

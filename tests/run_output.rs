@@ -40,6 +40,14 @@ fn collapse_output_honours_the_contract() {
     let summary = f.root_group().group("summary").unwrap();
     // μ(I) creeps: collapse.toml ends when the mass has settled.
     assert_eq!(summary.attr_string("status").unwrap(), "settled");
+    // The file says why, with the fraction the run stopped at (the default 1e-6).
+    let why = summary.attr_string("stop_reason").unwrap();
+    assert!(
+        why.starts_with("the kinetic energy fell to 1e-6 × its peak (time.settle_fraction"),
+        "{why}"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.is_empty(), "-q prints no report: {stdout}");
 
     // Grid.
     let nx = 640;

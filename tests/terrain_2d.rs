@@ -747,3 +747,42 @@ every = 0.1
         "{message}"
     );
 }
+
+/// `time.film_thickness`: a film thinner than it does not count for the kinetic energy
+/// (the settle stop); the signal speed (the CFL step), the mass, the largest speed and
+/// the wet cells still count it, and without the key every cell counts.
+#[test]
+fn a_film_below_film_thickness_leaves_the_kinetic_energy_not_the_cfl_speed() {
+    let r = raster(
+        4,
+        1,
+        (0.0, 4.0),
+        (0.0, 1.0),
+        Sides::all(WALL),
+        Coordinates::Cartesian,
+        0.0,
+        |_, _| 0.0,
+    );
+    // A layer of 0.5 m at rest, and a film of 1 µm at 100 m/s.
+    let state = State2d::from_velocities(
+        vec![0.5, 0.5, 1e-6, 0.0],
+        &[0.0, 0.0, 100.0, 0.0],
+        &[0.0; 4],
+    );
+    let all = Granular2d::new(&r, 1e-3).diagnose(&r, &state);
+    let bulk = Granular2d::new(&r, 1e-3)
+        .with_film_thickness(1e-4)
+        .diagnose(&r, &state);
+    assert!(all.signal_speed > 100.0, "{all:?}");
+    assert!(all.kinetic_energy > 0.0 && bulk.kinetic_energy == 0.0);
+    assert_eq!(
+        (bulk.mass, bulk.max_speed, bulk.signal_speed),
+        (all.mass, all.max_speed, all.signal_speed)
+    );
+    assert_eq!(bulk.wet_cells, Some(3));
+    // At the threshold a cell counts.
+    let at = Granular2d::new(&r, 1e-3)
+        .with_film_thickness(1e-6)
+        .diagnose(&r, &state);
+    assert_eq!(at, all);
+}

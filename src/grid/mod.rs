@@ -162,4 +162,9 @@ pub trait Grid: Send + 'static {
     fn has_outflow(&self) -> bool {
         false
     }
+    /// Number of cells material can occupy: [`Grid::cells`] but the walls (nodata
+    /// cells of a DEM), the denominator of the wet fraction.
+    fn flow_cells(&self) -> usize {
+        self.cells()
+    }
 }

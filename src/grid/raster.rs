@@ -411,6 +411,10 @@ impl Grid for Raster2d {
         Some((self.spec.ny, self.spec.nx))
     }
 
+    fn flow_cells(&self) -> usize {
+        self.cells() - self.walls.iter().filter(|&&w| w).count()
+    }
+
     fn has_outflow(&self) -> bool {
         let s = self.spec.sides;
         [s.west, s.east, s.south, s.north].contains(&BoundaryKind::Outflow)

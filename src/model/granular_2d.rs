@@ -26,7 +26,7 @@ use crate::numerics::workers::Workers;
 use crate::numerics::Stage;
 use crate::output::{OutputError, OutputSink, SnapshotView};
 use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, Voellmy};
-use crate::physics::shallow::{celerity, velocity};
+use crate::physics::shallow::{celerity, velocity, H_DRY};
 use crate::physics::{Material, GRAVITY};
 use crate::pipeline::Pipeline;
 use crate::state::tiles::Tiles;
@@ -54,6 +54,9 @@ pub struct Granular2d {
     erodible: bool,
     /// The run's threads, for the diagnostics and the copy of the state of t^n.
     workers: Workers,
+    /// `time.film_thickness`: a cell of smaller normal thickness does not count for
+    /// the kinetic energy (0: every cell counts).
+    film: f64,
 }
 
 /// One band's part of the diagnostics (sums and extrema over its cells).
@@ -66,6 +69,8 @@ struct BandDiagnostics {
     signal: f64,
     h_max: f64,
     front: f64,
+    /// Cells with h > H_DRY.
+    wet: usize,
 }
 
 impl Granular2d {
@@ -76,7 +81,15 @@ impl Granular2d {
             h_bed: vec![0.0; raster.nx() * raster.ny()],
             erodible: false,
             workers: Workers::serial(),
+            film: 0.0,
         }
+    }
+
+    /// The model with films thinner than `film` (m, normal to the bed) left out of the
+    /// kinetic energy ([`film_counts`]).
+    pub fn with_film_thickness(mut self, film: f64) -> Granular2d {
+        self.film = film;
+        self
     }
 
     /// The model with its diagnostics and its copy of the state on `workers` (the
@@ -123,6 +136,7 @@ impl Granular2d {
             signal: 0.0,
             h_max: 0.0,
             front: f64::NEG_INFINITY,
+            wet: 0,
         };
         for k in cells.flatten() {
             let (h, qx, qy) = (state.h[k], state.hu[k], state.hv[k]);
@@ -130,6 +144,7 @@ impl Granular2d {
             if h.to_bits() | qx.to_bits() | qy.to_bits() == 0 {
                 continue;
             }
+            d.wet += usize::from(h > H_DRY);
             d.mass += h;
             d.q_sum += qx + qy;
             d.h_max = d.h_max.max(h);
@@ -143,9 +158,11 @@ impl Granular2d {
                     (m.speed(k, u, v).powi(2), celerity(GRAVITY * c * c, h))
                 }
             };
-            d.ke += h * speed2;
             d.max_speed2 = d.max_speed2.max(speed2);
             d.signal = d.signal.max(u.abs().max(v.abs()) + wave);
+            if film_counts(self.film, raster, k, h) {
+                d.ke += h * speed2;
+            }
             // h − h_i ≤ h: without an erodible bed the first test decides. In the
             // bed-normal frame the threshold is on the normal thickness c H.
             let normal = raster.metric().map_or(1.0, |m| m.cos[k]);
@@ -268,6 +285,7 @@ impl Model for Granular2d {
         let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
         let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
         let mut front = f64::NEG_INFINITY;
+        let wet_cells = bands.iter().map(|b| b.wet).sum();
         for b in &bands {
             mass += b.mass;
             ke += b.ke;
@@ -295,6 +313,7 @@ impl Model for Granular2d {
             front_x: if front.is_finite() { front } else { f64::NAN },
             h_max,
             non_finite_at,
+            wet_cells: Some(wet_cells),
         }
     }
 
@@ -384,4 +403,14 @@ impl Model for Granular2d {
             extra: &[],
         })
     }
+}
+
+/// Whether cell `k` of thickness `h` counts for the kinetic energy (and so for the
+/// settle stop) under `time.film_thickness` = `film`: always without one (`film` = 0,
+/// the same bits as before the key existed), else when its normal thickness (c h in
+/// the bed-normal frame) is at least `film`. The signal speed counts every cell: a
+/// film left out of the CFL step outruns it and goes unstable (measured in
+/// docs/gis.md, "When a hazard run stops").
+fn film_counts(film: f64, raster: &Raster2d, k: usize, h: f64) -> bool {
+    film == 0.0 || raster.metric().map_or(1.0, |m| m.cos[k]) * h >= film
 }

@@ -68,6 +68,10 @@ pub struct Diagnostics {
     pub h_max: f64,
     /// First cell (physical index) holding a non-finite value, if any.
     pub non_finite_at: Option<usize>,
+    /// The cells holding material (h > [`H_DRY`](crate::physics::shallow::H_DRY)),
+    /// for the wet fraction and the wet-cell rate of the progress line and the summary;
+    /// `None` for a model that does not count them (the 1-D models).
+    pub wet_cells: Option<usize>,
 }
 
 /// A simulated model: its grid, its state, its diagnostics and its output.

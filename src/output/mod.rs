@@ -10,6 +10,7 @@ pub mod csv;
 pub mod gauges;
 pub mod hdf5;
 pub mod memory;
+pub mod stop_reason;
 pub mod tee;
 pub mod xdmf;
 
@@ -212,6 +213,10 @@ pub struct RunSummary {
     /// whose mass creeps long after it has practically stopped.
     #[serde(default = "nan")]
     pub settled_time: f64,
+    /// `time.settle_fraction` of the run (what `settled_time` and the status `settled`
+    /// count from), NaN for a run that never got going.
+    #[serde(default = "nan")]
+    pub settle_fraction: f64,
     pub h_max_final: f64,
     pub t_end: f64,
     pub steps: u64,
@@ -241,6 +246,30 @@ pub struct RunSummary {
     /// (stage name, wall seconds), written as `time_<stage>_s`.
     #[serde(skip)]
     pub stage_times: Vec<(String, f64)>,
+    /// Raster runs: the wet fraction and the cell updates per second (where the run's
+    /// time went). `None` for 1-D runs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wet: Option<WetCells>,
+}
+
+/// Where a raster run's work went: how much of the raster held material, and the cell
+/// updates per second of the run's wall time counted on the wet cells and on all of
+/// them (`/summary` `flow_cells`, `wet_fraction_mean`, `wet_fraction_peak`,
+/// `wet_cell_updates_per_s`, `cell_updates_per_s`). A cell is wet when h > H_DRY
+/// (10⁻¹⁰ m): a film left behind by the flow counts.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct WetCells {
+    /// Cells material can occupy (the raster's cells but its walls).
+    pub flow_cells: usize,
+    /// Mean over the steps of the fraction of `flow_cells` wet at a step's start.
+    pub mean_fraction: f64,
+    /// Largest fraction of `flow_cells` wet at once.
+    pub peak_fraction: f64,
+    /// Wet-cell updates (the cells wet at each step's start, summed over the steps)
+    /// per second of wall time.
+    pub wet_updates_per_s: f64,
+    /// Cell updates (all `flow_cells`, every step) per second of wall time.
+    pub cell_updates_per_s: f64,
 }
 
 /// How far a raster run went, as a practitioner reports it (`/summary`
@@ -287,12 +316,14 @@ impl RunSummary {
             runout: f64::NAN,
             stop_time: f64::NAN,
             settled_time: f64::NAN,
+            settle_fraction: f64::NAN,
             h_max_final: f64::NAN,
             t_end: f64::NAN,
             steps: 0,
             wall_time_s,
             status,
             max_wave_amplitude: None,
+            wet: None,
             outflowed_fraction: f64::NAN,
             front_at_end_time: f64::NAN,
             max_speed_final: f64::NAN,

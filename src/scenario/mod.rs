@@ -187,6 +187,9 @@ pub struct TimeSpec {
     /// End the run (status `settled`) once the kinetic energy is at or below
     /// `settle_fraction` × its peak.
     pub stop_when_settled: bool,
+    /// Raster runs: a cell whose normal thickness is below this (m) does not count for
+    /// the kinetic energy (nor so for `settle_fraction`); 0 (the default): every cell.
+    pub film_thickness: f64,
 }
 
 #[derive(Debug, Clone, PartialEq)]

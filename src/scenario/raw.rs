@@ -156,6 +156,7 @@ pub(crate) struct RawTime {
     pub stop_at_rest: Option<bool>,
     pub settle_fraction: Option<f64>,
     pub stop_when_settled: Option<bool>,
+    pub film_thickness: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -74,7 +74,9 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     let state = State2d::from_velocities(h, &s.u, &s.v);
     // A pool that cannot be started falls back to one thread: the same bits, slower.
     let workers = Workers::new(threads).unwrap_or_else(|_| Workers::serial());
-    let model = Granular2d::new(&grid, scn.output.front_threshold).with_workers(workers.clone());
+    let model = Granular2d::new(&grid, scn.output.front_threshold)
+        .with_workers(workers.clone())
+        .with_film_thickness(scn.time.film_thickness);
     let (model, erodible) = if scn.initial.has_erodible_bed() {
         (model.with_erodible_bed(h_bed.clone()), h_bed)
     } else {

@@ -208,11 +208,13 @@ mod tests {
                 runout: 0.1 + 0.2,
                 stop_time: f64::NAN,
                 settled_time: f64::NAN,
+                settle_fraction: 1e-6,
                 h_max_final: 1.0 / 3.0,
                 t_end: 1e300,
                 steps: 12,
                 wall_time_s: 2.5e-7,
                 max_wave_amplitude: None,
+                wet: None,
                 spread: Some(crate::output::Spread {
                     runout_length: 2852.25,
                     travel_angle_deg: f64::NAN,

@@ -114,6 +114,7 @@ impl Case {
                 stop_at_rest: self.stop_at_rest,
                 settle_fraction: 1e-6,
                 stop_when_settled: false,
+                film_thickness: 0.0,
             },
             output: OutputSpec {
                 file: "test.h5".into(),

@@ -97,6 +97,7 @@ impl Model for Dilatant {
             front_x: front.map_or(f64::NAN, |i| mesh.x[i]),
             h_max,
             non_finite_at,
+            wet_cells: None,
         }
     }
 

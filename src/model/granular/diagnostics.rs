@@ -93,6 +93,7 @@ pub fn diagnose(
         front_x: front.map_or(f64::NAN, |i| mesh.x[i]),
         h_max,
         non_finite_at,
+        wet_cells: None,
     }
 }
 

@@ -68,6 +68,7 @@ impl Model for Submarine {
             front_x: f64::NAN,
             h_max: 0.0,
             non_finite_at: None,
+            wet_cells: None,
         };
         let (mut front, mut all) = (None, 0.0f64);
         let smax = sweep_speeds(&self.params, g, s, |i, c| {

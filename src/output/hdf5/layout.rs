@@ -169,8 +169,14 @@ fn write_raster_layout(
         let attr = ds.new_attr::<f64>().shape(()).create("spacing")?;
         attr.write_numeric(&spacing)?;
     }
+    // Deflated as the maps: an erodible bed is zero outside its zones.
     for (name, data) in [("b", grid.b), ("h_bed", grid.h_bed)] {
-        let ds = g.new_dataset::<f64>().shape([ny, nx]).create(name)?;
+        let ds = g
+            .new_dataset::<f64>()
+            .shape([ny, nx])
+            .chunk(&frame_chunk(&[ny, nx], true)[1..])
+            .shuffle_deflate(RASTER_DEFLATE_LEVEL)
+            .create(name)?;
         ds.write_raw(data)?;
         units(&ds, "m")?;
     }
@@ -198,8 +204,8 @@ fn write_raster_layout(
 }
 
 /// Writes the maps of a raster run, `/maps/<name>` (ny, nx): created with their units
-/// when `create`, else overwritten in place (the datasets are contiguous and keep
-/// their size, so a rewrite claims no new room).
+/// when `create`, else overwritten. Chunked and deflated as the snapshot fields
+/// ([`frame_chunk`]): a map is zero (or NaN) where the flow never came.
 pub(super) fn write_map_fields(
     file: &H5File,
     (nx, ny): (usize, usize),
@@ -209,7 +215,12 @@ pub(super) fn write_map_fields(
     if create {
         let g = file.create_group("maps")?;
         for field in fields {
-            let ds = g.new_dataset::<f64>().shape([ny, nx]).create(field.name)?;
+            let ds = g
+                .new_dataset::<f64>()
+                .shape([ny, nx])
+                .chunk(&frame_chunk(&[ny, nx], true)[1..])
+                .shuffle_deflate(RASTER_DEFLATE_LEVEL)
+                .create(field.name)?;
             ds.write_raw(field.data)?;
             units(&ds, field.units)?;
             description(&ds, field.description)?;
@@ -428,8 +439,20 @@ pub(super) fn write_summary(
     set("max_speed_final", summary.max_speed_final)?;
     group.set_attr_numeric("steps", &(summary.steps as i64))?;
     group.set_attr_string("status", &summary.status)?;
+    group.set_attr_string(
+        "stop_reason",
+        &crate::output::stop_reason::stop_reason(summary),
+    )?;
+    set("settle_fraction", summary.settle_fraction)?;
     if let Some(a) = summary.max_wave_amplitude {
         set("max_wave_amplitude", a)?;
+    }
+    if let Some(w) = &summary.wet {
+        group.set_attr_numeric("flow_cells", &(w.flow_cells as i64))?;
+        set("wet_fraction_mean", w.mean_fraction)?;
+        set("wet_fraction_peak", w.peak_fraction)?;
+        set("wet_cell_updates_per_s", w.wet_updates_per_s)?;
+        set("cell_updates_per_s", w.cell_updates_per_s)?;
     }
     for (stage, seconds) in &summary.stage_times {
         set(&stage_attr_name(stage), *seconds)?;
@@ -549,7 +572,28 @@ fn label_axes(ds: &H5Dataset, name: &str, axes: &[Dim]) -> rust_hdf5::Result<()>
         .write_array(&dims)
 }
 
+/// Values per chunk of a raster field (1 MiB of f64): a chunk is a band of whole rows
+/// of one frame, (1, rows, nx), so a snapshot appends whole chunks and a reader of one
+/// frame decompresses only that frame's chunks.
+pub(super) const RASTER_CHUNK_VALUES: usize = 1 << 17;
+
+/// Deflate level of the raster fields (behind the shuffle filter). Level 1: a dry
+/// band (all zeros) shrinks as much as at level 6 and a wet one almost as much, at a
+/// fraction of the time (docs/performance.md, "Snapshots of a large raster").
+pub(super) const RASTER_DEFLATE_LEVEL: u32 = 1;
+
+/// The chunk of a field of frames `frame`: (1, frame…) on a line; on a raster
+/// (`frame` = [ny, nx]) a band of rows of about [`RASTER_CHUNK_VALUES`] values.
+pub(super) fn frame_chunk(frame: &[usize], raster: bool) -> Vec<usize> {
+    match *frame {
+        [ny, nx] if raster => vec![1, (RASTER_CHUNK_VALUES / nx.max(1)).clamp(1, ny.max(1)), nx],
+        _ => std::iter::once(1).chain(frame.iter().copied()).collect(),
+    }
+}
+
 /// Creates the field `name` of shape (nt, frame…), its axes after t being `axes`.
+/// A raster field is shuffled and deflated ([`RASTER_DEFLATE_LEVEL`]): its dry
+/// cells (zeros) take almost no room. A line's frames are small and stay raw.
 fn frames(
     group: &H5Group,
     name: &str,
@@ -558,16 +602,21 @@ fn frames(
     axes: &[Dim],
 ) -> rust_hdf5::Result<H5Dataset> {
     let dims: Vec<usize> = std::iter::once(0).chain(frame.iter().copied()).collect();
-    let chunk: Vec<usize> = std::iter::once(1).chain(frame.iter().copied()).collect();
     let max: Vec<Option<usize>> = std::iter::once(None)
         .chain(frame.iter().map(|&n| Some(n)))
         .collect();
-    let ds = group
+    let raster = axes.contains(&Dim::Y);
+    let builder = group
         .new_dataset::<f64>()
         .shape(dims)
-        .chunk(&chunk)
-        .max_shape(&max)
-        .create(name)?;
+        .chunk(&frame_chunk(frame, raster))
+        .max_shape(&max);
+    let builder = if raster {
+        builder.shuffle_deflate(RASTER_DEFLATE_LEVEL)
+    } else {
+        builder
+    };
+    let ds = builder.create(name)?;
     units(&ds, unit)?;
     label_axes(&ds, name, axes)?;
     Ok(ds)

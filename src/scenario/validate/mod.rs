@@ -324,6 +324,12 @@ fn validate(
     )?;
     let boundary = plane::boundary(raw.boundary.unwrap_or_default(), &domain)?;
     let time = time(section("time", raw.time)?)?;
+    if time.film_thickness > 0.0 && domain.plane.is_none() {
+        return err(
+            "time.film_thickness",
+            "applies to raster (2-D) runs only: a line counts every cell for its kinetic energy",
+        );
+    }
     let raw_output = raw.output.unwrap_or_default();
     let mut output = output(&raw_output, &time, &domain, default_output)?;
     output.path = path::spec(raw_output.path.as_ref(), &domain, base_dir)?;
@@ -621,6 +627,7 @@ fn time(t: RawTime) -> Res<TimeSpec> {
         stop_at_rest: t.stop_at_rest.unwrap_or(false),
         settle_fraction,
         stop_when_settled: t.stop_when_settled.unwrap_or(false),
+        film_thickness: non_negative("time.film_thickness", t.film_thickness.unwrap_or(0.0))?,
     })
 }
 
@@ -906,7 +913,8 @@ t_end = 2.0
                 cfl: 0.5,
                 stop_at_rest: false,
                 settle_fraction: 1e-6,
-                stop_when_settled: false
+                stop_when_settled: false,
+                film_thickness: 0.0,
             }
         );
         assert_eq!(
@@ -1397,6 +1405,19 @@ front_threshold = 2e-3
         // From a Coulomb file the switch works (mu set from the file).
         let s = load_set(MINIMAL, &["rheology.law=coulomb", "rheology.mu=0.25"]).unwrap();
         assert_eq!(s.friction, FrictionLaw::Coulomb { mu: 0.25 });
+    }
+
+    /// `time.film_thickness` applies to rasters only (a line refuses it) and is at
+    /// least 0, its default.
+    #[test]
+    fn film_thickness_is_for_rasters_and_not_negative() {
+        let e = load_set(MINIMAL, &["time.film_thickness=1e-4"]).unwrap_err();
+        assert_eq!(e.key(), Some("time.film_thickness"));
+        assert!(e.message().contains("raster (2-D) runs only"), "{e}");
+        let e = load_set(MINIMAL, &["time.film_thickness=-1"]).unwrap_err();
+        assert_eq!(e.key(), Some("time.film_thickness"));
+        let s = load_set(MINIMAL, &["time.film_thickness=0"]).unwrap();
+        assert_eq!(s.time.film_thickness, 0.0);
     }
 
     #[test]
