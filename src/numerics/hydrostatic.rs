@@ -148,6 +148,7 @@
 use super::face::{
     drained_fraction, interface, layer_momentum_flux, mass_flux, monolayer_fluxes, Side,
 };
+use super::muscl::{self, Limiter};
 use super::tracer::TracerTransport;
 use super::{Stage, StageError};
 use crate::grid::Line;
@@ -251,6 +252,16 @@ pub struct HydrostaticStep<L: BasalFriction> {
     drain: Vec<f64>,
     /// Transport of the state's tracers (idle when it has none).
     tracers: TracerTransport,
+    /// The limiter of the second-order reconstruction ([`muscl`]), `None` at first order.
+    limiter: Option<Limiter>,
+    /// Order 2, per cell with ghosts (nx + 2): the interior pressure force 𝓢^c of a
+    /// reconstructed cell and its gravity part (0 where first order).
+    interior: Vec<f64>,
+    interior_body: Vec<f64>,
+    /// Order 2, per cell with ghosts: the cell's west and east edge states (its mean
+    /// where first order).
+    west: Vec<Side>,
+    east: Vec<Side>,
 }
 
 /// The layer fractions as the exchange terms use them.
@@ -332,7 +343,25 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             h_new: vec![0.0; nx + 2],
             drain: vec![1.0; nx + 2],
             tracers: TracerTransport::default(),
+            limiter: None,
+            interior: Vec::new(),
+            interior_body: Vec::new(),
+            west: Vec::new(),
+            east: Vec::new(),
         }
+    }
+
+    /// The monolayer step with the second-order reconstruction of [`muscl`] and
+    /// `limiter` (the time integrator is the caller's: [`super::ssp_rk2`]).
+    pub fn second_order(law: L, nx: usize, limiter: Limiter) -> Self {
+        let mut step = Self::with_layers(law, nx, 1);
+        let dry = Side::monolayer(0.0, 0.0, 0.0, 0.0);
+        step.limiter = Some(limiter);
+        step.interior = vec![0.0; nx + 2];
+        step.interior_body = vec![0.0; nx + 2];
+        step.west = vec![dry; nx + 2];
+        step.east = vec![dry; nx + 2];
+        step
     }
 
     /// N > 1: velocities u_α and ū of every cell, ghosts included, the shear term of
@@ -515,6 +544,96 @@ impl<L: BasalFriction> HydrostaticStep<L> {
 }
 
 impl<L: BasalFriction> HydrostaticStep<L> {
+    /// Order 2: every cell's west and east edge states and interior force ([`muscl`]).
+    /// The ghost cells are first order (one ghost layer: no neighbour beyond them).
+    /// The reference plane's potential p = z − b is linear along the line, so an edge
+    /// takes the mean of the two cells' p at its face: the faces then see no jump of the
+    /// plane, which the interior forces carry (η's slope includes the plane's).
+    fn reconstruct(&mut self, mesh: &Line, h: &[f64], hu: &[f64], limiter: Limiter) {
+        let nx = mesh.nx;
+        let (b, z, g_n) = (&mesh.b_ghost[..nx + 2], &mesh.z[..nx + 2], mesh.g_n);
+        let cell = |j: usize| muscl::Cell {
+            h: h[j],
+            hu: hu[j],
+            eta: h[j] + z[j],
+        };
+        let plane = |j: usize| z[j] - b[j];
+        let edge_side = |e: muscl::Edge, p: f64| {
+            let z = e.eta - e.h;
+            let u = if e.h > H_DRY { e.u } else { 0.0 };
+            Side {
+                h: e.h,
+                u,
+                b: z - p,
+                z,
+                shear: 0.0,
+                u_base: u,
+                sqrt_h: e.h.sqrt(),
+            }
+        };
+        for j in 0..nx + 2 {
+            let interior = j > 0 && j <= nx;
+            let s = if interior {
+                muscl::slopes(limiter, cell(j - 1), cell(j), cell(j + 1))
+            } else {
+                None
+            };
+            match s {
+                None => {
+                    let mean = Side::monolayer(h[j], hu[j], b[j], z[j]);
+                    (self.west[j], self.east[j]) = (mean, mean);
+                    (self.interior[j], self.interior_body[j]) = (0.0, 0.0);
+                }
+                Some(s) => {
+                    let (w, e) = muscl::edges(cell(j), s);
+                    let p_w = 0.5 * (plane(j - 1) + plane(j));
+                    let p_e = 0.5 * (plane(j) + plane(j + 1));
+                    (self.west[j], self.east[j]) = (edge_side(w, p_w), edge_side(e, p_e));
+                    (self.interior[j], self.interior_body[j]) = muscl::interior_source(g_n, w, e);
+                }
+            }
+        }
+    }
+
+    /// Order 2, N = 1: the faces between the reconstructed edge states and the mass
+    /// update; returns the smallest h_new and its cell.
+    fn muscl_interfaces<F: FaceFriction>(
+        &mut self,
+        mesh: &Line,
+        dt: f64,
+        h: &[f64],
+        r: f64,
+        faces: &F,
+    ) -> (f64, usize) {
+        let nx = mesh.nx;
+        let (g_n, dx) = (mesh.g_n, mesh.dx);
+        for k in 0..=nx {
+            let (l, rt) = (self.east[k], self.west[k + 1]);
+            let (cell_l, cell_r) = ((l.u.abs(), l.h), (rt.u.abs(), rt.h));
+            let mu_of = |speed: f64, h: f64| faces.face_mu(k, cell_l, cell_r, speed, h, g_n);
+            let f = monolayer_fluxes(mu_of, l, rt, faces.potential_jump(k), g_n, dx, dt);
+            (self.flux_h[k], self.flux_hu[k]) = (f.0, f.1);
+            (self.share_left[k], self.share_right[k]) = (f.2, f.3);
+            (self.body_left[k], self.body_right[k]) = (f.4, f.5);
+        }
+        self.update_mass(h, r)
+    }
+
+    /// Order 2, N = 1: [`Self::update_monolayer`] with each cell's interior force.
+    fn update_muscl(&self, h: &mut [f64], hu: &mut [f64], r: f64) {
+        let nx = h.len() - 2;
+        for i in 1..=nx {
+            let h_old = h[i];
+            let hn = self.h_new[i];
+            h[i] = if hn < 0.0 { 0.0 } else { hn };
+            let body = self.body_left[i] + self.body_right[i - 1] + self.interior_body[i];
+            let source = self.share_left[i] + self.share_right[i - 1] + self.interior[i]
+                - body * drained_fraction(h[i], h_old);
+            let q = hu[i] - r * (self.flux_hu[i] - self.flux_hu[i - 1] + source);
+            hu[i] = if h[i] <= H_DRY { 0.0 } else { q };
+        }
+    }
+
     /// h_new = h − r (F_{i+1/2} − F_{i−1/2}); returns the smallest value and its cell.
     fn update_mass(&mut self, h: &[f64], r: f64) -> (f64, usize) {
         let mut worst = (f64::INFINITY, 1usize);
@@ -681,6 +800,13 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         // Mass first; limit the fluxes of cells that would empty, then refuse the step
         // (state untouched) if anything is still negative beyond round-off.
         let r = dt / mesh.dx;
+        if let Some(limiter) = self.limiter {
+            self.reconstruct(mesh, h, hu, limiter);
+            let worst = self.muscl_interfaces(mesh, dt, h, r, faces);
+            self.refuse_negative(h, r, worst)?;
+            self.update_muscl(&mut h[..nx + 2], &mut hu[..nx + 2], r);
+            return Ok(());
+        }
         let worst = self.monolayer_interfaces(mesh, dt, h, hu, r, faces);
         self.refuse_negative(h, r, worst)?;
         self.update_monolayer(&mut h[..nx + 2], &mut hu[..nx + 2], r);
