@@ -146,12 +146,13 @@
 //! masses at rest exactly at rest, like the monolayer.
 
 use super::face::{
-    drained_fraction, interface, layer_momentum_flux, mass_flux, monolayer_fluxes, Side,
+    drained_fraction, interface, interface_with_friction, layer_momentum_flux, mass_flux,
+    monolayer_fluxes, Side,
 };
 use super::muscl::{self, Limiter};
 use super::tracer::TracerTransport;
 use super::{Stage, StageError};
-use crate::grid::Line;
+use crate::grid::{BoundaryKind, Line};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
 use crate::state::layered::LayeredState;
@@ -262,6 +263,8 @@ pub struct HydrostaticStep<L: BasalFriction> {
     /// where first order).
     west: Vec<Side>,
     east: Vec<Side>,
+    /// Order 2, per cell with ghosts: the limited slopes, `None` where first order.
+    slopes: Vec<Option<muscl::Slopes>>,
 }
 
 /// The layer fractions as the exchange terms use them.
@@ -348,6 +351,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             interior_body: Vec::new(),
             west: Vec::new(),
             east: Vec::new(),
+            slopes: Vec::new(),
         }
     }
 
@@ -361,6 +365,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         step.interior_body = vec![0.0; nx + 2];
         step.west = vec![dry; nx + 2];
         step.east = vec![dry; nx + 2];
+        step.slopes = vec![None; nx + 2];
         step
     }
 
@@ -545,53 +550,98 @@ impl<L: BasalFriction> HydrostaticStep<L> {
 
 impl<L: BasalFriction> HydrostaticStep<L> {
     /// Order 2: every cell's west and east edge states and interior force ([`muscl`]).
-    /// The ghost cells are first order (one ghost layer: no neighbour beyond them).
-    /// The reference plane's potential p = z − b is linear along the line, so an edge
-    /// takes the mean of the two cells' p at its face: the faces then see no jump of the
-    /// plane, which the interior forces carry (η's slope includes the plane's).
-    fn reconstruct(&mut self, mesh: &Line, h: &[f64], hu: &[f64], limiter: Limiter) {
+    /// The surface reconstructed is h + b, over the reference plane: the plane's
+    /// potential z − b stays at the cell's value, so every face sees the plane's whole
+    /// jump, as at order 1 (a uniform layer sliding on the plane has no slopes and is
+    /// the first-order flow to the bit, at the faces beside first-order cells too).
+    /// A wall's ghost takes the mirror image of its neighbour's edge (the same depth
+    /// and surface, the velocity reversed: no mass crosses the wall); an outflow's
+    /// ghost is first order (a copy of the edge cell's mean).
+    ///
+    /// A cell slower than the speed its static friction takes out in one step,
+    /// |u| ≤ Δt μ_s g_n (μ_s the law at speed 0), is first order too: the friction step
+    /// may stop it within the step, a non-smooth event that order 2 cannot resolve, and
+    /// its first-order forces are those that hold masses at rest. Without it the back of
+    /// a Coulomb deposit standing at its friction angle crept at 1.7 cm/s for ever
+    /// (a force within a few per cent of the threshold, on either side), where order 1
+    /// stops it. Frictionless cells (μ = 0) are reconstructed wherever they move.
+    fn reconstruct(&mut self, mesh: &Line, dt: f64, h: &[f64], hu: &[f64], limiter: Limiter) {
         let nx = mesh.nx;
+        let law = self.law;
         let (b, z, g_n) = (&mesh.b_ghost[..nx + 2], &mesh.z[..nx + 2], mesh.g_n);
         let cell = |j: usize| muscl::Cell {
             h: h[j],
             hu: hu[j],
-            eta: h[j] + z[j],
+            eta: h[j] + b[j],
         };
-        let plane = |j: usize| z[j] - b[j];
-        let edge_side = |e: muscl::Edge, p: f64| {
-            let z = e.eta - e.h;
+        let edge_side = |e: muscl::Edge, plane: f64| {
+            let b = e.eta - e.h;
             let u = if e.h > H_DRY { e.u } else { 0.0 };
             Side {
                 h: e.h,
                 u,
-                b: z - p,
-                z,
+                b,
+                z: b + plane,
                 shear: 0.0,
                 u_base: u,
                 sqrt_h: e.h.sqrt(),
             }
         };
+        // Slopes where the cell is reconstructed (`None`: first order).
         for j in 0..nx + 2 {
-            let interior = j > 0 && j <= nx;
-            let s = if interior {
+            let stoppable = |j: usize| {
+                let speed = cell(j).u().abs();
+                speed <= dt * g_n * law.mu(0.0, h[j], g_n * h[j])
+            };
+            self.slopes[j] = if j > 0 && j <= nx && !stoppable(j) {
                 muscl::slopes(limiter, cell(j - 1), cell(j), cell(j + 1))
             } else {
                 None
             };
-            match s {
-                None => {
-                    let mean = Side::monolayer(h[j], hu[j], b[j], z[j]);
-                    (self.west[j], self.east[j]) = (mean, mean);
-                    (self.interior[j], self.interior_body[j]) = (0.0, 0.0);
-                }
-                Some(s) => {
-                    let (w, e) = muscl::edges(cell(j), s);
-                    let p_w = 0.5 * (plane(j - 1) + plane(j));
-                    let p_e = 0.5 * (plane(j) + plane(j + 1));
-                    (self.west[j], self.east[j]) = (edge_side(w, p_w), edge_side(e, p_e));
-                    (self.interior[j], self.interior_body[j]) = muscl::interior_source(g_n, w, e);
-                }
-            }
+        }
+        if mesh.left == BoundaryKind::Wall {
+            self.slopes[0] = self.slopes[1].map(muscl::Slopes::mirrored);
+        }
+        if mesh.right == BoundaryKind::Wall {
+            self.slopes[nx + 1] = self.slopes[nx].map(muscl::Slopes::mirrored);
+        }
+        // An edge is reconstructed only where both cells of its face are: at a face
+        // beside a first-order cell both sides are means, the jump spans the two
+        // centres and each cell takes its share as at order 1 (with one edge
+        // reconstructed, the first-order cell would feel only half of the surface's
+        // slope and its neighbour 5/4; module documentation of `muscl`).
+        let mean_edge = |j: usize| muscl::Edge {
+            h: h[j],
+            u: cell(j).u(),
+            eta: h[j] + b[j],
+        };
+        for j in 0..nx + 2 {
+            let mean = Side::monolayer(h[j], hu[j], b[j], z[j]);
+            let Some(s) = self.slopes[j] else {
+                (self.west[j], self.east[j]) = (mean, mean);
+                (self.interior[j], self.interior_body[j]) = (0.0, 0.0);
+                continue;
+            };
+            let (w, e) = muscl::edges(cell(j), s);
+            let plane = z[j] - b[j];
+            let west_recon = j > 0 && self.slopes[j - 1].is_some();
+            let east_recon = j <= nx && self.slopes[j + 1].is_some();
+            let (w, west) = if west_recon {
+                (w, edge_side(w, plane))
+            } else {
+                (mean_edge(j), mean)
+            };
+            let (e, east) = if east_recon {
+                (e, edge_side(e, plane))
+            } else {
+                (mean_edge(j), mean)
+            };
+            (self.west[j], self.east[j]) = (west, east);
+            (self.interior[j], self.interior_body[j]) = if west_recon || east_recon {
+                muscl::interior_source(g_n, w, e)
+            } else {
+                (0.0, 0.0)
+            };
         }
     }
 
@@ -607,14 +657,36 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     ) -> (f64, usize) {
         let nx = mesh.nx;
         let (g_n, dx) = (mesh.g_n, mesh.dx);
+        let z = &mesh.z[..nx + 2];
         for k in 0..=nx {
             let (l, rt) = (self.east[k], self.west[k + 1]);
             let (cell_l, cell_r) = ((l.u.abs(), l.h), (rt.u.abs(), rt.h));
-            let mu_of = |speed: f64, h: f64| faces.face_mu(k, cell_l, cell_r, speed, h, g_n);
-            let f = monolayer_fluxes(mu_of, l, rt, faces.potential_jump(k), g_n, dx, dt);
-            (self.flux_h[k], self.flux_hu[k]) = (f.0, f.1);
-            (self.share_left[k], self.share_right[k]) = (f.2, f.3);
-            (self.body_left[k], self.body_right[k]) = (f.4, f.5);
+            let mu_of =
+                |speed: f64, h: f64, _drive: f64| faces.face_mu(k, cell_l, cell_r, speed, h, g_n);
+            // ΔC decides whether friction holds the face from the drive between the
+            // cell centres, as at order 1: the jump between the edges is a fraction of
+            // it (the rest is in the cells' interior forces), and a face that saw only
+            // u/Δt would stop the mass flux of a mass that the friction step keeps
+            // moving (module documentation of `muscl`, "ΔC").
+            let centres = (h[k + 1] + z[k + 1]) - (h[k] + z[k]);
+            let edges = (rt.h + rt.z) - (l.h + l.z);
+            let missing = -g_n * (centres - edges) / dx;
+            let friction = |drive: f64, mu: f64| {
+                let threshold = g_n * mu;
+                -(drive + missing).clamp(-threshold, threshold)
+            };
+            let extra = faces.potential_jump(k);
+            let found = interface_with_friction(mu_of, l, rt, extra, friction, (g_n, g_n), dx, dt);
+            let Some((c, l, rt)) = found else {
+                (self.flux_h[k], self.flux_hu[k]) = (0.0, 0.0);
+                (self.share_left[k], self.share_right[k]) = (0.0, 0.0);
+                (self.body_left[k], self.body_right[k]) = (0.0, 0.0);
+                continue;
+            };
+            self.flux_h[k] = mass_flux(&c, l, rt);
+            self.flux_hu[k] = layer_momentum_flux(&c, c.h_minus, c.h_plus, l.u, rt.u);
+            (self.share_left[k], self.share_right[k]) = (c.share_left, c.share_right);
+            (self.body_left[k], self.body_right[k]) = (c.body_left, c.body_right);
         }
         self.update_mass(h, r)
     }
@@ -801,7 +873,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         // (state untouched) if anything is still negative beyond round-off.
         let r = dt / mesh.dx;
         if let Some(limiter) = self.limiter {
-            self.reconstruct(mesh, h, hu, limiter);
+            self.reconstruct(mesh, dt, h, hu, limiter);
             let worst = self.muscl_interfaces(mesh, dt, h, r, faces);
             self.refuse_negative(h, r, worst)?;
             self.update_muscl(&mut h[..nx + 2], &mut hu[..nx + 2], r);

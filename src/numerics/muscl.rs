@@ -1,12 +1,14 @@
 //! Second-order reconstruction (MUSCL, van Leer 1979) inside the hydrostatic
 //! reconstruction, in the well-balanced form of Audusse et al. 2004, §3: each cell
 //! carries limited linear profiles of its depth h, its velocity u and its free surface
-//! η = h + z, and a face sees, instead of the two cell means, the two edge values
+//! η = h + b (over the reference plane: the plane's own potential, linear along the
+//! grid, keeps its cell values and its jumps at the faces, as at order 1), and a face
+//! sees, instead of the two cell means, the two edge values
 //!
 //!   w_{i+1/2}⁻ = w_i + ½ σ_i^w,   w_{i−1/2}⁺ = w_i − ½ σ_i^w,   w ∈ {h, u, η},
 //!   σ_i^w = φ(w_i − w_{i−1}, w_{i+1} − w_i)   (a difference across one cell),
 //!
-//! with the potential z = η − h at the edges. The face then runs the first-order face
+//! with the bed b = η − h at the edges. The face then runs the first-order face
 //! kernel ([`super::face`]: hydrostatic reconstruction over the bed, Coulomb-aware ΔC,
 //! HLL/PVM diffusion, own-depth split) on the two edge states, and every reconstructed
 //! cell adds the pressure force of its own interior (Audusse et al. 2004, eq. 3.9, in
@@ -15,9 +17,14 @@
 //!   𝓢_i^c = g_n ½(h_{i−1/2}⁺ + h_{i+1/2}⁻)(η_{i+1/2}⁻ − η_{i−1/2}⁺).
 //!
 //! Its flat-bed part g_n ½(h⁺ + h⁻)(h⁻ − h⁺) = g_n Δ(h²/2) telescopes with the faces'
-//! flat-bed parts, so shocks keep their speed; over a lake at rest (η constant) every
-//! σ^η vanishes, the edge η are the cell η, the face kernel sees a lake at rest and
-//! 𝓢_i^c = 0: the scheme is well balanced (the property Audusse et al. 2004 build it for).
+//! flat-bed parts, so shocks keep their speed; over a lake at rest on a horizontal
+//! reference plane (η constant) every σ^η vanishes, the edge η are the cell η, the
+//! face kernel sees a lake at rest and 𝓢_i^c = 0: the scheme is well balanced (the
+//! property Audusse et al. 2004 build it for). On an inclined plane of potential p
+//! (local coordinates) a lake has η = C − p, linear, which the limiters reconstruct
+//! exactly: each face sees no jump of h + b and the plane's jump Δp, of which the cell
+//! takes ½ g_n h_edge Δp from each face, and the interior force −g_n ½(h_W + h_E) Δp
+//! cancels them.
 //!
 //! Limiters φ(a, b) (all zero when a b ≤ 0; Sweby 1984 for their TVD region):
 //! - minmod: sgn(a) min(|a|, |b|),
@@ -31,11 +38,33 @@
 //! where
 //! - it or a neighbour is dry (h ≤ H_DRY): wet/dry fronts and shorelines keep the
 //!   first-order treatment (emerging bed, clipping) that the face kernel was built for;
-//! - it is at rest (hu = 0 exactly): a mass at rest sees exactly the first-order step,
+//! - it is at rest (hu = 0 exactly), or (in the 1-D step) slower than its static
+//!   friction's impulse per step, |u| ≤ Δt μ_s g_n: a mass at rest sees exactly the
+//!   first-order step,
 //!   whose Coulomb-aware ΔC and own-depth split hold every profile with
 //!   |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s (docs/numerics.md). A limited slope can exceed the
 //!   two one-sided slopes' mean at a kink of the surface (minmod at slopes μ, μ, 0 gives
 //!   the cell 1.25 μ), which would set moving a deposit that the physics holds.
+//!
+//! Mixed faces. An edge is reconstructed only where both cells of its face are; at a
+//! face beside a first-order cell both sides keep their means, and the reconstructed
+//! cell's interior force runs from its other edge to its mean. The face's jump then
+//! spans the two centres and is shared as at order 1. With the reconstructed edge
+//! facing a first-order cell's mean, the jump would span half a cell, all of it inside
+//! the first-order cell, of which that cell takes only its half: a first-order cell
+//! between two reconstructed ones felt half the slope of the surface, its neighbours
+//! 5/4 of it, and a Coulomb deposit at its repose angle beside moving cells never
+//! came to rest (tests/second_order.rs).
+//!
+//! ΔC. The Coulomb-aware reconstruction of a face decides whether friction holds it
+//! from the drive u/Δt − g_n Δη/Δx with Δη the jump between the cell centres (as at
+//! order 1), not between the edges: the edges' jump is a fraction of the surface's
+//! drop, and a face that saw little more than u/Δt stopped the mass flux of cells that
+//! the friction step, which sees the interior forces too, kept moving (a Coulomb
+//! deposit at its repose angle slid for ever with its faces closed).
+//!
+//! Walls: the ghost is the mirror image of the edge cell, with mirrored slopes
+//! ([`Slopes::mirrored`]), so that no mass crosses the wall.
 //!
 //! The functions here see one cell stencil and return values; the 1-D step
 //! ([`super::hydrostatic`]) calls [`slopes`] once per cell and [`edges`] for the faces,
@@ -95,7 +124,8 @@ impl Limiter {
     }
 }
 
-/// What the reconstruction reads of a cell: depth, discharge and free surface η = h + z.
+/// What the reconstruction reads of a cell: depth, discharge and surface η = h + b over
+/// the reference plane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Cell {
     pub h: f64,
@@ -117,6 +147,19 @@ pub struct Slopes {
     pub h: f64,
     pub u: f64,
     pub eta: f64,
+}
+
+impl Slopes {
+    /// The slopes of the mirror image of a cell across a wall (its ghost: the same
+    /// depth and surface, the velocity reversed): h and η change sign, u does not.
+    #[inline(always)]
+    pub fn mirrored(self) -> Slopes {
+        Slopes {
+            h: -self.h,
+            u: self.u,
+            eta: -self.eta,
+        }
+    }
 }
 
 /// The slopes of `cell` from its neighbours `prev` and `next`, or `None` where the cell
@@ -176,14 +219,14 @@ pub fn interior_source(g_n: f64, west: Edge, east: Edge) -> (f64, f64) {
 
 /// The states each side of the face between `stencil[1]` and `stencil[2]` (the two
 /// cells each side of it): the east edge of `stencil[1]` and the west edge of
-/// `stencil[2]`, `None` on a side reconstructed to first order (the cell's mean, as
-/// it is, is then the face's state on that side).
+/// `stencil[2]` where both cells are reconstructed, else `None` (the two cell means,
+/// as they are, are then the face's states: module documentation, "mixed faces").
 #[inline(always)]
-pub fn face_states(limiter: Limiter, stencil: [Cell; 4]) -> (Option<Edge>, Option<Edge>) {
+pub fn face_states(limiter: Limiter, stencil: [Cell; 4]) -> Option<(Edge, Edge)> {
     let [a, l, r, b] = stencil;
-    let left = slopes(limiter, a, l, r).map(|s| edges(l, s).1);
-    let right = slopes(limiter, l, r, b).map(|s| edges(r, s).0);
-    (left, right)
+    let left = slopes(limiter, a, l, r)?;
+    let right = slopes(limiter, l, r, b)?;
+    Some((edges(l, left).1, edges(r, right).0))
 }
 
 #[cfg(test)]
@@ -251,6 +294,7 @@ mod tests {
             assert!(slopes(lim, cell(0.0, 0.0, 0.0), cell(1.2, 0.3, 0.0), wet).is_none());
             assert!(slopes(lim, wet, cell(1.2, 0.3, 0.0), cell(0.0, 0.0, 0.0)).is_none());
             assert!(slopes(lim, wet, cell(1.2, 0.3, 0.0), wet).is_some());
+            assert_eq!(face_states(lim, [wet, wet, cell(1.2, 0.0, 0.0), wet]), None);
         }
     }
 
@@ -279,8 +323,7 @@ mod tests {
             cell(1.2, 0.3, 0.0),
             cell(1.3, 0.4, 0.0),
         ];
-        let (l, r) = face_states(Limiter::Minmod, c);
-        let (l, r) = (l.unwrap(), r.unwrap());
+        let (l, r) = face_states(Limiter::Minmod, c).unwrap();
         assert!((l.h - 1.15).abs() < 1e-14 && (r.h - 1.15).abs() < 1e-14);
         assert!((l.u - 0.25).abs() < 1e-14 && (r.u - 0.25).abs() < 1e-14);
     }

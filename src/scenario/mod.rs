@@ -413,7 +413,7 @@ impl Default for Numerics {
     fn default() -> Self {
         Numerics {
             order: 1,
-            limiter: Limiter::VanLeer,
+            limiter: Limiter::Mc,
         }
     }
 }

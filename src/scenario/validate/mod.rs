@@ -871,8 +871,11 @@ t_end = 2.0
 
     #[test]
     fn second_order_is_refused_by_name_where_it_is_not_implemented() {
-        let s = load_set(MINIMAL, &["numerics.order=2", "numerics.limiter=mc"]).unwrap();
-        assert_eq!((s.numerics.order, s.numerics.limiter), (2, Limiter::Mc));
+        let s = load_set(MINIMAL, &["numerics.order=2", "numerics.limiter=van_leer"]).unwrap();
+        assert_eq!(
+            (s.numerics.order, s.numerics.limiter),
+            (2, Limiter::VanLeer)
+        );
         let s = load(MINIMAL).unwrap();
         assert_eq!(s.numerics, Numerics::default());
         assert_eq!(s.numerics.order, 1);
