@@ -263,8 +263,10 @@ pub struct HydrostaticStep<L: BasalFriction> {
     /// where first order).
     west: Vec<Side>,
     east: Vec<Side>,
-    /// Order 2, per cell with ghosts: the limited slopes, `None` where first order.
+    /// Order 2, per cell with ghosts: the limited slopes, `None` where first order,
+    /// and what the reconstruction reads of each cell.
     slopes: Vec<Option<muscl::Slopes>>,
+    cells: Vec<muscl::Cell>,
 }
 
 /// The layer fractions as the exchange terms use them.
@@ -352,6 +354,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             west: Vec::new(),
             east: Vec::new(),
             slopes: Vec::new(),
+            cells: Vec::new(),
         }
     }
 
@@ -366,6 +369,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         step.west = vec![dry; nx + 2];
         step.east = vec![dry; nx + 2];
         step.slopes = vec![None; nx + 2];
+        step.cells = vec![muscl::Cell::new(0.0, 0.0, 0.0); nx + 2];
         step
     }
 
@@ -569,11 +573,12 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         let nx = mesh.nx;
         let law = self.law;
         let (b, z, g_n) = (&mesh.b_ghost[..nx + 2], &mesh.z[..nx + 2], mesh.g_n);
-        let cell = |j: usize| muscl::Cell {
-            h: h[j],
-            hu: hu[j],
-            eta: h[j] + b[j],
-        };
+        // Each cell's velocity once (one division), read by three stencils.
+        for (j, c) in self.cells.iter_mut().enumerate() {
+            *c = muscl::Cell::new(h[j], hu[j], h[j] + b[j]);
+        }
+        let cells = &self.cells;
+        let cell = |j: usize| cells[j];
         let edge_side = |e: muscl::Edge, plane: f64| {
             let b = e.eta - e.h;
             let u = if e.h > H_DRY { e.u } else { 0.0 };
@@ -590,7 +595,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         // Slopes where the cell is reconstructed (`None`: first order).
         for j in 0..nx + 2 {
             let stoppable = |j: usize| {
-                let speed = cell(j).u().abs();
+                let speed = cell(j).u.abs();
                 speed <= dt * g_n * law.mu(0.0, h[j], g_n * h[j])
             };
             self.slopes[j] = if j > 0 && j <= nx && !stoppable(j) {
@@ -612,7 +617,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         // slope and its neighbour 5/4; module documentation of `muscl`).
         let mean_edge = |j: usize| muscl::Edge {
             h: h[j],
-            u: cell(j).u(),
+            u: cell(j).u,
             eta: h[j] + b[j],
         };
         for j in 0..nx + 2 {

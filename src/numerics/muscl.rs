@@ -38,7 +38,7 @@
 //! where
 //! - it or a neighbour is dry (h ≤ H_DRY): wet/dry fronts and shorelines keep the
 //!   first-order treatment (emerging bed, clipping) that the face kernel was built for;
-//! - it is at rest (hu = 0 exactly), or (in the 1-D step) slower than its static
+//! - it is at rest (u = 0 exactly), or (in the 1-D step) slower than its static
 //!   friction's impulse per step, |u| ≤ Δt μ_s g_n: a mass at rest sees exactly the
 //!   first-order step,
 //!   whose Coulomb-aware ΔC and own-depth split hold every profile with
@@ -124,20 +124,24 @@ impl Limiter {
     }
 }
 
-/// What the reconstruction reads of a cell: depth, discharge and surface η = h + b over
-/// the reference plane.
+/// What the reconstruction reads of a cell: depth, velocity (0 where dry) and surface
+/// η = h + b over the reference plane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Cell {
     pub h: f64,
-    pub hu: f64,
+    pub u: f64,
     pub eta: f64,
 }
 
 impl Cell {
-    /// The cell's velocity (0 where dry).
+    /// The cell of depth `h`, discharge `hu` and surface `eta`.
     #[inline(always)]
-    pub fn u(&self) -> f64 {
-        crate::physics::shallow::velocity(self.h, self.hu)
+    pub fn new(h: f64, hu: f64, eta: f64) -> Cell {
+        Cell {
+            h,
+            u: crate::physics::shallow::velocity(h, hu),
+            eta,
+        }
     }
 }
 
@@ -167,13 +171,13 @@ impl Slopes {
 /// documentation).
 #[inline(always)]
 pub fn slopes(limiter: Limiter, prev: Cell, cell: Cell, next: Cell) -> Option<Slopes> {
-    if cell.hu == 0.0 || cell.h <= H_DRY || prev.h <= H_DRY || next.h <= H_DRY {
+    if cell.u == 0.0 || cell.h <= H_DRY || prev.h <= H_DRY || next.h <= H_DRY {
         return None;
     }
-    let u = cell.u();
+    let u = cell.u;
     Some(Slopes {
         h: limiter.slope(cell.h - prev.h, next.h - cell.h),
-        u: limiter.slope(u - prev.u(), next.u() - u),
+        u: limiter.slope(u - prev.u, next.u - u),
         eta: limiter.slope(cell.eta - prev.eta, next.eta - cell.eta),
     })
 }
@@ -190,7 +194,7 @@ pub struct Edge {
 /// 0 against round-off (the limiters keep ½|σ^h| ≤ h).
 #[inline(always)]
 pub fn edges(cell: Cell, s: Slopes) -> (Edge, Edge) {
-    let u = cell.u();
+    let u = cell.u;
     let (dh, du, de) = (0.5 * s.h, 0.5 * s.u, 0.5 * s.eta);
     (
         Edge {
@@ -236,11 +240,7 @@ mod tests {
     const ALL: [Limiter; 3] = [Limiter::Minmod, Limiter::VanLeer, Limiter::Mc];
 
     fn cell(h: f64, u: f64, z: f64) -> Cell {
-        Cell {
-            h,
-            hu: h * u,
-            eta: h + z,
-        }
+        Cell::new(h, h * u, h + z)
     }
 
     #[test]
@@ -278,7 +278,7 @@ mod tests {
                     |v: f64, a: f64, b: f64| v >= a.min(b) - 1e-15 && v <= a.max(b) + 1e-15;
                 assert!(between(w.h, h0, h1) && between(e.h, h1, h2), "{lim:?}");
                 assert!(
-                    between(w.u, c0.u(), c1.u()) && between(e.u, c1.u(), c2.u()),
+                    between(w.u, c0.u, c1.u) && between(e.u, c1.u, c2.u),
                     "{lim:?}"
                 );
                 assert!(w.h >= 0.0 && e.h >= 0.0);
