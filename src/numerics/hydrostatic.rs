@@ -144,6 +144,10 @@
 //!
 //! A state at rest has u_α = 0, so ΔG = 0 and 𝓑 = 0: the exchange terms keep granular
 //! masses at rest exactly at rest, like the monolayer.
+//!
+//! Order 2 (monolayer, [`HydrostaticStep::second_order`]): the same face kernel on the
+//! edge states of the limited reconstruction of [`super::muscl`], plus each
+//! reconstructed cell's interior force; the time integrator is [`super::ssp_rk2`].
 
 use super::face::{
     drained_fraction, interface, interface_with_friction, layer_momentum_flux, mass_flux,
