@@ -63,6 +63,10 @@ SHORTENED = {
     r"^granflow run scenarios/(hockey|helix)_channel\.toml --output": (
         "--set time.t_end=10",
         "AvaFrame's 5 m grid to the stop takes one to two minutes of CPU"),
+    r"^python scripts/error_vs_runtime\.py --orders": (
+        "--cases ritter,mangeney --limiters mc",
+        "the whole order study (four cases, three limiters, a 5120-cell collapse) takes "
+        "minutes of CPU"),
 }
 
 NOT_RUN = {

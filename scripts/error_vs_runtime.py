@@ -1,8 +1,29 @@
 #!/usr/bin/env python3
-"""Error against run time for the granular model family (Escalante et al. 2023, §5.5.3, Table 9).
+"""Error against run time for the granular model family (Escalante et al. 2023, §5.5.3, Table 9),
+and for the scheme's two orders (--orders).
 
     python scripts/error_vs_runtime.py [--granflow PATH] [--jobs N] [--out DIR]
                                        [--slopes 0,22] [--set KEY=VALUE ...]
+    python scripts/error_vs_runtime.py --orders [--granflow PATH] [--out DIR]
+                                       [--cases ritter,stoker,mangeney,collapse]
+                                       [--limiters minmod,van_leer,mc]
+
+--orders: numerics.order = 1 and 2 (order 2 with each limiter of --limiters) on
+  ritter    the dry dam break (scenarios/dam_break_dry.toml): L1(h) against the exact
+            Ritter solution at t = 0.3 s, and the lag of the h = 1 mm front behind the
+            exact 1 mm contour (relative to its distance from the dam), 256 … 4096 cells;
+  stoker    the wet dam break (scenarios/dam_break_wet.toml): L1(h) against Stoker's
+            solution, 256 … 4096 cells;
+  mangeney  a Coulomb dam break on a 35° plane, δ = 30°, h₀ = 0.1 m on [−2.5, 2] m
+            (Mangeney et al. 2000: in the frame sliding with ½ a t²,
+            a = g(sin θ − cos θ tan δ), the solution is Ritter's with g cos θ):
+            L1(h) over x ≥ −1.5 m (the wall's own rarefaction has not reached it)
+            at t = 0.5 s, 256 … 4096 cells;
+  collapse  the μ(I) collapse on 22° (scenarios/collapse.toml, ends when settled):
+            |runout − runout of order 2 on 5120 cells|, 160 … 1280 cells.
+It prints one table per case (cells, order, limiter, error, observed order between
+successive grids, wall time from /summary/wall_time_s) and writes
+DIR/orders.csv. One run at a time: the wall times are CPU times of one core.
 
 Runs, through one `granflow sweep` per slope, the collapse of Escalante et al. 2023, §5.1/§5.5
 (scenarios/nh_multilayer_collapse.toml: domain [-0.2, 3] m, 640 cells, Table 1
@@ -95,14 +116,154 @@ def l2_percent(h, ref):
     return 100.0 * np.linalg.norm(h - ref) / np.linalg.norm(ref)
 
 
+G = 9.81
+
+
+def dam_break_h(x, t, h_l, h_r, g=G):
+    """Exact depth of the flat frictionless dam break h_l | h_r (h_r = 0: Ritter)."""
+    c_l = np.sqrt(g * h_l)
+    if h_r == 0.0:
+        h_m, u_m, shock = 0.0, 2 * c_l, 2 * c_l
+    else:
+        def mismatch(h):
+            return 2 * (c_l - np.sqrt(g * h)) - (h - h_r) * np.sqrt(g * (h + h_r) / (2 * h * h_r))
+        lo, hi = h_r, h_l
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if mismatch(mid) > 0 else (lo, mid)
+        h_m = 0.5 * (lo + hi)
+        u_m = 2 * (c_l - np.sqrt(g * h_m))
+        shock = u_m * h_m / (h_m - h_r)
+    xi = x / t
+    c_m = np.sqrt(g * h_m)
+    fan = (2 * c_l - xi) ** 2 / (9 * g)
+    return np.where(xi <= -c_l, h_l, np.where(xi <= u_m - c_m, fan, np.where(xi < shock, h_m, h_r)))
+
+
+MANGENEY = dict(theta=35.0, delta=30.0, h0=0.1, t=0.5)
+MANGENEY_TOML = f"""# Coulomb dam break on a slope (Mangeney et al. 2000), written by error_vs_runtime.py
+[domain]
+x_min = -2.5
+x_max = 2.0
+cells = 400
+slope_deg = {MANGENEY['theta']}
+
+[rheology]
+law = "coulomb"
+mu_deg = {MANGENEY['delta']}
+
+[initial]
+h = "if(x < 0, {MANGENEY['h0']}, 0)"
+
+[boundary]
+right = "outflow"
+
+[time]
+t_end = {MANGENEY['t']}
+cfl = 0.5
+
+[output]
+every = {MANGENEY['t']}
+"""
+
+
+def mangeney_h(x, t):
+    th, de = np.radians(MANGENEY["theta"]), np.radians(MANGENEY["delta"])
+    g_n = G * np.cos(th)
+    a = G * (np.sin(th) - np.cos(th) * np.tan(de))
+    return dam_break_h(x - 0.5 * a * t * t, t, MANGENEY["h0"], 0.0, g=g_n)
+
+
+def run_case(granflow, scenario, cells, sets, h5):
+    cmd = [granflow, "run", str(scenario), "-q", "-o", str(h5), "--set", f"domain.cells={cells}"]
+    for s in sets:
+        cmd += ["--set", s]
+    subprocess.run(cmd, check=True)
+    return Run(h5)
+
+
+def orders_study(args):
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    scen = ROOT / "scenarios"
+    (out / "mangeney.toml").write_text(MANGENEY_TOML)
+    fine = [256, 512, 1024, 2048, 4096]
+
+    def l1_h(exact, x_from=-np.inf):
+        def error(r):
+            keep = r.x >= x_from
+            return float(np.sum(np.abs(r.h[-1] - exact(r.x, r.t[-1]))[keep]) * r.dx)
+        return error
+
+    ritter_front = 0.3 * (2 * np.sqrt(G) - 3 * np.sqrt(G * 1e-3))
+    cases = {
+        "ritter": (scen / "dam_break_dry.toml", fine, [
+            ("L1(h) m²", l1_h(lambda x, t: dam_break_h(x, t, 1.0, 0.0))),
+            ("front lag", lambda r: (ritter_front - float(r.front_x[-1])) / ritter_front)]),
+        "stoker": (scen / "dam_break_wet.toml", fine, [
+            ("L1(h) m²", l1_h(lambda x, t: dam_break_h(x, t, 1.0, 0.1)))]),
+        "mangeney": (out / "mangeney.toml", fine, [("L1(h) m²", l1_h(mangeney_h, -1.5))]),
+        "collapse": (scen / "collapse.toml", [160, 320, 640, 1280], [("runout error m", None)]),
+    }
+    limiters = args.limiters.split(",")
+    schemes = [(1, None)] + [(2, lim) for lim in limiters]
+    rows = []
+    for name in args.cases.split(","):
+        scenario, cells_list, measures = cases[name]
+        reference = None
+        if name == "collapse":
+            h5 = out / "collapse_reference.h5"
+            ref = run_case(args.granflow, scenario, 5120, ["numerics.order=2"], h5)
+            reference = float(ref.summary["runout"])
+            print(f"\ncollapse: reference runout {reference:.4f} m (order 2, {ref.attrs.get('limiter', 'default limiter')}, 5120 cells)")
+        print(f"\n{name}")
+        for order, lim in schemes:
+            prev = None
+            for cells in cells_list:
+                sets = [f"numerics.order={order}"] + ([f"numerics.limiter={lim}"] if lim else [])
+                h5 = out / f"{name}_o{order}_{lim or 'none'}_{cells}.h5"
+                r = run_case(args.granflow, scenario, cells, sets, h5)
+                values = []
+                for label, f in measures:
+                    values.append(abs(float(r.summary["runout"]) - reference) if f is None else f(r))
+                wall = float(r.summary["wall_time_s"])
+                orders = ([np.log(p / v) / np.log(2) if p > 0 and v > 0 else float("nan")
+                           for p, v in zip(prev, values)] if prev else [float("nan")] * len(values))
+                prev = values
+                text = "  ".join(f"{label} {v:.4e} (order {o:5.2f})" for (label, _), v, o in zip(measures, values, orders))
+                print(f"  order {order} {lim or '':9} {cells:5} cells  {text}  wall {wall:.4f} s")
+                for (label, _), v, o in zip(measures, values, orders):
+                    rows.append(dict(case=name, order=order, limiter=lim or "", cells=cells, measure=label,
+                                     error=v, observed_order=o, wall_s=wall))
+    with open(out / "orders.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    print(f"\nwrote {out / 'orders.csv'}")
+    return 0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--orders", action="store_true", help="the order study (module documentation)")
+    ap.add_argument("--cases", default="ritter,stoker,mangeney,collapse")
+    ap.add_argument("--limiters", default="minmod,van_leer,mc")
     ap.add_argument("--granflow", default=shutil.which("granflow") or str(ROOT / "target/release/granflow"))
     ap.add_argument("--jobs", type=int, default=1, help="runs at once (default 1: timings on an idle core)")
     ap.add_argument("--out", default="out/error_vs_runtime")
     ap.add_argument("--slopes", default="0,22")
     ap.add_argument("--set", action="append", default=[], dest="sets")
     args = ap.parse_args()
+    if not pathlib.Path(args.granflow).exists():
+        print(f"error: granflow binary not found: {args.granflow} (cargo build --release)", file=sys.stderr)
+        return 2
+    if args.orders:
+        bad = [c for c in args.cases.split(",") if c not in ("ritter", "stoker", "mangeney", "collapse")]
+        bad += [l for l in args.limiters.split(",") if l not in ("minmod", "van_leer", "mc")]
+        if bad:
+            print(f"error: unknown case or limiter: {', '.join(bad)}", file=sys.stderr)
+            return 2
+        return orders_study(args)
     try:
         slopes = [int(float(s)) for s in args.slopes.split(",")]
         if any(s not in CASES for s in slopes):

@@ -29,6 +29,7 @@ mod run_loop;
 mod run_output;
 mod run_report;
 mod scenarios;
+mod second_order;
 mod submarine;
 mod submarine_paper;
 mod sweep;

@@ -16,10 +16,12 @@ pub mod friction_2d;
 pub mod hydrostatic;
 pub mod hydrostatic_2d;
 pub mod linalg;
+pub mod muscl;
 pub mod nh_multilayer;
 
 pub mod nonhydrostatic;
 pub mod projection;
+pub mod ssp_rk2;
 pub mod tracer;
 pub mod two_layer;
 pub mod viscous;

@@ -33,6 +33,7 @@ pub use crate::model::granular::config::{MultilayerSpec, Pressure};
 pub use crate::model::granular_2d::FrictionZones;
 pub use crate::model::submarine::SubmarineSpec;
 pub use crate::model::ModelKind;
+pub use crate::numerics::muscl::Limiter;
 pub use crate::numerics::viscous::{
     BasalCondition, Regularization, Sidewall, SidewallForm, ViscosityTime,
 };
@@ -396,4 +397,26 @@ pub struct Scenario {
     pub sampled: Sampled,
     /// The release polygon of `initial.h`, when it is one.
     pub release: Option<ReleaseSummary>,
+    /// `[numerics]`: the order of the scheme and its limiter.
+    pub numerics: Numerics,
+}
+
+/// `[numerics]`: first-order scheme (the default) or the second-order one
+/// (`order = 2`: MUSCL reconstruction and Heun's method, the monolayer hydrostatic
+/// model on a line only; docs/numerics.md).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Numerics {
+    /// 1 or 2.
+    pub order: u8,
+    /// The slope limiter of the reconstruction (order 2).
+    pub limiter: Limiter,
+}
+
+impl Default for Numerics {
+    fn default() -> Self {
+        Numerics {
+            order: 1,
+            limiter: Limiter::Mc,
+        }
+    }
 }

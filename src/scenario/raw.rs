@@ -24,6 +24,15 @@ pub(crate) struct RawScenario {
     pub output: Option<RawOutput>,
     pub submarine: Option<RawSubmarine>,
     pub dilatancy: Option<RawDilatancy>,
+    pub numerics: Option<RawNumerics>,
+}
+
+/// `[numerics]`: the scheme's order and limiter.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawNumerics {
+    pub order: Option<i64>,
+    pub limiter: Option<String>,
 }
 
 /// `[dilatancy]`: the dilatant model's law and numerics (Bouchut et al. 2021).

@@ -36,6 +36,7 @@ pub fn build(scn: &Scenario) -> Simulation<Granular> {
         &mesh,
         scn.model.pressure,
         &scn.multilayer,
+        (scn.numerics.order == 2).then_some(scn.numerics.limiter),
     );
     let layers = scn.model.layers;
     let model = Granular {

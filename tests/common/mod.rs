@@ -10,8 +10,8 @@ use granflow::output::memory::MemorySink;
 use granflow::output::RunSummary;
 use granflow::scenario::{
     BasalCondition, Boundaries, BoundaryKind, Coordinates, Domain, FrictionLaw, Initial, Material,
-    ModelKind, ModelSpec, MultilayerSpec, OutputSpec, Pressure, Profile, Regularization, Sampled,
-    Scenario, TimeSpec, ViscosityTime,
+    ModelKind, ModelSpec, MultilayerSpec, Numerics, OutputSpec, Pressure, Profile, Regularization,
+    Sampled, Scenario, TimeSpec, ViscosityTime,
 };
 use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
@@ -23,6 +23,8 @@ pub struct Case {
     pub t_end: f64,
     pub every: f64,
     pub stop_at_rest: bool,
+    /// `[numerics]` (order 1 by default).
+    pub numerics: Numerics,
 }
 
 impl Case {
@@ -42,6 +44,7 @@ impl Case {
             t_end: 1.0,
             every: 0.1,
             stop_at_rest: false,
+            numerics: Numerics::default(),
         }
     }
 
@@ -127,6 +130,7 @@ impl Case {
             },
             submarine: None,
             sampled: Sampled::default(),
+            numerics: self.numerics,
         };
         scn.sampled = Sampled::of(&scn.domain, &scn.bed, &scn.initial);
         build_granular(&scn)

@@ -10,11 +10,13 @@ use crate::model::granular::config::{MultilayerSpec, Pressure};
 use crate::numerics::banded::BandedCholesky;
 use crate::numerics::friction::CoulombFrictionStep;
 use crate::numerics::hydrostatic::HydrostaticStep;
+use crate::numerics::muscl::Limiter;
 use crate::numerics::nh_multilayer::NhViscousStep;
 use crate::numerics::nonhydrostatic::NhFrictionStep;
 use crate::numerics::projection::monolayer::MonolayerOperator;
 use crate::numerics::projection::multilayer::SharedOperator;
 use crate::numerics::projection::{ProjectionStage, ThomasSolver};
+use crate::numerics::ssp_rk2::HeunSplitting;
 use crate::numerics::viscous::{MultilayerViscousStep, ViscosityTime, ViscousOptions};
 use crate::numerics::Stage;
 use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, MuI, Voellmy};
@@ -56,6 +58,9 @@ pub struct Stages<'a> {
     pub mesh: &'a Line,
     pub pressure: Pressure,
     pub multilayer: &'a MultilayerSpec,
+    /// `Some(limiter)`: the second-order step (`numerics.order = 2`; the validation
+    /// allows it for the monolayer hydrostatic model only).
+    pub second_order: Option<Limiter>,
 }
 
 impl WithLaw for Stages<'_> {
@@ -64,6 +69,10 @@ impl WithLaw for Stages<'_> {
     fn with<L: BasalFriction + LocalFriction + 'static>(self, law: L) -> Self::Out {
         let (mesh, spec) = (self.mesh, self.multilayer);
         let (nx, l) = (mesh.nx, &spec.layer_fractions);
+        if let Some(limiter) = self.second_order {
+            assert!(self.pressure == Pressure::Hydrostatic && l.len() == 1);
+            return vec![Box::new(HeunSplitting::new(law, nx, limiter))];
+        }
         let mut stages: Self::Out = vec![Box::new(HydrostaticStep::with_layers(law, nx, l.len()))];
         match (self.pressure, l.len()) {
             (Pressure::Hydrostatic, 1) => stages.push(Box::new(CoulombFrictionStep::new(law))),
@@ -120,11 +129,13 @@ pub fn granular(
     mesh: &Line,
     pressure: Pressure,
     multilayer: &MultilayerSpec,
+    second_order: Option<Limiter>,
 ) -> Pipeline<Line, LayeredState> {
     let stages = Stages {
         mesh,
         pressure,
         multilayer,
+        second_order,
     };
     Pipeline::new(with_law(law, material, stages))
 }

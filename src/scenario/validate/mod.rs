@@ -25,18 +25,18 @@ use super::error::ScenarioError;
 use super::overrides::Override;
 use super::profile::{read_bounded, Profile};
 use super::raw::{
-    RawBoundary, RawDomain, RawInitial, RawMaterial, RawOutput, RawScenario, RawTime,
+    RawBoundary, RawDomain, RawInitial, RawMaterial, RawNumerics, RawOutput, RawScenario, RawTime,
 };
 use super::{
-    Boundaries, BoundaryKind, Coordinates, Domain, Initial, Material, ModelSpec, OutputSpec,
-    Pressure, Sampled, Scenario, TimeSpec,
+    Boundaries, BoundaryKind, Coordinates, Domain, Initial, Limiter, Material, ModelSpec, Numerics,
+    OutputSpec, Pressure, Sampled, Scenario, TimeSpec,
 };
 use check::*;
 use dilatant::{check_fraction, dilatancy};
 use granular::{model, multilayer, rheology, ViscousKeys};
 
 /// The tables of a scenario file.
-const SECTIONS: [&str; 11] = [
+const SECTIONS: [&str; 12] = [
     "domain",
     "bed",
     "material",
@@ -48,6 +48,7 @@ const SECTIONS: [&str; 11] = [
     "output",
     "submarine",
     "dilatancy",
+    "numerics",
 ];
 
 /// Largest accepted `domain.cells`.
@@ -330,6 +331,7 @@ fn validate(
             "applies to raster (2-D) runs only: a line counts every cell for its kinetic energy",
         );
     }
+    let numerics = numerics(raw.numerics.unwrap_or_default(), &model, &domain)?;
     let raw_output = raw.output.unwrap_or_default();
     let mut output = output(&raw_output, &time, &domain, default_output)?;
     output.path = path::spec(raw_output.path.as_ref(), &domain, base_dir)?;
@@ -383,6 +385,7 @@ fn validate(
         submarine,
         sampled,
         release,
+        numerics,
     })
 }
 
@@ -605,6 +608,54 @@ fn line_boundary(b: RawBoundary) -> Res<Boundaries> {
     })
 }
 
+/// `[numerics]`: order 2 exists for the monolayer hydrostatic granular model on a line
+/// (docs/numerics.md, "Second order"); any other model refuses it by name.
+fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics> {
+    let order = int_in("numerics.order", n.order.unwrap_or(1), 1, 2)? as u8;
+    let limiters = [
+        ("minmod", Limiter::Minmod),
+        ("van_leer", Limiter::VanLeer),
+        ("mc", Limiter::Mc),
+    ];
+    let limiter = choice(
+        "numerics.limiter",
+        n.limiter.as_deref(),
+        Numerics::default().limiter,
+        &limiters,
+    )?;
+    if order == 2 {
+        let refuse = |what: &str| {
+            err(
+                "numerics.order",
+                format!(
+                    "order 2 is implemented for the monolayer hydrostatic granular model on a line; {what}: use numerics.order = 1"
+                ),
+            )
+        };
+        if model.kind == crate::model::ModelKind::Dilatant {
+            return refuse("model.kind is \"dilatant\"");
+        }
+        if model.kind == crate::model::ModelKind::Submarine {
+            return refuse("model.kind is \"submarine\"");
+        }
+        if model.pressure == Pressure::NonHydrostatic {
+            return refuse("model.pressure is \"nonhydrostatic\"");
+        }
+        if model.layers > 1 {
+            return refuse(&format!("model.layers is {}", model.layers));
+        }
+        if domain.plane.is_some() {
+            return refuse("the domain is a raster");
+        }
+    } else if n.limiter.is_some() {
+        return err(
+            "numerics.limiter",
+            "the limiter belongs to the second-order reconstruction: set numerics.order = 2",
+        );
+    }
+    Ok(Numerics { order, limiter })
+}
+
 fn time(t: RawTime) -> Res<TimeSpec> {
     let t_end = positive("time.t_end", required("time.t_end", t.t_end)?)?;
     let cfl = positive("time.cfl", t.cfl.unwrap_or(0.5))?;
@@ -823,6 +874,45 @@ t_end = 2.0
     fn load_set(text: &str, sets: &[&str]) -> Res<Scenario> {
         let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
         load_str(text, Path::new("."), &sets)
+    }
+
+    #[test]
+    fn second_order_is_refused_by_name_where_it_is_not_implemented() {
+        let s = load_set(MINIMAL, &["numerics.order=2", "numerics.limiter=van_leer"]).unwrap();
+        assert_eq!(
+            (s.numerics.order, s.numerics.limiter),
+            (2, Limiter::VanLeer)
+        );
+        let s = load(MINIMAL).unwrap();
+        assert_eq!(s.numerics, Numerics::default());
+        assert_eq!(s.numerics.order, 1);
+        for (sets, what) in [
+            (&["model.layers=3"][..], "model.layers is 3"),
+            (&["model.pressure=nonhydrostatic"][..], "nonhydrostatic"),
+        ] {
+            let sets = [sets, &["numerics.order=2"]].concat();
+            let e = load_set(MINIMAL, &sets).unwrap_err();
+            assert!(e.to_string().contains("numerics.order"), "{e}");
+            assert!(e.message().contains(what), "{e}");
+        }
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+        for (file, what) in [
+            ("dilatancy_dense.toml", "dilatant"),
+            ("submarine_landslide.toml", "submarine"),
+            ("radial_collapse.toml", "raster"),
+        ] {
+            let sets = ["numerics.order=2".to_owned()];
+            let e = load_file(&root.join(file), &sets).unwrap_err();
+            assert!(e.to_string().contains("numerics.order"), "{file}: {e}");
+            assert!(e.message().contains(what), "{file}: {e}");
+            assert!(load_file(&root.join(file), &[]).is_ok(), "{file}");
+        }
+        let e = load_set(MINIMAL, &["numerics.order=3"]).unwrap_err();
+        assert!(e.to_string().contains("numerics.order"), "{e}");
+        let e = load_set(MINIMAL, &["numerics.limiter=superbee", "numerics.order=2"]).unwrap_err();
+        assert!(e.to_string().contains("numerics.limiter"), "{e}");
+        let e = load_set(MINIMAL, &["numerics.limiter=mc"]).unwrap_err();
+        assert!(e.to_string().contains("numerics.limiter"), "{e}");
     }
 
     #[test]

@@ -1,0 +1,81 @@
+//! The second-order time step (`numerics.order = 2`) of the monolayer hydrostatic
+//! model on a line: Heun's method, the two-stage strong-stability-preserving
+//! Runge–Kutta scheme of Shu & Osher 1988 (eq. 2.18), around the whole splitting,
+//! with the second-order hyperbolic step H_Δt of [`super::muscl`] and the implicit
+//! friction step F_Δt of [`super::friction`]:
+//!
+//!   U⁽¹⁾ = F_Δt(H_Δt(Uⁿ)),
+//!   Uⁿ⁺¹ = F_{Δt/2}(½ Uⁿ + ½ H_Δt(U⁽¹⁾)).
+//!
+//! Without friction this is Heun's method, ½Uⁿ + ½(U⁽¹⁾ + Δt L(U⁽¹⁾)): second order
+//! in time, and a convex combination of forward-Euler steps, so every bound one Euler
+//! step keeps under its CFL condition (h ≥ 0, Audusse et al. 2004, §3: Δt max(|u| +
+//! √(g_n h)) ≤ Δx/2 over the edge states) holds for the whole step. For the friction
+//! alone (dq/dt = −σ sgn q, σ = μ g_n h constant over the step) it is exact: a sliding
+//! mass loses Δt σ (q⁽¹⁾ = q − Δt σ, then ½(q + q⁽¹⁾) − ½Δt σ = q − Δt σ), and a mass
+//! that stops within the step stops exactly (q < Δt σ gives q⁽¹⁾ = 0 and ½q ≤ ½Δt σ).
+//! Averaging the two stages after the friction of each (½(Uⁿ + F(H(U⁽¹⁾)))) would
+//! instead halve a stopping discharge every step without ever reaching 0.
+//!
+//! Where friction depends on the state (μ(I), Voellmy; also every sgn q change) the
+//! splitting's error stays O(Δt²) per step: for a linear model with transport A and
+//! friction B the step is exp(Δt(A + B)) + Δt²(½BA + ½B²) + O(Δt³). The
+//! cases of docs/validation.md where order 2 is measured are frictionless (Ritter,
+//! Stoker, the smooth wave) or have a constant Coulomb force while they slide.
+//!
+//! At rest every cell is reconstructed to first order ([`super::muscl`]), the first
+//! stage returns Uⁿ exactly (the first-order step holds it), the second returns
+//! q* = −Δt (the cell's pressure force), and F_{Δt/2} holds ½q* exactly when F_Δt held
+//! q*: masses at rest stay at rest, to the bit.
+
+use super::friction::CoulombFrictionStep;
+use super::hydrostatic::HydrostaticStep;
+use super::muscl::Limiter;
+use super::{Stage, StageError};
+use crate::grid::Line;
+use crate::physics::rheology::BasalFriction;
+use crate::physics::shallow::H_DRY;
+use crate::state::layered::LayeredState;
+
+/// Heun's method around the hyperbolic and friction steps (module documentation).
+#[derive(Debug)]
+pub struct HeunSplitting<L: BasalFriction> {
+    hyperbolic: HydrostaticStep<L>,
+    friction: CoulombFrictionStep<L>,
+    /// Uⁿ (h and hu with ghosts).
+    h0: Vec<f64>,
+    hu0: Vec<f64>,
+}
+
+impl<L: BasalFriction> HeunSplitting<L> {
+    pub fn new(law: L, nx: usize, limiter: Limiter) -> Self {
+        HeunSplitting {
+            hyperbolic: HydrostaticStep::second_order(law, nx, limiter),
+            friction: CoulombFrictionStep::new(law),
+            h0: vec![0.0; nx + 2],
+            hu0: vec![0.0; nx + 2],
+        }
+    }
+}
+
+impl<L: BasalFriction> Stage<Line, LayeredState> for HeunSplitting<L> {
+    fn name(&self) -> &'static str {
+        "ssp_rk2"
+    }
+
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+        debug_assert_eq!(state.layers, 1);
+        self.h0.copy_from_slice(&state.h);
+        self.hu0.copy_from_slice(&state.hu);
+        self.hyperbolic.apply(mesh, dt, state)?;
+        self.friction.apply(mesh, dt, state)?;
+        self.hyperbolic.apply(mesh, dt, state)?;
+        let cells = state.h.iter_mut().zip(state.hu.iter_mut());
+        for ((h, q), (h0, q0)) in cells.zip(self.h0.iter().zip(&self.hu0)) {
+            *h = 0.5 * (*h0 + *h);
+            *q = if *h <= H_DRY { 0.0 } else { 0.5 * (*q0 + *q) };
+        }
+        state.fill_ghosts(mesh);
+        self.friction.apply(mesh, 0.5 * dt, state)
+    }
+}
