@@ -150,7 +150,7 @@ impl fmt::Display for RunReport {
         if let Some(w) = &s.wet {
             writeln!(
                 f,
-                "  wet cells     {} % of {} on average, {} % at most; {:.3e} wet-cell updates/s ({:.3e} on all cells)",
+                "  wet cells     {} % of {} on average, {} % at most; {:.3e} wet-cell updates/s ({:.3e} on the cells stepped)",
                 pct(w.mean_fraction),
                 w.flow_cells,
                 pct(w.peak_fraction),
@@ -378,7 +378,7 @@ mod tests {
         assert!(
             text.contains(
                 "  wet cells     2.13 % of 40000 on average, 4.50 % at most; 1.500e6 \
-                 wet-cell updates/s (7.040e7 on all cells)"
+                 wet-cell updates/s (7.040e7 on the cells stepped)"
             ),
             "{text}"
         );

@@ -541,7 +541,11 @@ impl<M: Model> Simulation<M> {
             },
             peak_fraction: tally.wet_peak as f64 / flow,
             wet_updates_per_s: tally.wet_updates / wall_s,
-            cell_updates_per_s: steps * flow / wall_s,
+            cell_updates_per_s: self
+                .model
+                .cell_updates(&self.state)
+                .map_or(steps * flow, |u| u as f64)
+                / wall_s,
         })
     }
 

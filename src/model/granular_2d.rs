@@ -355,6 +355,11 @@ impl Model for Granular2d {
         first_maximum((0..state.h.len()).map(speed2))
     }
 
+    /// The cells of the stepped tiles, summed over the accepted steps.
+    fn cell_updates(&self, state: &State2d) -> Option<u64> {
+        Some(state.tiles.updates().0)
+    }
+
     fn bed_layer(&self) -> &[f64] {
         &self.h_bed
     }

@@ -101,6 +101,13 @@ pub trait Model: Send + 'static {
         0.0
     }
 
+    /// The cell updates of the run's steps so far, where a model's steps visit only part
+    /// of its cells (a raster's active tiles, `state::tiles`); `None`: every step updates
+    /// every cell.
+    fn cell_updates(&self, _state: &Self::State) -> Option<u64> {
+        None
+    }
+
     /// Thickness of the initial erodible bed per cell (`/grid/h_bed`), zeros if none.
     fn bed_layer(&self) -> &[f64];
 

@@ -253,8 +253,8 @@ pub struct RunSummary {
 }
 
 /// Where a raster run's work went: how much of the raster held material, and the cell
-/// updates per second of the run's wall time counted on the wet cells and on all of
-/// them (`/summary` `flow_cells`, `wet_fraction_mean`, `wet_fraction_peak`,
+/// updates per second of the run's wall time counted on the wet cells and on the cells
+/// the steps visited (`/summary` `flow_cells`, `wet_fraction_mean`, `wet_fraction_peak`,
 /// `wet_cell_updates_per_s`, `cell_updates_per_s`). A cell is wet when h > H_DRY
 /// (10⁻¹⁰ m): a film left behind by the flow counts.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -268,7 +268,9 @@ pub struct WetCells {
     /// Wet-cell updates (the cells wet at each step's start, summed over the steps)
     /// per second of wall time.
     pub wet_updates_per_s: f64,
-    /// Cell updates (all `flow_cells`, every step) per second of wall time.
+    /// Cell updates per second of wall time: the cells each step visited (those of its
+    /// active tiles, `state::tiles`; dry cells next to the flow included), summed over
+    /// the steps.
     pub cell_updates_per_s: f64,
 }
 
