@@ -768,3 +768,78 @@ fn maps_replaces_only_its_own_files() {
     assert_success(&maps(&["--format", "asc"]));
     assert_success(&maps(&["--format", "asc"]));
 }
+
+/// A sweep whose axes are sampled (`[sample]`, a seeded Latin hypercube): each of the
+/// n strata of every axis holds one run, the same seed draws the same runs (their
+/// names and parameters in `summary.csv`), and `granflow maps` maps them as any sweep.
+#[test]
+fn a_sampled_sweep_is_stratified_reproducible_and_mapped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("radial.toml"), RADIAL).unwrap();
+    let text = "scenario = \"radial.toml\"\n\n[sample]\nruns = 4\nseed = 11\nrheology.mu_deg = { uniform = [20, 32] }\ntime.t_end = { normal = [0.5, 0.05], min = 0.4 }\n";
+    fs::write(d.join("lhs.toml"), text).unwrap();
+    let sweep = |out: &str| {
+        assert_success(
+            &granflow()
+                .args([
+                    "sweep", "lhs.toml", "--quiet", "--jobs", "1", "--output", out,
+                ])
+                .current_dir(d)
+                .output()
+                .unwrap(),
+        );
+        fs::read_to_string(d.join(out).join("summary.csv")).unwrap()
+    };
+    let csv = sweep("a");
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(header[2..4], ["rheology.mu_deg", "time.t_end"], "{csv}");
+    let column = |c: usize| -> Vec<f64> {
+        csv.lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(c).unwrap().parse().unwrap())
+            .collect()
+    };
+    let mut strata: Vec<usize> = column(2)
+        .iter()
+        .map(|mu| ((mu - 20.0) / 12.0 * 4.0) as usize)
+        .collect();
+    strata.sort();
+    assert_eq!(strata, [0, 1, 2, 3], "{csv}");
+    assert!(column(3).iter().all(|&t| t >= 0.4), "{csv}");
+    // The same seed: the same runs; the rows name the same parameters.
+    let again = sweep("b");
+    let params = |csv: &str| -> Vec<String> {
+        csv.lines()
+            .map(|l| l.split(',').take(4).collect::<Vec<_>>().join(","))
+            .collect()
+    };
+    assert_eq!(params(&again), params(&csv));
+    let table = assert_success(
+        &granflow()
+            .args(["maps", "a", "--threshold", "0.02"])
+            .current_dir(d)
+            .output()
+            .unwrap(),
+    );
+    assert!(table.contains("maps: 4 runs"), "{table}");
+    assert!(d.join("a/maps/pft_probability.tif").is_file());
+    // A bad distribution: exit 2, naming the key.
+    fs::write(
+        d.join("bad.toml"),
+        text.replace("uniform = [20, 32]", "uniform = [32, 20]"),
+    )
+    .unwrap();
+    let out = granflow()
+        .args(["sweep", "bad.toml", "--output", "c"])
+        .current_dir(d)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("sample.rheology.mu_deg") && err.contains("line 6"),
+        "{err}"
+    );
+    assert!(!d.join("c").join("summary.csv").exists());
+}
