@@ -843,3 +843,65 @@ fn a_sampled_sweep_is_stratified_reproducible_and_mapped() {
     );
     assert!(!d.join("c").join("summary.csv").exists());
 }
+
+/// `--layout avaframe`: AvaFrame's peak files (`Outputs/com1DFA/peakFiles`, names
+/// `<release>_<hash>_C_null_dfa_<res>`, ppr in kPa), on the run's grid; other maps,
+/// snapshots and NetCDF are refused with exit code 2.
+#[test]
+fn the_avaframe_layout_writes_peak_files_in_avaframes_names_and_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let h5 = georeferenced_run(d);
+    let (run, ava) = (h5.to_str().unwrap(), d.join("avaSlope"));
+    let listed = assert_success(&export(&[
+        run,
+        "--layout",
+        "avaframe",
+        "--format",
+        "asc",
+        "-o",
+        ava.to_str().unwrap(),
+    ]));
+    let peak = ava.join("Outputs/com1DFA/peakFiles");
+    let mut names: Vec<String> = fs::read_dir(&peak)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".asc"))
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 3, "{listed}");
+    for (name, (res, dataset, scale)) in names.iter().zip([
+        ("pft", "h_max", 1.0),
+        ("pfv", "speed_max", 1.0),
+        ("ppr", "ppr", 1000.0),
+    ]) {
+        let parts: Vec<&str> = name.trim_end_matches(".asc").split('_').collect();
+        assert_eq!(parts[0], "slope", "{name}");
+        assert_eq!(parts[2..], ["C", "null", "dfa", res], "{name}");
+        let grid = asc::read(&peak.join(name)).unwrap();
+        let (_, values) = read(&h5, &format!("maps/{dataset}"));
+        let want: Vec<f64> = north_up(&values, 20).iter().map(|v| v / scale).collect();
+        assert_eq!(
+            (grid.x_left, grid.y_top, grid.cell_size),
+            (600_000.0, 5_200_140.0, 10.0)
+        );
+        assert_eq!(grid.values, want, "{name}");
+    }
+    for (args, needle) in [
+        (
+            &["--format", "netcdf"][..],
+            "not with --time or --format netcdf",
+        ),
+        (&["--time", "1"][..], "not with --time"),
+        (&["--fields", "deposit"][..], "pft, pfv and ppr only"),
+    ] {
+        let mut all = vec![run, "--layout", "avaframe"];
+        all.extend(args);
+        let out = export(&all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(needle),
+            "{args:?}"
+        );
+    }
+}
