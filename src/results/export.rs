@@ -112,7 +112,7 @@ pub fn crs_warning(crs: &crate::gis::Crs, format: ExportFormat) -> Option<String
     }
     match (format, crs.epsg) {
         (ExportFormat::Asc, Some(code)) if crs.wkt_text().is_none() => Some(format!(
-            "the run's CRS is EPSG:{code}, known by its code alone: an ESRI ASCII grid keeps a CRS only as WKT in its .prj, which granflow makes for WGS 84 and UTM zones only, so the .asc files have no .prj; export as GeoTIFF (the default), or copy the DEM's .prj beside each .asc"
+            "the run's CRS is EPSG:{code}, known by its code alone: an ESRI ASCII grid keeps a CRS only as WKT in its .prj, which granflow makes only for the codes listed in docs/gis.md (WGS 84 and UTM, ETRS89 UTM and LAEA, NAD83 UTM, the Swiss, Austrian, German, French, Italian and Dutch national grids), so the .asc files have no .prj; export as GeoTIFF (the default), or copy the DEM's .prj beside each .asc"
         )),
         _ => None,
     }
