@@ -4,6 +4,9 @@
 //!   cargo run --release --example gis_roundtrip -- write DIR
 //!       writes dem.asc (+ .prj), dem_*.tif, geo.tif, series.nc and expected.json (what
 //!       each file must hold: grid, nodata, EPSG code, values, NetCDF frames)
+//!   cargo run --release --example gis_roundtrip -- prj DIR
+//!       writes epsg_<code>.asc with the .prj granflow makes for a CRS known by its
+//!       EPSG code alone, one per family of codes it knows (`tests/python/test_prj_epsg.py`)
 //!   cargo run --release --example gis_roundtrip -- dump RASTER OUT.json
 //!       reads RASTER (.tif or .asc) and writes its grid, nodata, CRS and values as JSON
 //!       (NaN as null)
@@ -140,13 +143,34 @@ fn dump(input: &Path, output: &Path) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
+/// One code of each family `wkt_of_epsg` knows (both ends of the ranges).
+const EPSG_CODES: [u32; 30] = [
+    4326, 32601, 32632, 32660, 32701, 32719, 32760, 25828, 25833, 25838, 26901, 26911, 26923, 3035,
+    2056, 21781, 31254, 31255, 31256, 31257, 31258, 31259, 31287, 2154, 31466, 31467, 31468, 31469,
+    3003, 28992,
+];
+
+/// `epsg_<code>.asc` (+ `.prj`) for each of [`EPSG_CODES`] and `3004`.
+fn write_prj(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
+    for code in EPSG_CODES.into_iter().chain([3004]) {
+        let mut r = Raster::filled(2, 2, 500_000.0, 5_000_000.0, 10.0, 1.0);
+        r.crs = Crs::from_epsg(code);
+        asc::write(&r, &dir.join(format!("epsg_{code}.asc")))?;
+    }
+    Ok(())
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.iter().map(String::as_str).collect::<Vec<_>>()[..] {
         ["write", dir] => write_all(Path::new(dir)),
         ["dump", input, output] => dump(Path::new(input), Path::new(output)),
+        ["prj", dir] => write_prj(Path::new(dir)),
         _ => {
-            eprintln!("usage: gis_roundtrip write DIR | gis_roundtrip dump RASTER OUT.json");
+            eprintln!(
+                "usage: gis_roundtrip write DIR | gis_roundtrip prj DIR | gis_roundtrip dump RASTER OUT.json"
+            );
             std::process::exit(2);
         }
     };

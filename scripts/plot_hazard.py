@@ -16,6 +16,14 @@ A run file gives two maps (default: next to RUN.h5):
   as practitioners read them (--classes, default 1, 10, 25 and 50 kPa: below 1 not
   drawn, then 1-10, 10-25, 25-50 and above 50), over the same bed and release.
 
+A run with `output.path` draws its thalweg line on both maps and gives a third figure:
+
+- PREFIX_path.png: the profiles along the path against s (/path): the thalweg's
+  elevation z with the top of the release, the runout point and the line between them
+  at the runout angle (/summary path_release_top_s, path_runout_s,
+  path_runout_angle_deg), then the largest pft (m), pfv (m/s) and ppr (kPa) across the
+  path's band at each station (AIMEC's cross-section maxima), the runout marked on each.
+
 Both have a scale bar, a north arrow, at most five coordinate labels per axis (map
 coordinates of six or seven digits do not run into each other) and the coordinate
 reference system named (root attributes crs and crs_wkt; "no CRS" when the inputs had
@@ -66,6 +74,7 @@ class Run:
             self.pft = f["maps/h_max"][:]
             self.ppr = f["maps/ppr"][:] if "maps/ppr" in f else None
             self.summary = dict(f["summary"].attrs) if "summary" in f else {}
+            self.path = ({k: f["path"][k][:] for k in f["path"]} if "path" in f else None)
             self.crs = crs_name(f.attrs)
         d = self.x[1] - self.x[0] if len(self.x) > 1 else self.y[1] - self.y[0]
         self.d = d
@@ -183,6 +192,7 @@ def draw_run(run, levels, name):
     rx, ry = run.summary.get("runout_x"), run.summary.get("runout_y")
     if rx is not None and np.isfinite(rx) and np.isfinite(ry):
         ax.plot([rx], [ry], "r*", ms=12, label=f"runout ({run.summary['runout_length']:.4g} m)")
+    path_line(ax, run)
     finish(ax, run)
     ax.set_title(f"{name}: peak flow thickness, {run.crs}", fontsize=10)
     return fig, ax, cs
@@ -210,9 +220,55 @@ def draw_ppr(run, classes_kpa, name):
     release_outline(ax, run)
     if not (kpa >= bounds[0]).any():
         plot_common.mark_note(ax, f"ppr below {bounds[0]:g} kPa everywhere")
+    path_line(ax, run)
     finish(ax, run)
     ax.set_title(f"{name}: peak pressure classes, {run.crs}", fontsize=10)
     return fig, ax, cb
+
+
+def path_line(ax, run):
+    """The thalweg line of `output.path` (its stations' points), when there is one."""
+    if run.path is None:
+        return
+    ax.plot(run.path["x"], run.path["y"], color="tab:cyan", lw=1.4, label="path",
+            path_effects=[patheffects.withStroke(linewidth=2.8, foreground="k")])
+
+
+def draw_path(run, name):
+    """The profiles along the path of `run`; returns (fig, axes): elevation, pft,
+    pfv, ppr against s."""
+    if run.path is None:
+        raise SystemExit("error: the run has no /path (the scenario has no output.path)")
+    p, s = run.path, run.path["s"]
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(8, 9), constrained_layout=True,
+                             gridspec_kw={"height_ratios": [2, 1, 1, 1]})
+    z = np.asarray(p["z"], dtype=float)
+    ok = np.isfinite(z)
+    axes[0].plot(s[ok], z[ok], "k-", lw=1.2, label="thalweg bed")
+    top, end = run.summary.get("path_release_top_s"), run.summary.get("path_runout_s")
+    angle = run.summary.get("path_runout_angle_deg")
+    marks = top is not None and end is not None and np.isfinite(end) and ok.any()
+    if marks:
+        zt, ze = np.interp([top, end], s[ok], z[ok])
+        axes[0].plot([top, end], [zt, ze], "r--", lw=1,
+                     label=f"runout angle {angle:.3g}°")
+        axes[0].plot([top], [zt], "k^", ms=8, label="top of the release")
+        axes[0].plot([end], [ze], "r*", ms=12,
+                     label=f"runout (s = {end:.4g} m, {end - top:.4g} m from the top)")
+    axes[0].set_ylabel("elevation (m)")
+    axes[0].legend(fontsize=8)
+    for ax, key, scale, label in ((axes[1], "pft_max", 1.0, "max pft (m)"),
+                                  (axes[2], "pfv_max", 1.0, "max pfv (m/s)"),
+                                  (axes[3], "ppr_max", 1e-3, "max ppr (kPa)")):
+        ax.plot(s, np.asarray(p[key], dtype=float) * scale, "-", color="tab:blue", lw=1.2)
+        ax.set_ylabel(label)
+        if marks:
+            ax.axvline(end, color="r", ls=":", lw=1)
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("s along the path (m)")
+    axes[0].set_title(f"{name}: along the path (maxima across its band), {run.crs}",
+                      fontsize=10)
+    return fig, axes
 
 
 def plot_run(path, prefix, fmt, levels, classes, dpi):
@@ -226,6 +282,11 @@ def plot_run(path, prefix, fmt, levels, classes, dpi):
     out = f"{prefix}_ppr.{fmt}"
     plot_common.save(fig, out, dpi)
     print(f"wrote {out}")
+    if run.path is not None:
+        fig, _ = draw_path(run, name)
+        out = f"{prefix}_path.{fmt}"
+        plot_common.save(fig, out, dpi)
+        print(f"wrote {out}")
 
 
 def read_asc(path):

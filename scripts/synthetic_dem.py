@@ -3,8 +3,8 @@
 
     python scripts/synthetic_dem.py DIR
 
-writes DIR/synthetic_dem.asc (+ .prj) and DIR/synthetic_release.geojson (the files in
-scenarios/data/ are its output). Plain Python, no packages.
+writes DIR/synthetic_dem.asc (+ .prj), DIR/synthetic_release.geojson and
+DIR/synthetic_path.geojson (the files in scenarios/data/ are its output). Plain Python, no packages.
 
 The terrain, in Swiss LV95 coordinates (EPSG:2056) from the lower-left corner
 (2 600 000, 1 200 000), 120 × 60 cells of 5 m: along x a 30° slope over 250 m, a
@@ -12,7 +12,8 @@ transition over 100 m in which the slope falls linearly to 0, then a flat runout
 with a shallow valley across y (0.002 (y − y_c)² m). A block of 6 × 8 cells in the
 runout (x from 420 to 450 m, y from 170 to 210 m from the corner) has no data: a
 building, a wall of the run. The release is a pentagon on the slope, 1.5 m thick
-normal to it.
+normal to it. The path (thalweg, for `output.path`) runs down the valley's axis,
+y = 150 m from the corner, from x = 10 m to x = 590 m.
 """
 
 import json
@@ -80,6 +81,21 @@ def main(out):
         ],
     }
     (out / "synthetic_release.geojson").write_text(json.dumps(release, indent=1) + "\n")
+    path = {
+        "type": "FeatureCollection",
+        "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::2056"}},
+        "features": [
+            {
+                "type": "Feature",
+                "properties": {"name": "thalweg"},
+                "geometry": {
+                    "type": "LineString",
+                    "coordinates": [[X0 + 10.0, Y0 + 150.0], [X0 + 590.0, Y0 + 150.0]],
+                },
+            }
+        ],
+    }
+    (out / "synthetic_path.geojson").write_text(json.dumps(path, indent=1) + "\n")
 
 
 if __name__ == "__main__":

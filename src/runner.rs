@@ -192,6 +192,15 @@ impl fmt::Display for RunReport {
                     )?,
                     (None, _) => {}
                 }
+                if let Some([pft, pfv, ppr]) = sp.path_max {
+                    writeln!(
+                        f,
+                        "  path maxima   pft {} m, pfv {} m/s, ppr {} kPa (largest along output.path, /path in the HDF5 file)",
+                        sig(pft),
+                        sig(pfv),
+                        sig(ppr / 1000.0)
+                    )?;
+                }
             }
             _ if s.runout.is_nan() => writeln!(f, "  runout        none (no front)")?,
             // Wet or periodic domains have no front that moves: say so rather than

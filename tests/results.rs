@@ -768,3 +768,140 @@ fn maps_replaces_only_its_own_files() {
     assert_success(&maps(&["--format", "asc"]));
     assert_success(&maps(&["--format", "asc"]));
 }
+
+/// A sweep whose axes are sampled (`[sample]`, a seeded Latin hypercube): each of the
+/// n strata of every axis holds one run, the same seed draws the same runs (their
+/// names and parameters in `summary.csv`), and `granflow maps` maps them as any sweep.
+#[test]
+fn a_sampled_sweep_is_stratified_reproducible_and_mapped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("radial.toml"), RADIAL).unwrap();
+    let text = "scenario = \"radial.toml\"\n\n[sample]\nruns = 4\nseed = 11\nrheology.mu_deg = { uniform = [20, 32] }\ntime.t_end = { normal = [0.5, 0.05], min = 0.4 }\n";
+    fs::write(d.join("lhs.toml"), text).unwrap();
+    let sweep = |out: &str| {
+        assert_success(
+            &granflow()
+                .args([
+                    "sweep", "lhs.toml", "--quiet", "--jobs", "1", "--output", out,
+                ])
+                .current_dir(d)
+                .output()
+                .unwrap(),
+        );
+        fs::read_to_string(d.join(out).join("summary.csv")).unwrap()
+    };
+    let csv = sweep("a");
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(header[2..4], ["rheology.mu_deg", "time.t_end"], "{csv}");
+    let column = |c: usize| -> Vec<f64> {
+        csv.lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(c).unwrap().parse().unwrap())
+            .collect()
+    };
+    let mut strata: Vec<usize> = column(2)
+        .iter()
+        .map(|mu| ((mu - 20.0) / 12.0 * 4.0) as usize)
+        .collect();
+    strata.sort();
+    assert_eq!(strata, [0, 1, 2, 3], "{csv}");
+    assert!(column(3).iter().all(|&t| t >= 0.4), "{csv}");
+    // The same seed: the same runs; the rows name the same parameters.
+    let again = sweep("b");
+    let params = |csv: &str| -> Vec<String> {
+        csv.lines()
+            .map(|l| l.split(',').take(4).collect::<Vec<_>>().join(","))
+            .collect()
+    };
+    assert_eq!(params(&again), params(&csv));
+    let table = assert_success(
+        &granflow()
+            .args(["maps", "a", "--threshold", "0.02"])
+            .current_dir(d)
+            .output()
+            .unwrap(),
+    );
+    assert!(table.contains("maps: 4 runs"), "{table}");
+    assert!(d.join("a/maps/pft_probability.tif").is_file());
+    // A bad distribution: exit 2, naming the key.
+    fs::write(
+        d.join("bad.toml"),
+        text.replace("uniform = [20, 32]", "uniform = [32, 20]"),
+    )
+    .unwrap();
+    let out = granflow()
+        .args(["sweep", "bad.toml", "--output", "c"])
+        .current_dir(d)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("sample.rheology.mu_deg") && err.contains("line 6"),
+        "{err}"
+    );
+    assert!(!d.join("c").join("summary.csv").exists());
+}
+
+/// `--layout avaframe`: AvaFrame's peak files (`Outputs/com1DFA/peakFiles`, names
+/// `<release>_<hash>_C_null_dfa_<res>`, ppr in kPa), on the run's grid; other maps,
+/// snapshots and NetCDF are refused with exit code 2.
+#[test]
+fn the_avaframe_layout_writes_peak_files_in_avaframes_names_and_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let h5 = georeferenced_run(d);
+    let (run, ava) = (h5.to_str().unwrap(), d.join("avaSlope"));
+    let listed = assert_success(&export(&[
+        run,
+        "--layout",
+        "avaframe",
+        "--format",
+        "asc",
+        "-o",
+        ava.to_str().unwrap(),
+    ]));
+    let peak = ava.join("Outputs/com1DFA/peakFiles");
+    let mut names: Vec<String> = fs::read_dir(&peak)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".asc"))
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 3, "{listed}");
+    for (name, (res, dataset, scale)) in names.iter().zip([
+        ("pft", "h_max", 1.0),
+        ("pfv", "speed_max", 1.0),
+        ("ppr", "ppr", 1000.0),
+    ]) {
+        let parts: Vec<&str> = name.trim_end_matches(".asc").split('_').collect();
+        assert_eq!(parts[0], "slope", "{name}");
+        assert_eq!(parts[2..], ["C", "null", "dfa", res], "{name}");
+        let grid = asc::read(&peak.join(name)).unwrap();
+        let (_, values) = read(&h5, &format!("maps/{dataset}"));
+        let want: Vec<f64> = north_up(&values, 20).iter().map(|v| v / scale).collect();
+        assert_eq!(
+            (grid.x_left, grid.y_top, grid.cell_size),
+            (600_000.0, 5_200_140.0, 10.0)
+        );
+        assert_eq!(grid.values, want, "{name}");
+    }
+    for (args, needle) in [
+        (
+            &["--format", "netcdf"][..],
+            "not with --time or --format netcdf",
+        ),
+        (&["--time", "1"][..], "not with --time"),
+        (&["--fields", "deposit"][..], "pft, pfv and ppr only"),
+    ] {
+        let mut all = vec![run, "--layout", "avaframe"];
+        all.extend(args);
+        let out = export(&all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(needle),
+            "{args:?}"
+        );
+    }
+}

@@ -425,3 +425,93 @@ fn a_raster_run_reports_its_wet_fraction_and_its_rate_on_wet_cells() {
         "{wet_rate} vs {all_rate}"
     );
 }
+
+/// The maxima along the path (`/path/*`): on a line straight down the middle of the
+/// slope, through cell centres, each station is one row of the DEM, so its pft, pfv
+/// and ppr are the row's largest values of the maps; a band of 10 m keeps the line's
+/// column and its two neighbours. The sweep table's maxima are the largest of the
+/// profiles, and the report prints them.
+#[test]
+fn the_maxima_along_the_path_are_those_of_the_maps_across_its_band() {
+    use rust_hdf5::H5File;
+    let dir = tempfile::tempdir().unwrap();
+    let scn = south_facing(dir.path());
+    // The column x = 52.5 m (column 10), from the centre of the top row (y = 237.5 m)
+    // down.
+    fs::write(
+        dir.path().join("centre.geojson"),
+        r#"{"type": "LineString", "coordinates": [[52.5, 237.5], [52.5, 2.5]]}"#,
+    )
+    .unwrap();
+    let text = fs::read_to_string(&scn).unwrap().replace(
+        r#"path = { line = "path.geojson", field = "pft", threshold = 0.001 }"#,
+        r#"path = { line = "centre.geojson", field = "pft", threshold = 0.001, width = 10 }"#,
+    );
+    fs::write(&scn, text).unwrap();
+    fs::write(
+        dir.path().join("sweep.toml"),
+        "scenario = \"south.toml\"\n\n[axes]\nrheology.mu_deg = [22]\n",
+    )
+    .unwrap();
+    let out = granflow()
+        .args(["sweep", "sweep.toml", "--output", "out"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let stdout = crate::common::assert_success(&out);
+    assert!(stdout.contains("max_ppr_kPa"), "{stdout}");
+    let out_dir = dir.path().join("out");
+    let h5 = fs::read_dir(&out_dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|e| e == "h5"))
+        .unwrap();
+    let file = H5File::open(&h5).unwrap();
+    let read = |name: &str| crate::common::read_h5(&file, name);
+    let csv = fs::read_to_string(out_dir.join("summary.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+    let column = |name: &str| -> f64 {
+        let c = header.iter().position(|&c| c == name);
+        row[c.unwrap_or_else(|| panic!("no {name}: {csv}"))]
+            .parse()
+            .unwrap()
+    };
+    // The maps' row j (row 0 south) is at y = /grid/y[j], station s = 237.5 − y.
+    let (nx, y) = (20, read("grid/y"));
+    let s = read("path/s");
+    assert_eq!(s.len(), y.len(), "{s:?}");
+    let row_of = |s: f64| y.iter().position(|&y| 237.5 - y == s).unwrap();
+    for (map, profile, units, name) in [
+        ("maps/h_max", "path/pft_max", "m", "path_max_pft"),
+        ("maps/speed_max", "path/pfv_max", "m/s", "path_max_pfv"),
+        ("maps/ppr", "path/ppr_max", "Pa", "path_max_ppr"),
+    ] {
+        let values = read(map);
+        let along = read(profile);
+        let unit = file.dataset(profile).unwrap().attr("units").unwrap();
+        assert_eq!(unit.read_string().unwrap(), units);
+        for (i, &s) in s.iter().enumerate() {
+            assert_eq!(s, 5.0 * i as f64);
+            let j = row_of(s);
+            let direct = values[j * nx + 9..=j * nx + 11]
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max);
+            assert_eq!(along[i], direct, "{profile} at s = {s}");
+        }
+        let largest = along.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        assert!(largest > 0.0, "{profile}: {along:?}");
+        assert_eq!(column(name), largest, "{name}");
+    }
+    // The thalweg's bed, and the line's points.
+    let b = read("grid/b");
+    let z: Vec<f64> = s.iter().map(|&s| b[row_of(s) * nx + 10]).collect();
+    assert_eq!(read("path/z"), z);
+    assert!(read("path/x").iter().all(|&x| x == 52.5));
+    // The runout along the path is the last station where pft exceeds the threshold.
+    let pft = read("path/pft_max");
+    let last = pft.iter().rposition(|&v| v > 0.001).unwrap();
+    let top = 237.5 - 217.5;
+    assert_eq!(column("path_runout_length"), s[last] - top);
+}

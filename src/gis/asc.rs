@@ -17,10 +17,11 @@
 //! The writer writes `xllcorner`/`yllcorner`, `cellsize`, `NODATA_value` when the raster
 //! has a finite nodata value (NaN cells are written as that value), every number in
 //! its shortest round-trip form (reading the file back gives the same `f64`s), and
-//! the `.prj` when the CRS has WKT text or an EPSG code of WGS 84 (4326), its UTM
-//! zones (326xx, 327xx) or ETRS89's (258xx), whose WKT is made here. Any other CRS
-//! known only by its code gets no `.prj` (that needs the EPSG registry; `granflow
-//! export` warns). The written `yllcorner` is the shortest decimal that
+//! the `.prj` when the CRS has WKT text or an EPSG code whose WKT granflow makes
+//! (`crs::wkt_of_epsg`: WGS 84 and its UTM zones, ETRS89's UTM zones and LAEA, NAD83's
+//! UTM zones, the Swiss, Austrian, German, French, Italian and Dutch national grids).
+//! Any other CRS known only by its code gets no `.prj` (that needs the EPSG registry;
+//! `granflow export` warns). The written `yllcorner` is the shortest decimal that
 //! maps back to the same top edge, so a file read and written again is unchanged.
 
 use std::io::Write;

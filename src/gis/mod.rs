@@ -27,6 +27,8 @@
 //!   cell-centre or the area-fraction rule, released volume, slope-normal → vertical
 //!   thickness;
 //! * [`netcdf`]: a CF-1.8 NetCDF writer for time series of 2-D fields;
+//! * [`path`]: an avalanche path (thalweg) and the runout along it; [`profile`]: the
+//!   largest pft, pfv and ppr across its band at each station (AvaFrame's AIMEC);
 //! * `validity`: the checks that refuse release polygons which are not simple areas
 //!   (self-crossing rings, holes outside their ring, rings without area).
 //!
@@ -37,6 +39,7 @@ mod crs;
 pub mod geotiff;
 pub mod netcdf;
 pub mod path;
+pub mod profile;
 mod raster;
 pub mod release;
 mod validity;

@@ -36,6 +36,8 @@ pub struct PathSpec {
     pub field: PathField,
     /// The value a cell must exceed to count as reached, in the map's units.
     pub threshold: f64,
+    /// Width of the band around the line whose cells count (m); `None`: every cell.
+    pub width: Option<f64>,
 }
 
 /// The map of [`PathSpec`].
@@ -194,6 +196,31 @@ impl PathLine {
         }
         best
     }
+
+    /// The horizontal length of the line (m).
+    pub fn length(&self) -> f64 {
+        self.points
+            .windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum()
+    }
+
+    /// The point at distance `s` along the line, the end segments extended past the
+    /// ends (negative s before the first vertex).
+    pub fn point_at(&self, s: f64) -> [f64; 2] {
+        let n = self.points.len();
+        let mut start = 0.0;
+        for i in 0..n - 1 {
+            let (a, b) = (self.points[i], self.points[i + 1]);
+            let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+            if s <= start + len || i == n - 2 {
+                let t = (s - start) / len;
+                return [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t];
+            }
+            start += len;
+        }
+        unreachable!("a line has at least two vertices")
+    }
 }
 
 /// The runout along a path.
@@ -270,6 +297,16 @@ mod tests {
         assert_eq!(line.project([10.0, -13.0]), (23.0, 0.0));
         // Before the first vertex: negative s.
         assert_eq!(line.project([-2.0, 0.0]), (-2.0, 0.0));
+    }
+
+    #[test]
+    fn points_at_s_lie_on_the_line_and_past_its_ends() {
+        let line = l();
+        assert_eq!(line.length(), 20.0);
+        assert_eq!(line.point_at(4.0), [4.0, 0.0]);
+        assert_eq!(line.point_at(14.0), [10.0, -4.0]);
+        assert_eq!(line.point_at(23.0), [10.0, -13.0]);
+        assert_eq!(line.point_at(-2.0), [-2.0, 0.0]);
     }
 
     #[test]

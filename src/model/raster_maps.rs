@@ -43,6 +43,7 @@
 use std::borrow::Cow;
 
 use crate::gis::path::{PathField, PathSpec};
+use crate::gis::profile::{self, Profile};
 use crate::grid::raster::{Raster2d, BAND_ROWS};
 use crate::grid::Grid;
 use crate::model::tracker::Tracker;
@@ -100,15 +101,19 @@ impl RasterMaps {
         self
     }
 
-    /// The runout along the path (`/summary` `path_*`), when there is one and the
-    /// flow reached a cell over its threshold.
-    fn path_runout(&self, grid: &Raster2d) -> Vec<(&'static str, f64)> {
+    /// The runout along the path and the maxima of the profiles (`/summary` `path_*`)
+    /// and the profiles (`/path/*`, `gis::profile`), when there is a path.
+    fn path_results(&self, grid: &Raster2d) -> (Vec<(&'static str, f64)>, Option<Profile>) {
         let Some(spec) = &self.path else {
-            return Vec::new();
+            return (Vec::new(), None);
         };
+        let pft = grid.mask_walls(&self.h_max);
+        let ppr = self.peak_pressure();
+        let ppr = grid.mask_walls(&ppr);
+        let pfv = grid.mask_walls(&self.speed_max);
         let values = match spec.field {
-            PathField::Pft => grid.mask_walls(&self.h_max).into_owned(),
-            PathField::Ppr => grid.mask_walls(&self.peak_pressure()).into_owned(),
+            PathField::Pft => &pft,
+            PathField::Ppr => &ppr,
         };
         let theta = grid.plane_theta();
         let cell = |k: usize| {
@@ -120,24 +125,46 @@ impl RasterMaps {
                 -p.x * theta.sin() + b * theta.cos(),
             ]
         };
+        let half = spec.width.map_or(f64::INFINITY, |w| 0.5 * w);
+        let within = |k: usize| {
+            let c = cell(k);
+            spec.line.project([c[0], c[1]]).1 <= half
+        };
+        let profile = profile::along(
+            &spec.line,
+            half,
+            grid.dx().min(grid.dy()),
+            values.len(),
+            |k| (!grid.is_wall(k)).then(|| cell(k)),
+            [&pft, &pfv, &ppr],
+        );
+        let maxima = [
+            ("path_max_pft", profile::max(&profile.pft)),
+            ("path_max_pfv", profile::max(&profile.pfv)),
+            ("path_max_ppr", profile::max(&profile.ppr)),
+        ];
         let found = crate::gis::path::runout(
             &spec.line,
             cell,
             values.len(),
-            |k| values[k] > spec.threshold,
-            |k| self.h0[k] > self.threshold,
+            |k| values[k] > spec.threshold && within(k),
+            |k| self.h0[k] > self.threshold && within(k),
         );
         let Some(r) = found else {
-            return vec![("path_runout_length", f64::NAN)];
+            let mut s = vec![("path_runout_length", f64::NAN)];
+            s.extend(maxima);
+            return (s, Some(profile));
         };
-        vec![
+        let mut s = vec![
             ("path_runout_s", r.runout_s),
             ("path_release_top_s", r.top_s),
             ("path_runout_length", r.length),
             ("path_runout_angle_deg", r.angle_deg),
             ("path_runout_x", r.runout_xy[0]),
             ("path_runout_y", r.runout_xy[1]),
-        ]
+        ];
+        s.extend(maxima);
+        (s, Some(profile))
     }
 
     /// The maps updated on the threads of `workers` (the step's pool): each cell's maps
@@ -334,12 +361,32 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
         let values = self.values(grid, &normal);
         let ppr = self.ppr_description();
         let maps = Self::fields(&values, &ppr);
-        let mut scalars = self.scalars(grid, state);
+        let mut scalars = Vec::new();
+        let mut path = None;
+        if !self.h0.is_empty() {
+            scalars = self.runout(grid, &above);
+            let (s, p) = self.path_results(grid);
+            scalars.extend(s);
+            path = p;
+        }
         scalars.push(("density", self.density));
+        let profile: Vec<(&str, &str, &[f64])> = match &path {
+            None => Vec::new(),
+            Some(p) => vec![
+                ("s", "m", &p.s),
+                ("x", "m", &p.x),
+                ("y", "m", &p.y),
+                ("z", "m", &p.z),
+                ("pft_max", "m", &p.pft),
+                ("pfv_max", "m/s", &p.pfv),
+                ("ppr_max", "Pa", &p.ppr),
+            ],
+        };
         sink.maps(&RunMaps {
             maps: &maps,
             series: &[("area_reached", "m^2", &self.area)],
             scalars: &scalars,
+            profile: &profile,
         })
     }
 
@@ -348,7 +395,7 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
             Vec::new()
         } else {
             let mut s = self.runout(grid, &self.above(&state.h));
-            s.extend(self.path_runout(grid));
+            s.extend(self.path_results(grid).0);
             s
         }
     }

@@ -279,7 +279,8 @@ impl<S: OutputSink> OutputSink for Budgeted<S> {
 
     fn maps(&mut self, maps: &RunMaps) -> Result<(), OutputError> {
         let values = maps.maps.iter().map(|f| f.data.len()).sum::<usize>()
-            + maps.series.iter().map(|s| s.2.len()).sum::<usize>();
+            + maps.series.iter().map(|s| s.2.len()).sum::<usize>()
+            + maps.profile.iter().map(|s| s.2.len()).sum::<usize>();
         self.spend(8 * values as u64)?;
         self.inner.maps(maps)
     }

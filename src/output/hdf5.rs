@@ -1009,6 +1009,7 @@ mod tests {
             maps: &last,
             series: &[],
             scalars: &[],
+            profile: &[],
         })
         .unwrap();
         assert_eq!(read("maps/h_max"), [5.0; 6]);

@@ -172,6 +172,9 @@ pub struct RunMaps<'a> {
     pub series: &'a [(&'static str, &'static str, &'a [f64])],
     /// (name, value), written as `/summary` attributes.
     pub scalars: &'a [(&'static str, f64)],
+    /// (name, units, one value per station) of the profiles along `output.path`,
+    /// written as `/path/<name>`; empty without a path.
+    pub profile: &'a [(&'static str, &'static str, &'a [f64])],
 }
 
 /// One row per time step: `/diagnostics/*` and `/front/*`.
@@ -291,6 +294,10 @@ pub struct Spread {
     /// With `output.path`: the runout angle along the path (degrees).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path_runout_angle_deg: Option<f64>,
+    /// With `output.path`: the largest pft (m), pfv (m/s) and ppr (Pa) of the band
+    /// around the path (the maxima of its profiles, `gis::profile`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path_max: Option<[f64; 3]>,
 }
 
 impl Spread {
@@ -303,6 +310,13 @@ impl Spread {
             area_reached: get("area_reached")?,
             path_runout_length: get("path_runout_length"),
             path_runout_angle_deg: get("path_runout_angle_deg"),
+            path_max: (|| {
+                Some([
+                    get("path_max_pft")?,
+                    get("path_max_pfv")?,
+                    get("path_max_ppr")?,
+                ])
+            })(),
         })
     }
 }

@@ -35,6 +35,16 @@ pub enum ExportFormat {
     Netcdf,
 }
 
+/// The file layouts of `granflow export`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Layout {
+    /// `DIR/RUN_<field>.<ext>`, ppr in Pa.
+    Granflow,
+    /// AvaFrame's: `DIR/Outputs/com1DFA/peakFiles/<name>_<hash>_C_null_dfa_<pft|pfv|ppr>.<ext>`,
+    /// ppr in kPa, as AIMEC reads com1DFA's peak files.
+    Avaframe,
+}
+
 /// `granflow export RUN.h5 [options]`.
 #[derive(Debug, Args)]
 pub struct ExportArgs {
@@ -57,6 +67,10 @@ pub struct ExportArgs {
     /// `RUN_<field>.<ext>`.
     #[arg(long, short, value_name = "DIR")]
     pub output: Option<PathBuf>,
+    /// File names and units: granflow's, or AvaFrame's peak files (DIR is then the
+    /// avalanche directory; pft, pfv, ppr only, ppr in kPa; docs/gis.md).
+    #[arg(long, value_enum, default_value_t = Layout::Granflow)]
+    pub layout: Layout,
     /// GeoTIFF samples as Float64 (the file's values exactly) instead of Float32.
     #[arg(long)]
     pub float64: bool,

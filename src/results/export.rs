@@ -13,7 +13,8 @@
 
 use std::path::{Path, PathBuf};
 
-use super::args::{ExportArgs, ExportFormat, RasterFormat};
+use super::args::{ExportArgs, ExportFormat, Layout, RasterFormat};
+use super::avaframe;
 use super::publish::{Owner, Publish};
 use super::run_file::{north_up, RunFile};
 use super::{write_raster_band, ResultsError};
@@ -111,7 +112,7 @@ pub fn crs_warning(crs: &crate::gis::Crs, format: ExportFormat) -> Option<String
     }
     match (format, crs.epsg) {
         (ExportFormat::Asc, Some(code)) if crs.wkt_text().is_none() => Some(format!(
-            "the run's CRS is EPSG:{code}, known by its code alone: an ESRI ASCII grid keeps a CRS only as WKT in its .prj, which granflow makes for WGS 84 and UTM zones only, so the .asc files have no .prj; export as GeoTIFF (the default), or copy the DEM's .prj beside each .asc"
+            "the run's CRS is EPSG:{code}, known by its code alone: an ESRI ASCII grid keeps a CRS only as WKT in its .prj, which granflow makes only for the codes listed in docs/gis.md (WGS 84 and UTM, ETRS89 UTM and LAEA, NAD83 UTM, the Swiss, Austrian, German, French, Italian and Dutch national grids), so the .asc files have no .prj; export as GeoTIFF (the default), or copy the DEM's .prj beside each .asc"
         )),
         _ => None,
     }
@@ -240,7 +241,16 @@ fn status_warning(run: &RunFile) -> Option<String> {
 
 /// Runs `granflow export`.
 pub fn export(args: &ExportArgs) -> Result<Exported, ResultsError> {
-    let (maps, snaps) = choose_fields(&args.fields, args.time.is_some(), args.format)?;
+    let (mut maps, snaps) = choose_fields(&args.fields, args.time.is_some(), args.format)?;
+    let avaframe = args.layout == Layout::Avaframe;
+    if avaframe {
+        if args.time.is_some() || args.format == ExportFormat::Netcdf {
+            return Err(ResultsError::input(
+                "--layout avaframe writes AvaFrame's peak files (the maps, as .tif or .asc): not with --time or --format netcdf",
+            ));
+        }
+        maps = avaframe::fields(&maps, !args.fields.is_empty())?;
+    }
     let run = RunFile::open(&args.run)?;
     // A snapshot is what it says at its time; the maps of a run that stopped early
     // are not its final deposit.
@@ -254,10 +264,13 @@ pub fn export(args: &ExportArgs) -> Result<Exported, ResultsError> {
         .time
         .map(|t| nearest_snapshot(run.times(), t))
         .transpose()?;
-    let dir = match &args.output {
+    let mut dir = match &args.output {
         Some(d) => d.clone(),
         None => args.run.parent().map(Path::to_path_buf).unwrap_or_default(),
     };
+    if avaframe {
+        dir = avaframe::peak_dir(&dir);
+    }
     if !dir.as_os_str().is_empty() {
         std::fs::create_dir_all(&dir)
             .map_err(|e| ResultsError::failure(format!("cannot create {}: {e}", dir.display())))?;
@@ -286,11 +299,23 @@ pub fn export(args: &ExportArgs) -> Result<Exported, ResultsError> {
             write_raster_band(&mut publish, run.grid(), values, options, &path, Some(band))
         };
         for f in &maps {
-            let path = dir.join(format!("{stem}_{}.{ext}", f.name));
             let values = north_up(&run.map(f.source)?, nx, ny);
             // The run file's own description (it names ppr's density), else ours.
             let text = run.map_description(f.source);
-            band(path, values, f, band_description(f, text.as_deref()))?;
+            let mut description = band_description(f, text.as_deref());
+            let (path, values) = if avaframe {
+                if f.name == "ppr" {
+                    description = description.replace("in Pa (1 kPa = 1000 Pa)", "in kPa");
+                }
+                let name = avaframe::peak_name(&stem, f.name);
+                (
+                    dir.join(format!("{name}.{ext}")),
+                    avaframe::in_units(f, values),
+                )
+            } else {
+                (dir.join(format!("{stem}_{}.{ext}", f.name)), values)
+            };
+            band(path, values, f, description)?;
         }
         if let Some(k) = frame {
             for f in &snaps {

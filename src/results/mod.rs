@@ -13,6 +13,7 @@
 //! - [`publish`]: how both put their files in place (never a user's file, never half).
 
 pub mod args;
+pub mod avaframe;
 pub mod ensemble;
 pub mod export;
 pub mod maps;
@@ -20,7 +21,7 @@ pub mod publish;
 pub mod run_file;
 pub mod skill;
 
-pub use args::{ExportArgs, MapsArgs, RasterFormat};
+pub use args::{ExportArgs, Layout, MapsArgs, RasterFormat};
 
 use crate::terminal::{EXIT_BAD_INPUT, EXIT_FAILURE};
 

@@ -29,6 +29,7 @@ pub mod naming;
 pub mod order;
 pub mod plan;
 pub mod record;
+pub mod sample;
 pub mod spec;
 pub mod summary;
 

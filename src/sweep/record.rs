@@ -221,6 +221,7 @@ mod tests {
                     area_reached: 1.0 / 3.0,
                     path_runout_length: Some(2956.5),
                     path_runout_angle_deg: None,
+                    path_max: Some([2.5, 31.0, 1.5e6]),
                 }),
                 outflowed_fraction: 0.0,
                 front_at_end_time: f64::NAN,
@@ -250,6 +251,7 @@ mod tests {
             (b.runout_length, b.area_reached, b.path_runout_length)
         );
         assert!(a.travel_angle_deg.is_nan() && a.path_runout_angle_deg.is_none());
+        assert_eq!(a.path_max, b.path_max);
         assert!(!back.is_ok());
         // No temporary file left behind.
         let names: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();

@@ -23,6 +23,7 @@ use toml_edit::{Item, TableLike, Value};
 
 use super::error::SweepError;
 use super::naming::canonical_value;
+use super::sample;
 
 /// One value of an axis.
 #[derive(Debug, Clone, PartialEq)]
@@ -120,7 +121,7 @@ fn line_of(text: &str, offset: usize) -> usize {
         + 1
 }
 
-const TOP_KEYS: &str = "scenario, output, set, axes, zip";
+const TOP_KEYS: &str = "scenario, output, set, axes, zip, sample";
 
 /// Reads and checks a sweep file.
 pub fn load(path: &Path) -> Result<SweepSpec, SweepError> {
@@ -205,6 +206,7 @@ pub fn parse(path: &Path, text: &str) -> Result<SweepSpec, SweepError> {
                     zips.push(Dimension { axes, zipped: true });
                 }
             }
+            "sample" => zips.push(p.sample(item, line)?),
             other => {
                 return Err(p.err(
                     line,
@@ -262,6 +264,123 @@ pub fn parse(path: &Path, text: &str) -> Result<SweepSpec, SweepError> {
         set_line,
         dims,
     })
+}
+
+/// A dotted scenario key's parts are ASCII letters, digits, `_` and `-`.
+fn check_key(key: &str) -> Result<(), String> {
+    match key.split('.').find(|part| {
+        part.is_empty()
+            || !part
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    }) {
+        Some(bad) => Err(format!(
+            "'{bad}' is not a valid scenario key part (expected a dotted key such as domain.slope_deg)"
+        )),
+        None => Ok(()),
+    }
+}
+
+/// A distribution of `[sample]` (`sweep::sample`): `uniform = [a, b]`,
+/// `normal = [mean, sd]` with optional `min`, `max`, or `ci95 = [value, half_width]`.
+fn distribution(t: &dyn TableLike) -> Result<sample::Distribution, String> {
+    use sample::Distribution;
+    let number = |v: &Item| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+    let pair = |name: &str| -> Result<Option<(f64, f64)>, String> {
+        let Some(v) = t.get(name) else {
+            return Ok(None);
+        };
+        let a = v.as_array().filter(|a| a.len() == 2);
+        let p = a.and_then(|a| {
+            let x: Vec<f64> = a
+                .iter()
+                .filter_map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+                .collect();
+            (x.len() == 2 && x.iter().all(|x| x.is_finite())).then(|| (x[0], x[1]))
+        });
+        p.map(Some).ok_or_else(|| {
+            format!(
+                "{name} must be two finite numbers, found {}",
+                v.to_string().trim()
+            )
+        })
+    };
+    let kinds: Vec<&str> = ["uniform", "normal", "ci95"]
+        .into_iter()
+        .filter(|k| t.contains_key(k))
+        .collect();
+    if kinds.len() > 1 {
+        return Err(format!(
+            "one distribution per key, found {}",
+            kinds.join(" and ")
+        ));
+    }
+    let allowed: &[&str] = match kinds[0] {
+        "normal" => &["normal", "min", "max"],
+        "uniform" => &["uniform"],
+        _ => &["ci95"],
+    };
+    if let Some((other, _)) = t.iter().find(|(k, _)| !allowed.contains(k)) {
+        return Err(format!(
+            "unknown key '{other}' with {} (allowed: {})",
+            kinds[0],
+            allowed.join(", ")
+        ));
+    }
+    let bound = |name: &str, default: f64| -> Result<f64, String> {
+        match t.get(name) {
+            None => Ok(default),
+            Some(v) => number(v).filter(|x| x.is_finite()).ok_or_else(|| {
+                format!(
+                    "{name} must be a finite number, found {}",
+                    v.to_string().trim()
+                )
+            }),
+        }
+    };
+    let d = match kinds[0] {
+        "uniform" => {
+            let (lo, hi) = pair("uniform")?.unwrap_or_default();
+            if lo >= hi {
+                return Err(format!("uniform = [a, b] needs a < b, got [{lo}, {hi}]"));
+            }
+            Distribution::Uniform { lo, hi }
+        }
+        "ci95" => {
+            let (v, c) = pair("ci95")?.unwrap_or_default();
+            if c <= 0.0 {
+                return Err(format!(
+                    "ci95 = [value, half_width] needs a half-width > 0, got {c}"
+                ));
+            }
+            Distribution::Uniform {
+                lo: v - c,
+                hi: v + c,
+            }
+        }
+        _ => {
+            let (mean, sd) = pair("normal")?.unwrap_or_default();
+            if sd <= 0.0 {
+                return Err(format!("normal = [mean, sd] needs sd > 0, got {sd}"));
+            }
+            let (lo, hi) = (
+                bound("min", f64::NEG_INFINITY)?,
+                bound("max", f64::INFINITY)?,
+            );
+            if lo >= hi {
+                return Err(format!("min ({lo}) must be below max ({hi})"));
+            }
+            let d = Distribution::Normal { mean, sd, lo, hi };
+            // Far in a tail the window holds no probability a double can resolve.
+            if d.mass().is_nan() || d.mass() <= 1e-300 {
+                return Err(format!(
+                    "[min, max] = [{lo}, {hi}] holds no probability of normal = [{mean}, {sd}]"
+                ));
+            }
+            d
+        }
+    };
+    Ok(d)
 }
 
 struct Parser<'a> {
@@ -334,6 +453,106 @@ impl Parser<'_> {
                 .collect(),
             _ => Err(wrong()),
         }
+    }
+
+    /// `[sample]`: `runs`, `seed` and one distribution per scenario key, drawn by a
+    /// Latin hypercube into one zipped group of `runs` values (`sweep::sample`).
+    fn sample(&self, item: &Item, line: Option<usize>) -> Result<Dimension, SweepError> {
+        let table = item.as_table_like().ok_or_else(|| {
+            self.err(
+                line,
+                "sample",
+                "must be a table: [sample] with runs, seed and one distribution per key",
+            )
+        })?;
+        let integer = |name: &str, min: i64| -> Result<Option<i64>, SweepError> {
+            let Some(v) = table.get(name) else {
+                return Ok(None);
+            };
+            match v.as_integer() {
+                Some(i) if i >= min => Ok(Some(i)),
+                _ => Err(self.err(
+                    self.key_line(table, name),
+                    &format!("sample.{name}"),
+                    format!("must be an integer ≥ {min}, found {}", v.to_string().trim()),
+                )),
+            }
+        };
+        let runs = integer("runs", 1)?.ok_or_else(|| {
+            self.err(
+                line,
+                "sample.runs",
+                "missing: the number of runs to draw, e.g. runs = 40",
+            )
+        })? as usize;
+        let seed = integer("seed", 0)?.unwrap_or(0) as u64;
+        let mut leaves = Vec::new();
+        for (name, item) in table.iter() {
+            if name != "runs" && name != "seed" {
+                self.distributions(table, name, item, name.to_owned(), &mut leaves)?;
+            }
+        }
+        if leaves.is_empty() {
+            return Err(self.err(
+                line,
+                "sample",
+                "no distribution: add e.g. rheology.mu = { uniform = [0.12, 0.2] }",
+            ));
+        }
+        let u = sample::latin_hypercube(runs, leaves.len(), seed);
+        let axes = leaves
+            .into_iter()
+            .zip(u)
+            .map(|((key, line, dist), u)| Axis {
+                key,
+                line,
+                values: u
+                    .into_iter()
+                    .map(|u| {
+                        let v = Value::from(dist.quantile(u));
+                        AxisValue {
+                            toml: v.to_string(),
+                            display: canonical_value(&v),
+                        }
+                    })
+                    .collect(),
+            })
+            .collect();
+        Ok(Dimension { axes, zipped: true })
+    }
+
+    /// The distributions under `item` (key `key`): a table with `uniform`, `normal` or
+    /// `ci95` is one; any other table holds more.
+    fn distributions(
+        &self,
+        parent: &dyn TableLike,
+        name: &str,
+        item: &Item,
+        key: String,
+        out: &mut Vec<(String, Option<usize>, sample::Distribution)>,
+    ) -> Result<(), SweepError> {
+        let line = self.key_line(parent, name);
+        let shown = format!("sample.{key}");
+        check_key(&key).map_err(|m| self.err(line, &shown, m))?;
+        let Some(t) = item.as_table_like() else {
+            return Err(self.err(
+                line,
+                &shown,
+                "must be a distribution: { uniform = [a, b] }, { normal = [mean, sd] } (with optional min, max) or { ci95 = [value, half_width] }",
+            ));
+        };
+        if !["uniform", "normal", "ci95"]
+            .iter()
+            .any(|k| t.contains_key(k))
+        {
+            for (sub, item) in t.iter() {
+                self.distributions(t, sub, item, format!("{key}.{sub}"), out)?;
+            }
+            return Ok(());
+        }
+        let d = distribution(t).map_err(|m| self.err(line, &shown, m))?;
+        out.push((key, line, d));
+        Ok(())
     }
 
     /// Flattens `table` into axes: every array is an axis named by its dotted path.
@@ -543,5 +762,120 @@ mod tests {
         let e = parse(Path::new("s.toml"), "scenario = \n").unwrap_err();
         assert_eq!(e.line(), Some(1), "{e}");
         assert!(e.to_string().contains("invalid TOML"), "{e}");
+    }
+
+    #[test]
+    fn a_sample_is_one_zipped_group_drawn_by_a_latin_hypercube() {
+        let text = "scenario = \"c.toml\"\n[axes]\ndomain.slope_deg = [10, 20]\n[sample]\nruns = 8\nseed = 3\nrheology.mu = { uniform = [0.1, 0.3] }\ninitial.h = { thickness = { ci95 = [1.5, 0.3] } }\nrheology.xi = { normal = [2000, 400], min = 1500 }\n";
+        let s = parse_ok(text);
+        assert_eq!(s.run_count(), 2 * 8);
+        let group = &s.dims[1];
+        assert!(group.zipped);
+        let keys: Vec<&str> = group.axes.iter().map(|a| a.key.as_str()).collect();
+        // In the order of the TOML tables (rheology's keys together).
+        assert_eq!(keys, ["rheology.mu", "rheology.xi", "initial.h.thickness"]);
+        assert_eq!(group.axes[0].line, Some(7));
+        let values =
+            |a: &Axis| -> Vec<f64> { a.values.iter().map(|v| v.toml.parse().unwrap()).collect() };
+        // Every stratum of each axis once: the uniform's and the ci95's by their
+        // bounds, the normal's through its CDF.
+        let strata = |x: &[f64], cdf: &dyn Fn(f64) -> f64| {
+            let mut k: Vec<usize> = x.iter().map(|&x| (cdf(x) * 8.0) as usize).collect();
+            k.sort();
+            k
+        };
+        let all: Vec<usize> = (0..8).collect();
+        assert_eq!(strata(&values(&group.axes[0]), &|x| (x - 0.1) / 0.2), all);
+        assert_eq!(strata(&values(&group.axes[2]), &|x| (x - 1.2) / 0.6), all);
+        let phi = sample::phi;
+        let lo = phi(-1.25);
+        let normal = |x: f64| (phi((x - 2000.0) / 400.0) - lo) / (1.0 - lo);
+        assert_eq!(strata(&values(&group.axes[1]), &normal), all);
+        assert!(values(&group.axes[1]).iter().all(|&x| x >= 1500.0));
+        // The same seed, the same runs; another, others.
+        assert_eq!(parse_ok(text).dims, s.dims);
+        assert_ne!(parse_ok(&text.replace("seed = 3", "seed = 4")).dims, s.dims);
+    }
+
+    #[test]
+    fn bad_samples_name_their_key_and_line() {
+        let base = "scenario = \"c\"\n[sample]\n";
+        for (body, key, line, needle) in [
+            (
+                "seed = 1\na = { uniform = [0, 1] }\n",
+                "sample.runs",
+                Some(2),
+                "missing",
+            ),
+            (
+                "runs = 0\na = { uniform = [0, 1] }\n",
+                "sample.runs",
+                Some(3),
+                "integer ≥ 1",
+            ),
+            (
+                "runs = 4\nseed = -1\na = { uniform = [0, 1] }\n",
+                "sample.seed",
+                Some(4),
+                "integer ≥ 0",
+            ),
+            ("runs = 4\n", "sample", Some(2), "no distribution"),
+            (
+                "runs = 4\na.b = { uniform = [1, 0] }\n",
+                "sample.a.b",
+                Some(4),
+                "a < b",
+            ),
+            (
+                "runs = 4\na = { uniform = [0] }\n",
+                "sample.a",
+                Some(4),
+                "two finite numbers",
+            ),
+            (
+                "runs = 4\na = { normal = [0, 0] }\n",
+                "sample.a",
+                Some(4),
+                "sd > 0",
+            ),
+            (
+                "runs = 4\na = { normal = [0, 1], min = 2, max = 1 }\n",
+                "sample.a",
+                Some(4),
+                "below max",
+            ),
+            (
+                "runs = 4\na = { normal = [0, 1], min = 50 }\n",
+                "sample.a",
+                Some(4),
+                "no probability",
+            ),
+            (
+                "runs = 4\na = { ci95 = [1, -0.1] }\n",
+                "sample.a",
+                Some(4),
+                "half-width > 0",
+            ),
+            (
+                "runs = 4\na = { uniform = [0, 1], min = 0 }\n",
+                "sample.a",
+                Some(4),
+                "unknown key 'min'",
+            ),
+            (
+                "runs = 4\na = { uniform = [0, 1], ci95 = [1, 1] }\n",
+                "sample.a",
+                Some(4),
+                "one distribution",
+            ),
+            (
+                "runs = 4\na = 3\n",
+                "sample.a",
+                Some(4),
+                "must be a distribution",
+            ),
+        ] {
+            fails(&format!("{base}{body}"), key, line, needle);
+        }
     }
 }

@@ -86,6 +86,11 @@ fn path(row: &Row) -> Option<(f64, f64)> {
     ))
 }
 
+/// The largest pft, pfv and ppr along the run's path (`output.path`).
+fn path_max(row: &Row) -> Option<[f64; 3]> {
+    spread(row)?.path_max
+}
+
 /// The run's wave amplitude, if it has one.
 fn wave(row: &Row) -> Option<f64> {
     row.record.as_ref()?.summary.max_wave_amplitude
@@ -97,6 +102,7 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
     let waves = rows.iter().any(|r| wave(r).is_some());
     let spreads = rows.iter().any(|r| spread(r).is_some());
     let paths = rows.iter().any(|r| path(r).is_some());
+    let maxima = rows.iter().any(|r| path_max(r).is_some());
     let header: Vec<String> = ["index", "run"]
         .iter()
         .map(|s| s.to_string())
@@ -114,6 +120,13 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
         .chain(
             paths
                 .then_some(["path_runout_length", "path_runout_angle_deg"])
+                .into_iter()
+                .flatten()
+                .map(str::to_string),
+        )
+        .chain(
+            maxima
+                .then_some(["path_max_pft", "path_max_pfv", "path_max_ppr"])
                 .into_iter()
                 .flatten()
                 .map(str::to_string),
@@ -165,6 +178,12 @@ pub fn to_csv(axes: &[String], rows: &[Row]) -> String {
                 None => fields.extend(std::iter::repeat_n(String::new(), 2)),
             }
         }
+        if maxima {
+            match path_max(row) {
+                Some(m) => fields.extend(m.map(format_float)),
+                None => fields.extend(std::iter::repeat_n(String::new(), 3)),
+            }
+        }
         out.push_str(&fields.join(","));
         out.push('\n');
     }
@@ -184,7 +203,7 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
     }
     let paths = rows.iter().any(|r| path(r).is_some());
     if paths {
-        header.extend(["path_m", "path_deg"].map(str::to_string));
+        header.extend(["path_m", "path_deg", "max_ppr_kPa"].map(str::to_string));
     }
     header.extend(
         [
@@ -227,7 +246,8 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
                     paths
                         .then(|| {
                             let (l, a) = path(row).unwrap_or((f64::NAN, f64::NAN));
-                            [num(l), num(a)]
+                            let ppr = path_max(row).map_or(f64::NAN, |m| m[2] / 1000.0);
+                            [num(l), num(a), num(ppr)]
                         })
                         .into_iter()
                         .flatten(),
@@ -243,7 +263,7 @@ pub fn to_table(axes: &[String], rows: &[Row]) -> String {
             ),
             None => line.extend(std::iter::repeat_n(
                 String::new(),
-                7 + if spreads { 2 } else { 0 } + if paths { 2 } else { 0 },
+                7 + if spreads { 2 } else { 0 } + if paths { 3 } else { 0 },
             )),
         }
         let status: String = row.status().chars().take(70).collect();

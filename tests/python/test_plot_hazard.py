@@ -11,8 +11,10 @@ sweep mapped against an observed footprint. Then:
    among the cells with data), a north arrow, coordinate labels that do not overlap, and
    the release outline drawn dark under a white dashed line (visible on a light shade);
 2. the peak-pressure map is classed in kPa (1-10, 10-25, 25-50, > 50);
-3. the probability map of the sweep draws the observed footprint;
-4. every file written passes scripts/check_plot.py.
+3. the profiles along the path (output.path) draw /path's maxima against s and the
+   runout of /summary;
+4. the probability map of the sweep draws the observed footprint;
+5. every file written passes scripts/check_plot.py.
 Needs h5py, numpy, matplotlib and pillow.
 """
 
@@ -54,6 +56,7 @@ t_end = 12.0
 
 [output]
 every = 4.0
+path = { line = "path.geojson", field = "ppr", threshold = 1000.0, width = 100 }
 """
 
 
@@ -86,10 +89,14 @@ def write_inputs(d):
         "NODATA_value -9999\n" + "\n".join(rows) + "\n")
     (d / "release.geojson").write_text(rectangle(X0 + 20, X0 + 50, Y0 + 55, Y0 + 95))
     (d / "observed.geojson").write_text(rectangle(X0 + 15, X0 + 230, Y0 + 40, Y0 + 110))
+    (d / "path.geojson").write_text(
+        '{"type": "LineString", "coordinates": [[%r, %r], [%r, %r]]}'
+        % (X0 + 10, Y0 + 75, X0 + 290, Y0 + 75))
     (d / "s.toml").write_text(SCENARIO)
     # The sweep's base names its files by absolute paths.
     (d / "base.toml").write_text(SCENARIO.replace('"dem.asc"', f'"{d / "dem.asc"}"')
-                                 .replace('"release.geojson"', f'"{d / "release.geojson"}"'))
+                                 .replace('"release.geojson"', f'"{d / "release.geojson"}"')
+                                 .replace('"path.geojson"', f'"{d / "path.geojson"}"'))
     (d / "sweep.toml").write_text('scenario = "base.toml"\n\n[axes]\nrheology.mu_deg = [18, 24]\n')
 
 
@@ -127,7 +134,19 @@ def main():
     assert labels == ["1–10", "10–25", "25–50", "> 50"], labels
     assert "kPa" in cb.ax.get_ylabel(), cb.ax.get_ylabel()
 
-    # 3. The sweep's probability with the observed footprint.
+    # 3. The profiles along the path: the maxima of /path against s, the runout marked
+    # where the summary puts it.
+    fig, axes = plot_hazard.draw_path(r, "s.h5")
+    assert len(axes) == 4
+    line = axes[3].get_lines()[0]
+    np.testing.assert_array_equal(line.get_xdata(), r.path["s"])
+    np.testing.assert_array_equal(line.get_ydata(), r.path["ppr_max"] * 1e-3)
+    labels = axes[0].get_legend_handles_labels()[1]
+    assert any(t.startswith("runout angle") for t in labels), labels
+    assert any(t.startswith("runout (s = %.4g" % r.summary["path_runout_s"]) for t in labels), \
+        labels
+
+    # 4. The sweep's probability with the observed footprint.
     runs = d / "runs"
     run(gf, "sweep", d / "sweep.toml", "--quiet", "--output", runs)
     run(gf, "maps", runs, "--threshold", "0.05", "--format", "asc", "--observed",
@@ -137,11 +156,11 @@ def main():
     assert drawn, "the observed footprint was not drawn"
     assert "observed footprint" in ax.get_legend_handles_labels()[1]
 
-    # 4. The files, through the command line.
+    # 5. The files, through the command line.
     run(PY, ROOT / "scripts/plot_hazard.py", h5)
     run(PY, ROOT / "scripts/plot_hazard.py", runs)
     run(PY, ROOT / "scripts/check_plot.py", d / "s_hazard.png", d / "s_ppr.png",
-        runs / "maps" / "probability.png")
+        d / "s_path.png", runs / "maps" / "probability.png")
     print("test_plot_hazard: all checks passed")
 
 

@@ -253,6 +253,14 @@ pub(super) fn write_maps(
     for &(name, value) in maps.scalars {
         summary.set_attr_numeric(name, &value)?;
     }
+    if !maps.profile.is_empty() {
+        let g = file.create_group("path")?;
+        for &(name, unit, values) in maps.profile {
+            let ds = g.new_dataset::<f64>().shape([values.len()]).create(name)?;
+            ds.write_raw(values)?;
+            units(&ds, unit)?;
+        }
+    }
     Ok(())
 }
 

@@ -8,8 +8,10 @@
 //!
 //! `line` is a polyline file (shapefile or GeoJSON, top of the path first), `field` the
 //! map whose threshold defines the cells reached (`"pft"`, m, the default, or `"ppr"`,
-//! Pa), `threshold` (required) the value they must exceed. The line's CRS is compared
-//! with the domain's, as a release's is.
+//! Pa), `threshold` (required) the value they must exceed, `width` (m, optional) the
+//! width of the band centred on the line whose cells count (AIMEC's `domainWidth`;
+//! every cell without it). The line's CRS is compared with the domain's, as a
+//! release's is.
 
 use std::path::{Path, PathBuf};
 
@@ -39,7 +41,7 @@ pub(super) fn spec(
     let Some(plane) = &domain.plane else {
         return err(KEY, "a runout path needs a raster (2-D) domain");
     };
-    const ALLOWED: &str = "line, field, threshold";
+    const ALLOWED: &str = "line, field, threshold, width";
     if let Some(other) = t
         .keys()
         .find(|k| !ALLOWED.split(", ").any(|a| a == k.as_str()))
@@ -92,6 +94,17 @@ pub(super) fn spec(
             format!("must be a finite number ≥ 0, got {threshold}"),
         );
     }
+    let width = match t.get("width") {
+        None => None,
+        Some(toml::Value::Integer(i)) if *i > 0 => Some(*i as f64),
+        Some(toml::Value::Float(f)) if f.is_finite() && *f > 0.0 => Some(*f),
+        Some(other) => {
+            return err(
+                &format!("{KEY}.width"),
+                format!("must be a width in m > 0 (AIMEC's default is 600), found {other}"),
+            )
+        }
+    };
     let line = crate::gis::path::read(&base_dir.join(&file))
         .map_err(|e| ScenarioError::at(format!("{KEY}.line"), e.to_string()))?;
     plane
@@ -107,5 +120,6 @@ pub(super) fn spec(
         line,
         field,
         threshold,
+        width,
     }))
 }
