@@ -63,6 +63,12 @@ SHORTENED = {
     r"^granflow run scenarios/(hockey|helix)_channel\.toml --output": (
         "--set time.t_end=10",
         "AvaFrame's 5 m grid to the stop takes one to two minutes of CPU"),
+    r"--example flow_cost -- .*cells=\[3201,3201\]": (
+        "--set 'domain.cells=[161,161]' --set time.t_end=5",
+        "10^7 cells take 2.5 GB and half a minute of set-up"),
+    r"--example flow_cost -- (?!.*cells=\[3201)": (
+        "--set time.t_end=5",
+        "a hockey-stick run to its stop takes 10 s of CPU, the full sweep a minute"),
     r"^python scripts/error_vs_runtime\.py --orders": (
         "--cases ritter,mangeney --limiters mc",
         "the whole order study (four cases, three limiters, a 5120-cell collapse) takes "

@@ -22,7 +22,7 @@ use crate::model::granular::pipeline::{with_law, WithLaw};
 use crate::model::{first_maximum, Diagnostics, Model};
 use crate::numerics::friction_2d::{CellFriction, FrictionStep2d};
 use crate::numerics::hydrostatic_2d::HydrostaticStep2d;
-use crate::numerics::workers::Workers;
+use crate::numerics::workers::{Disjoint, Workers};
 use crate::numerics::Stage;
 use crate::output::{OutputError, OutputSink, SnapshotView};
 use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, Voellmy};
@@ -111,6 +111,9 @@ impl Granular2d {
             return self.cells_diagnostics(raster, state, std::iter::once(cells));
         }
         let tiles = &state.tiles;
+        // A band with no visited tile is passed over with one look at its tiles.
+        let any = tiles.band_columns(band, Tiles::is_visited).next().is_some();
+        let rows = if any { rows } else { rows.start..rows.start };
         let ranges = rows.flat_map(|j| {
             tiles
                 .band_columns(band, Tiles::is_visited)
@@ -331,17 +334,25 @@ impl Model for Granular2d {
             backup.tiles.clone_from(&state.tiles);
             return;
         }
-        let tiles = &state.tiles;
-        let nx = tiles.nx();
-        for &t in tiles.stepped() {
-            let (rows, cols) = tiles.cells(t as usize);
+        let (tiles, nx) = (&state.tiles, state.tiles.nx());
+        let (h, hu, hv) = (
+            Disjoint::new(&mut backup.h[..]),
+            Disjoint::new(&mut backup.hu[..]),
+            Disjoint::new(&mut backup.hv[..]),
+        );
+        self.workers.tiles(tiles.stepped(), |_, t| {
+            let (rows, cols) = tiles.cells(t);
             for j in rows {
-                let cells = j * nx + cols.start..j * nx + cols.end;
-                backup.h[cells.clone()].copy_from_slice(&state.h[cells.clone()]);
-                backup.hu[cells.clone()].copy_from_slice(&state.hu[cells.clone()]);
-                backup.hv[cells.clone()].copy_from_slice(&state.hv[cells]);
+                for k in j * nx + cols.start..j * nx + cols.end {
+                    // SAFETY: cell k is in tile t, this task's alone.
+                    unsafe {
+                        h.set(k, state.h[k]);
+                        hu.set(k, state.hu[k]);
+                        hv.set(k, state.hv[k]);
+                    }
+                }
             }
-        }
+        });
         backup.tiles.clone_from(tiles);
     }
 

@@ -44,13 +44,12 @@ use std::borrow::Cow;
 
 use crate::gis::path::{PathField, PathSpec};
 use crate::gis::profile::{self, Profile};
-use crate::grid::raster::{Raster2d, BAND_ROWS};
+use crate::grid::raster::Raster2d;
 use crate::grid::Grid;
 use crate::model::tracker::Tracker;
-use crate::numerics::workers::Workers;
+use crate::numerics::workers::{Disjoint, Workers};
 use crate::output::{CellField, OutputError, OutputSink, RunMaps};
 use crate::state::layered_2d::State2d;
-use crate::state::tiles::Tiles;
 
 /// The maps of one raster run (allocated once, updated in place).
 #[derive(Debug, Clone)]
@@ -67,10 +66,12 @@ pub struct RasterMaps {
     h_bed: Vec<f64>,
     reached: usize,
     area: Vec<f64>,
-    /// The run's pool: the maps are updated band by band on its threads.
+    /// The run's pool: the maps are updated tile by tile (band by band before the first
+    /// step) on its threads.
     workers: Workers,
-    /// Cells first reached in each band during one update (summed in band order).
-    band_reached: Vec<usize>,
+    /// Cells first reached in each tile (or band) during one update (an integer count:
+    /// the sum does not depend on the order).
+    part_reached: Vec<usize>,
     /// `output.path`: the runout along a thalweg line (`gis::path`).
     path: Option<PathSpec>,
 }
@@ -90,7 +91,7 @@ impl RasterMaps {
             reached: 0,
             area: Vec::new(),
             workers: Workers::serial(),
-            band_reached: Vec::new(),
+            part_reached: Vec::new(),
             path: None,
         }
     }
@@ -272,81 +273,99 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
             self.h0 = self.above(&state.h).into_owned();
         }
         let thr = self.threshold;
-        let cells = state.h.len();
-        // The step's bands: a thread steals whole bands, the count is exact anyway.
-        let chunk = BAND_ROWS * grid.nx();
         let RasterMaps {
             h_max,
             speed_max,
             arrival,
             h_bed,
             workers,
-            band_reached,
+            part_reached,
             ..
         } = self;
-        band_reached.clear();
-        band_reached.resize(cells.div_ceil(chunk), 0);
         let (h, hu, hv, h_bed) = (&state.h, &state.hu, &state.hv, &h_bed[..]);
         let (metric, tiles, nx) = (grid.metric(), &state.tiles, grid.nx());
-        workers.bands3(
-            chunk,
-            (&mut h_max[..], &mut speed_max[..], &mut arrival[..]),
-            &mut band_reached[..],
-            |band, (h_max, speed_max, arrival), reached| {
-                let base = band * chunk;
-                // Only the cells of the tiles the last step changed (all before the
-                // first step, `state::tiles`): the maps of the others stand.
-                let rows = grid.band_rows(band);
-                let all = (!tiles.is_known()).then(|| rows.start * nx..rows.end * nx);
-                let stepped = tiles.is_known().then(|| {
-                    rows.flat_map(|j| {
-                        tiles
-                            .band_columns(band, Tiles::is_stepped)
-                            .map(move |c| j * nx + c.start..j * nx + c.end)
-                    })
-                });
-                let cells = all.into_iter().chain(stepped.into_iter().flatten());
-                for k in cells.flatten() {
-                    let i = k - base;
-                    let mut above = if h_bed.is_empty() {
-                        h[k]
-                    } else {
-                        h[k] - h_bed[k]
-                    };
-                    if let Some(m) = metric {
-                        above *= m.cos[k];
-                    }
-                    // Nothing changes where there is no flow (h_max ≥ 0): such a
-                    // cell costs the read of h alone, not of the maps.
-                    if above <= 0.0 {
-                        continue;
-                    }
-                    let before = h_max[i];
-                    if above > before {
-                        h_max[i] = above;
-                    }
-                    if above > thr {
-                        // √(hu² + hv²) rather than `hypot`: a libm call per wet cell
-                        // was most of the tracker's cost; momenta are far from overflow.
-                        let speed = match metric {
-                            None => (hu[k] * hu[k] + hv[k] * hv[k]).sqrt() / h[k],
-                            Some(m) => m.speed(k, hu[k] / h[k], hv[k] / h[k]),
-                        };
-                        if speed > speed_max[i] {
-                            speed_max[i] = speed;
-                        }
-                        // Reached before ⇔ h_max > h_f before (h_max, never NaN, is the largest
-                        // h above the bed seen, the arrival its first time over h_f):
-                        // the arrival map is read only on the first arrival.
-                        if before <= thr {
-                            arrival[i] = t;
-                            *reached += 1;
-                        }
-                    }
-                }
-            },
+        let (h_max, speed_max, arrival) = (
+            Disjoint::new(&mut h_max[..]),
+            Disjoint::new(&mut speed_max[..]),
+            Disjoint::new(&mut arrival[..]),
         );
-        self.reached += self.band_reached.iter().sum::<usize>();
+        // The maps of cell k; whether it arrived (first over h_f) now.
+        // SAFETY (every access below): a task visits the cells of its own tile or band.
+        let visit = |k: usize| -> bool {
+            let mut above = if h_bed.is_empty() {
+                h[k]
+            } else {
+                h[k] - h_bed[k]
+            };
+            if let Some(m) = metric {
+                above *= m.cos[k];
+            }
+            // Nothing changes where there is no flow (h_max ≥ 0): such a cell costs the
+            // read of h alone, not of the maps.
+            if above <= 0.0 {
+                return false;
+            }
+            let before = unsafe { h_max.get(k) };
+            if above > before {
+                unsafe { h_max.set(k, above) };
+            }
+            if above > thr {
+                // √(hu² + hv²) rather than `hypot`: a libm call per wet cell was most of
+                // the tracker's cost; momenta are far from overflow.
+                let speed = match metric {
+                    None => (hu[k] * hu[k] + hv[k] * hv[k]).sqrt() / h[k],
+                    Some(m) => m.speed(k, hu[k] / h[k], hv[k] / h[k]),
+                };
+                if speed > unsafe { speed_max.get(k) } {
+                    unsafe { speed_max.set(k, speed) };
+                }
+                // Reached before ⇔ h_max > h_f before (h_max, never NaN, is the largest h
+                // above the bed seen, the arrival its first time over h_f): the arrival
+                // map is read only on the first arrival.
+                if before <= thr {
+                    unsafe { arrival.set(k, t) };
+                    return true;
+                }
+            }
+            false
+        };
+        if tiles.is_known() {
+            // Only the cells of the tiles the last step changed, one task per tile (the
+            // threads share the flow's tiles): the maps of the others stand.
+            part_reached.resize(tiles.count(), 0);
+            let reached = Disjoint::new(&mut part_reached[..]);
+            workers.tiles(tiles.stepped(), |_, t| {
+                let (rows, cols) = tiles.cells(t);
+                let mut n = 0;
+                for j in rows {
+                    n += (j * nx + cols.start..j * nx + cols.end)
+                        .filter(|&k| visit(k))
+                        .count();
+                }
+                // SAFETY: entry t is this task's alone.
+                unsafe { reached.set(t, n) };
+            });
+            self.reached += tiles
+                .stepped()
+                .iter()
+                .map(|&t| self.part_reached[t as usize])
+                .sum::<usize>();
+        } else {
+            // Before the first step: every cell, band by band.
+            let bands = grid.bands();
+            part_reached.clear();
+            part_reached.resize(bands, 0);
+            let reached = Disjoint::new(&mut part_reached[..]);
+            workers.map_bands(bands, |band| {
+                let rows = grid.band_rows(band);
+                let n = (rows.start * nx..rows.end * nx)
+                    .filter(|&k| visit(k))
+                    .count();
+                // SAFETY: entry `band` is this task's alone.
+                unsafe { reached.set(band, n) };
+            });
+            self.reached += self.part_reached.iter().sum::<usize>();
+        }
         self.area.push(self.reached as f64 * grid.cell_area());
     }
 

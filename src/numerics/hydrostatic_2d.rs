@@ -1340,25 +1340,26 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
             });
         }
         // The new state of the stepped tiles, with round-off below zero (kept for the
-        // test above) clipped; the other tiles are unchanged.
+        // test above) clipped, one task per tile; the other tiles are unchanged.
         let State2d { h, hu, hv, tiles } = state;
-        for &t in tiles.stepped() {
-            let (rows, cols) = tiles.cells(t as usize);
-            let clip = self.tile_worst[t as usize].0 < 0.0;
+        let (h, hu, hv) = (Disjoint::new(h), Disjoint::new(hu), Disjoint::new(hv));
+        let (h_new, hu_new, hv_new) = (&self.h_new, &self.hu_new, &self.hv_new);
+        let tile_worst = &self.tile_worst;
+        self.workers.tiles(tiles.stepped(), |_, t| {
+            let (rows, cols) = tiles.cells(t);
+            let clip = tile_worst[t].0 < 0.0;
             for j in rows {
-                let cells = j * nx + cols.start..j * nx + cols.end;
-                if clip {
-                    for v in &mut self.h_new[cells.clone()] {
-                        if *v < 0.0 {
-                            *v = 0.0;
-                        }
+                for k in j * nx + cols.start..j * nx + cols.end {
+                    let hn = h_new[k];
+                    // SAFETY: cell k is in tile t, this task's alone.
+                    unsafe {
+                        h.set(k, if clip && hn < 0.0 { 0.0 } else { hn });
+                        hu.set(k, hu_new[k]);
+                        hv.set(k, hv_new[k]);
                     }
                 }
-                h[cells.clone()].copy_from_slice(&self.h_new[cells.clone()]);
-                hu[cells.clone()].copy_from_slice(&self.hu_new[cells.clone()]);
-                hv[cells.clone()].copy_from_slice(&self.hv_new[cells]);
             }
-        }
+        });
         let wet: u64 = tiles
             .stepped()
             .iter()
