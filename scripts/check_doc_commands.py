@@ -63,10 +63,10 @@ SHORTENED = {
     r"^granflow run scenarios/(hockey|helix)_channel\.toml --output": (
         "--set time.t_end=10",
         "AvaFrame's 5 m grid to the stop takes one to two minutes of CPU"),
-    r"--example flow_cost -- .*cells=\[3201,3201\]": (
+    r"--example flow_cost -- .*cells=\[3162,3162\]": (
         "--set 'domain.cells=[161,161]' --set time.t_end=5",
         "10^7 cells take 2.5 GB and half a minute of set-up"),
-    r"--example flow_cost -- (?!.*cells=\[3201)": (
+    r"--example flow_cost -- (?!.*cells=\[3162)": (
         "--set time.t_end=5",
         "a hockey-stick run to its stop takes 10 s of CPU, the full sweep a minute"),
     r"^python scripts/error_vs_runtime\.py --orders": (
