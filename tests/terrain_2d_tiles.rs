@@ -63,6 +63,12 @@ fn run(file: &str, sets: &[&str], threads: usize, every: bool) -> (MemorySink, S
     (sink, sim.state)
 }
 
+/// Whether two states hold the same bits.
+fn same_state(a: &State2d, b: &State2d) -> bool {
+    let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits());
+    same(&a.h, &b.h) && same(&a.hu, &b.hu) && same(&a.hv, &b.hv)
+}
+
 /// Every number of two runs, to the bit (the shortest round-trip form of `Debug`
 /// differs between any two different f64, ±0 included).
 fn same_bits(a: &(MemorySink, State2d), b: &(MemorySink, State2d)) -> bool {
@@ -71,22 +77,7 @@ fn same_bits(a: &(MemorySink, State2d), b: &(MemorySink, State2d)) -> bool {
         let at = |s: &str| s[k.saturating_sub(200)..(k + 100).min(s.len())].to_string();
         eprintln!("first difference:\n{}\n---\n{}", at(&da), at(&db));
     }
-    da == db
-        && a.1
-            .h
-            .iter()
-            .zip(&b.1.h)
-            .all(|(x, y)| x.to_bits() == y.to_bits())
-        && a.1
-            .hu
-            .iter()
-            .zip(&b.1.hu)
-            .all(|(x, y)| x.to_bits() == y.to_bits())
-        && a.1
-            .hv
-            .iter()
-            .zip(&b.1.hv)
-            .all(|(x, y)| x.to_bits() == y.to_bits())
+    da == db && same_state(&a.1, &b.1)
 }
 
 /// The bundled raster scenarios (Cartesian collapse; a DEM with nodata walls in the
@@ -193,21 +184,7 @@ fn a_flow_across_tile_edges_gives_the_full_sweeps_bits_at_every_step() {
             // changed are copied) equals the state.
             granflow::model::Model::save_state(&model, &mut backup, &tiled);
             assert!(
-                backup
-                    .h
-                    .iter()
-                    .zip(&tiled.h)
-                    .all(|(a, b)| a.to_bits() == b.to_bits())
-                    && backup
-                        .hu
-                        .iter()
-                        .zip(&tiled.hu)
-                        .all(|(a, b)| a.to_bits() == b.to_bits())
-                    && backup
-                        .hv
-                        .iter()
-                        .zip(&tiled.hv)
-                        .all(|(a, b)| a.to_bits() == b.to_bits()),
+                same_state(&backup, &tiled),
                 "the copy of the state before step {step} differs from it"
             );
             let d = granflow::model::Model::diagnose(&model, &raster, &full);
@@ -215,20 +192,7 @@ fn a_flow_across_tile_edges_gives_the_full_sweeps_bits_at_every_step() {
             p_full.advance(&raster, dt, &mut full).unwrap();
             p_tiled.advance(&raster, dt, &mut tiled).unwrap();
             assert!(
-                full.h
-                    .iter()
-                    .zip(&tiled.h)
-                    .all(|(a, b)| a.to_bits() == b.to_bits())
-                    && full
-                        .hu
-                        .iter()
-                        .zip(&tiled.hu)
-                        .all(|(a, b)| a.to_bits() == b.to_bits())
-                    && full
-                        .hv
-                        .iter()
-                        .zip(&tiled.hv)
-                        .all(|(a, b)| a.to_bits() == b.to_bits()),
+                same_state(&full, &tiled),
                 "step {step} on {threads} threads differs from the full sweep"
             );
             let d_tiled = granflow::model::Model::diagnose(&model, &raster, &tiled);

@@ -717,6 +717,23 @@ mod tests {
         }
     }
 
+    /// The run information of a raster run on `nx` × `ny` cells of 1 m, without CRS.
+    fn raster_info(nx: usize, ny: usize) -> RunInfo {
+        let mut raster = info(1);
+        raster.raster = Some(crate::output::RasterInfo {
+            nx,
+            ny,
+            dx: 1.0,
+            dy: 1.0,
+            crs_epsg: None,
+            crs_wkt: None,
+            release: None,
+            wall_cells: 0,
+            geotransform: None,
+        });
+        raster
+    }
+
     fn begin(path: &Path) -> Hdf5Sink {
         let mut sink = Hdf5Sink::create(path).unwrap();
         let x = [0.5, 1.5, 2.5];
@@ -865,18 +882,7 @@ mod tests {
         let path = dir.path().join("raster.h5");
         let (nx, ny) = (500, 300);
         let mut sink = Hdf5Sink::create(&path).unwrap();
-        let mut raster = info(1);
-        raster.raster = Some(crate::output::RasterInfo {
-            nx,
-            ny,
-            dx: 1.0,
-            dy: 1.0,
-            crs_epsg: None,
-            crs_wkt: None,
-            release: None,
-            wall_cells: 0,
-            geotransform: None,
-        });
+        let raster = raster_info(nx, ny);
         let x: Vec<f64> = (0..nx * ny).map(|k| (k % nx) as f64 + 0.5).collect();
         let y: Vec<f64> = (0..nx * ny).map(|k| (k / nx) as f64 + 0.5).collect();
         let zeros = vec![0.0; nx * ny];
@@ -955,18 +961,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("maps.h5");
         let mut sink = Hdf5Sink::create(&path).unwrap();
-        let mut raster = info(1);
-        raster.raster = Some(crate::output::RasterInfo {
-            nx: 3,
-            ny: 2,
-            dx: 1.0,
-            dy: 1.0,
-            crs_epsg: None,
-            crs_wkt: None,
-            release: None,
-            wall_cells: 0,
-            geotransform: None,
-        });
+        let raster = raster_info(3, 2);
         let x = [0.5, 1.5, 2.5, 0.5, 1.5, 2.5];
         let y = [0.5, 0.5, 0.5, 1.5, 1.5, 1.5];
         sink.begin(
