@@ -86,7 +86,7 @@ impl Granular2d {
     }
 
     /// The model with films thinner than `film` (m, normal to the bed) left out of the
-    /// kinetic energy ([`film_counts`]).
+    /// kinetic energy (and so from the settle stop; `time.film_thickness`).
     pub fn with_film_thickness(mut self, film: f64) -> Granular2d {
         self.film = film;
         self
