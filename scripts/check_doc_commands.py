@@ -151,6 +151,8 @@ def is_inline_command(span):
     """An inline span is a command, not a mention such as `granflow run` or
     `granflow run --set`, when it has an argument beyond the subcommand."""
     toks = span.split()
+    if not toks:
+        return False
     return (starts_with_command(span) and len(toks) >= 3 and not toks[-1].startswith("--")
             or toks[0] in ("python", "python3") and len(toks) >= 2)
 
