@@ -112,8 +112,9 @@ impl Granular2d {
         }
         let tiles = &state.tiles;
         // A band with no visited tile is passed over with one look at its tiles.
-        let any = tiles.band_columns(band, Tiles::is_visited).next().is_some();
-        let rows = if any { rows } else { rows.start..rows.start };
+        if tiles.band_columns(band, Tiles::is_visited).next().is_none() {
+            return self.cells_diagnostics(raster, state, std::iter::empty());
+        }
         let ranges = rows.flat_map(|j| {
             tiles
                 .band_columns(band, Tiles::is_visited)
@@ -334,22 +335,19 @@ impl Model for Granular2d {
             backup.tiles.clone_from(&state.tiles);
             return;
         }
-        let (tiles, nx) = (&state.tiles, state.tiles.nx());
+        let tiles = &state.tiles;
         let (h, hu, hv) = (
             Disjoint::new(&mut backup.h[..]),
             Disjoint::new(&mut backup.hu[..]),
             Disjoint::new(&mut backup.hv[..]),
         );
         self.workers.tiles(tiles.stepped(), |_, t| {
-            let (rows, cols) = tiles.cells(t);
-            for j in rows {
-                for k in j * nx + cols.start..j * nx + cols.end {
-                    // SAFETY: cell k is in tile t, this task's alone.
-                    unsafe {
-                        h.set(k, state.h[k]);
-                        hu.set(k, state.hu[k]);
-                        hv.set(k, state.hv[k]);
-                    }
+            for k in tiles.row_segments(t).flatten() {
+                // SAFETY: cell k is in tile t, this task's alone.
+                unsafe {
+                    h.set(k, state.h[k]);
+                    hu.set(k, state.hu[k]);
+                    hv.set(k, state.hv[k]);
                 }
             }
         });
@@ -368,7 +366,7 @@ impl Model for Granular2d {
 
     /// The cells of the stepped tiles, summed over the accepted steps.
     fn cell_updates(&self, state: &State2d) -> Option<u64> {
-        Some(state.tiles.updates().0)
+        Some(state.tiles.updates())
     }
 
     fn bed_layer(&self) -> &[f64] {

@@ -69,8 +69,8 @@ pub struct RasterMaps {
     /// The run's pool: the maps are updated tile by tile (band by band before the first
     /// step) on its threads.
     workers: Workers,
-    /// Cells first reached in each tile (or band) during one update (an integer count:
-    /// the sum does not depend on the order).
+    /// Cells first reached in each stepped tile during one update (an integer count: the
+    /// sum does not depend on the order).
     part_reached: Vec<usize>,
     /// `output.path`: the runout along a thalweg line (`gis::path`).
     path: Option<PathSpec>,
@@ -335,13 +335,11 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
             part_reached.resize(tiles.count(), 0);
             let reached = Disjoint::new(&mut part_reached[..]);
             workers.tiles(tiles.stepped(), |_, t| {
-                let (rows, cols) = tiles.cells(t);
-                let mut n = 0;
-                for j in rows {
-                    n += (j * nx + cols.start..j * nx + cols.end)
-                        .filter(|&k| visit(k))
-                        .count();
-                }
+                let n = tiles
+                    .row_segments(t)
+                    .flatten()
+                    .filter(|&k| visit(k))
+                    .count();
                 // SAFETY: entry t is this task's alone.
                 unsafe { reached.set(t, n) };
             });
@@ -351,20 +349,14 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
                 .map(|&t| self.part_reached[t as usize])
                 .sum::<usize>();
         } else {
-            // Before the first step: every cell, band by band.
-            let bands = grid.bands();
-            part_reached.clear();
-            part_reached.resize(bands, 0);
-            let reached = Disjoint::new(&mut part_reached[..]);
-            workers.map_bands(bands, |band| {
+            // Before the first step (once): every cell, band by band.
+            let reached = workers.map_bands(grid.bands(), |band| {
                 let rows = grid.band_rows(band);
-                let n = (rows.start * nx..rows.end * nx)
+                (rows.start * nx..rows.end * nx)
                     .filter(|&k| visit(k))
-                    .count();
-                // SAFETY: entry `band` is this task's alone.
-                unsafe { reached.set(band, n) };
+                    .count()
             });
-            self.reached += self.part_reached.iter().sum::<usize>();
+            self.reached += reached.iter().sum::<usize>();
         }
         self.area.push(self.reached as f64 * grid.cell_area());
     }

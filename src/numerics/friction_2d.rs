@@ -141,25 +141,22 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
         let (hu, hv) = (Disjoint::new(hu), Disjoint::new(hv));
         let metric = raster.metric();
         self.workers.tiles(tiles.stepped(), |_, t| {
-            let (rows, cols) = tiles.cells(t);
-            for j in rows {
-                for k in j * nx + cols.start..j * nx + cols.end {
-                    // SAFETY: cell k is in tile t, this task's alone.
-                    let q = unsafe { (hu.get(k), hv.get(k)) };
-                    let (qx, qy) = match (metric, friction) {
-                        (Some(m), _) => bed_normal_friction(&friction.at(k), m, k, q, h[k], dt),
-                        (None, CellFriction::Uniform(law)) => {
-                            vector_friction(law, q.0, q.1, h[k], dt, g_n)
-                        }
-                        (None, CellFriction::PerCell(laws)) => {
-                            vector_friction(&laws[k], q.0, q.1, h[k], dt, g_n)
-                        }
-                    };
-                    // SAFETY: as above.
-                    unsafe {
-                        hu.set(k, qx);
-                        hv.set(k, qy);
+            for k in tiles.row_segments(t).flatten() {
+                // SAFETY: cell k is in tile t, this task's alone.
+                let q = unsafe { (hu.get(k), hv.get(k)) };
+                let (qx, qy) = match (metric, friction) {
+                    (Some(m), _) => bed_normal_friction(&friction.at(k), m, k, q, h[k], dt),
+                    (None, CellFriction::Uniform(law)) => {
+                        vector_friction(law, q.0, q.1, h[k], dt, g_n)
                     }
+                    (None, CellFriction::PerCell(laws)) => {
+                        vector_friction(&laws[k], q.0, q.1, h[k], dt, g_n)
+                    }
+                };
+                // SAFETY: as above.
+                unsafe {
+                    hu.set(k, qx);
+                    hv.set(k, qy);
                 }
             }
         });

@@ -237,8 +237,6 @@ pub struct HydrostaticStep2d<L: BasalFriction> {
     /// whether it has a draining cell (false outside a step).
     tile_worst: Vec<(f64, usize)>,
     tile_drains: Vec<bool>,
-    /// Per tile: its wet cells (h > H_DRY) at the start of the step.
-    tile_wet: Vec<u32>,
     /// One scratch per thread (each locked by its own thread only).
     scratch: Vec<Mutex<TileScratch>>,
 }
@@ -272,7 +270,6 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             drain: vec![1.0; cells],
             tile_worst: vec![(f64::INFINITY, 0); tiles],
             tile_drains: vec![false; tiles],
-            tile_wet: vec![0; tiles],
             scratch,
         }
     }
@@ -1133,7 +1130,6 @@ struct Outputs<'a> {
     drain: Disjoint<'a, f64>,
     worst: Disjoint<'a, (f64, usize)>,
     drains: Disjoint<'a, bool>,
-    wet: Disjoint<'a, u32>,
 }
 
 impl<L: BasalFriction> HydrostaticStep2d<L> {
@@ -1153,7 +1149,6 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             drain: Disjoint::new(&mut self.drain),
             worst: Disjoint::new(&mut self.tile_worst),
             drains: Disjoint::new(&mut self.tile_drains),
-            wet: Disjoint::new(&mut self.tile_wet),
         };
         (out, &self.friction, &self.scratch, &self.workers)
     }
@@ -1186,10 +1181,9 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         workers.tiles(tiles.stepped(), |thread, t| {
             let mut s = scratch[thread].lock().expect("a thread's own scratch");
             let mut worst = (f64::INFINITY, 0usize);
-            let (mut drains, mut wet) = (false, 0u32);
+            let mut drains = false;
             ctx.sweep::<WALLS, _>(tiles.cells(t), &mut s, |i, j, w, e, so, no| {
                 let cell = j * nx + i;
-                wet += u32::from(ctx.h[cell] > H_DRY);
                 let (hn, qu, qv) = ctx.update(cell, r, [w, e, so, no]);
                 if hn < worst.0 {
                     worst = (hn, cell);
@@ -1210,7 +1204,6 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             unsafe {
                 out.worst.set(t, worst);
                 out.drains.set(t, drains);
-                out.wet.set(t, wet);
             }
         });
         self.worst(tiles)
@@ -1305,14 +1298,13 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
 
     /// Resets the draining factors and flags of the tiles that drained to 1 and false
     /// (their values outside a step).
-    fn reset_drains(&mut self, tiles: &Tiles, nx: usize) {
+    fn reset_drains(&mut self, tiles: &Tiles) {
         for &t in tiles.stepped() {
             let t = t as usize;
             if self.tile_drains[t] {
                 self.tile_drains[t] = false;
-                let (rows, cols) = tiles.cells(t);
-                for j in rows {
-                    self.drain[j * nx + cols.start..j * nx + cols.end].fill(1.0);
+                for cells in tiles.row_segments(t) {
+                    self.drain[cells].fill(1.0);
                 }
             }
         }
@@ -1331,7 +1323,7 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
         if worst.0 < 0.0 {
             worst = self.limited_pass(raster, dt, state);
         }
-        self.reset_drains(&state.tiles, nx);
+        self.reset_drains(&state.tiles);
         let tolerance = -1e-14 * (1.0 + state.h[worst.1].abs());
         if worst.0 < tolerance {
             return Err(StageError::NegativeThickness {
@@ -1346,26 +1338,18 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
         let (h_new, hu_new, hv_new) = (&self.h_new, &self.hu_new, &self.hv_new);
         let tile_worst = &self.tile_worst;
         self.workers.tiles(tiles.stepped(), |_, t| {
-            let (rows, cols) = tiles.cells(t);
             let clip = tile_worst[t].0 < 0.0;
-            for j in rows {
-                for k in j * nx + cols.start..j * nx + cols.end {
-                    let hn = h_new[k];
-                    // SAFETY: cell k is in tile t, this task's alone.
-                    unsafe {
-                        h.set(k, if clip && hn < 0.0 { 0.0 } else { hn });
-                        hu.set(k, hu_new[k]);
-                        hv.set(k, hv_new[k]);
-                    }
+            for k in tiles.row_segments(t).flatten() {
+                let hn = h_new[k];
+                // SAFETY: cell k is in tile t, this task's alone.
+                unsafe {
+                    h.set(k, if clip && hn < 0.0 { 0.0 } else { hn });
+                    hu.set(k, hu_new[k]);
+                    hv.set(k, hv_new[k]);
                 }
             }
         });
-        let wet: u64 = tiles
-            .stepped()
-            .iter()
-            .map(|&t| u64::from(self.tile_wet[t as usize]))
-            .sum();
-        tiles.count_updates(tiles.stepped_cells() as u64, wet);
+        tiles.count_updates();
         tiles.mark_pending();
         Ok(())
     }

@@ -2,14 +2,15 @@
 //! the stages of one pipeline share and own.
 //!
 //! With one thread there is no pool and the work runs in order on the caller's thread
-//! (no rayon at all). With more, each tile (the hyperbolic step, [`Workers::tiles`]) or
-//! band of rows (the friction step, the diagnostics, the maps) is one task
+//! (no rayon at all). With more, each stepped tile (the stages, the maps, the copy of
+//! the state: [`Workers::tiles`]) or band of rows (the diagnostics, whose sums go band
+//! by band: [`Workers::map_bands`]) is one task
 //! (`with_max_len(1)`: a thread that runs out of work steals single tasks, so the dry
 //! and wet parts of a run balance). The partition does not depend on the number of
 //! threads, each task writes only its own cells, and every reduction is combined in a
 //! fixed order (band order for sums) or by an order-free rule (the first minimum in
 //! cell order): the results are the same bits for 1, 2 or 4 threads. Scratch is
-//! allocated once by the stage (per band or per thread), so no task allocates.
+//! allocated once by the stage (per thread), so no task allocates.
 
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -71,99 +72,6 @@ impl Workers {
         }
     }
 
-    /// Calls `f(k, a_k, b_k)` for every band k (chunks of `chunk` values).
-    pub fn bands2<F>(&self, chunk: usize, a: &mut [f64], b: &mut [f64], f: F)
-    where
-        F: Fn(usize, &mut [f64], &mut [f64]) + Sync + Send,
-    {
-        match &self.pool {
-            None => {
-                for (k, (a, b)) in a.chunks_mut(chunk).zip(b.chunks_mut(chunk)).enumerate() {
-                    f(k, a, b);
-                }
-            }
-            Some(pool) => pool.install(|| {
-                a.par_chunks_mut(chunk)
-                    .zip(b.par_chunks_mut(chunk))
-                    .with_max_len(1)
-                    .enumerate()
-                    .for_each(|(k, (a, b))| f(k, a, b));
-            }),
-        }
-    }
-
-    /// Calls `f(k, (a_k, b_k, c_k), s_k)` for every band k (chunks of `chunk` values,
-    /// the band's scratch `s_k`).
-    pub fn bands3<S, F>(
-        &self,
-        chunk: usize,
-        (a, b, c): (&mut [f64], &mut [f64], &mut [f64]),
-        scratch: &mut [S],
-        f: F,
-    ) where
-        S: Send,
-        F: Fn(usize, (&mut [f64], &mut [f64], &mut [f64]), &mut S) + Sync + Send,
-    {
-        match &self.pool {
-            None => {
-                let chunks = a
-                    .chunks_mut(chunk)
-                    .zip(b.chunks_mut(chunk))
-                    .zip(c.chunks_mut(chunk));
-                for (k, (((a, b), c), s)) in chunks.zip(scratch.iter_mut()).enumerate() {
-                    f(k, (a, b, c), s);
-                }
-            }
-            Some(pool) => pool.install(|| {
-                a.par_chunks_mut(chunk)
-                    .zip(b.par_chunks_mut(chunk))
-                    .zip(c.par_chunks_mut(chunk))
-                    .zip(scratch.par_iter_mut())
-                    .with_max_len(1)
-                    .enumerate()
-                    .for_each(|(k, (((a, b), c), s))| f(k, (a, b, c), s));
-            }),
-        }
-    }
-
-    /// Calls `f(k, (a_k, b_k, c_k, d_k), s_k)` for every band k (chunks of `chunk`
-    /// values, the band's scratch `s_k`).
-    pub fn bands4<S, F>(
-        &self,
-        chunk: usize,
-        (a, b, c, d): (&mut [f64], &mut [f64], &mut [f64], &mut [f64]),
-        scratch: &mut [S],
-        f: F,
-    ) where
-        S: Send,
-        F: Fn(usize, (&mut [f64], &mut [f64], &mut [f64], &mut [f64]), &mut S) + Sync + Send,
-    {
-        match &self.pool {
-            None => {
-                let chunks = a
-                    .chunks_mut(chunk)
-                    .zip(b.chunks_mut(chunk))
-                    .zip(c.chunks_mut(chunk))
-                    .zip(d.chunks_mut(chunk));
-                for (k, ((((a, b), c), d), s)) in chunks.zip(scratch.iter_mut()).enumerate() {
-                    f(k, (a, b, c, d), s);
-                }
-            }
-            Some(pool) => pool.install(|| {
-                a.par_chunks_mut(chunk)
-                    .zip(b.par_chunks_mut(chunk))
-                    .zip(c.par_chunks_mut(chunk))
-                    .zip(d.par_chunks_mut(chunk))
-                    .zip(scratch.par_iter_mut())
-                    .with_max_len(1)
-                    .enumerate()
-                    .for_each(|(k, ((((a, b), c), d), s))| f(k, (a, b, c, d), s));
-            }),
-        }
-    }
-}
-
-impl Workers {
     /// The number of threads (1 when serial): the run's tasks index per-thread scratch
     /// with [`Self::tiles`]'s first argument, below it.
     pub fn threads(&self) -> usize {

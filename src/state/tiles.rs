@@ -73,10 +73,8 @@ pub struct Tiles {
     pending: bool,
     /// Every tile is stepped (the full sweep, for comparison).
     every: bool,
-    /// Cell updates of the accepted steps: in stepped tiles, and of wet cells (h > H_DRY
-    /// at the start of the step).
+    /// Cell updates of the accepted steps (the cells of their stepped tiles).
     updates: u64,
-    wet_updates: u64,
 }
 
 // `Clone` by hand: the run loop copies the state into its backup every step, and the
@@ -94,7 +92,7 @@ impl Clone for Tiles {
         self.stepped_flag.clone_from(&source.stepped_flag);
         self.stepped.clone_from(&source.stepped);
         (self.pending, self.every) = (source.pending, source.every);
-        (self.updates, self.wet_updates) = (source.updates, source.wet_updates);
+        self.updates = source.updates;
     }
 }
 
@@ -185,21 +183,27 @@ impl Tiles {
         (rows, cols)
     }
 
+    /// The cells of tile `t`, row by row: one range of row-major cell indices per row.
+    #[inline]
+    pub fn row_segments(&self, t: usize) -> impl Iterator<Item = Range<usize>> {
+        let (rows, cols) = self.cells(t);
+        let nx = self.nx;
+        rows.map(move |j| j * nx + cols.start..j * nx + cols.end)
+    }
+
     /// The fraction of the raster's cells in stepped tiles.
     pub fn stepped_fraction(&self) -> f64 {
         self.stepped_cells() as f64 / (self.nx * self.ny).max(1) as f64
     }
 
-    /// Counts a step's cell updates: `stepped` cells in stepped tiles, `wet` of them wet.
-    pub fn count_updates(&mut self, stepped: u64, wet: u64) {
-        self.updates += stepped;
-        self.wet_updates += wet;
+    /// Counts a step's cell updates: the cells of its stepped tiles.
+    pub fn count_updates(&mut self) {
+        self.updates += self.stepped_cells() as u64;
     }
 
-    /// The cell updates counted so far ([`Self::count_updates`]): (in stepped tiles,
-    /// of wet cells).
-    pub fn updates(&self) -> (u64, u64) {
-        (self.updates, self.wet_updates)
+    /// The cell updates counted so far ([`Self::count_updates`]).
+    pub fn updates(&self) -> u64 {
+        self.updates
     }
 
     /// The number of cells in the stepped tiles.
