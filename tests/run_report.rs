@@ -122,11 +122,7 @@ fn the_sweep_summary_has_the_outflowed_fraction() {
         .arg(&out_dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_success(&out);
     let csv = fs::read_to_string(out_dir.join("summary.csv")).unwrap();
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -258,12 +254,7 @@ fn a_raster_run_reports_its_runout_along_the_flow() {
         .current_dir(dir.path())
         .output()
         .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let stdout = crate::common::assert_success(&out);
     let line = stdout
         .lines()
         .find(|l| l.starts_with("  runout"))
@@ -313,12 +304,7 @@ fn a_raster_run_reports_its_runout_along_the_flow() {
         .current_dir(dir.path())
         .output()
         .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let stdout = crate::common::assert_success(&out);
     let table: Vec<&str> = stdout
         .lines()
         .skip_while(|l| !l.contains("runout_m"))
