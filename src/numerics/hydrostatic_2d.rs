@@ -479,7 +479,8 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     }
 
     /// The view of interior cell (i, j): the same values as [`Self::x_side`] and
-    /// [`Self::y_side`] give for it.
+    /// [`Self::y_side`] give for it, except an empty cell's drives (left at 0, which
+    /// give its faces the same bits).
     #[inline(always)]
     fn view(&self, i: usize, j: usize) -> CellView {
         let cell = j * self.nx + i;
@@ -500,10 +501,20 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
             speed: 0.0,
             kappa: 0.0,
         };
+        // An empty cell (h = +0) has u = v = 0 and weighs nothing (√h = 0) in the
+        // faces' mean drive, which equals the one with its drive (every face sees
+        // the same bits): its view is its bed.
+        if h.to_bits() == 0 {
+            return view;
+        }
         if let Some(m) = self.bed() {
-            (view.wx, view.wy) = m.lower(cell, u, v);
-            view.speed = m.speed(cell, u, v);
-            view.kappa = m.normal_curvature(cell, u, v);
+            // A dry cell has u = v = 0: its momenta, speed and centrifugal term are 0
+            // (the metric's products would give ±0, which no face tells apart).
+            if h > H_DRY {
+                (view.wx, view.wy) = m.lower(cell, u, v);
+                view.speed = m.speed(cell, u, v);
+                view.kappa = m.normal_curvature(cell, u, v);
+            }
         } else {
             view.speed = cell_speed(u, v);
         }
@@ -669,6 +680,11 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         (d, along_x): (f64, bool),
         cells: C,
     ) -> FaceFlux {
+        // Between two dry cells the kernel carries nothing (it returns at once); the
+        // bed-normal face's geometry is not worth computing for it.
+        if l.side.h <= H_DRY && r.side.h <= H_DRY {
+            return FaceFlux::default();
+        }
         if let Some(m) = self.bed() {
             return self.bed_normal_face(m, l, r, (d, along_x), cells);
         }
