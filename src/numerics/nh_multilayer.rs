@@ -47,10 +47,9 @@ pub struct NhViscousStep<L: BasalFriction + LocalFriction> {
     /// Δt pⁿ, face-major.
     impulse: Vec<f64>,
     /// Freeze the viscosities from the velocities of the previous viscous step (before
-    /// its projection) instead of those at tⁿ (after it); N > 1 only.
+    /// its projection, kept in the state: `NonHydrostatic::lagged_hu`) instead of
+    /// those at tⁿ (after it); N > 1 only.
     lagged: bool,
-    /// h u_α after the last viscous solve (ghosts included); empty before the first.
-    viscous_hu: Vec<f64>,
 }
 
 impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
@@ -71,7 +70,6 @@ impl<L: BasalFriction + LocalFriction> NhViscousStep<L> {
             viscous,
             impulse: vec![0.0; (mesh.nx + 1) * layers],
             lagged: false,
-            viscous_hu: Vec::new(),
         }
     }
 
@@ -106,15 +104,15 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for NhViscousSt
     }
 
     fn prepare(&mut self, mesh: &Line, state: &LayeredState) {
-        if !self.lagged || self.viscous_hu.len() != state.hu.len() {
+        let lagged_hu = &state.nh.as_ref().expect("non-hydrostatic state").lagged_hu;
+        if !self.lagged || lagged_hu.len() != state.hu.len() {
             // The paper's freezing at tⁿ, and the first step of a lagged run.
             self.viscous.prepare(mesh, state);
             return;
         }
         // tⁿ with the discharges of the last viscous solve: h is that of tⁿ (the
         // projection moves no mass) and so is pⁿ (the total pressures of eq. 10).
-        self.viscous
-            .prepare_with_discharges(mesh, state, &self.viscous_hu);
+        self.viscous.prepare_with_discharges(mesh, state, lagged_hu);
     }
 
     fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
@@ -124,9 +122,10 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for NhViscousSt
             // Copied in pieces below 2048 bytes, where glibc's `memcpy` uses its vector
             // loop rather than `rep movsb` (callgrind counts the latter per byte: 0.10 M
             // instructions per step for the 100 KB of 20 layers × 640 cells).
-            self.viscous_hu.resize(state.hu.len(), 0.0);
-            let pieces = self.viscous_hu.chunks_mut(COPY_PIECE);
-            for (to, from) in pieces.zip(state.hu.chunks(COPY_PIECE)) {
+            let LayeredState { hu, nh, .. } = state;
+            let lagged_hu = &mut nh.as_mut().expect("non-hydrostatic state").lagged_hu;
+            lagged_hu.resize(hu.len(), 0.0);
+            for (to, from) in lagged_hu.chunks_mut(COPY_PIECE).zip(hu.chunks(COPY_PIECE)) {
                 to.copy_from_slice(from);
             }
         }
@@ -329,5 +328,48 @@ mod tests {
         );
         println!("friction impulse: {lost0:.3e} (p = 0), {lost_more:.3e} (+), {lost_less:.3e} (−)");
         assert!(lost_more > 1.4 * lost0 && lost_less < 0.6 * lost0 && lost_less > 0.0);
+    }
+
+    /// The lagged discharges belong to the state: an attempt that the run loop refuses
+    /// and undoes (restoring its backup of tⁿ) leaves no trace in the retried step,
+    /// which gives the bits of a run that never made the attempt. Kept in the stage,
+    /// the retry froze its viscosities from the refused attempt's discharges.
+    #[test]
+    fn a_refused_attempt_leaves_no_trace_in_the_lagged_viscosities() {
+        let layers = 4;
+        let (mesh, state0) = setup(layers);
+        let opts = ViscousOptions {
+            viscosity: crate::numerics::viscous::ViscosityTime::Lagged,
+            ..options()
+        };
+        let new_step = || {
+            let viscous = MultilayerViscousStep::new(law(), mesh.nx, &state0.l, opts);
+            NhViscousStep::new(&mesh, &state0.l, viscous).lagged(true)
+        };
+        let advance = |step: &mut NhViscousStep<MuI>, s: &mut LayeredState, dt: f64| {
+            step.prepare(&mesh, s);
+            step.apply(&mesh, dt, s).unwrap();
+        };
+        let dt = 1e-3;
+        let mut clean = state0.clone();
+        let mut step = new_step();
+        advance(&mut step, &mut clean, dt);
+        advance(&mut step, &mut clean, dt);
+
+        let mut s = state0.clone();
+        let mut step = new_step();
+        advance(&mut step, &mut s, dt);
+        let mut backup = state0.clone();
+        backup.clone_from(&s);
+        advance(&mut step, &mut s, 4.0 * dt);
+        let refused = s.nh.as_ref().unwrap().lagged_hu.clone();
+        s.clone_from(&backup);
+        let mut tainted = s.clone();
+        advance(&mut step, &mut s, dt);
+        assert_eq!(s, clean, "the retried step is the clean run's");
+        // The refused attempt's discharges would have changed the step.
+        tainted.nh.as_mut().unwrap().lagged_hu = refused;
+        advance(&mut step, &mut tainted, dt);
+        assert!(tainted.hu != clean.hu, "the lagged discharges must matter");
     }
 }

@@ -64,7 +64,10 @@ impl Clone for LayeredState {
         self.hu.clone_from(&source.hu);
         self.tracers.clone_from(&source.tracers);
         match (&mut self.nh, &source.nh) {
-            (Some(nh), Some(src)) => nh.p.clone_from(&src.p),
+            (Some(nh), Some(src)) => {
+                nh.p.clone_from(&src.p);
+                nh.lagged_hu.clone_from(&src.lagged_hu);
+            }
             (nh, src) => nh.clone_from(src),
         }
     }
@@ -179,6 +182,7 @@ impl LayeredState {
         self.tracers.push(Tracer { name: HW, q: hw });
         self.nh = Some(NonHydrostatic {
             p: vec![0.0; (nx + 1) * n],
+            lagged_hu: Vec::new(),
         });
     }
 
@@ -207,9 +211,16 @@ pub fn fill_tracer_ghosts(q: &mut [f64], nx: usize, n: usize) {
 /// `p[k * N + α − 1]`. The free-surface value p_{N+1/2} is 0 and is not stored. For
 /// the monolayer, p_{1/2} is the basal value 2q̄ of Garres-Díaz et al. 2021 (a linear profile
 /// vanishing at the surface; q̄ = p_{1/2}/2 is the depth average).
+///
+/// `lagged_hu`: the layer discharges h u_α after the last viscous solve (ghosts
+/// included, cell-major like `hu`; empty before the first, and in runs that do not
+/// lag the viscosities), from which the next step's viscosities are frozen
+/// (`numerics::nh_multilayer`). It decides the next step, so it lives here, in the
+/// state that a refused step restores, not in the stage.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NonHydrostatic {
     pub p: Vec<f64>,
+    pub lagged_hu: Vec<f64>,
 }
 
 impl NonHydrostatic {
