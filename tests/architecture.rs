@@ -1,14 +1,18 @@
 //! The crate's layering, checked on its sources: the graph of top-level modules
 //! (`src/<module>.rs` or `src/<module>/`) built from their `crate::<module>` references
-//! (use statements and paths, comments left out) has no cycle, and a few edges are
-//! forbidden outright:
+//! (use statements and paths, comments left out)
 //!
-//! - `physics` (the pointwise laws) imports no `numerics` (the schemes built on them);
-//! - `numerics` imports neither `model` nor `scenario` (a scheme sees states and the
-//!   grid, never a model's assembly or the input file);
-//! - `grid` and `state` import none of `numerics`, `model`, `scenario`, `setup`,
-//!   `output`, `cli`;
-//! - `terminal` (printing to stdout and stderr) imports nothing of the crate.
+//! - has no cycle (every cycle is listed, edge by edge, with a file that makes each edge);
+//! - points downwards in the order docs/architecture.md documents ("Which module may
+//!   import which": one line per layer, the highest first); every top-level module is
+//!   in that list once, and an upward edge fails unless [`UPWARD_TODAY`] names it;
+//! - has none of a few edges forbidden outright:
+//!   - `physics` (the pointwise laws) imports no `numerics` (the schemes built on them);
+//!   - `numerics` imports neither `model` nor `scenario` (a scheme sees states and the
+//!     grid, never a model's assembly or the input file);
+//!   - `grid` and `state` import none of `numerics`, `model`, `scenario`, `setup`,
+//!     `output`, `cli`;
+//!   - `terminal` (printing to stdout and stderr) imports nothing of the crate.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
@@ -207,72 +211,256 @@ fn forbidden(from: &str, to: &str) -> bool {
     }
 }
 
-/// The `numerics` → `model` and `numerics` → `scenario` edges, which [`numerics_sees_no_model_nor_scenario`]
-/// checks on their own (and the cycle check leaves out, so as not to report them
-/// twice).
+/// The `numerics` → `model` and `numerics` → `scenario` edges, which
+/// [`numerics_sees_no_model_nor_scenario`] names file by file.
 fn numerics_upward(from: &str, to: &str) -> bool {
     from == "numerics" && (to == "model" || to == "scenario")
 }
 
-/// A cycle of the graph, if there is one (depth-first search).
-fn find_cycle(graph: &Graph) -> Option<Vec<String>> {
-    fn visit(
-        node: &str,
-        graph: &Graph,
-        state: &mut BTreeMap<String, u8>,
-        stack: &mut Vec<String>,
-    ) -> Option<Vec<String>> {
-        state.insert(node.to_owned(), 1);
-        stack.push(node.to_owned());
+/// The nodes `from` reaches along the graph's edges (itself only through a cycle).
+fn reachable(graph: &Graph, from: &str) -> BTreeSet<String> {
+    let mut seen = BTreeSet::new();
+    let mut todo: Vec<&str> = vec![from];
+    while let Some(node) = todo.pop() {
         for to in graph.get(node).into_iter().flat_map(|m| m.keys()) {
-            if numerics_upward(node, to) {
-                continue;
-            }
-            match state.get(to.as_str()) {
-                Some(1) => {
-                    let start = stack.iter().position(|n| n == to).unwrap();
-                    let mut cycle = stack[start..].to_vec();
-                    cycle.push(to.clone());
-                    return Some(cycle);
-                }
-                Some(_) => {}
-                None => {
-                    if let Some(c) = visit(to, graph, state, stack) {
-                        return Some(c);
-                    }
-                }
-            }
-        }
-        stack.pop();
-        state.insert(node.to_owned(), 2);
-        None
-    }
-    let mut state = BTreeMap::new();
-    for node in graph.keys() {
-        if !state.contains_key(node) {
-            let mut stack = Vec::new();
-            if let Some(c) = visit(node, graph, &mut state, &mut stack) {
-                return Some(c);
+            if seen.insert(to.clone()) {
+                todo.push(to);
             }
         }
     }
-    None
+    seen
 }
+
+/// Every cycle of the graph, one per strongly connected component of more than one
+/// module: the shortest cycle through the component's first module (breadth-first),
+/// as the list of its modules with the first repeated at the end.
+fn cycles(graph: &Graph) -> Vec<Vec<String>> {
+    let reach: BTreeMap<&str, BTreeSet<String>> = graph
+        .keys()
+        .map(|n| (n.as_str(), reachable(graph, n)))
+        .collect();
+    let mut done = BTreeSet::new();
+    let mut found = Vec::new();
+    for (&node, from_node) in &reach {
+        if done.contains(node) || !from_node.contains(node) {
+            continue;
+        }
+        let component: BTreeSet<&str> = from_node
+            .iter()
+            .map(String::as_str)
+            .filter(|other| reach.get(other).is_some_and(|r| r.contains(node)))
+            .collect();
+        done.extend(component.iter().copied());
+        // Breadth-first from `node` inside the component, back to `node`.
+        let mut parent: BTreeMap<&str, &str> = BTreeMap::new();
+        let mut queue = std::collections::VecDeque::from([node]);
+        'search: while let Some(at) = queue.pop_front() {
+            for to in graph[at].keys().map(String::as_str) {
+                if to == node {
+                    let mut cycle = vec![node.to_owned()];
+                    let mut back = at;
+                    while back != node {
+                        cycle.push(back.to_owned());
+                        back = parent[back];
+                    }
+                    cycle.push(node.to_owned());
+                    cycle.reverse();
+                    found.push(cycle);
+                    break 'search;
+                }
+                if component.contains(to) && !parent.contains_key(to) {
+                    parent.insert(to, at);
+                    queue.push_back(to);
+                }
+            }
+        }
+    }
+    found
+}
+
+/// Cycles the graph has today, each as its modules in order (`["a", "b", "a"]`), with
+/// why it is there. None today: a new cycle fails the test.
+const CYCLES_TODAY: &[(&[&str], &str)] = &[];
 
 #[test]
 fn top_level_modules_import_each_other_without_a_cycle() {
     let (graph, _) = graph();
     assert!(graph.contains_key("numerics") && graph.contains_key("cli"));
-    if let Some(cycle) = find_cycle(&graph) {
-        let edges: Vec<String> = cycle
-            .windows(2)
-            .map(|w| format!("{} -> {} ({})", w[0], w[1], show(&graph[&w[0]][&w[1]])))
-            .collect();
-        panic!(
-            "import cycle between top-level modules:\n  {}",
-            edges.join("\n  ")
-        );
+    let known: Vec<Vec<String>> = CYCLES_TODAY
+        .iter()
+        .map(|(c, _)| c.iter().map(|m| m.to_string()).collect())
+        .collect();
+    let new: Vec<String> = cycles(&graph)
+        .into_iter()
+        .filter(|c| !known.contains(c))
+        .map(|cycle| {
+            cycle
+                .windows(2)
+                .map(|w| format!("{} -> {} ({})", w[0], w[1], show(&graph[&w[0]][&w[1]])))
+                .collect::<Vec<_>>()
+                .join("\n    ")
+        })
+        .collect();
+    assert!(
+        new.is_empty(),
+        "import cycles between top-level modules:\n  cycle:\n    {}",
+        new.join("\n  cycle:\n    ")
+    );
+}
+
+#[test]
+fn the_cycle_finder_lists_every_cycle_and_nothing_else() {
+    let mut graph = Graph::new();
+    for (from, to) in [
+        ("a", "b"),
+        ("b", "c"),
+        ("c", "a"),
+        ("c", "d"),
+        ("d", "e"),
+        ("e", "d"),
+        ("f", "a"),
+    ] {
+        graph
+            .entry(from.into())
+            .or_default()
+            .insert(to.into(), PathBuf::new());
+        graph.entry(to.into()).or_default();
     }
+    assert_eq!(
+        cycles(&graph),
+        [vec!["a", "b", "c", "a"], vec!["d", "e", "d"]]
+    );
+    graph.get_mut("c").unwrap().remove("a");
+    graph.get_mut("e").unwrap().remove("d");
+    assert!(cycles(&graph).is_empty());
+}
+
+/// The documented layers, highest first: in docs/architecture.md, the first code block
+/// after the heading "Which module may import which", one layer a line, its modules
+/// (comma-separated) before the first run of two spaces, a description after it (an
+/// indented line continues the description).
+fn documented_layers(doc: &str) -> Vec<Vec<String>> {
+    const HEADING: &str = "### Which module may import which";
+    let after = &doc[doc
+        .find(HEADING)
+        .unwrap_or_else(|| panic!("docs/architecture.md has no heading {HEADING:?}"))..];
+    let block = after
+        .split("```")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no code block after {HEADING:?}"));
+    block
+        .lines()
+        .skip(1) // the rest of the opening fence's line
+        .filter(|l| !l.trim().is_empty() && !l.starts_with(' '))
+        .map(|line| {
+            let names = line.split("  ").next().unwrap();
+            names
+                .split(',')
+                .map(|m| m.trim().to_owned())
+                .filter(|m| !m.is_empty())
+                .collect()
+        })
+        .collect()
+}
+
+/// Each documented module's layer, 0 the highest.
+fn layer_of(layers: &[Vec<String>]) -> BTreeMap<String, usize> {
+    let mut of = BTreeMap::new();
+    for (k, layer) in layers.iter().enumerate() {
+        for m in layer {
+            assert!(
+                of.insert(m.clone(), k).is_none(),
+                "docs/architecture.md lists {m} twice in the module order"
+            );
+        }
+    }
+    of
+}
+
+fn documented_order() -> BTreeMap<String, usize> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/architecture.md");
+    layer_of(&documented_layers(&fs::read_to_string(path).unwrap()))
+}
+
+/// Every top-level module of the crate (`src/<m>.rs`, `src/<m>/`), lib.rs and main.rs
+/// aside.
+fn top_level_modules() -> BTreeSet<String> {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    files.iter().filter_map(|f| top_module(f)).collect()
+}
+
+/// Upward edges (`from` in a lower layer than `to`) the code has today, with why.
+/// None today: a new upward edge fails the test. An entry names an edge to remove, not
+/// a permission; the test fails when the edge is gone so that the entry goes too.
+const UPWARD_TODAY: &[(&str, &str, &str)] = &[];
+
+#[test]
+fn the_documented_order_lists_every_top_level_module_once() {
+    let order = documented_order();
+    let documented: BTreeSet<String> = order.keys().cloned().collect();
+    let modules = top_level_modules();
+    let missing: Vec<&String> = modules.difference(&documented).collect();
+    let gone: Vec<&String> = documented.difference(&modules).collect();
+    assert!(
+        missing.is_empty() && gone.is_empty(),
+        "docs/architecture.md's module order (\"Which module may import which\") misses \
+         {missing:?} and lists {gone:?}, which src/ does not have"
+    );
+}
+
+#[test]
+fn no_module_imports_a_higher_layer() {
+    let order = documented_order();
+    let (graph, _) = graph();
+    let mut upward = Vec::new();
+    for (from, tos) in &graph {
+        for (to, file) in tos {
+            let (Some(&f), Some(&t)) = (order.get(from), order.get(to)) else {
+                continue; // the test above names the module the order misses
+            };
+            if t < f {
+                upward.push((from.as_str(), to.as_str(), file));
+            }
+        }
+    }
+    let new: Vec<String> = upward
+        .iter()
+        .filter(|(f, t, _)| !UPWARD_TODAY.iter().any(|(a, b, _)| a == f && b == t))
+        .map(|(f, t, file)| format!("{f} -> {t} ({})", show(file)))
+        .collect();
+    assert!(
+        new.is_empty(),
+        "imports upward in docs/architecture.md's module order:\n  {}",
+        new.join("\n  ")
+    );
+    let stale: Vec<String> = UPWARD_TODAY
+        .iter()
+        .filter(|(a, b, _)| !upward.iter().any(|(f, t, _)| a == f && b == t))
+        .map(|(a, b, _)| format!("{a} -> {b}"))
+        .collect();
+    assert!(
+        stale.is_empty(),
+        "UPWARD_TODAY names edges the code no longer has (remove them): {stale:?}"
+    );
+}
+
+#[test]
+fn the_order_is_read_from_the_code_block_after_the_heading() {
+    let doc = "# A\n```\nz  not this block\n```\n### Which module may import which\n\n\
+               Downwards:\n\n```\ncli, runner  the commands\n\nmodel\ngrid, physics   \
+               cells;\n                laws, constants\n```\n```\nother\n```\n";
+    let layers = documented_layers(doc);
+    assert_eq!(
+        layers,
+        [
+            vec!["cli", "runner"],
+            vec!["model"],
+            vec!["grid", "physics"]
+        ]
+    );
+    let of = layer_of(&layers);
+    assert_eq!((of["runner"], of["model"], of["physics"]), (0, 1, 2));
 }
 
 #[test]
