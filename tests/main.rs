@@ -2,6 +2,15 @@
 //!
 //! Run one area with `cargo test --test main AREA::`, e.g.
 //! `cargo test --test main analytic::`.
+//!
+//! Two tiers. `cargo test` runs the quick tier: unit tests, properties, exact solutions
+//! on small grids, the CLI, and in every area at least one quick check of its physics.
+//! The paper reproductions and refinement studies that take seconds each are the slow
+//! tier, one line under their `#[test]`:
+//! `#[ignore = "slow: paper reproduction"]` or `#[ignore = "slow: refinement study"]`.
+//! `cargo test -- --ignored` runs the slow tier alone, `cargo test -- --include-ignored`
+//! both (CI does); add `--include-ignored` to run one slow test by name. No test is
+//! ignored for any other reason.
 
 mod common;
 
