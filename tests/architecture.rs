@@ -6,13 +6,19 @@
 //! - points downwards in the order docs/architecture.md documents ("Which module may
 //!   import which": one line per layer, the highest first); every top-level module is
 //!   in that list once, and an upward edge fails unless [`UPWARD_TODAY`] names it;
-//! - has none of a few edges forbidden outright:
-//!   - `physics` (the pointwise laws) imports no `numerics` (the schemes built on them);
-//!   - `numerics` imports neither `model` nor `scenario` (a scheme sees states and the
-//!     grid, never a model's assembly or the input file);
-//!   - `grid` and `state` import none of `numerics`, `model`, `scenario`, `setup`,
-//!     `output`, `cli`;
-//!   - `terminal` (printing to stdout and stderr) imports nothing of the crate.
+//! - has none of a few edges forbidden outright (below);
+//!
+//! and inside each top-level module that is a directory, its children (`src/<m>/<c>.rs`,
+//! `src/<m>/<c>/`) import each other (through `crate::<m>::<c>`, `super::<c>`, …; unit
+//! tests left out) without a cycle beyond those [`CHILD_CYCLES_TODAY`] lists.
+//!
+//! The edges forbidden outright:
+//! - `physics` (the pointwise laws) imports no `numerics` (the schemes built on them);
+//! - `numerics` imports neither `model` nor `scenario` (a scheme sees states and the
+//!   grid, never a model's assembly or the input file);
+//! - `grid` and `state` import none of `numerics`, `model`, `scenario`, `setup`,
+//!   `output`, `cli`;
+//! - `terminal` (printing to stdout and stderr) imports nothing of the crate.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
@@ -231,10 +237,12 @@ fn reachable(graph: &Graph, from: &str) -> BTreeSet<String> {
     seen
 }
 
-/// Every cycle of the graph, one per strongly connected component of more than one
-/// module: the shortest cycle through the component's first module (breadth-first),
-/// as the list of its modules with the first repeated at the end.
-fn cycles(graph: &Graph) -> Vec<Vec<String>> {
+/// The cycles of a graph, one entry per strongly connected component of more than one
+/// module: its modules (sorted) and the shortest cycle through the first of them
+/// (breadth-first), the first module repeated at its end.
+type Cycle = (Vec<String>, Vec<String>);
+
+fn cycles(graph: &Graph) -> Vec<Cycle> {
     let reach: BTreeMap<&str, BTreeSet<String>> = graph
         .keys()
         .map(|n| (n.as_str(), reachable(graph, n)))
@@ -265,7 +273,8 @@ fn cycles(graph: &Graph) -> Vec<Vec<String>> {
                     }
                     cycle.push(node.to_owned());
                     cycle.reverse();
-                    found.push(cycle);
+                    let members = component.iter().map(|m| m.to_string()).collect();
+                    found.push((members, cycle));
                     break 'search;
                 }
                 if component.contains(to) && !parent.contains_key(to) {
@@ -278,33 +287,45 @@ fn cycles(graph: &Graph) -> Vec<Vec<String>> {
     found
 }
 
-/// Cycles the graph has today, each as its modules in order (`["a", "b", "a"]`), with
-/// why it is there. None today: a new cycle fails the test.
+/// The cycles of `graph` whose modules `known` does not list, each described by its
+/// shortest cycle and every edge between its modules, with a file that makes each.
+fn new_cycles(graph: &Graph, known: &[&[&str]]) -> Vec<String> {
+    cycles(graph)
+        .into_iter()
+        .filter(|(members, _)| !known.iter().any(|k| k.iter().eq(members.iter())))
+        .map(|(members, cycle)| {
+            let edges: Vec<String> = members
+                .iter()
+                .flat_map(|from| {
+                    graph[from]
+                        .iter()
+                        .filter(|(to, _)| members.contains(to))
+                        .map(move |(to, file)| format!("{from} -> {to} ({})", show(file)))
+                })
+                .collect();
+            format!(
+                "{} (every edge between them: {})",
+                cycle.join(" -> "),
+                edges.join(", ")
+            )
+        })
+        .collect()
+}
+
+/// The modules of each cycle between top-level modules today, with why. None today: a
+/// new cycle fails the test.
 const CYCLES_TODAY: &[(&[&str], &str)] = &[];
 
 #[test]
 fn top_level_modules_import_each_other_without_a_cycle() {
     let (graph, _) = graph();
     assert!(graph.contains_key("numerics") && graph.contains_key("cli"));
-    let known: Vec<Vec<String>> = CYCLES_TODAY
-        .iter()
-        .map(|(c, _)| c.iter().map(|m| m.to_string()).collect())
-        .collect();
-    let new: Vec<String> = cycles(&graph)
-        .into_iter()
-        .filter(|c| !known.contains(c))
-        .map(|cycle| {
-            cycle
-                .windows(2)
-                .map(|w| format!("{} -> {} ({})", w[0], w[1], show(&graph[&w[0]][&w[1]])))
-                .collect::<Vec<_>>()
-                .join("\n    ")
-        })
-        .collect();
+    let known: Vec<&[&str]> = CYCLES_TODAY.iter().map(|(c, _)| *c).collect();
+    let new = new_cycles(&graph, &known);
     assert!(
         new.is_empty(),
-        "import cycles between top-level modules:\n  cycle:\n    {}",
-        new.join("\n  cycle:\n    ")
+        "import cycles between top-level modules:\n  {}",
+        new.join("\n  ")
     );
 }
 
@@ -326,10 +347,25 @@ fn the_cycle_finder_lists_every_cycle_and_nothing_else() {
             .insert(to.into(), PathBuf::new());
         graph.entry(to.into()).or_default();
     }
+    let strings = |v: &[&str]| v.iter().map(|m| m.to_string()).collect::<Vec<_>>();
     assert_eq!(
         cycles(&graph),
-        [vec!["a", "b", "c", "a"], vec!["d", "e", "d"]]
+        [
+            (strings(&["a", "b", "c"]), strings(&["a", "b", "c", "a"])),
+            (strings(&["d", "e"]), strings(&["d", "e", "d"]))
+        ]
     );
+    // A second cycle through a and c joins the same component.
+    graph
+        .get_mut("a")
+        .unwrap()
+        .insert("c".into(), PathBuf::new());
+    assert_eq!(cycles(&graph)[0].0, strings(&["a", "b", "c"]));
+    assert_eq!(
+        new_cycles(&graph, &[&["a", "b", "c"], &["d", "e"]]),
+        [""; 0]
+    );
+    assert_eq!(new_cycles(&graph, &[&["a", "b", "c"]]).len(), 1);
     graph.get_mut("c").unwrap().remove("a");
     graph.get_mut("e").unwrap().remove("d");
     assert!(cycles(&graph).is_empty());
@@ -506,4 +542,297 @@ fn the_reference_scanner_sees_groups_and_skips_comments() {
     );
     let refs: Vec<String> = referenced_modules(&code).into_iter().collect();
     assert_eq!(refs, ["a", "b", "c", "i"]);
+}
+
+/// A file's module path: `src/model/granular/mod.rs` → `["model", "granular"]`.
+fn module_path(file: &Path) -> Vec<String> {
+    let rel = file.strip_prefix(src()).unwrap().with_extension("");
+    let mut path: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if path.last().is_some_and(|last| last == "mod") {
+        path.pop();
+    }
+    path
+}
+
+/// The identifiers of a path `a::b::c` at the start of `s` (none if `s` starts with no
+/// identifier).
+fn path_segments(s: &str) -> Vec<String> {
+    let mut segments = Vec::new();
+    let mut rest = s.trim_start();
+    loop {
+        let ident: String = rest.chars().take_while(|&c| is_ident(c)).collect();
+        if ident.is_empty() {
+            break;
+        }
+        rest = &rest[ident.len()..];
+        segments.push(ident);
+        match rest.strip_prefix("::") {
+            Some(r) if r.starts_with(|c: char| is_ident(c)) => rest = r,
+            _ => break,
+        }
+    }
+    segments
+}
+
+/// The paths a file's code names through `crate::`, `super::` and `self::`, resolved
+/// to paths from the crate root against the module each one is written in: `here`, or
+/// an inline `mod name { … }` in it. In a group (`super::{a::X, b}`) each item counts.
+/// Paths in an inline `mod tests` are left out.
+fn referenced_paths(code: &str, here: &[String]) -> Vec<Vec<String>> {
+    let b = code.as_bytes();
+    let mut found = Vec::new();
+    let mut depth = 0usize;
+    let mut inline: Vec<(String, usize)> = Vec::new(); // (name, depth inside its braces)
+    let mut pending_mod: Option<String> = None;
+    let mut i = 0;
+    while i < b.len() {
+        let boundary = i == 0 || !(is_ident(b[i - 1] as char) || b[i - 1] == b'$');
+        match b[i] {
+            b'{' => {
+                depth += 1;
+                if let Some(name) = pending_mod.take() {
+                    inline.push((name, depth));
+                }
+                i += 1;
+                continue;
+            }
+            b'}' => {
+                if inline.last().is_some_and(|(_, d)| *d == depth) {
+                    inline.pop();
+                }
+                depth = depth.saturating_sub(1);
+                i += 1;
+                continue;
+            }
+            b';' => pending_mod = None, // `mod name;`: a file of its own
+            _ => {}
+        }
+        let rest = &code[i..];
+        if boundary && rest.starts_with("mod ") {
+            pending_mod = path_segments(&rest[4..]).into_iter().next();
+            i += 4;
+            continue;
+        }
+        let starts = ["crate::", "super::", "self::"];
+        if !boundary
+            || !starts.iter().any(|s| rest.starts_with(s))
+            || i >= 2 && &b[i - 2..i] == b"::"
+        {
+            i += rest.chars().next().map_or(1, char::len_utf8);
+            continue;
+        }
+        if inline.iter().any(|(name, _)| name == "tests") {
+            // A file's unit tests may reach into any sibling: no dependency of the code.
+            i += 1;
+            continue;
+        }
+        let mut base: Vec<String> = here
+            .iter()
+            .cloned()
+            .chain(inline.iter().map(|(n, _)| n.clone()))
+            .collect();
+        let mut tail = rest;
+        loop {
+            if let Some(r) = tail.strip_prefix("crate::") {
+                base.clear();
+                tail = r;
+            } else if let Some(r) = tail.strip_prefix("super::") {
+                base.pop();
+                tail = r;
+            } else if let Some(r) = tail.strip_prefix("self::") {
+                tail = r;
+            } else {
+                break;
+            }
+        }
+        let prefix = path_segments(tail);
+        let after = &tail[prefix
+            .iter()
+            .map(|s| s.len() + 2)
+            .sum::<usize>()
+            .saturating_sub(2)..];
+        let group = if prefix.is_empty() {
+            tail.trim_start().strip_prefix('{')
+        } else {
+            after.strip_prefix("::{")
+        };
+        let mut push = |item: &str| {
+            let segments = path_segments(item);
+            if segments
+                .first()
+                .is_some_and(|s| s != "self" && s != "super")
+            {
+                let mut full = base.clone();
+                full.extend(prefix.iter().cloned());
+                full.extend(segments);
+                found.push(full);
+            }
+        };
+        match group {
+            Some(group) => {
+                let mut level = 0;
+                let mut item = String::new();
+                for c in group.chars() {
+                    match c {
+                        '{' => level += 1,
+                        '}' if level == 0 => break,
+                        '}' => level -= 1,
+                        ',' if level == 0 => {
+                            push(&item);
+                            item.clear();
+                            continue;
+                        }
+                        _ => {}
+                    }
+                    item.push(c);
+                }
+                push(&item);
+            }
+            None if !prefix.is_empty() => {
+                let mut full = base.clone();
+                full.extend(prefix.iter().cloned());
+                found.push(full);
+            }
+            None => {}
+        }
+        i += rest.find("::").unwrap() + 2;
+    }
+    found
+}
+
+/// For each top-level module that is a directory, the graph of its children
+/// (`src/<m>/<child>.rs`, `src/<m>/<child>/`; `mod.rs` is the module itself) built from
+/// the paths each child's files name in a sibling.
+fn child_graphs() -> BTreeMap<String, Graph> {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    files.sort();
+    let mut children: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for file in &files {
+        let path = module_path(file);
+        if path.len() >= 2 {
+            children
+                .entry(path[0].clone())
+                .or_default()
+                .insert(path[1].clone());
+        }
+    }
+    let mut graphs: BTreeMap<String, Graph> = BTreeMap::new();
+    for file in &files {
+        let path = module_path(file);
+        if path.len() < 2 {
+            continue;
+        }
+        let (top, child) = (&path[0], &path[1]);
+        let code = strip_comments(&fs::read_to_string(file).unwrap());
+        let node = graphs
+            .entry(top.clone())
+            .or_default()
+            .entry(child.clone())
+            .or_default();
+        for full in referenced_paths(&code, &path) {
+            if full.len() >= 2
+                && full[0] == *top
+                && full[1] != *child
+                && children[top].contains(&full[1])
+            {
+                node.entry(full[1].clone()).or_insert_with(|| file.clone());
+            }
+        }
+    }
+    graphs
+}
+
+/// The cycles between the children of a top-level module today: the module, the
+/// cycle's children, why they need each other. Each is a knot to untie (the shared
+/// part moved into a child both import), not a permission: a new cycle, or a child
+/// joining one of these, fails the test.
+const CHILD_CYCLES_TODAY: &[(&str, &[&str], &str)] = &[
+    (
+        "gis",
+        &["release", "validity"],
+        "validity checks release's Polygon and Ring (with release::ring_area); release \
+         asks validity::invalid_reason of every polygon it reads",
+    ),
+    (
+        "results",
+        &["avaframe", "export"],
+        "avaframe names export's map fields (export::Field, MAP_FIELDS) in AvaFrame's \
+         layout; export calls avaframe for that layout's files",
+    ),
+    (
+        "scenario",
+        &["compiled", "profile", "validate"],
+        "compiled calls profile's expression functions (unary_function, noise); profile \
+         builds Compiled expressions and checks raster cells against \
+         validate::MIN_RELATIVE_DX; validate builds the profiles",
+    ),
+];
+
+#[test]
+fn children_of_a_module_import_each_other_without_a_new_cycle() {
+    let graphs = child_graphs();
+    assert!(graphs["numerics"].contains_key("hydrostatic"));
+    let mut new = Vec::new();
+    for (top, graph) in &graphs {
+        let known: Vec<&[&str]> = CHILD_CYCLES_TODAY
+            .iter()
+            .filter(|(t, _, _)| t == top)
+            .map(|(_, c, _)| *c)
+            .collect();
+        new.extend(
+            new_cycles(graph, &known)
+                .into_iter()
+                .map(|c| format!("{top}: {c}")),
+        );
+    }
+    assert!(
+        new.is_empty(),
+        "import cycles between the children of a module:\n  {}",
+        new.join("\n  ")
+    );
+    let stale: Vec<String> = CHILD_CYCLES_TODAY
+        .iter()
+        .filter(|(top, known, _)| {
+            !cycles(&graphs[*top])
+                .iter()
+                .any(|(members, _)| known.iter().eq(members.iter()))
+        })
+        .map(|(top, known, _)| format!("{top}: {known:?}"))
+        .collect();
+    assert!(
+        stale.is_empty(),
+        "CHILD_CYCLES_TODAY names cycles the code no longer has (remove them): {stale:?}"
+    );
+}
+
+#[test]
+fn paths_resolve_against_the_module_they_are_written_in() {
+    let here: Vec<String> = ["scenario", "validate", "granular"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let code =
+        "use super::{check::finite, self, Scenario};\nuse crate::grid::{line::Line, Grid};\n\
+                let x = super::super::profile::f(self::g());\nmod inner { use super::h; }\n\
+                mod tests { use crate::sweep::X; }\nx::super::y;";
+    let found: Vec<String> = referenced_paths(code, &here)
+        .iter()
+        .map(|p| p.join("::"))
+        .collect();
+    assert_eq!(
+        found,
+        [
+            "scenario::validate::check::finite",
+            "scenario::validate::Scenario",
+            "grid::line::Line",
+            "grid::Grid",
+            "scenario::profile::f",
+            "scenario::validate::granular::g",
+            "scenario::validate::granular::h",
+        ]
+    );
 }
