@@ -264,8 +264,10 @@ def check_synopsis(toks, env, cwd):
     return True, f"options {' '.join(flags) or '(none)'} in --help"
 
 
-def check_test_filter(text, tests):
-    """A quoted `cargo test [--test main] FILTER [-- --exact]` selects at least one test."""
+def check_test_filter(text, tests, slow=()):
+    """A quoted `cargo test [--test main] FILTER [-- --exact]` selects at least one test,
+    and says --include-ignored (or --ignored) if it selects one of the slow tier (the
+    tests marked `#[ignore = "slow: …"]`, which `cargo test` alone skips)."""
     toks = shlex.split(text)
     before, _, after = " ".join(toks).partition(" -- ")
     words = before.split()[2:]
@@ -277,13 +279,18 @@ def check_test_filter(text, tests):
             skip_next = w not in ("--lib",)
         elif not w.startswith("-"):
             filters.append(w)
-    if not filters:
-        return True, "whole target"
-    exact = "--exact" in after.split()
+    flags = after.split()
+    exact = "--exact" in flags
+    selects = (lambda t: any((t == f) if exact else (f in t) for f in filters)) if filters \
+        else (lambda t: True)
     for f in filters:
         if not any((t == f) if exact else (f in t) for t in tests):
             return False, f"no test {'named' if exact else 'matching'} {f!r} in the test crate"
-    return True, "tests exist"
+    chosen_slow = [t for t in slow if selects(t)]
+    if filters and chosen_slow and not {"--include-ignored", "--ignored"} & set(flags):
+        return False, (f"selects {len(chosen_slow)} slow-tier test(s) ({chosen_slow[0]}, …) "
+                       "that only run with `-- --include-ignored`")
+    return True, "tests exist" if filters else "whole target"
 
 
 def main():
@@ -293,11 +300,20 @@ def main():
     ap.add_argument("--keep", help="scratch directory to use and keep (default: a temp dir)")
     ap.add_argument("--test-list", help="output of `cargo test --test main -- --list`: every "
                     "quoted `cargo test` must then name tests that exist")
+    ap.add_argument("--slow-list", help="output of `cargo test --test main -- --list "
+                    "--ignored` (the slow tier): a quoted `cargo test` that selects one must "
+                    "say --include-ignored")
     args = ap.parse_args()
-    tests = None
+    tests, slow = None, []
+
+    def names(path):
+        return [l.split(": test")[0] for l in pathlib.Path(path).read_text().splitlines()
+                if l.endswith(": test")]
+
+    if args.slow_list:
+        slow = names(args.slow_list)
     if args.test_list:
-        tests = [l.split(": test")[0] for l in pathlib.Path(args.test_list).read_text().splitlines()
-                 if l.endswith(": test")]
+        tests = names(args.test_list)
         # Inline `cargo test …` spans anywhere in the docs, even mid-sentence and
         # broken across lines, must name tests that exist.
         bad = 0
@@ -305,14 +321,22 @@ def main():
             text = md.read_text()
             for m in re.finditer(r"`(cargo test[^`]*)`", text):
                 cmd = " ".join(m.group(1).replace("//!", " ").split())
-                ok, why = check_test_filter(cmd, tests)
+                ok, why = check_test_filter(cmd, tests, slow)
                 if not ok:
                     line = text.count("\n", 0, m.start()) + 1
                     print(f"FAIL      {md.relative_to(ROOT)}:{line}: {cmd}  ({why})")
                     bad += 1
+    cmds = collect()
+    if tests is not None:
+        # And those of the code blocks and scenario headers.
+        for c in cmds:
+            if c.text.startswith("cargo test"):
+                ok, why = check_test_filter(c.text, tests, slow)
+                if not ok:
+                    print(f"FAIL      {c.where()}: {c.text}  ({why})")
+                    bad += 1
         if bad:
             return 1
-    cmds = collect()
     if args.list:
         for c in cmds:
             kind, what = classify(c)
@@ -341,12 +365,6 @@ def main():
         kind, what = classify(c)
         counts[kind] += 1
         if kind == "skip":
-            if tests is not None and c.text.startswith("cargo test"):
-                ok, why = check_test_filter(c.text, tests)
-                if not ok:
-                    print(f"FAIL      {c.where()}: {c.text}  ({why})")
-                    failures.append((c, why))
-                    continue
             print(f"skip      {c.where()}: {c.text}  ({what})")
             continue
         if kind == "synopsis":

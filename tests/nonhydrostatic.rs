@@ -418,6 +418,7 @@ fn fastest_above_1_mm(s: &Snapshot) -> f64 {
 /// 2.9, 2.1 mm (1.4, 0.8 mm on 10240, 20480 cells) and the fastest cell stays below
 /// 2√(g h₀) (1.95, 2.07, 2.15 m/s) (docs/validation.md, "Non-hydrostatic runout under refinement").
 #[test]
+#[ignore = "slow: refinement study"]
 fn dry_dam_break_converges_from_a_smooth_column_and_not_from_a_step() {
     let bound = 2.0 * (9.81f64 * 0.14).sqrt();
     let run_at = |cells: usize, column: &str| {
@@ -490,6 +491,7 @@ fn dry_dam_break_converges_from_a_smooth_column_and_not_from_a_step() {
 /// "Non-hydrostatic runout under refinement") no surge forms and the 1 mm front
 /// converges.
 #[test]
+#[ignore = "slow: refinement study"]
 fn wedge_toe_converges_until_it_stops_and_a_later_surge_over_the_deposit_does_not() {
     let g_n = 9.81 * 22f64.to_radians().cos();
     let run_at = |cells: usize| {
@@ -556,6 +558,7 @@ fn wedge_toe_converges_until_it_stops_and_a_later_surge_over_the_deposit_does_no
 /// cells it moves by 1.0 % (H) and 0.04 % (NH), and the hydrostatic centre of mass
 /// moves further, H/NH − 1 = +15.0 % and +16.1 % (+17.2, +17.1 % on 5120, 10240).
 #[test]
+#[ignore = "slow: refinement study"]
 fn collapse_at_19_degrees_centre_of_mass_converges_and_moves_further_when_hydrostatic() {
     let shift = |cells: usize, pressure: &str| {
         let cells = format!("domain.cells={cells}");

@@ -83,6 +83,7 @@ fn smooth_convergence(numerics: Numerics) -> (Vec<f64>, f64) {
 }
 
 #[test]
+#[ignore = "slow: refinement study"]
 fn smooth_flow_converges_at_second_order_with_order_2() {
     for limiter in [Limiter::Minmod, Limiter::VanLeer, Limiter::Mc] {
         let (errors, order) = smooth_convergence(order_2(limiter));
@@ -129,6 +130,7 @@ fn ritter_front_error_at_2048_cells_in_both_orders() {
 /// asserted beyond convergence (its 1 mm contour converges at order 0.3–0.5 on these
 /// grids: the first-order front is smeared over a number of cells that grows).
 #[test]
+#[ignore = "slow: refinement study"]
 fn ritter_front_converges_at_order_one_with_order_2() {
     let cells = [512, 1024, 2048];
     let dx: Vec<f64> = cells.iter().map(|&n| 4.5 / n as f64).collect();
