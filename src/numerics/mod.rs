@@ -9,6 +9,7 @@
 //! ([`crate::interrupt`]) and give up the step with [`StageError::Interrupted`].
 
 pub mod banded;
+pub mod bed_normal;
 pub mod dilatant;
 pub mod face;
 pub mod friction;
