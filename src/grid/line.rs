@@ -6,11 +6,14 @@
 //!
 //! - local coordinates: z = b(X) + b̃(X), b̃ = −X tan θ (the plane, up to a constant)
 //!   and g_n = g cos θ (Garres-Díaz et al. 2021, eq. 15b);
-//! - Cartesian coordinates: z = b(x), g_n = g (Garres-Díaz et al. 2021, §4.1).
+//! - Cartesian coordinates: z = b(x), g_n = g (Garres-Díaz et al. 2021, §4.1);
+//! - the bed-normal frame (docs/numerics.md, "The bed-normal frame"): z = b(x), the
+//!   cells horizontal, with the bed's metric ([`BedMetric`] of one row: b_x, cos θ,
+//!   b_xx); an outflow's ghost bed continues the edge cell's slope, as on a raster.
 //!
 //! Arrays carry one ghost cell on each side: index 0 and nx + 1.
 
-use super::{BoundaryKind, Coordinates, Grid, Point, Stencil};
+use super::{BedMetric, BoundaryKind, Coordinates, Grid, Point, Stencil};
 use crate::physics::GRAVITY;
 
 /// A uniform 1-D grid of nx cells with its bed, potential and boundary kinds: the grid
@@ -35,6 +38,9 @@ pub struct Line {
     pub coordinates: Coordinates,
     pub left: BoundaryKind,
     pub right: BoundaryKind,
+    /// The bed's gradient, cos θ and curvature in the bed-normal frame (one row:
+    /// b_y = 0), else `None`.
+    metric: Option<BedMetric>,
 }
 
 /// What a line is built from; `b` is sampled at the cell centres.
@@ -129,6 +135,21 @@ impl Line {
         b_ghost.push(b[0]);
         b_ghost.extend_from_slice(&b);
         b_ghost.push(b[nx - 1]);
+        let metric = (spec.coordinates == Coordinates::BedNormal)
+            .then(|| BedMetric::new(nx, 1, dx, dx, &b, &[]));
+        if let Some(m) = &metric {
+            // As a raster's west and east ghosts (`Raster2d::with_walls`): an outflow
+            // continues the bed's slope (the edge cell's gradient), so that a flow on
+            // a slope cut by the edge leaves it; a wall keeps the edge cell's bed. The
+            // potential is the bed.
+            let ghost = |kind: BoundaryKind, edge: f64, slope: f64| match kind {
+                BoundaryKind::Wall => edge,
+                BoundaryKind::Outflow => edge + slope,
+            };
+            b_ghost[0] = ghost(spec.left, b[0], -m.gx[0] * dx);
+            b_ghost[nx + 1] = ghost(spec.right, b[nx - 1], m.gx[nx - 1] * dx);
+            z.copy_from_slice(&b_ghost);
+        }
         Line {
             nx,
             x_min: spec.x_min,
@@ -142,11 +163,27 @@ impl Line {
             coordinates: spec.coordinates,
             left: spec.left,
             right: spec.right,
+            metric,
         }
     }
 
     pub fn x_max(&self) -> f64 {
         self.x_min + self.nx as f64 * self.dx
+    }
+
+    /// The bed's metric in the bed-normal frame (`None` in the other frames).
+    #[inline(always)]
+    pub fn metric(&self) -> Option<&BedMetric> {
+        self.metric.as_ref()
+    }
+
+    /// The line without the centrifugal term in the basal normal stress of the
+    /// bed-normal frame (`domain.curvature = false`; nothing changes in the others).
+    pub fn without_friction_curvature(mut self) -> Line {
+        if let Some(m) = &mut self.metric {
+            m.in_friction = false;
+        }
+        self
     }
 }
 

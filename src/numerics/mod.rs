@@ -17,6 +17,7 @@ pub mod friction_2d;
 pub mod hydrostatic;
 pub mod hydrostatic_2d;
 pub mod linalg;
+pub mod line_bed_normal;
 pub mod muscl;
 pub mod nh_multilayer;
 
