@@ -520,6 +520,20 @@ t_end = 1.0
         eprintln!("{sets:?}: {e}");
         assert!(e.contains(key), "{sets:?}: {e}");
     }
+    // The bundled line scenarios of the other models.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    for file in ["dilatancy_dense.toml", "submarine_landslide.toml"] {
+        let text = std::fs::read_to_string(dir.join(file)).unwrap();
+        let sets = ["domain.coordinates=\"bed_normal\"", "domain.slope_deg=0"].map(String::from);
+        let e = granflow::scenario::load_str(&text, &dir, &sets)
+            .unwrap_err()
+            .to_string();
+        eprintln!("{file}: {e}");
+        assert!(
+            e.contains("domain.coordinates") && e.contains("model.kind"),
+            "{e}"
+        );
+    }
 }
 
 /// The same scenario on a line and on a raster of 3 rows (the profiles do not depend
