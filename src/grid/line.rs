@@ -255,3 +255,51 @@ pub fn interpolate(x: &[f64], dx: f64, xg: f64) -> (usize, f64) {
     }
     (i, ((xg - x[i]) / dx).clamp(0.0, 1.0))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(coordinates: Coordinates, left: BoundaryKind, right: BoundaryKind) -> LineSpec {
+        LineSpec {
+            x_min: 0.0,
+            x_max: 4.0,
+            cells: 4,
+            slope_deg: 0.0,
+            coordinates,
+            left,
+            right,
+        }
+    }
+
+    /// In the bed-normal frame an outflow's ghost bed continues the edge cell's slope
+    /// and a wall's keeps the edge bed, the potential is the bed, and the metric is
+    /// the bed's (b = x² at x = 0.5 … 3.5: b_x = 2x where centred, one-sided at the
+    /// ends, and b_xx the differences of b_x); the other frames keep the edge bed and
+    /// have no metric.
+    #[test]
+    fn a_bed_normal_line_has_the_rasters_ghost_beds_and_the_beds_metric() {
+        let bed: Vec<f64> = (0..4).map(|i| (i as f64 + 0.5).powi(2)).collect();
+        let (wall, outflow) = (BoundaryKind::Wall, BoundaryKind::Outflow);
+        let line = Line::new(&spec(Coordinates::BedNormal, outflow, wall), bed.clone());
+        let m = line.metric().expect("a metric");
+        assert_eq!(m.gx, [2.0, 3.0, 5.0, 6.0]);
+        assert_eq!(m.gy, [0.0; 4]);
+        assert_eq!(m.hxx, [1.0, 1.5, 1.5, 1.0]);
+        assert_eq!((m.hxy.clone(), m.hyy.clone()), (vec![0.0; 4], vec![0.0; 4]));
+        assert_eq!(line.b_ghost, [0.25 - 2.0, 0.25, 2.25, 6.25, 12.25, 12.25]);
+        assert_eq!(line.z, line.b_ghost);
+        assert_eq!(line.g_n, GRAVITY);
+        assert!(
+            m.in_friction
+                && !line
+                    .without_friction_curvature()
+                    .metric()
+                    .unwrap()
+                    .in_friction
+        );
+        let flat = Line::new(&spec(Coordinates::Cartesian, outflow, wall), bed);
+        assert!(flat.metric().is_none());
+        assert_eq!(flat.b_ghost[0], 0.25);
+    }
+}
