@@ -5,10 +5,11 @@
 //! c = cos θ = 1/√(1 + b_x²)) and the horizontal discharge H u:
 //!
 //!   ∂_t H + ∂_x(H u) = 0,
-//!   ∂_t(H w) + ∂_x(H w u) = −g c H ∂_x(c H) − g H b_x + H b_x b_xx u² − τ c² w/|U|,
+//!   ∂_t(H w) + ∂_x(H w u) = −g c H ∂_x(c H) − g H b_x + H b_x b_xx u² − H F w/|U|,
 //!
-//! with w = (1 + b_x²) u = u/c² the covariant velocity and |U| = |u|/c the speed along
-//! the bed (the friction τ is step 2, [`super::friction::BedNormalFrictionStep`]). On a
+//! with w = (1 + b_x²) u = u/c² the covariant velocity, |U| = |u|/c the speed along
+//! the bed and F the friction per unit mass (μ c (g + b_xx u²)₊ for Coulomb; step 2,
+//! [`super::friction::BedNormalFrictionStep`]). On a
 //! plane of slope θ this is the local frame over that plane with ∂_X = c ∂_x
 //! (docs/numerics.md).
 //!
