@@ -26,6 +26,7 @@ mod gis;
 mod gis_scenario;
 mod hostile;
 mod hostile_outputs;
+mod line_bed_normal;
 mod multilayer;
 mod newcomer;
 mod nh_multilayer;

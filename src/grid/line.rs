@@ -6,11 +6,14 @@
 //!
 //! - local coordinates: z = b(X) + b̃(X), b̃ = −X tan θ (the plane, up to a constant)
 //!   and g_n = g cos θ (Garres-Díaz et al. 2021, eq. 15b);
-//! - Cartesian coordinates: z = b(x), g_n = g (Garres-Díaz et al. 2021, §4.1).
+//! - Cartesian coordinates: z = b(x), g_n = g (Garres-Díaz et al. 2021, §4.1);
+//! - the bed-normal frame (docs/numerics.md, "The bed-normal frame"): z = b(x), the
+//!   cells horizontal, with the bed's metric ([`BedMetric`] of one row: b_x, cos θ,
+//!   b_xx); an outflow's ghost bed continues the edge cell's slope, as on a raster.
 //!
 //! Arrays carry one ghost cell on each side: index 0 and nx + 1.
 
-use super::{BoundaryKind, Coordinates, Grid, Point, Stencil};
+use super::{BedMetric, BoundaryKind, Coordinates, Grid, Point, Stencil};
 use crate::physics::GRAVITY;
 
 /// A uniform 1-D grid of nx cells with its bed, potential and boundary kinds: the grid
@@ -35,6 +38,9 @@ pub struct Line {
     pub coordinates: Coordinates,
     pub left: BoundaryKind,
     pub right: BoundaryKind,
+    /// The bed's gradient, cos θ and curvature in the bed-normal frame (one row:
+    /// b_y = 0), else `None`.
+    metric: Option<BedMetric>,
 }
 
 /// What a line is built from; `b` is sampled at the cell centres.
@@ -129,6 +135,21 @@ impl Line {
         b_ghost.push(b[0]);
         b_ghost.extend_from_slice(&b);
         b_ghost.push(b[nx - 1]);
+        let metric = (spec.coordinates == Coordinates::BedNormal)
+            .then(|| BedMetric::new(nx, 1, dx, dx, &b, &[]));
+        if let Some(m) = &metric {
+            // As a raster's west and east ghosts (`Raster2d::with_walls`): an outflow
+            // continues the bed's slope (the edge cell's gradient), so that a flow on
+            // a slope cut by the edge leaves it; a wall keeps the edge cell's bed. The
+            // potential is the bed.
+            let ghost = |kind: BoundaryKind, edge: f64, slope: f64| match kind {
+                BoundaryKind::Wall => edge,
+                BoundaryKind::Outflow => edge + slope,
+            };
+            b_ghost[0] = ghost(spec.left, b[0], -m.gx[0] * dx);
+            b_ghost[nx + 1] = ghost(spec.right, b[nx - 1], m.gx[nx - 1] * dx);
+            z.copy_from_slice(&b_ghost);
+        }
         Line {
             nx,
             x_min: spec.x_min,
@@ -142,11 +163,27 @@ impl Line {
             coordinates: spec.coordinates,
             left: spec.left,
             right: spec.right,
+            metric,
         }
     }
 
     pub fn x_max(&self) -> f64 {
         self.x_min + self.nx as f64 * self.dx
+    }
+
+    /// The bed's metric in the bed-normal frame (`None` in the other frames).
+    #[inline(always)]
+    pub fn metric(&self) -> Option<&BedMetric> {
+        self.metric.as_ref()
+    }
+
+    /// The line without the centrifugal term in the basal normal stress of the
+    /// bed-normal frame (`domain.curvature = false`; nothing changes in the others).
+    pub fn without_friction_curvature(mut self) -> Line {
+        if let Some(m) = &mut self.metric {
+            m.in_friction = false;
+        }
+        self
     }
 }
 
@@ -217,4 +254,52 @@ pub fn interpolate(x: &[f64], dx: f64, xg: f64) -> (usize, f64) {
         return (i, 0.0);
     }
     (i, ((xg - x[i]) / dx).clamp(0.0, 1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(coordinates: Coordinates, left: BoundaryKind, right: BoundaryKind) -> LineSpec {
+        LineSpec {
+            x_min: 0.0,
+            x_max: 4.0,
+            cells: 4,
+            slope_deg: 0.0,
+            coordinates,
+            left,
+            right,
+        }
+    }
+
+    /// In the bed-normal frame an outflow's ghost bed continues the edge cell's slope
+    /// and a wall's keeps the edge bed, the potential is the bed, and the metric is
+    /// the bed's (b = x² at x = 0.5 … 3.5: b_x = 2x where centred, one-sided at the
+    /// ends, and b_xx the differences of b_x); the other frames keep the edge bed and
+    /// have no metric.
+    #[test]
+    fn a_bed_normal_line_has_the_rasters_ghost_beds_and_the_beds_metric() {
+        let bed: Vec<f64> = (0..4).map(|i| (i as f64 + 0.5).powi(2)).collect();
+        let (wall, outflow) = (BoundaryKind::Wall, BoundaryKind::Outflow);
+        let line = Line::new(&spec(Coordinates::BedNormal, outflow, wall), bed.clone());
+        let m = line.metric().expect("a metric");
+        assert_eq!(m.gx, [2.0, 3.0, 5.0, 6.0]);
+        assert_eq!(m.gy, [0.0; 4]);
+        assert_eq!(m.hxx, [1.0, 1.5, 1.5, 1.0]);
+        assert_eq!((m.hxy.clone(), m.hyy.clone()), (vec![0.0; 4], vec![0.0; 4]));
+        assert_eq!(line.b_ghost, [0.25 - 2.0, 0.25, 2.25, 6.25, 12.25, 12.25]);
+        assert_eq!(line.z, line.b_ghost);
+        assert_eq!(line.g_n, GRAVITY);
+        assert!(
+            m.in_friction
+                && !line
+                    .without_friction_curvature()
+                    .metric()
+                    .unwrap()
+                    .in_friction
+        );
+        let flat = Line::new(&spec(Coordinates::Cartesian, outflow, wall), bed);
+        assert!(flat.metric().is_none());
+        assert_eq!(flat.b_ghost[0], 0.25);
+    }
 }

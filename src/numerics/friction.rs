@@ -14,7 +14,14 @@
 //! satisfies |η_{i+1} − η_{i−1}| ≤ 2Δx μ_s has |(hu)*| ≤ Δt σ exactly and stays at rest,
 //! for any profile. Escalante et al. 2023's well-balancing thickness ĥ of eq. (25) compensates the
 //! centred split ½ g_n h̄ Δη of the printed scheme and is not needed (docs/numerics.md).
+//!
+//! On a bed-normal line ([`BedNormalFrictionStep`]) the raster's rule of the frame
+//! ([`super::friction_2d::bed_normal_friction`], on its one row with v = 0): the law's
+//! scalar update acts on the speed along the bed |U| = |u|/c with the normal
+//! thickness h = c H and the normal stress per unit mass c (g + b_xx u²)₊ (the
+//! centrifugal term dropped with `domain.curvature = false`), and scales H u.
 
+use super::friction_2d::bed_normal_friction;
 use super::{Stage, StageError};
 use crate::grid::Line;
 use crate::physics::rheology::BasalFriction;
@@ -50,6 +57,36 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for CoulombFrictionStep<L> {
                 continue;
             }
             *q = self.law.friction_update(*q, h, dt, g_n);
+        }
+        state.fill_ghosts(mesh);
+        Ok(())
+    }
+}
+
+/// The friction step of the monolayer on a bed-normal line (module documentation).
+#[derive(Debug)]
+pub struct BedNormalFrictionStep<L: BasalFriction> {
+    law: L,
+}
+
+impl<L: BasalFriction> BedNormalFrictionStep<L> {
+    pub fn new(law: L) -> Self {
+        BedNormalFrictionStep { law }
+    }
+}
+
+impl<L: BasalFriction> Stage<Line, LayeredState> for BedNormalFrictionStep<L> {
+    fn name(&self) -> &'static str {
+        "friction"
+    }
+
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+        debug_assert_eq!(state.layers, 1);
+        let m = mesh.metric().expect("a bed-normal line");
+        let nx = mesh.nx;
+        let cells = state.hu[1..=nx].iter_mut().zip(&state.h[1..=nx]);
+        for (k, (q, &h)) in cells.enumerate() {
+            (*q, _) = bed_normal_friction(&self.law, m, k, (*q, 0.0), h, dt);
         }
         state.fill_ghosts(mesh);
         Ok(())

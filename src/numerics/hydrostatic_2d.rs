@@ -71,9 +71,10 @@
 //! Δt = CFL · min(Δx, Δy)/s, Δt (s_x/Δx + s_y/Δy) ≤ 2 CFL; the unsplit update keeps
 //! h ≥ 0 for CFL ≤ ½ (the limiter and the run loop's retry catch the rest).
 
+use super::bed_normal::{self, face_sources, FaceFlux, FaceSide};
 use super::face::{
-    drained_fraction, interface_with_friction, interface_with_zoned_transverse_drive,
-    layer_momentum_flux, mass_flux, transverse_flux, Interface, Side,
+    drained_fraction, interface_with_zoned_transverse_drive, layer_momentum_flux, mass_flux,
+    transverse_flux, Side,
 };
 use super::friction_2d::CellFriction;
 use super::workers::Disjoint;
@@ -88,52 +89,6 @@ use crate::state::tiles::{Tiles, TILE_COLS};
 use crate::state::State2d;
 use std::ops::Range;
 use std::sync::Mutex;
-
-/// What one face gives its two cells: mass flux, normal and tangential momentum
-/// fluxes, the pressure sources of the lower-index (l) and higher-index (r) cell and
-/// their gravity parts.
-#[derive(Debug, Clone, Copy, Default)]
-struct FaceFlux {
-    h: f64,
-    qn: f64,
-    qt: f64,
-    share_l: f64,
-    share_r: f64,
-    body_l: f64,
-    body_r: f64,
-}
-
-impl FaceFlux {
-    /// The fluxes scaled by the donor's draining factor θ (sources unchanged).
-    #[inline(always)]
-    fn drained(mut self, theta: f64) -> FaceFlux {
-        self.h *= theta;
-        self.qn *= theta;
-        self.qt *= theta;
-        self
-    }
-}
-
-/// A cell as a face sees it: the side along the face's normal, the tangential
-/// velocity `t`, the tangential drive u_t/Δt − g_n ∂_t(h + z) of the cell (for the
-/// disk threshold of ΔC, [`super::face::interface_with_zoned_transverse_drive`]) and the
-/// cell's speed |(u, v)| (for a friction law whose face threshold takes the cells'
-/// own speeds, [`BasalFriction::face_mu`]).
-///
-/// In the bed-normal frame `side.u` is the normal component of the horizontal
-/// velocity (which carries the mass), `side.u_base` and `t` the normal and tangential
-/// covariant components of the tangent velocity (the momenta the face carries,
-/// [`BedMetric::lower`]), `drive` the tangential covariant drive, `speed` the speed
-/// along the surface, `kappa` the cell's centrifugal term uᵀ∇²b u. In the other
-/// frames `side.u_base` = `side.u` and `kappa` = 0.
-#[derive(Debug, Clone, Copy)]
-struct FaceSide {
-    side: Side,
-    t: f64,
-    drive: f64,
-    speed: f64,
-    kappa: f64,
-}
 
 /// A cell as its four faces see it, computed once per sweep: thickness, the
 /// velocities u = hu/h and v = hv/h, √h, bed and potential, the drives along x
@@ -707,17 +662,9 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         }
     }
 
-    /// A face in the bed-normal frame (docs/numerics.md): the 1-D face kernel along the
-    /// face with the face's geometry. With the bed's slope ∂_n b = Δb/d across the face
-    /// and ∂_t b the mean of the cells' along it, c_f² = 1/(1 + |∇b|²): the kernel's
-    /// gravity is g c_f², its potential b/c_f² (Δz = Δb/c_f², the bed itself flat in
-    /// the face's plane: no step), its thickness H = h/c per horizontal area and its
-    /// velocity the horizontal normal component, so that its source g c_f² H̄ Δ(H + z)/d
-    /// is the covariant pressure and gravity g c H ∂_n(c H) + g H ∂_n b. ΔC treats as
-    /// bed the friction against the covariant drive d = (d_n, d_t) up to the disk
-    /// |d|_{G⁻¹} ≤ μ g_N in the surface's metric, with g_N = c_f (g + uᵀ∇²b u)₊ the
-    /// normal stress of the friction step (the mean of the cells' centrifugal terms).
-    /// The face carries the covariant momenta (normal and tangential) with the mass.
+    /// A face in the bed-normal frame ([`bed_normal::face`], docs/numerics.md) with the
+    /// geometry of its cells `cells` and, with friction zones, the law of the cell the
+    /// normal drive pushes mass out of ([`Self::face_law`]).
     #[inline(always)]
     fn bed_normal_face<C: Fn() -> (usize, usize) + Copy>(
         &self,
@@ -727,76 +674,13 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         (d, along_x): (f64, bool),
         cells: C,
     ) -> FaceFlux {
-        // The cells' geometry (a ghost's is its edge cell's): the bed's slope along the
-        // face and the normal thickness.
+        // The cells' geometry (a ghost's is its edge cell's): cos θ and the bed's
+        // slope along the face.
         let (cl, cr) = cells();
         let slope_t = |c: usize| if along_x { m.gy[c] } else { m.gx[c] };
-        let (hn_l, hn_r) = (m.cos[cl] * l.side.h, m.cos[cr] * r.side.h);
-        let db = r.side.b - l.side.b;
-        let (gn, gt) = (db / d, 0.5 * (slope_t(cl) + slope_t(cr)));
-        let inv_c2 = 1.0 + gn * gn + gt * gt;
-        let c2 = 1.0 / inv_c2;
-        let (gi_nn, gi_nt, gi_tt) = (1.0 - c2 * gn * gn, -c2 * gn * gt, 1.0 - c2 * gt * gt);
-        let g_normal = c2.sqrt() * (GRAVITY + 0.5 * (l.kappa + r.kappa)).max(0.0);
-        // Absolute potentials (not Δb/c_f² on one side): a face and its mirror image
-        // then give the same bits with the sign changed, as in the other frames. The
-        // bed lies in the face's plane (b = 0: no step to reconstruct over) between two
-        // wet cells; beside a dry cell it is the potential itself, so that a dry cell
-        // whose bed stands above the wet one's surface is an emerging bed, as in the
-        // Cartesian system: it neither takes mass nor pushes the layer down.
-        let (zl, zr) = (l.side.b * inv_c2, r.side.b * inv_c2);
-        let step = l.side.h <= H_DRY || r.side.h <= H_DRY;
-        let ls = Side {
-            b: if step { zl } else { 0.0 },
-            z: zl,
-            ..l.side
-        };
-        let rs = Side {
-            b: if step { zr } else { 0.0 },
-            z: zr,
-            ..r.side
-        };
-        let (wl, wr) = (ls.sqrt_h, rs.sqrt_h);
-        let friction = |drive: f64, mu: f64| {
-            let threshold = mu * g_normal;
-            let drive_t = (wl * l.drive + wr * r.drive) / (wl + wr);
-            let metric2 =
-                gi_nn * drive * drive + 2.0 * gi_nt * drive * drive_t + gi_tt * drive_t * drive_t;
-            let magnitude = metric2.max(0.0).sqrt();
-            if magnitude <= threshold {
-                -drive
-            } else {
-                -drive * (threshold / magnitude)
-            }
-        };
-        let mu_of = |_speed: f64, _h: f64, drive: f64| {
-            let law = self.face_law(drive, cells);
-            let (speed, h) = (0.5 * (l.speed + r.speed), 0.5 * (hn_l + hn_r));
-            law.face_mu((l.speed, hn_l), (r.speed, hn_r), speed, h, g_normal)
-        };
-        // The kernel's gravity, and that of its wave speeds: along the face's normal
-        // the waves of H run at √(g c_f² H G⁻¹_nn) in horizontal coordinates.
-        let g_k = GRAVITY * c2;
-        let gravities = (g_k, g_k * gi_nn);
-        match interface_with_friction(mu_of, ls, rs, 0.0, friction, gravities, d, self.dt) {
-            None => FaceFlux::default(),
-            Some((c, sl, sr)) => {
-                let t_l = if c.left_at_rest { 0.0 } else { l.t };
-                let t_r = if c.right_at_rest { 0.0 } else { r.t };
-                // Both momenta go with the mass (HLL's form, or the donor's own where
-                // the face drains it: `drained_upwind`).
-                let h = mass_flux(&c, sl, sr);
-                let drain = self.dt / d;
-                FaceFlux {
-                    h,
-                    qn: drained_upwind(h, drain, (sl.h, sr.h), (sl.u_base, sr.u_base))
-                        .unwrap_or_else(|| transverse_flux(&c, sl, sr, sl.u_base, sr.u_base)),
-                    qt: drained_upwind(h, drain, (sl.h, sr.h), (t_l, t_r))
-                        .unwrap_or_else(|| transverse_flux(&c, sl, sr, t_l, t_r)),
-                    ..face_sources(&c)
-                }
-            }
-        }
+        let law_of = |drive: f64| self.face_law(drive, cells);
+        let (cos, slopes) = ((m.cos[cl], m.cos[cr]), (slope_t(cl), slope_t(cr)));
+        bed_normal::face(l, r, cos, slopes, law_of, d, self.dt)
     }
 
     /// A face with a wall on the left (`wall_l`), the right or both sides: the wall
@@ -953,24 +837,9 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         let Some(m) = self.bed() else {
             return update_cell(old, r, faces);
         };
-        let (h, qx, qy) = old;
-        let (px, py) = m.lower(cell, qx, qy);
-        let (hn, mut px, mut py) = update_cell((h, px, py), r, faces);
-        if hn <= H_DRY {
-            return (hn, 0.0, 0.0);
-        }
-        if h > H_DRY {
-            let (u, v) = (qx / h, qy / h);
-            let s = self.dt * h * (m.gx[cell] * u + m.gy[cell] * v);
-            px += s * (m.hxx[cell] * u + m.hxy[cell] * v);
-            py += s * (m.hxy[cell] * u + m.hyy[cell] * v);
-        }
-        let (qu, qv) = m.raise(cell, px, py);
-        // A film that the step drained: its velocity desingularised (Kurganov &
-        // Petrova 2007, eq. 2.17), so that momentum exported through a face with its
-        // neighbour's mass (the HLL flux's central part) cannot leave it racing.
-        let scale = desingularised(hn);
-        (hn, qu * scale, qv * scale)
+        bed_normal::update(m, cell, old, self.dt, |lowered| {
+            update_cell(lowered, r, faces)
+        })
     }
 
     /// The four faces (west, east, south, north) of cell (i, j) of the limited pass,
@@ -1038,21 +907,6 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     }
 }
 
-/// The pressure sources of a face and their gravity parts (its fluxes left at zero,
-/// for the frame's own).
-#[inline(always)]
-fn face_sources(c: &Interface) -> FaceFlux {
-    FaceFlux {
-        h: 0.0,
-        qn: 0.0,
-        qt: 0.0,
-        share_l: c.share_left,
-        share_r: c.share_right,
-        body_l: c.body_left,
-        body_r: c.body_right,
-    }
-}
-
 /// The new state of one cell from its old state and its four faces (west, east,
 /// south, north), `r` = (Δt/Δx, Δt/Δy): (unclipped new thickness, h u, h v).
 #[inline(always)]
@@ -1076,41 +930,6 @@ fn update_cell(
         (hn, 0.0, 0.0)
     } else {
         (hn, qu, qv)
-    }
-}
-
-/// The momentum flux h w_donor of the face's donor cell (upwind of the mass flux
-/// `h`) when the face alone takes more than half of the donor's thickness in the step
-/// (`drain` = Δt/d), else `None` (the HLL flux). A cell's own flux takes at most the
-/// CFL number's fraction of it; more happens across a strong thickness jump held by ΔC
-/// (its diffusion cancelled), where HLL's central part drains a film at the rate of
-/// the thick side's flux and carries the thick side's momentum out of it: the film was
-/// left with the opposite momentum and raced off, up to 1e5 m/s, on the flank of a
-/// valley.
-#[inline(always)]
-fn drained_upwind(
-    h: f64,
-    drain: f64,
-    (h_l, h_r): (f64, f64),
-    (w_l, w_r): (f64, f64),
-) -> Option<f64> {
-    let (donor, w) = if h > 0.0 { (h_l, w_l) } else { (h_r, w_r) };
-    (drain * h.abs() > 0.5 * donor).then_some(h * w)
-}
-
-/// Films thinner than this (m, thickness per horizontal area) have their velocity
-/// desingularised in the bed-normal frame ([`desingularised`]).
-const H_FILM: f64 = 1e-6;
-
-/// The factor 2H²/(H² + max(H², ε²)) (ε = [`H_FILM`]) on the discharge of a cell of
-/// thickness `h`: 1 (to the bit) for H ≥ ε, the velocity q/H otherwise replaced by
-/// 2Hq/(H² + ε²) (Kurganov & Petrova 2007, eq. 2.17), bounded as H → 0.
-#[inline(always)]
-fn desingularised(h: f64) -> f64 {
-    if h >= H_FILM {
-        1.0
-    } else {
-        2.0 * h * h / (h * h + H_FILM * H_FILM)
     }
 }
 

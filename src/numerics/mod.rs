@@ -9,6 +9,7 @@
 //! ([`crate::interrupt`]) and give up the step with [`StageError::Interrupted`].
 
 pub mod banded;
+pub mod bed_normal;
 pub mod dilatant;
 pub mod face;
 pub mod friction;
@@ -16,6 +17,7 @@ pub mod friction_2d;
 pub mod hydrostatic;
 pub mod hydrostatic_2d;
 pub mod linalg;
+pub mod line_bed_normal;
 pub mod muscl;
 pub mod nh_multilayer;
 

@@ -48,6 +48,9 @@ pub struct Domain {
     /// Inclination θ of the reference plane, degrees (0 for Cartesian runs).
     pub slope_deg: f64,
     pub coordinates: Coordinates,
+    /// `domain.curvature`: the centrifugal term uᵀ∇²b u in the basal normal stress of
+    /// the bed-normal frame (default true; no effect in the other frames).
+    pub curvature: bool,
     /// The y axis of a raster domain (`cells` is then nx); `None` on a line.
     pub plane: Option<Plane>,
 }
@@ -60,9 +63,6 @@ pub struct Plane {
     pub y_max: f64,
     pub ny: usize,
     pub crs: crate::gis::Crs,
-    /// `domain.curvature`: the centrifugal term uᵀ∇²b u in the basal normal stress of
-    /// the bed-normal frame (default true).
-    pub curvature: bool,
     /// (x of the west edge, y of the north edge, cell size) of the raster bed whose
     /// grid the domain is, exactly as read (after `domain.crop` and `domain.coarsen`),
     /// so that the outputs sit on the DEM's very grid; `None` for a domain given by

@@ -3,6 +3,9 @@
 //! column sits on a layer h_i of the same material, so h = initial.h + h_i),
 //! and builds the pipeline of the chosen model (every layer starts with the velocity
 //! `initial.u`; a non-hydrostatic run also with the normal velocity `initial.w`).
+//! In the bed-normal frame the state holds H = h/c per horizontal length (as a raster
+//! does): `initial.h` and the erodible bed are thicknesses normal to the bed, and
+//! `initial.u` is the horizontal velocity.
 //! Everything that can be wrong with the scenario was refused by its validation.
 
 use crate::model::granular::config::Pressure;
@@ -15,10 +18,19 @@ use crate::state::layered::LayeredState;
 
 pub fn build(scn: &Scenario) -> Simulation<Granular> {
     let mesh = scenario_line(scn);
-    let h_bed = &scn.sampled.h_bed;
-    let h: Vec<f64> = scn
-        .sampled
-        .h
+    let mesh = if scn.domain.curvature {
+        mesh
+    } else {
+        mesh.without_friction_curvature()
+    };
+    let per_length = |values: &[f64]| -> Vec<f64> {
+        match mesh.metric() {
+            Some(m) => values.iter().zip(&m.cos).map(|(h, c)| h / c).collect(),
+            None => values.to_vec(),
+        }
+    };
+    let h_bed = &per_length(&scn.sampled.h_bed);
+    let h: Vec<f64> = per_length(&scn.sampled.h)
         .iter()
         .zip(h_bed)
         .map(|(&h, &h_i)| h + h_i)

@@ -39,7 +39,7 @@ pub fn scenario_raster(scn: &Scenario) -> Raster2d {
     };
     let raster = Raster2d::with_walls(spec, scn.sampled.b.clone(), scn.sampled.wall.clone())
         .unwrap_or_else(|e| panic!("a validated raster domain was refused: {e}"));
-    if plane.curvature {
+    if d.curvature {
         raster
     } else {
         raster.without_friction_curvature()

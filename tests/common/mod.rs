@@ -74,6 +74,7 @@ impl Case {
                 cells: self.mesh.cells,
                 slope_deg: self.mesh.slope_deg,
                 coordinates: self.mesh.coordinates,
+                curvature: true,
                 plane: None,
             },
             bed: Profile::function(move |x, _| b(x)),

@@ -16,6 +16,13 @@
 //!   √(x + y) ≤ √x + √y for the averaged shear of a face) and the column-blind bound
 //!   max_i |ū_i| + √(g_n max_i h_i + max_i σ_i); both bound every face speed.
 //!
+//! In the bed-normal frame (N = 1) the line holds H = h/c and the horizontal discharge
+//! H u, as a raster does: the mass is ∫H dx, the kinetic energy ∫½H|U|² dx and the
+//! largest speed max |U| with |U| = |u|/c the speed along the bed, the signal speed
+//! max_i (|u_i| + √(g c_i² H_i)) (the raster's, whose faces' waves run at
+//! √(g c_f² G⁻¹_xx H) = c_f² √(g H)), and the front counts the normal thickness
+//! c (H − H_bed).
+//!
 //! The global bound max_i |u_i| + √(g_n max_i h_i), maxima taken over different cells,
 //! is never smaller and often much larger (a fast thin front and a slow thick column):
 //! it would take more steps than the flux needs.
@@ -23,6 +30,7 @@
 use crate::grid::Line;
 use crate::model::Diagnostics;
 use crate::physics::shallow::{celerity, velocity, H_DRY};
+use crate::physics::GRAVITY;
 use crate::state::layered::LayeredState;
 
 pub fn diagnose(
@@ -41,7 +49,15 @@ pub fn diagnose(
     for (i, ((&h, q), &bed)) in h.iter().zip(hu.chunks_exact(n)).zip(h_bed).enumerate() {
         mass += h;
         h_max = h_max.max(h);
-        if n == 1 {
+        let normal = mesh.metric().map_or(1.0, |m| m.cos[i]);
+        if let Some(m) = mesh.metric() {
+            q_sum += q[0];
+            let u = velocity(h, q[0]);
+            let (speed, c) = (m.speed(i, u, 0.0), m.cos[i]);
+            ke += h * speed * speed;
+            max_speed = max_speed.max(speed);
+            cell_max = cell_max.max(u.abs() + celerity(GRAVITY * c * c, h));
+        } else if n == 1 {
             q_sum += q[0];
             let u = velocity(h, q[0]);
             ke += h * u * u;
@@ -65,7 +81,7 @@ pub fn diagnose(
                 cell_max = cell_max.max(mean.abs() + celerity(mesh.g_n, h));
             }
         }
-        if h - bed > front_threshold {
+        if normal * (h - bed) > front_threshold {
             front = Some(i);
         }
     }

@@ -8,8 +8,9 @@
 use crate::grid::Line;
 use crate::model::granular::config::{MultilayerSpec, Pressure};
 use crate::numerics::banded::BandedCholesky;
-use crate::numerics::friction::CoulombFrictionStep;
+use crate::numerics::friction::{BedNormalFrictionStep, CoulombFrictionStep};
 use crate::numerics::hydrostatic::HydrostaticStep;
+use crate::numerics::line_bed_normal::BedNormalLineStep;
 use crate::numerics::muscl::Limiter;
 use crate::numerics::nh_multilayer::NhViscousStep;
 use crate::numerics::nonhydrostatic::NhFrictionStep;
@@ -69,6 +70,16 @@ impl WithLaw for Stages<'_> {
     fn with<L: BasalFriction + LocalFriction + 'static>(self, law: L) -> Self::Out {
         let (mesh, spec) = (self.mesh, self.multilayer);
         let (nx, l) = (mesh.nx, &spec.layer_fractions);
+        if mesh.metric().is_some() {
+            // The bed-normal frame (the validation allows it for the monolayer
+            // hydrostatic model at order 1 only).
+            assert!(self.pressure == Pressure::Hydrostatic && l.len() == 1);
+            assert!(self.second_order.is_none());
+            return vec![
+                Box::new(BedNormalLineStep::new(law, nx)),
+                Box::new(BedNormalFrictionStep::new(law)),
+            ];
+        }
         if let Some(limiter) = self.second_order {
             assert!(self.pressure == Pressure::Hydrostatic && l.len() == 1);
             return vec![Box::new(HeunSplitting::new(law, nx, limiter))];

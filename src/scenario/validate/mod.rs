@@ -254,6 +254,7 @@ fn validate(
         );
     }
     nonhydrostatic_solver_fits(&domain, &model)?;
+    bed_normal_line_fits(&domain, &model)?;
     if matches!(friction, super::FrictionLaw::Voellmy { .. }) && model.layers > 1 {
         // Its drag g|u|²/ξ is a basal law of the depth-averaged flow; inside a column
         // of layers it has no local form.
@@ -464,26 +465,42 @@ fn domain(d: RawDomain) -> Res<Domain> {
         );
     }
     let (coordinates, slope_deg) = frame(&d, Coordinates::Local)?;
-    if d.curvature.is_some() {
-        return err(
-            "domain.curvature",
-            "the centrifugal term belongs to the bed-normal frame of raster domains",
-        );
-    }
-    if coordinates == Coordinates::BedNormal {
-        return err(
-            "domain.coordinates",
-            "\"bed_normal\" is a frame of raster (2-D) domains; a line takes \"local\" or \"cartesian\"",
-        );
-    }
     Ok(Domain {
         x_min,
         x_max,
         cells,
         slope_deg,
         coordinates,
+        curvature: plane::curvature(&d, coordinates)?,
         plane: None,
     })
+}
+
+/// The bed-normal frame on a line exists for the monolayer hydrostatic granular model
+/// (the 1-D reduction of the raster's system, docs/numerics.md); the other models
+/// and layer counts are written in the local or Cartesian frame and refuse it by name.
+fn bed_normal_line_fits(domain: &Domain, model: &ModelSpec) -> Res<()> {
+    if domain.plane.is_some() || domain.coordinates != Coordinates::BedNormal {
+        return Ok(());
+    }
+    let refuse = |what: String| {
+        err(
+            "domain.coordinates",
+            format!(
+                "\"bed_normal\" on a line is the frame of the monolayer hydrostatic granular model; {what}: use \"local\" or \"cartesian\""
+            ),
+        )
+    };
+    if model.kind != crate::model::ModelKind::Granular {
+        return refuse(format!("model.kind is \"{}\"", model.kind.name()));
+    }
+    if model.layers != 1 {
+        return refuse(format!("model.layers is {}", model.layers));
+    }
+    if model.pressure != Pressure::Hydrostatic {
+        return refuse("model.pressure is \"nonhydrostatic\"".to_string());
+    }
+    Ok(())
 }
 
 /// `domain.coordinates` (`default` where it is not given) and `domain.slope_deg`.
@@ -646,6 +663,9 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
         }
         if domain.plane.is_some() {
             return refuse("the domain is a raster");
+        }
+        if domain.coordinates == Coordinates::BedNormal {
+            return refuse("domain.coordinates is \"bed_normal\" (order 2 is written for the local and Cartesian frames)");
         }
     } else if n.limiter.is_some() {
         return err(
@@ -963,6 +983,7 @@ t_end = 2.0
                 cells: 10,
                 slope_deg: 0.0,
                 coordinates: Coordinates::Local,
+                curvature: true,
                 plane: None,
             }
         );

@@ -139,7 +139,7 @@ fn axis(lo_key: &str, hi_key: &str, lo: Option<f64>, hi: Option<f64>, n: usize) 
 }
 
 /// `domain.curvature`, which only the bed-normal frame takes.
-fn curvature(d: &RawDomain, coordinates: Coordinates) -> Res<bool> {
+pub(super) fn curvature(d: &RawDomain, coordinates: Coordinates) -> Res<bool> {
     match d.curvature {
         Some(_) if coordinates != Coordinates::BedNormal => err(
             "domain.curvature",
@@ -161,12 +161,12 @@ pub(super) fn domain(d: RawDomain) -> Res<Domain> {
         cells: nx,
         slope_deg,
         coordinates,
+        curvature: curvature(&d, coordinates)?,
         plane: Some(Plane {
             y_min,
             y_max,
             ny,
             crs: Crs::unknown(),
-            curvature: curvature(&d, coordinates)?,
             geotransform: None,
         }),
     })
@@ -194,12 +194,12 @@ pub(super) fn domain_of_raster(d: RawDomain, bed: &Profile) -> Res<Domain> {
         cells: r.nx,
         slope_deg,
         coordinates,
+        curvature: curvature(&d, coordinates)?,
         plane: Some(Plane {
             y_min: b.y_min,
             y_max: b.y_max,
             ny: r.ny,
             crs: r.crs.clone(),
-            curvature: curvature(&d, coordinates)?,
             geotransform: Some([r.x_left, r.y_top, r.cell_size]),
         }),
     })
