@@ -536,3 +536,38 @@ fn the_dem_scenario_runs_in_the_bed_normal_frame_with_short_steps() {
     assert!((mass - mass0).abs() < 1e-11 * mass0, "{mass0} → {mass}");
     assert!(top < (2.0 * 9.81 * 144.0f64).sqrt(), "{top}");
 }
+
+/// The fastest cell that a speed-bound failure is placed at is the one of the largest
+/// speed along the surface, the speed the bound sees: on a 45° slope a horizontal
+/// velocity of 10 m/s is 14.1 m/s along the bed, faster than 12 m/s on the flat.
+#[test]
+fn the_fastest_cell_is_the_fastest_along_the_surface() {
+    let (nx, ny) = (20, 3);
+    let sides = Sides {
+        west: WALL,
+        east: WALL,
+        south: WALL,
+        north: WALL,
+    };
+    let r = raster(
+        nx,
+        ny,
+        (0.0, 20.0),
+        (0.0, 3.0),
+        sides,
+        Coordinates::BedNormal,
+        0.0,
+        |x, _| if x < 10.0 { 10.0 - x } else { 0.0 },
+    );
+    let cells = nx * ny;
+    let (steep, flat) = (nx + 4, nx + 15);
+    let mut h = vec![0.0; cells];
+    let mut u = vec![0.0; cells];
+    (h[steep], u[steep]) = (1.0, 10.0);
+    (h[flat], u[flat]) = (1.0, 12.0);
+    let s = State2d::from_velocities(h, &u, &vec![0.0; cells]);
+    let model = Granular2d::new(&r, 1e-3);
+    assert_eq!(model.fastest_cell(&r, &s), Some(steep));
+    let speed = model.diagnose(&r, &s).max_speed;
+    assert!((speed - 200f64.sqrt()).abs() < 1e-12, "{speed}");
+}

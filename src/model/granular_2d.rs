@@ -354,12 +354,18 @@ impl Model for Granular2d {
         backup.tiles.clone_from(tiles);
     }
 
-    /// The first cell with the largest u² + v² (the speed of [`Self::diagnose`]).
-    fn fastest_cell(&self, _raster: &Raster2d, state: &State2d) -> Option<usize> {
+    /// The first cell with the largest speed of [`Self::diagnose`]: u² + v², or in the
+    /// bed-normal frame the speed along the surface (which is not the fastest
+    /// horizontal velocity where the bed's slope varies).
+    fn fastest_cell(&self, raster: &Raster2d, state: &State2d) -> Option<usize> {
+        let metric = raster.metric();
         let speed2 = |k: usize| {
             let h = state.h[k];
             let (u, v) = (velocity(h, state.hu[k]), velocity(h, state.hv[k]));
-            u * u + v * v
+            match metric {
+                Some(m) => m.speed(k, u, v),
+                None => u * u + v * v,
+            }
         };
         first_maximum((0..state.h.len()).map(speed2))
     }
