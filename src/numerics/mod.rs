@@ -17,6 +17,7 @@ pub mod hydrostatic;
 pub mod hydrostatic_2d;
 pub mod linalg;
 pub mod muscl;
+pub mod muscl_2d;
 pub mod nh_multilayer;
 
 pub mod nonhydrostatic;

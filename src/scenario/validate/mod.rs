@@ -331,7 +331,7 @@ fn validate(
             "applies to raster (2-D) runs only: a line counts every cell for its kinetic energy",
         );
     }
-    let numerics = numerics(raw.numerics.unwrap_or_default(), &model, &domain)?;
+    let numerics = numerics(raw.numerics.unwrap_or_default(), &model)?;
     let raw_output = raw.output.unwrap_or_default();
     let mut output = output(&raw_output, &time, &domain, default_output)?;
     output.path = path::spec(raw_output.path.as_ref(), &domain, base_dir)?;
@@ -608,9 +608,10 @@ fn line_boundary(b: RawBoundary) -> Res<Boundaries> {
     })
 }
 
-/// `[numerics]`: order 2 exists for the monolayer hydrostatic granular model on a line
-/// (docs/numerics.md, "Second order"); any other model refuses it by name.
-fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics> {
+/// `[numerics]`: order 2 exists for the monolayer hydrostatic granular model, on a line
+/// and on a raster in all three frames (docs/numerics.md, "Second order"); any other
+/// model refuses it by name.
+fn numerics(n: RawNumerics, model: &ModelSpec) -> Res<Numerics> {
     let order = int_in("numerics.order", n.order.unwrap_or(1), 1, 2)? as u8;
     let limiters = [
         ("minmod", Limiter::Minmod),
@@ -628,7 +629,7 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
             err(
                 "numerics.order",
                 format!(
-                    "order 2 is implemented for the monolayer hydrostatic granular model on a line; {what}: use numerics.order = 1"
+                    "order 2 is implemented for the monolayer hydrostatic granular model; {what}: use numerics.order = 1"
                 ),
             )
         };
@@ -643,9 +644,6 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
         }
         if model.layers > 1 {
             return refuse(&format!("model.layers is {}", model.layers));
-        }
-        if domain.plane.is_some() {
-            return refuse("the domain is a raster");
         }
     } else if n.limiter.is_some() {
         return err(
