@@ -293,14 +293,12 @@ def orders_2d(args, name, out, schemes, rows):
         ref_h5 = out / "collapse2d_reference.h5"
         _, _, ref, _, wall, cpu = raster_run(args.granflow, scenario, fine,
                                              ["numerics.order=2", "numerics.limiter=mc"], ref_h5, args.threads)
-        print(f"
-collapse2d: reference order 2 (mc) on {fine}² cells, wall {wall:.1f} s, CPU {cpu:.1f} s")
+        print(f"\ncollapse2d: reference order 2 (mc) on {fine}² cells, wall {wall:.1f} s, CPU {cpu:.1f} s")
 
         def errors(x, y, h, t, n):
             r = coarsen2d(ref, fine // n)
             return [float(np.abs(h - r).sum() / r.sum())]
-    print(f"
-{name}")
+    print(f"\n{name}")
     for order, lim in schemes:
         prev = None
         for n in grids:

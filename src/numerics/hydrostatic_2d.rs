@@ -644,7 +644,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     fn cell_slopes(&self, limiter: Limiter, i: usize, j: usize) -> [Option<AxisSlopes>; 2] {
         let cell = j * self.nx + i;
         let h = self.h[cell];
-        if !(h > H_DRY) {
+        if h <= H_DRY || h.is_nan() {
             return [None, None];
         }
         let (u, v) = (velocity(h, self.hu[cell]), velocity(h, self.hv[cell]));
