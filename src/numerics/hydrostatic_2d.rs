@@ -293,7 +293,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     }
 
     /// Bytes of scratch per cell that the step holds (new state, draining factors,
-    /// per-tile results, the threads' face and view rows), for the memory budget of
+    /// per-tile results, the threads' face and view rows, at order 2 the slopes), for the memory budget of
     /// `docs/performance.md`.
     pub fn bytes_per_cell(&self) -> f64 {
         let cells = self.h_new.len() as f64;
@@ -301,7 +301,12 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let rows = self.scratch.len()
             * TILE_COLS
             * (2 * std::mem::size_of::<FaceFlux>() + 2 * std::mem::size_of::<CellView>());
-        (4.0 * 8.0 * cells + (per_tile * self.tile_worst.len() + rows) as f64) / cells
+        // Order 2: the slopes along x and y of every cell.
+        let slopes = match &self.recon {
+            Some(_) => 2.0 * std::mem::size_of::<Option<AxisSlopes>>() as f64,
+            None => 0.0,
+        };
+        (4.0 * 8.0 * cells + (per_tile * self.tile_worst.len() + rows) as f64) / cells + slopes
     }
 }
 
