@@ -311,8 +311,9 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
 }
 
 /// The read-only data of one step; `BN`: the raster is in the bed-normal frame (the
-/// flat frames' code is compiled without its branches).
-struct Ctx<'a, L: BasalFriction, const BN: bool> {
+/// flat frames' code is compiled without its branches); `O2`: order 2 (the order-1
+/// code is compiled without the reconstruction's, so that it keeps its speed).
+struct Ctx<'a, L: BasalFriction, const BN: bool, const O2: bool> {
     friction: &'a CellFriction<L>,
     raster: &'a Raster2d,
     metric: Option<&'a BedMetric>,
@@ -354,7 +355,7 @@ struct Centres {
     r: (f64, f64, f64),
 }
 
-impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
+impl<'a, L: BasalFriction, const BN: bool, const O2: bool> Ctx<'a, L, BN, O2> {
     /// The bed's metric in the bed-normal frame, `None` (known at compile time) in
     /// the others.
     #[inline(always)]
@@ -815,7 +816,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
         cells: C,
         pos: FacePos,
     ) -> FaceFlux {
-        if self.recon.is_some() {
+        if O2 {
             if let Some((le, re, centres)) = self.edge_sides(pos, l, r) {
                 return self.face_flux(&le, &re, d, cells, Some(centres));
             }
@@ -1313,9 +1314,7 @@ impl<'a, L: BasalFriction, const BN: bool> Ctx<'a, L, BN> {
     #[inline(always)]
     fn update(&self, cell: usize, r: (f64, f64), faces: [&FaceFlux; 4]) -> (f64, f64, f64) {
         let old = (self.h[cell], self.hu[cell], self.hv[cell]);
-        let interior = self
-            .recon
-            .map(|_| self.interior(cell % self.nx, cell / self.nx));
+        let interior = O2.then(|| self.interior(cell % self.nx, cell / self.nx));
         let Some(m) = self.bed() else {
             return update_cell(old, r, faces, interior);
         };
@@ -1455,10 +1454,25 @@ fn face_sources(c: &Interface) -> FaceFlux {
 /// are first order, keep the rule.
 #[inline(always)]
 fn update_cell(
+    old: (f64, f64, f64),
+    r: (f64, f64),
+    faces: [&FaceFlux; 4],
+    interior: Option<([f64; 4], bool)>,
+) -> (f64, f64, f64) {
+    match interior {
+        None => update_cell_with(old, r, faces, ([0.0; 4], false), false),
+        Some(interior) => update_cell_with(old, r, faces, interior, true),
+    }
+}
+
+/// [`update_cell`] with (`o2`) or without the interior forces `interior`.
+#[inline(always)]
+fn update_cell_with(
     (h_old, hu_old, hv_old): (f64, f64, f64),
     (rx, ry): (f64, f64),
     [w, e, so, no]: [&FaceFlux; 4],
-    interior: Option<([f64; 4], bool)>,
+    interior: ([f64; 4], bool),
+    o2: bool,
 ) -> (f64, f64, f64) {
     // The x and y parts are summed before they are subtracted: a sum of two terms does
     // not depend on their order, so a state symmetric under x ↔ y (Δx = Δy) stays
@@ -1466,19 +1480,22 @@ fn update_cell(
     let hn = h_old - (rx * (e.h - w.h) + ry * (no.h - so.h));
     // Clip round-off below zero; `f64::max` would also turn a NaN into 0.
     let h = if hn < 0.0 { 0.0 } else { hn };
-    let drained = match interior {
-        Some((_, true)) => 0.0,
-        _ => drained_fraction(h, h_old),
+    let ([sx, bx, sy, by], smooth) = interior;
+    let drained = if o2 && smooth {
+        0.0
+    } else {
+        drained_fraction(h, h_old)
     };
-    let (source_x, source_y) = match interior {
-        None => (
-            e.share_l + w.share_r - (e.body_l + w.body_r) * drained,
-            no.share_l + so.share_r - (no.body_l + so.body_r) * drained,
-        ),
-        Some(([sx, bx, sy, by], _)) => (
+    let (source_x, source_y) = if o2 {
+        (
             e.share_l + w.share_r + sx - (e.body_l + w.body_r + bx) * drained,
             no.share_l + so.share_r + sy - (no.body_l + so.body_r + by) * drained,
-        ),
+        )
+    } else {
+        (
+            e.share_l + w.share_r - (e.body_l + w.body_r) * drained,
+            no.share_l + so.share_r - (no.body_l + so.body_r) * drained,
+        )
     };
     let qu = hu_old - (rx * (e.qn - w.qn + source_x) + ry * (no.qt - so.qt));
     let qv = hv_old - (rx * (e.qt - w.qt) + ry * (no.qn - so.qn + source_y));
@@ -1595,7 +1612,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         };
         let limiter = recon.limiter;
         let (x, y) = (Disjoint::new(&mut recon.x), Disjoint::new(&mut recon.y));
-        let ctx = Ctx::<L, false>::new(friction, raster, state, dt);
+        let ctx = Ctx::<L, false, true>::new(friction, raster, state, dt);
         let (nx, tiles) = (raster.nx(), &state.tiles);
         workers.tiles(tiles.stepped(), |_, t| {
             let (rows, cols) = tiles.cells(t);
@@ -1616,17 +1633,22 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     /// (the thickness unclipped), with the draining factors θ ≠ 1 from the same faces;
     /// returns the smallest new thickness and its cell, first in cell order.
     fn update_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
-        match (raster.walls().is_empty(), raster.metric().is_some()) {
-            (true, false) => self.update_pass_with::<false, false>(raster, dt, state),
-            (false, false) => self.update_pass_with::<true, false>(raster, dt, state),
-            (true, true) => self.update_pass_with::<false, true>(raster, dt, state),
-            (false, true) => self.update_pass_with::<true, true>(raster, dt, state),
+        let o2 = self.recon.is_some();
+        match (raster.walls().is_empty(), raster.metric().is_some(), o2) {
+            (true, false, false) => self.update_pass_with::<false, false, false>(raster, dt, state),
+            (false, false, false) => self.update_pass_with::<true, false, false>(raster, dt, state),
+            (true, true, false) => self.update_pass_with::<false, true, false>(raster, dt, state),
+            (false, true, false) => self.update_pass_with::<true, true, false>(raster, dt, state),
+            (true, false, true) => self.update_pass_with::<false, false, true>(raster, dt, state),
+            (false, false, true) => self.update_pass_with::<true, false, true>(raster, dt, state),
+            (true, true, true) => self.update_pass_with::<false, true, true>(raster, dt, state),
+            (false, true, true) => self.update_pass_with::<true, true, true>(raster, dt, state),
         }
     }
 
     /// [`Self::update_pass`] with (`WALLS`) or without the test for wall cells, in the
     /// bed-normal frame (`BN`) or another.
-    fn update_pass_with<const WALLS: bool, const BN: bool>(
+    fn update_pass_with<const WALLS: bool, const BN: bool, const O2: bool>(
         &mut self,
         raster: &Raster2d,
         dt: f64,
@@ -1636,7 +1658,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let r = (dt / raster.dx(), dt / raster.dy());
         let tiles = &state.tiles;
         let (out, friction, scratch, workers, recon) = self.outputs();
-        let ctx = Ctx::<L, BN>::new(friction, raster, state, dt).with_recon(recon);
+        let ctx = Ctx::<L, BN, O2>::new(friction, raster, state, dt).with_recon(recon);
         workers.tiles(tiles.stepped(), |thread, t| {
             let mut s = scratch[thread].lock().expect("a thread's own scratch");
             let mut worst = (f64::INFINITY, 0usize);
@@ -1674,17 +1696,26 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
     /// which are the same bits (a flux times θ = 1 is the flux). Returns the smallest
     /// new thickness and its cell, first in cell order.
     fn limited_pass(&mut self, raster: &Raster2d, dt: f64, state: &State2d) -> (f64, usize) {
-        match (raster.walls().is_empty(), raster.metric().is_some()) {
-            (true, false) => self.limited_pass_with::<false, false>(raster, dt, state),
-            (false, false) => self.limited_pass_with::<true, false>(raster, dt, state),
-            (true, true) => self.limited_pass_with::<false, true>(raster, dt, state),
-            (false, true) => self.limited_pass_with::<true, true>(raster, dt, state),
+        let o2 = self.recon.is_some();
+        match (raster.walls().is_empty(), raster.metric().is_some(), o2) {
+            (true, false, false) => {
+                self.limited_pass_with::<false, false, false>(raster, dt, state)
+            }
+            (false, false, false) => {
+                self.limited_pass_with::<true, false, false>(raster, dt, state)
+            }
+            (true, true, false) => self.limited_pass_with::<false, true, false>(raster, dt, state),
+            (false, true, false) => self.limited_pass_with::<true, true, false>(raster, dt, state),
+            (true, false, true) => self.limited_pass_with::<false, false, true>(raster, dt, state),
+            (false, false, true) => self.limited_pass_with::<true, false, true>(raster, dt, state),
+            (true, true, true) => self.limited_pass_with::<false, true, true>(raster, dt, state),
+            (false, true, true) => self.limited_pass_with::<true, true, true>(raster, dt, state),
         }
     }
 
     /// [`Self::limited_pass`] with (`WALLS`) or without the test for wall cells, in the
     /// bed-normal frame (`BN`) or another.
-    fn limited_pass_with<const WALLS: bool, const BN: bool>(
+    fn limited_pass_with<const WALLS: bool, const BN: bool, const O2: bool>(
         &mut self,
         raster: &Raster2d,
         dt: f64,
@@ -1696,7 +1727,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let cols = tiles.cols();
         let rows_of_tiles = tiles.count() / cols.max(1);
         let (out, friction, _, workers, recon) = self.outputs();
-        let ctx = Ctx::<L, BN>::new(friction, raster, state, dt).with_recon(recon);
+        let ctx = Ctx::<L, BN, O2>::new(friction, raster, state, dt).with_recon(recon);
         // A tile changes only if it or a tile next to it has a draining cell (the
         // flags are false outside the stepped tiles).
         // SAFETY (reads of `drains` and `drain`): this pass writes neither.
