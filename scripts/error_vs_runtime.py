@@ -5,7 +5,7 @@ and for the scheme's two orders (--orders).
     python scripts/error_vs_runtime.py [--granflow PATH] [--jobs N] [--out DIR]
                                        [--slopes 0,22] [--set KEY=VALUE ...]
     python scripts/error_vs_runtime.py --orders [--granflow PATH] [--out DIR]
-                                       [--cases ritter,stoker,mangeney,collapse]
+                                       [--cases ritter,stoker,mangeney,collapse,thacker2d,collapse2d]
                                        [--limiters minmod,van_leer,mc]
 
 --orders: numerics.order = 1 and 2 (order 2 with each limiter of --limiters) on
@@ -20,10 +20,19 @@ and for the scheme's two orders (--orders).
             L1(h) over x ≥ −1.5 m (the wall's own rarefaction has not reached it)
             at t = 0.5 s, 256 … 4096 cells;
   collapse  the μ(I) collapse on 22° (scenarios/collapse.toml, ends when settled):
-            |runout − runout of order 2 on 5120 cells|, 160 … 1280 cells.
+            |runout − runout of order 2 on 5120 cells|, 160 … 1280 cells;
+  thacker2d Thacker's (1981) radial paraboloid on a raster (Cartesian, frictionless,
+            bowl b = −h₀(1 − r²/a²), a = 1 m, h₀ = 0.1 m, shoreline at r₀ = 0.8 m at
+            t = 0) at t = T/8: L1(h) relative to the mass, over the disk r < 0.4 m
+            (which the shoreline's waves have not reached) and over the raster,
+            50² … 400² cells on [−1.6, 1.6]²;
+  collapse2d the radial collapse (scenarios/radial_collapse.toml, Coulomb 27°, its
+            deposit at t = 1 s): L1(h) relative to the mass against order 2 (MC) on
+            320² cells, its cell means averaged onto the coarser grid, 40² … 160² cells.
 It prints one table per case (cells, order, limiter, error, observed order between
-successive grids, wall time from /summary/wall_time_s) and writes
-DIR/orders.csv. One run at a time: the wall times are CPU times of one core.
+successive grids, wall time from /summary/wall_time_s, CPU time: user + system of the
+run's process) and writes DIR/orders.csv. One run at a time (rasters on
+`--threads`, default 1).
 
 Runs, through one `granflow sweep` per slope, the collapse of Escalante et al. 2023, §5.1/§5.5
 (scenarios/nh_multilayer_collapse.toml: domain [-0.2, 3] m, 640 cells, Table 1
@@ -182,6 +191,131 @@ def run_case(granflow, scenario, cells, sets, h5):
     return Run(h5)
 
 
+# Thacker's (1981) radial paraboloid (module documentation).
+THACKER = dict(a=1.0, h0=0.1, r0=0.8)
+
+
+def thacker_h(x, y, t):
+    a, h0, r0 = THACKER["a"], THACKER["h0"], THACKER["r0"]
+    big_a = (a * a - r0 * r0) / (a * a + r0 * r0)
+    omega = np.sqrt(8 * G * h0) / a
+    c = 1 - big_a * np.cos(omega * t)
+    r2 = (x * x + y * y) / (a * a)
+    eta = h0 * (np.sqrt(1 - big_a ** 2) / c - 1 - r2 * ((1 - big_a ** 2) / c ** 2 - 1))
+    return np.maximum(eta + h0 * (1 - r2), 0.0)
+
+
+def thacker_toml():
+    a, h0, r0 = THACKER["a"], THACKER["h0"], THACKER["r0"]
+    big_a = (a * a - r0 * r0) / (a * a + r0 * r0)
+    period = float(2 * np.pi / (np.sqrt(8 * G * h0) / a))
+    k0 = float(np.sqrt(1 - big_a ** 2) / (1 - big_a) - 1)
+    k2 = float((1 - big_a ** 2) / (1 - big_a) ** 2 - 1)
+    return f"""[domain]
+x_min = -1.6
+x_max = 1.6
+y_min = -1.6
+y_max = 1.6
+cells = [100, 100]
+coordinates = "cartesian"
+
+[bed]
+b = "-{h0}*(1 - (x^2 + y^2)/{a * a})"
+
+[rheology]
+law = "coulomb"
+mu = 0.0
+
+[model]
+kind = "granular"
+
+[initial]
+h = "max({h0}*({k0!r} - (x^2 + y^2)/{a * a}*{k2!r}) + {h0}*(1 - (x^2 + y^2)/{a * a}), 0)"
+
+[boundary]
+west = "wall"
+east = "wall"
+south = "wall"
+north = "wall"
+
+[time]
+t_end = {period / 8!r}
+cfl = 0.4
+
+[output]
+every = {period / 8!r}
+"""
+
+
+def raster_run(granflow, scenario, n, sets, h5, threads):
+    """Runs `scenario` on n × n cells; returns (x, y, h at the end, t_end, wall s, CPU s)."""
+    import h5py
+    import resource
+    cmd = [granflow, "run", str(scenario), "-q", "-o", str(h5), "--threads", str(threads),
+           "--set", f"domain.cells=[{n},{n}]"]
+    for s in sets:
+        cmd += ["--set", s]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run(cmd, check=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    with h5py.File(h5, "r") as f:
+        x, y = f["grid/x"][:], f["grid/y"][:]
+        h = f["snapshots/h"][-1]
+        t = float(f["snapshots/t"][-1])
+        wall = float(f["summary"].attrs["wall_time_s"])
+    return x, y, h, t, wall, cpu
+
+
+def coarsen2d(h, factor):
+    ny, nx = h.shape
+    return h.reshape(ny // factor, factor, nx // factor, factor).mean(axis=(1, 3))
+
+
+def orders_2d(args, name, out, schemes, rows):
+    """The raster cases of the order study (module documentation)."""
+    if name == "thacker2d":
+        scenario = out / "thacker2d.toml"
+        scenario.write_text(thacker_toml())
+        grids = [50, 100, 200, 400]
+        labels = ["L1(h) r<0.4", "L1(h) all"]
+
+        def errors(x, y, h, t, n):
+            xx, yy = np.meshgrid(x, y)
+            exact = thacker_h(xx, yy, t)
+            inner = xx ** 2 + yy ** 2 < 0.16
+            e = np.abs(h - exact)
+            return [float(e[inner].sum() / exact[inner].sum()), float(e.sum() / exact.sum())]
+    else:
+        scenario = ROOT / "scenarios" / "radial_collapse.toml"
+        grids, fine = [40, 80, 160], 320
+        labels = ["L1(h) vs 320²"]
+        ref_h5 = out / "collapse2d_reference.h5"
+        _, _, ref, _, wall, cpu = raster_run(args.granflow, scenario, fine,
+                                             ["numerics.order=2", "numerics.limiter=mc"], ref_h5, args.threads)
+        print(f"\ncollapse2d: reference order 2 (mc) on {fine}² cells, wall {wall:.1f} s, CPU {cpu:.1f} s")
+
+        def errors(x, y, h, t, n):
+            r = coarsen2d(ref, fine // n)
+            return [float(np.abs(h - r).sum() / r.sum())]
+    print(f"\n{name}")
+    for order, lim in schemes:
+        prev = None
+        for n in grids:
+            sets = [f"numerics.order={order}"] + ([f"numerics.limiter={lim}"] if lim else [])
+            h5 = out / f"{name}_o{order}_{lim or 'none'}_{n}.h5"
+            x, y, h, t, wall, cpu = raster_run(args.granflow, scenario, n, sets, h5, args.threads)
+            values = errors(x, y, h, t, n)
+            orders = ([np.log(p / v) / np.log(2) if p > 0 and v > 0 else float("nan")
+                       for p, v in zip(prev, values)] if prev else [float("nan")] * len(values))
+            prev = values
+            text = "  ".join(f"{label} {v:.4e} (order {o:5.2f})" for label, v, o in zip(labels, values, orders))
+            print(f"  order {order} {lim or '':9} {n:4}² cells  {text}  wall {wall:.3f} s  CPU {cpu:.3f} s")
+            for label, v, o in zip(labels, values, orders):
+                rows.append(dict(case=name, order=order, limiter=lim or "", cells=n * n, measure=label,
+                                 error=v, observed_order=o, wall_s=wall, cpu_s=cpu))
+
+
 def orders_study(args):
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -209,6 +343,9 @@ def orders_study(args):
     schemes = [(1, None)] + [(2, lim) for lim in limiters]
     rows = []
     for name in args.cases.split(","):
+        if name in ("thacker2d", "collapse2d"):
+            orders_2d(args, name, out, schemes, rows)
+            continue
         scenario, cells_list, measures = cases[name]
         reference = None
         if name == "collapse":
@@ -234,7 +371,7 @@ def orders_study(args):
                 print(f"  order {order} {lim or '':9} {cells:5} cells  {text}  wall {wall:.4f} s")
                 for (label, _), v, o in zip(measures, values, orders):
                     rows.append(dict(case=name, order=order, limiter=lim or "", cells=cells, measure=label,
-                                     error=v, observed_order=o, wall_s=wall))
+                                     error=v, observed_order=o, wall_s=wall, cpu_s=float("nan")))
     with open(out / "orders.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
@@ -250,6 +387,7 @@ def main():
     ap.add_argument("--limiters", default="minmod,van_leer,mc")
     ap.add_argument("--granflow", default=shutil.which("granflow") or str(ROOT / "target/release/granflow"))
     ap.add_argument("--jobs", type=int, default=1, help="runs at once (default 1: timings on an idle core)")
+    ap.add_argument("--threads", type=int, default=1, help="threads of a raster run (--orders)")
     ap.add_argument("--out", default="out/error_vs_runtime")
     ap.add_argument("--slopes", default="0,22")
     ap.add_argument("--set", action="append", default=[], dest="sets")
@@ -258,7 +396,8 @@ def main():
         print(f"error: granflow binary not found: {args.granflow} (cargo build --release)", file=sys.stderr)
         return 2
     if args.orders:
-        bad = [c for c in args.cases.split(",") if c not in ("ritter", "stoker", "mangeney", "collapse")]
+        known = ("ritter", "stoker", "mangeney", "collapse", "thacker2d", "collapse2d")
+        bad = [c for c in args.cases.split(",") if c not in known]
         bad += [l for l in args.limiters.split(",") if l not in ("minmod", "van_leer", "mc")]
         if bad:
             print(f"error: unknown case or limiter: {', '.join(bad)}", file=sys.stderr)

@@ -3,7 +3,9 @@
 //! or local coordinates, with Coulomb, μ(I) or Voellmy basal friction. The time step
 //! is the pipeline hyperbolic → friction ([`pipeline`]): the 2-D hydrostatic step
 //! (`numerics/hydrostatic_2d.rs`, the 1-D face kernel on every x- and y-face) and the
-//! vector friction step (`numerics/friction_2d.rs`, the disk rule).
+//! vector friction step (`numerics/friction_2d.rs`, the disk rule). At
+//! `numerics.order = 2` the step is Heun's method around both, with the second-order
+//! reconstruction of `numerics/muscl_2d.rs` ([`second_order_pipeline`]).
 //!
 //! Diagnostics: mass ∫ h dx dy, kinetic energy ∫ ½ h (u² + v²) dx dy, the largest
 //! speed √(u² + v²), the signal speed max(|u|, |v|) + √(g_n h) per cell (with the
@@ -22,6 +24,8 @@ use crate::model::granular::pipeline::{with_law, WithLaw};
 use crate::model::{first_maximum, Diagnostics, Model};
 use crate::numerics::friction_2d::{CellFriction, FrictionStep2d};
 use crate::numerics::hydrostatic_2d::HydrostaticStep2d;
+use crate::numerics::muscl::Limiter;
+use crate::numerics::ssp_rk2::Heun2d;
 use crate::numerics::workers::{Disjoint, Workers};
 use crate::numerics::Stage;
 use crate::output::{OutputError, OutputSink, SnapshotView};
@@ -188,12 +192,17 @@ impl Granular2d {
     }
 }
 
-/// The stages of a 2-D run for the friction of its cells.
+/// The stages of a 2-D run for the friction of its cells: hyperbolic → friction, or
+/// at order 2 (`limiter`) Heun's method around both ([`Heun2d`]).
 fn stages<L: BasalFriction + 'static>(
     friction: CellFriction<L>,
     raster: &Raster2d,
     workers: Workers,
+    limiter: Option<Limiter>,
 ) -> Vec<Box<dyn Stage<Raster2d, State2d>>> {
+    if let Some(limiter) = limiter {
+        return vec![Box::new(Heun2d::new(friction, raster, workers, limiter))];
+    }
     vec![
         Box::new(HydrostaticStep2d::with_friction(
             friction.clone(),
@@ -208,13 +217,19 @@ fn stages<L: BasalFriction + 'static>(
 struct Stages2d<'a> {
     raster: &'a Raster2d,
     workers: Workers,
+    limiter: Option<Limiter>,
 }
 
 impl WithLaw for Stages2d<'_> {
     type Out = Vec<Box<dyn Stage<Raster2d, State2d>>>;
 
     fn with<L: BasalFriction + LocalFriction + 'static>(self, law: L) -> Self::Out {
-        stages(CellFriction::Uniform(law), self.raster, self.workers)
+        stages(
+            CellFriction::Uniform(law),
+            self.raster,
+            self.workers,
+            self.limiter,
+        )
     }
 }
 
@@ -238,7 +253,42 @@ pub fn pipeline_on(
     raster: &Raster2d,
     workers: Workers,
 ) -> Pipeline<Raster2d, State2d> {
-    Pipeline::new(with_law(law, material, Stages2d { raster, workers }))
+    pipeline_of_order(law, material, raster, workers, None)
+}
+
+/// [`pipeline`] at order 2 with `limiter` (`numerics.order = 2`): one stage, Heun's
+/// method around the second-order hyperbolic step and the friction ([`Heun2d`]).
+pub fn second_order_pipeline(
+    law: &FrictionLaw,
+    material: &Material,
+    raster: &Raster2d,
+    threads: usize,
+    limiter: Limiter,
+) -> Result<Pipeline<Raster2d, State2d>, String> {
+    let workers = Workers::new(threads)?;
+    Ok(pipeline_of_order(
+        law,
+        material,
+        raster,
+        workers,
+        Some(limiter),
+    ))
+}
+
+/// [`pipeline_on`] at order 1 (`limiter` `None`) or 2.
+pub fn pipeline_of_order(
+    law: &FrictionLaw,
+    material: &Material,
+    raster: &Raster2d,
+    workers: Workers,
+    limiter: Option<Limiter>,
+) -> Pipeline<Raster2d, State2d> {
+    let stages = Stages2d {
+        raster,
+        workers,
+        limiter,
+    };
+    Pipeline::new(with_law(law, material, stages))
 }
 
 /// [`pipeline_on`] with friction zones: the Coulomb or Voellmy law of every cell takes
@@ -250,6 +300,17 @@ pub fn pipeline_with_zones(
     workers: Workers,
     zones: &FrictionZones,
 ) -> Result<Pipeline<Raster2d, State2d>, String> {
+    pipeline_with_zones_of_order(law, raster, workers, zones, None)
+}
+
+/// [`pipeline_with_zones`] at order 1 (`limiter` `None`) or 2.
+pub fn pipeline_with_zones_of_order(
+    law: &FrictionLaw,
+    raster: &Raster2d,
+    workers: Workers,
+    zones: &FrictionZones,
+    limiter: Option<Limiter>,
+) -> Result<Pipeline<Raster2d, State2d>, String> {
     let cells = raster.nx() * raster.ny();
     let field = |f: &Option<Vec<f64>>, uniform: f64, k: usize| f.as_ref().map_or(uniform, |v| v[k]);
     let stages = match *law {
@@ -257,14 +318,24 @@ pub fn pipeline_with_zones(
             let laws = (0..cells).map(|k| Coulomb {
                 mu: field(&zones.mu, mu, k),
             });
-            stages(CellFriction::PerCell(laws.collect()), raster, workers)
+            stages(
+                CellFriction::PerCell(laws.collect()),
+                raster,
+                workers,
+                limiter,
+            )
         }
         FrictionLaw::Voellmy { mu, xi } => {
             let laws = (0..cells).map(|k| Voellmy {
                 mu: field(&zones.mu, mu, k),
                 xi: field(&zones.xi, xi, k),
             });
-            stages(CellFriction::PerCell(laws.collect()), raster, workers)
+            stages(
+                CellFriction::PerCell(laws.collect()),
+                raster,
+                workers,
+                limiter,
+            )
         }
         FrictionLaw::MuI { .. } => return Err("the μ(I) law has no friction zones".into()),
     };

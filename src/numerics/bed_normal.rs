@@ -95,7 +95,9 @@ pub(crate) fn face_sources(c: &Interface) -> FaceFlux {
 /// normal stress of the friction step (the mean of the cells' centrifugal terms), μ
 /// that of `law_of(d_n)` (the law of the cell the normal drive pushes mass out of,
 /// with friction zones). The face carries the covariant momenta (normal and
-/// tangential) with the mass.
+/// tangential) with the mass. At order 2 (`centres`: the (H, b) of the two cells'
+/// centres, the sides being the reconstructed edges) the face's slope is that of the
+/// centres and ΔC adds the drive between the centres that the edges miss.
 #[inline(always)]
 pub(crate) fn face<L: BasalFriction>(
     l: &FaceSide,
@@ -103,12 +105,17 @@ pub(crate) fn face<L: BasalFriction>(
     (cos_l, cos_r): (f64, f64),
     (slope_l, slope_r): (f64, f64),
     law_of: impl Fn(f64) -> L,
+    centres: Option<((f64, f64), (f64, f64))>,
     d: f64,
     dt: f64,
 ) -> FaceFlux {
     // The normal thickness of the cells (a ghost's geometry is its edge cell's).
     let (hn_l, hn_r) = (cos_l * l.side.h, cos_r * r.side.h);
-    let db = r.side.b - l.side.b;
+    // At order 2 the sides are edges: the face's geometry is that of the centres.
+    let db = match centres {
+        Some((c_l, c_r)) => c_r.1 - c_l.1,
+        None => r.side.b - l.side.b,
+    };
     let (gn, gt) = (db / d, 0.5 * (slope_l + slope_r));
     let inv_c2 = 1.0 + gn * gn + gt * gt;
     let c2 = 1.0 / inv_c2;
@@ -133,7 +140,17 @@ pub(crate) fn face<L: BasalFriction>(
         ..r.side
     };
     let (wl, wr) = (ls.sqrt_h, rs.sqrt_h);
+    // Order 2: ΔC decides from the drive between the centres (`muscl`, "ΔC").
+    let missing = centres.map(|(c_l, c_r)| {
+        let centre = (c_r.0 + c_r.1 * inv_c2) - (c_l.0 + c_l.1 * inv_c2);
+        let edges = (rs.h + rs.z) - (ls.h + ls.z);
+        -GRAVITY * c2 * (centre - edges) / d
+    });
     let friction = |drive: f64, mu: f64| {
+        let drive = match missing {
+            Some(extra) => drive + extra,
+            None => drive,
+        };
         let threshold = mu * g_normal;
         let drive_t = (wl * l.drive + wr * r.drive) / (wl + wr);
         let metric2 =

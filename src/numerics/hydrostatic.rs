@@ -708,8 +708,16 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             let hn = self.h_new[i];
             h[i] = if hn < 0.0 { 0.0 } else { hn };
             let body = self.body_left[i] + self.body_right[i - 1] + self.interior_body[i];
-            let source = self.share_left[i] + self.share_right[i - 1] + self.interior[i]
-                - body * drained_fraction(h[i], h_old);
+            // A reconstructed cell keeps its whole gravity source: the near-dry rule is
+            // for first-order cells (`muscl_2d`'s update, where it cost Heun's step its
+            // second order on a curved bed).
+            let drained = if self.slopes[i].is_some() {
+                0.0
+            } else {
+                drained_fraction(h[i], h_old)
+            };
+            let source =
+                self.share_left[i] + self.share_right[i - 1] + self.interior[i] - body * drained;
             let q = hu[i] - r * (self.flux_hu[i] - self.flux_hu[i - 1] + source);
             hu[i] = if h[i] <= H_DRY { 0.0 } else { q };
         }

@@ -179,7 +179,7 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for BedNormalLineStep<L> {
             let (cl, cr) = (k.clamp(1, nx) - 1, (k + 1).clamp(1, nx) - 1);
             let (l, rt) = (&self.sides[k], &self.sides[k + 1]);
             let (cos, slopes) = ((m.cos[cl], m.cos[cr]), (m.gy[cl], m.gy[cr]));
-            self.faces[k] = bed_normal::face(l, rt, cos, slopes, |_| law, mesh.dx, dt);
+            self.faces[k] = bed_normal::face(l, rt, cos, slopes, |_| law, None, mesh.dx, dt);
         }
         let mut worst = self.update(m, state, (dt, r), false);
         if worst.0 < 0.0 {

@@ -19,6 +19,7 @@ pub mod hydrostatic_2d;
 pub mod linalg;
 pub mod line_bed_normal;
 pub mod muscl;
+pub mod muscl_2d;
 pub mod nh_multilayer;
 
 pub mod nonhydrostatic;

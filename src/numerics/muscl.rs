@@ -66,9 +66,15 @@
 //! Walls: the ghost is the mirror image of the edge cell, with mirrored slopes
 //! ([`Slopes::mirrored`]), so that no mass crosses the wall.
 //!
+//! Near-dry rule: a reconstructed cell keeps its whole gravity source (the rule that
+//! evaluates it at the new thickness where the depth falls is for first-order cells;
+//! in a smooth flow over a curved bed it cost Heun's step its second order,
+//! [`super::muscl_2d`]).
+//!
 //! The functions here see one cell stencil and return values; the 1-D step
-//! ([`super::hydrostatic`]) calls [`slopes`] once per cell and [`edges`] for the faces,
-//! a 2-D face loop can call [`face_states`] on the two cells each side of a face.
+//! ([`super::hydrostatic`]) calls [`slopes`] once per cell and [`edges`] for the faces;
+//! the 2-D step applies the same reconstruction dimension by dimension
+//! ([`super::muscl_2d`]).
 
 use crate::physics::shallow::H_DRY;
 

@@ -29,13 +29,17 @@
 //! q*: masses at rest stay at rest, to the bit.
 
 use super::friction::CoulombFrictionStep;
+use super::friction_2d::{CellFriction, FrictionStep2d};
 use super::hydrostatic::HydrostaticStep;
+use super::hydrostatic_2d::HydrostaticStep2d;
 use super::muscl::Limiter;
+use super::workers::Workers;
 use super::{Stage, StageError};
-use crate::grid::Line;
+use crate::grid::{Line, Raster2d};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
 use crate::state::layered::LayeredState;
+use crate::state::State2d;
 
 /// Heun's method around the hyperbolic and friction steps (module documentation).
 #[derive(Debug)]
@@ -77,5 +81,132 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for HeunSplitting<L> {
         }
         state.fill_ghosts(mesh);
         self.friction.apply(mesh, 0.5 * dt, state)
+    }
+}
+
+/// Heun's method around the 2-D hyperbolic and friction steps of a raster
+/// ([`super::hydrostatic_2d`] at order 2, [`super::friction_2d`]): the same scheme as
+/// [`HeunSplitting`], over the stepped tiles (`state::tiles`). The stage U⁽¹⁾ steps
+/// the tiles S₁ of Uⁿ, the second stage those S₂ of U⁽¹⁾; a cell outside S₁ ∪ S₂ is
+/// unchanged by both and keeps Uⁿ to the bit (½(a + a) = a), so the average is formed
+/// over S₁ ∪ S₂ alone, with Uⁿ saved over S₁ and, on S₂ outside S₁ (where U⁽¹⁾ = Uⁿ),
+/// taken from U⁽¹⁾. The tiles of S₂ are re-classified at the next step as after any
+/// hyperbolic stage; where S₁ has tiles outside S₂ (the flow left them in the first
+/// stage) the average may have changed them too: every tile is classified again for
+/// the last friction step, and the tiles are left unknown after it (the run loop then
+/// copies the whole state, and the next step classifies every tile).
+#[derive(Debug)]
+pub struct Heun2d<L: BasalFriction> {
+    hyperbolic: HydrostaticStep2d<L>,
+    friction: FrictionStep2d<L>,
+    /// Uⁿ over S₁ ∪ S₂ (h, hu, hv per cell; other entries stale).
+    h0: Vec<f64>,
+    hu0: Vec<f64>,
+    hv0: Vec<f64>,
+    /// Per tile: whether it is in S₁, and S₁ itself.
+    in_first: Vec<bool>,
+    first: Vec<u32>,
+}
+
+impl<L: BasalFriction> Heun2d<L> {
+    /// Heun's method with the second-order reconstruction of `limiter` on `raster`,
+    /// the friction of its cells `friction`, its tiles run by `workers`.
+    pub fn new(
+        friction: CellFriction<L>,
+        raster: &Raster2d,
+        workers: Workers,
+        limiter: Limiter,
+    ) -> Self {
+        let cells = raster.nx() * raster.ny();
+        Heun2d {
+            hyperbolic: HydrostaticStep2d::second_order(
+                friction.clone(),
+                raster,
+                workers.clone(),
+                limiter,
+            ),
+            friction: FrictionStep2d::with_friction(friction, workers),
+            h0: vec![0.0; cells],
+            hu0: vec![0.0; cells],
+            hv0: vec![0.0; cells],
+            in_first: Vec::new(),
+            first: Vec::new(),
+        }
+    }
+
+    /// Copies the state's cells of tile `t` into Uⁿ.
+    fn save(&mut self, state: &State2d, t: usize) {
+        for cells in state.tiles.row_segments(t) {
+            self.h0[cells.clone()].copy_from_slice(&state.h[cells.clone()]);
+            self.hu0[cells.clone()].copy_from_slice(&state.hu[cells.clone()]);
+            self.hv0[cells.clone()].copy_from_slice(&state.hv[cells]);
+        }
+    }
+
+    /// ½(Uⁿ + U) on the cells of tile `t`, the discharges 0 where dry.
+    fn average(&self, state: &mut State2d, t: usize) {
+        let State2d { h, hu, hv, tiles } = state;
+        for cells in tiles.row_segments(t) {
+            for k in cells {
+                h[k] = 0.5 * (self.h0[k] + h[k]);
+                if h[k] <= H_DRY {
+                    (hu[k], hv[k]) = (0.0, 0.0);
+                } else {
+                    hu[k] = 0.5 * (self.hu0[k] + hu[k]);
+                    hv[k] = 0.5 * (self.hv0[k] + hv[k]);
+                }
+            }
+        }
+    }
+}
+
+impl<L: BasalFriction> Stage<Raster2d, State2d> for Heun2d<L> {
+    fn name(&self) -> &'static str {
+        "ssp_rk2"
+    }
+
+    fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
+        let (nx, ny) = (raster.nx(), raster.ny());
+        state.refresh_tiles(nx, ny);
+        self.in_first = vec![false; state.tiles.count()];
+        self.first = state.tiles.stepped().to_vec();
+        for k in 0..self.first.len() {
+            let t = self.first[k] as usize;
+            self.in_first[t] = true;
+            self.save(state, t);
+        }
+        self.hyperbolic.apply(raster, dt, state)?;
+        self.friction.apply(raster, dt, state)?;
+        state.refresh_tiles(nx, ny);
+        let second = state.tiles.stepped().to_vec();
+        for &t in &second {
+            if !self.in_first[t as usize] {
+                self.save(state, t as usize);
+            }
+        }
+        self.hyperbolic.apply(raster, dt, state)?;
+        let mut left = false;
+        let mut in_second = vec![false; state.tiles.count()];
+        for &t in &second {
+            in_second[t as usize] = true;
+            self.average(state, t as usize);
+        }
+        for &t in &self.first {
+            if !in_second[t as usize] {
+                left = true;
+                self.average(state, t as usize);
+            }
+        }
+        if !left {
+            return self.friction.apply(raster, 0.5 * dt, state);
+        }
+        // The average changed tiles outside the stepped set S₂: the friction steps every
+        // tile with a live cell, and the tiles are left unknown, so that the run loop's
+        // copy of the state and the next step see every cell.
+        state.tiles.touch();
+        state.refresh_tiles(nx, ny);
+        let done = self.friction.apply(raster, 0.5 * dt, state);
+        state.tiles.touch();
+        done
     }
 }

@@ -7,7 +7,7 @@
 
 use crate::grid::raster::{Raster2d, RasterSpec, Sides};
 use crate::grid::Grid;
-use crate::model::granular_2d::{pipeline_on, pipeline_with_zones, Granular2d};
+use crate::model::granular_2d::{pipeline_of_order, pipeline_with_zones_of_order, Granular2d};
 use crate::model::raster_maps::RasterMaps;
 use crate::numerics::workers::Workers;
 use crate::output::{RasterInfo, ReleaseVolumes};
@@ -82,10 +82,19 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
     } else {
         (model, Vec::new())
     };
+    let limiter = (scn.numerics.order == 2).then_some(scn.numerics.limiter);
     let stages = match &scn.friction_zones {
-        None => pipeline_on(&scn.friction, &scn.material, &grid, workers.clone()),
-        Some(zones) => pipeline_with_zones(&scn.friction, &grid, workers.clone(), zones)
-            .expect("validation refuses friction zones for the μ(I) law"),
+        None => pipeline_of_order(
+            &scn.friction,
+            &scn.material,
+            &grid,
+            workers.clone(),
+            limiter,
+        ),
+        Some(zones) => {
+            pipeline_with_zones_of_order(&scn.friction, &grid, workers.clone(), zones, limiter)
+                .expect("validation refuses friction zones for the μ(I) law")
+        }
     };
     let mut info = run_info(scn, "hydrostatic", 1);
     info.raster = Some(RasterInfo {
