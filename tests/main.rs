@@ -40,6 +40,7 @@ mod run_output;
 mod run_report;
 mod scenarios;
 mod second_order;
+mod second_order_multilayer;
 mod submarine;
 mod submarine_paper;
 mod sweep;

@@ -645,7 +645,7 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
             err(
                 "numerics.order",
                 format!(
-                    "order 2 is implemented for the monolayer hydrostatic granular model on a line; {what}: use numerics.order = 1"
+                    "order 2 is implemented for the hydrostatic granular model (any model.layers) on a line; {what}: use numerics.order = 1"
                 ),
             )
         };
@@ -657,9 +657,6 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
         }
         if model.pressure == Pressure::NonHydrostatic {
             return refuse("model.pressure is \"nonhydrostatic\"");
-        }
-        if model.layers > 1 {
-            return refuse(&format!("model.layers is {}", model.layers));
         }
         if domain.plane.is_some() {
             return refuse("the domain is a raster");
@@ -906,9 +903,14 @@ t_end = 2.0
         let s = load(MINIMAL).unwrap();
         assert_eq!(s.numerics, Numerics::default());
         assert_eq!(s.numerics.order, 1);
+        let s = load_set(MINIMAL, &["numerics.order=2", "model.layers=3"]).unwrap();
+        assert_eq!((s.numerics.order, s.model.layers), (2, 3));
         for (sets, what) in [
-            (&["model.layers=3"][..], "model.layers is 3"),
             (&["model.pressure=nonhydrostatic"][..], "nonhydrostatic"),
+            (
+                &["model.layers=3", "model.pressure=nonhydrostatic"][..],
+                "nonhydrostatic",
+            ),
         ] {
             let sets = [sets, &["numerics.order=2"]].concat();
             let e = load_set(MINIMAL, &sets).unwrap_err();
