@@ -9,7 +9,8 @@ use crate::common::{l1, observed_order, run, tan_deg, Case};
 use granflow::model::granular::Granular;
 use granflow::output::memory::MemorySink;
 use granflow::physics::GRAVITY as G;
-use granflow::scenario::{BoundaryKind, FrictionLaw, Limiter, MonolayerShear, Numerics};
+use granflow::scenario::{load_file, BoundaryKind, FrictionLaw, Limiter, MonolayerShear, Numerics};
+use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
 
 const ORDER_1: Numerics = Numerics {
@@ -251,7 +252,11 @@ fn coarsen(fine: &[f64], factor: usize) -> Vec<f64> {
 
 /// L1 errors of h and of the layer discharges on `cells` against the same scheme on
 /// `reference` cells, and the observed orders.
-fn sheared_convergence(numerics: Numerics, cells: &[usize], reference: usize) -> [(Vec<f64>, f64); 2] {
+fn sheared_convergence(
+    numerics: Numerics,
+    cells: &[usize],
+    reference: usize,
+) -> [(Vec<f64>, f64); 2] {
     let (h_ref, q_ref) = sheared_wave(numerics, reference);
     let (mut e_h, mut e_q) = (Vec::new(), Vec::new());
     for &n in cells {
@@ -267,9 +272,12 @@ fn sheared_convergence(numerics: Numerics, cells: &[usize], reference: usize) ->
 
 #[test]
 fn sheared_smooth_flow_with_three_layers_converges_faster_at_order_2() {
-    let [(e2, o2), (q2, oq2)] = sheared_convergence(order_2(Limiter::VanLeer), &[50, 100, 200], 800);
+    let [(e2, o2), (q2, oq2)] =
+        sheared_convergence(order_2(Limiter::VanLeer), &[50, 100, 200], 800);
     let [(e1, o1), _] = sheared_convergence(ORDER_1, &[50, 100, 200], 800);
-    eprintln!("order 2: L1(h) {e2:?} ({o2:.3}), L1(hu) {q2:?} ({oq2:.3}); order 1: {e1:?} ({o1:.3})");
+    eprintln!(
+        "order 2: L1(h) {e2:?} ({o2:.3}), L1(hu) {q2:?} ({oq2:.3}); order 1: {e1:?} ({o1:.3})"
+    );
     assert!(o2 >= 1.6 && oq2 >= 1.6, "order 2: {o2}, {oq2}");
     assert!(o1 < 1.3, "order 1: {o1}");
     assert!(e2[2] < 0.2 * e1[2]);
@@ -307,7 +315,10 @@ fn ritter_lag(numerics: Numerics, cells: usize) -> f64 {
 #[ignore = "slow: refinement study"]
 fn ritter_front_with_three_layers_converges_at_order_one_with_order_2() {
     let cells = [256, 512, 1024, 2048];
-    let lags: Vec<f64> = cells.iter().map(|&n| ritter_lag(order_2(Limiter::VanLeer), n)).collect();
+    let lags: Vec<f64> = cells
+        .iter()
+        .map(|&n| ritter_lag(order_2(Limiter::VanLeer), n))
+        .collect();
     let dx: Vec<f64> = cells.iter().map(|&n| 4.5 / n as f64).collect();
     let order = observed_order(&dx, &lags);
     eprintln!("Ritter, 3 layers, order 2: front lags {lags:?}, observed order {order:.3}");
@@ -315,3 +326,97 @@ fn ritter_front_with_three_layers_converges_at_order_one_with_order_2() {
     assert!((0.7..1.3).contains(&order), "{order}");
 }
 
+/// The μ(I) collapse on 22° (`scenarios/collapse.toml`, to settling) with six layers
+/// at `order` on `cells` cells: (runout = final front, wall time in s).
+fn collapse_runout(order: u8, cells: usize) -> (f64, f64) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/collapse.toml");
+    let sets: Vec<String> = [
+        "model.layers=6".to_owned(),
+        format!("domain.cells={cells}"),
+        format!("numerics.order={order}"),
+        "output.every=10".to_owned(),
+    ]
+    .into();
+    let scn = load_file(&path, &sets).expect("collapse.toml loads");
+    let mut sim = build_granular(&scn);
+    let start = std::time::Instant::now();
+    let (_, summary) = run(&mut sim);
+    let seconds = start.elapsed().as_secs_f64();
+    assert!(summary.t_end < 10.0, "settles: {}", summary.status);
+    (sim.diagnostics().front_x, seconds)
+}
+
+/// Runout error (against order 2 on 2560 cells) against wall time, both orders, six
+/// layers; the table of docs/validation.md ("Second order: error against CPU time").
+#[test]
+#[ignore = "slow: refinement study"]
+fn six_layer_collapse_runout_converges_in_both_orders() {
+    let (reference, t_ref) = collapse_runout(2, 2560);
+    eprintln!("reference: order 2, 2560 cells: runout {reference:.4} m ({t_ref:.2} s)");
+    let cells = [160, 320, 640, 1280];
+    let mut errors = [[0.0; 4]; 2];
+    for (k, order) in [1u8, 2].into_iter().enumerate() {
+        for (c, &n) in cells.iter().enumerate() {
+            let (runout, seconds) = collapse_runout(order, n);
+            errors[k][c] = (runout - reference).abs();
+            eprintln!(
+                "| {order} | {n} | {runout:.4} | {:.2e} | {seconds:.2} |",
+                errors[k][c]
+            );
+        }
+    }
+    for e in errors {
+        assert!(e[3] < e[0], "{e:?}");
+    }
+    assert!(errors[1][3] < errors[0][3], "{errors:?}");
+}
+
+/// The collapse over an erodible bed with eight layers (`scenarios/erodible_bed.toml`,
+/// the variants of `multilayer.rs`: the static bed is held by the viscous columns'
+/// basal and internal friction): mass conserved, h ≥ 0, the column collapses.
+#[test]
+fn erodible_bed_collapse_with_eight_layers_at_order_2_conserves_mass() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/erodible_bed.toml");
+    let variants: [&[&str]; 2] = [
+        &["initial.erodible_bed=2e-3"],
+        &["rheology.basal=no_slip", "initial.erodible_bed=2e-3"],
+    ];
+    for extra in variants {
+        let sets: Vec<String> = [
+            "domain.x_max=1.0",
+            "domain.cells=200",
+            "boundary.right=wall",
+            "model.layers=8",
+            "numerics.order=2",
+            "time.t_end=1.0",
+            "time.stop_at_rest=false",
+            "output.every=0.05",
+        ]
+        .iter()
+        .chain(extra)
+        .map(|s| s.to_string())
+        .collect();
+        let scn = load_file(&path, &sets).expect("erodible_bed.toml loads");
+        let mut sim = build_granular(&scn);
+        let (sink, summary) = run(&mut sim);
+        assert_eq!(summary.t_end, 1.0, "{extra:?}: {}", summary.status);
+        let m0 = sink.steps[0].mass;
+        for rec in &sink.steps {
+            assert!(
+                (rec.mass - m0).abs() <= 1e-13 * m0,
+                "{extra:?} t = {}",
+                rec.t
+            );
+        }
+        for snap in &sink.snapshots {
+            assert!(snap.h.iter().all(|&h| h >= 0.0), "{extra:?} t = {}", snap.t);
+            assert!(
+                snap.u.iter().all(|u| u.is_finite()),
+                "{extra:?} t = {}",
+                snap.t
+            );
+        }
+        let max_u = sink.steps.iter().map(|r| r.max_speed).fold(0.0, f64::max);
+        assert!(max_u > 0.5, "{extra:?}: max speed {max_u}");
+    }
+}

@@ -145,9 +145,12 @@
 //! A state at rest has u_α = 0, so ΔG = 0 and 𝓑 = 0: the exchange terms keep granular
 //! masses at rest exactly at rest, like the monolayer.
 //!
-//! Order 2 (monolayer, [`HydrostaticStep::second_order`]): the same face kernel on the
-//! edge states of the limited reconstruction of [`super::muscl`], plus each
-//! reconstructed cell's interior force; the time integrator is [`super::ssp_rk2`].
+//! Order 2 ([`HydrostaticStep::second_order`], N = 1, and
+//! [`HydrostaticStep::second_order_with_layers`]): the same face kernel on the edge
+//! states of the limited reconstruction of [`super::muscl`], plus each reconstructed
+//! cell's interior force and, for N > 1, its interior exchange term 𝓑^c (the face's
+//! 𝓑 between the cell's own edges: ∂_X G inside the cell, which the faces' O(Δx²)
+//! jumps no longer carry); the time integrator is [`super::ssp_rk2`].
 
 use super::face::{
     drained_fraction, interface, interface_with_friction, layer_momentum_flux, mass_flux,
@@ -963,7 +966,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     }
 }
 
-/// Order 2 with N > 1 layers (module documentation of [`super::muscl`], "N layers").
+/// Order 2 with N > 1 layers (module documentation; [`super::muscl`], "N layers").
 impl<L: BasalFriction> HydrostaticStep<L> {
     /// The first-order side of cell `j` (its means), as [`Self::interfaces`] sees it.
     fn mean_side(&self, mesh: &Line, h: &[f64], j: usize) -> Side {

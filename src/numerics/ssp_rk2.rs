@@ -145,7 +145,10 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for HeunLayers<
         self.hyperbolic.apply(mesh, dt, state)?;
         for (j, (h, h0)) in state.h.iter_mut().zip(&self.h0).enumerate() {
             *h = 0.5 * (*h0 + *h);
-            let (q, q0) = (&mut state.hu[j * n..(j + 1) * n], &self.hu0[j * n..(j + 1) * n]);
+            let (q, q0) = (
+                &mut state.hu[j * n..(j + 1) * n],
+                &self.hu0[j * n..(j + 1) * n],
+            );
             for (q, q0) in q.iter_mut().zip(q0) {
                 *q = if *h <= H_DRY { 0.0 } else { 0.5 * (*q0 + *q) };
             }
