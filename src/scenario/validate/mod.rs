@@ -625,8 +625,9 @@ fn line_boundary(b: RawBoundary) -> Res<Boundaries> {
     })
 }
 
-/// `[numerics]`: order 2 exists for the monolayer hydrostatic granular model on a line
-/// (docs/numerics.md, "Second order"); any other model refuses it by name.
+/// `[numerics]`: order 2 exists for the hydrostatic granular model on a line, any
+/// number of layers, local and Cartesian frames (docs/numerics.md, "Second order");
+/// any other model refuses it by name.
 fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics> {
     let order = int_in("numerics.order", n.order.unwrap_or(1), 1, 2)? as u8;
     let limiters = [
