@@ -145,9 +145,12 @@
 //! A state at rest has u_α = 0, so ΔG = 0 and 𝓑 = 0: the exchange terms keep granular
 //! masses at rest exactly at rest, like the monolayer.
 //!
-//! Order 2 (monolayer, [`HydrostaticStep::second_order`]): the same face kernel on the
-//! edge states of the limited reconstruction of [`super::muscl`], plus each
-//! reconstructed cell's interior force; the time integrator is [`super::ssp_rk2`].
+//! Order 2 ([`HydrostaticStep::second_order`], N = 1, and
+//! [`HydrostaticStep::second_order_with_layers`]): the same face kernel on the edge
+//! states of the limited reconstruction of [`super::muscl`], plus each reconstructed
+//! cell's interior force and, for N > 1, its interior exchange term 𝓑^c (the face's
+//! 𝓑 between the cell's own edges: ∂_X G inside the cell, which the faces' O(Δx²)
+//! jumps no longer carry); the time integrator is [`super::ssp_rk2`].
 
 use super::face::{
     drained_fraction, interface, interface_with_friction, layer_momentum_flux, mass_flux,
@@ -271,6 +274,12 @@ pub struct HydrostaticStep<L: BasalFriction> {
     /// and what the reconstruction reads of each cell.
     slopes: Vec<Option<muscl::Slopes>>,
     cells: Vec<muscl::Cell>,
+    /// Order 2 with N > 1, per cell with ghosts and layer ((nx + 2)·N, cell-major):
+    /// the edge velocities u_α of the west and east edges (the cell's own where first
+    /// order) and the exchange term 𝓑^c_α of the cell's interior (0 where first order).
+    west_u: Vec<f64>,
+    east_u: Vec<f64>,
+    interior_exchange: Vec<f64>,
 }
 
 /// The layer fractions as the exchange terms use them.
@@ -359,13 +368,27 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             east: Vec::new(),
             slopes: Vec::new(),
             cells: Vec::new(),
+            west_u: Vec::new(),
+            east_u: Vec::new(),
+            interior_exchange: Vec::new(),
         }
     }
 
     /// The monolayer step with the second-order reconstruction of [`muscl`] and
     /// `limiter` (the time integrator is the caller's: [`super::ssp_rk2`]).
     pub fn second_order(law: L, nx: usize, limiter: Limiter) -> Self {
-        let mut step = Self::with_layers(law, nx, 1);
+        Self::second_order_with_layers(law, nx, 1, limiter)
+    }
+
+    /// The step for `layers` ≥ 1 layers with the second-order reconstruction (N = 1:
+    /// [`Self::second_order`]; N > 1: [`Self::reconstruct_layers`]).
+    pub fn second_order_with_layers(law: L, nx: usize, layers: usize, limiter: Limiter) -> Self {
+        let mut step = Self::with_layers(law, nx, layers);
+        if layers > 1 {
+            step.west_u = vec![0.0; (nx + 2) * layers];
+            step.east_u = vec![0.0; (nx + 2) * layers];
+            step.interior_exchange = vec![0.0; (nx + 2) * layers];
+        }
         let dry = Side::monolayer(0.0, 0.0, 0.0, 0.0);
         step.limiter = Some(limiter);
         step.interior = vec![0.0; nx + 2];
@@ -850,6 +873,13 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         let r = dt / mesh.dx;
         if n == 1 {
             self.advance_monolayer(mesh, dt, &mut state.h, &mut state.hu, faces)?;
+        } else if let Some(limiter) = self.limiter {
+            self.velocities(state);
+            self.reconstruct_layers(mesh, dt, &state.h, &state.l, limiter);
+            self.muscl_layer_interfaces(mesh, dt, &state.l, &state.h, faces);
+            let worst = self.update_mass(&state.h, r);
+            self.refuse_negative(&state.h, r, worst)?;
+            self.update_layers_muscl(state, nx, r);
         } else {
             // Mass first; limit the fluxes of cells that would empty, then refuse the
             // step (state untouched) if anything is still negative beyond round-off.
@@ -941,5 +971,270 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     /// the ghost-inclusive cells k and k + 1).
     pub fn mass_flux(&self) -> &[f64] {
         &self.flux_h
+    }
+}
+
+/// Order 2 with N > 1 layers (module documentation; [`super::muscl`], "N layers").
+impl<L: BasalFriction> HydrostaticStep<L> {
+    /// The first-order side of cell `j` (its means), as [`Self::interfaces`] sees it.
+    fn mean_side(&self, mesh: &Line, h: &[f64], j: usize) -> Side {
+        Side {
+            h: h[j],
+            u: self.u_mean[j],
+            b: mesh.b_ghost[j],
+            z: mesh.z[j],
+            shear: self.shear[j],
+            u_base: self.u[j * self.layers],
+            sqrt_h: h[j].max(0.0).sqrt(),
+        }
+    }
+
+    /// Order 2, N > 1: the limited slopes of h, η and every layer's u_α, each cell's
+    /// west and east edge states (depth, surface, layer velocities, and from these ū,
+    /// the shear of the wave speed and the basal u_1 of ΔC), its interior pressure force
+    /// and its interior exchange term 𝓑^c = 𝓑(edge_W, edge_E). The rules of the
+    /// monolayer ([`Self::reconstruct`]) apply per cell: first order beside a dry cell,
+    /// at rest, and where any layer is slower than the static friction's impulse per
+    /// step, min_α |u_α| ≤ Δt μ_s g_n (the viscous step may stop that layer within the
+    /// step, which order 2 cannot resolve, and a mass at rest then sees exactly the
+    /// first-order forces that hold it); mixed faces keep both means. Requires
+    /// [`Self::velocities`] first.
+    fn reconstruct_layers(
+        &mut self,
+        mesh: &Line,
+        dt: f64,
+        h: &[f64],
+        l_frac: &[f64],
+        limiter: Limiter,
+    ) {
+        let (nx, n) = (mesh.nx, self.layers);
+        let law = self.law;
+        let (b, g_n) = (&mesh.b_ghost[..nx + 2], mesh.g_n);
+        for (j, c) in self.cells.iter_mut().enumerate() {
+            *c = muscl::Cell {
+                h: h[j],
+                u: self.u_mean[j],
+                eta: h[j] + b[j],
+            };
+        }
+        for j in 0..nx + 2 {
+            let slowest = self.u[j * n..(j + 1) * n]
+                .iter()
+                .fold(f64::INFINITY, |m, u| m.min(u.abs()));
+            let slow = slowest <= dt * g_n * law.mu(0.0, h[j], g_n * h[j]);
+            // Two cells from a dry cell too: the layers of a film behind a front
+            // shear apart (the top layer of a 0.7 mm film reached 9 m/s against the
+            // bottom's 2 m/s and the run failed) where the cell behind the front cell
+            // is reconstructed against the front cell's mean.
+            let near_front =
+                (j >= 2 && h[j - 2] <= H_DRY) || (j + 2 <= nx + 1 && h[j + 2] <= H_DRY);
+            self.slopes[j] = if j > 0 && j <= nx && !slow && !near_front {
+                muscl::slopes(limiter, self.cells[j - 1], self.cells[j], self.cells[j + 1])
+            } else {
+                None
+            };
+        }
+        if mesh.left == BoundaryKind::Wall {
+            self.slopes[0] = self.slopes[1].map(muscl::Slopes::mirrored);
+        }
+        if mesh.right == BoundaryKind::Wall {
+            self.slopes[nx + 1] = self.slopes[nx].map(muscl::Slopes::mirrored);
+        }
+        for j in 0..nx + 2 {
+            let mean = self.mean_side(mesh, h, j);
+            let range = j * n..(j + 1) * n;
+            let Some(s) = self.slopes[j] else {
+                (self.west[j], self.east[j]) = (mean, mean);
+                self.west_u[range.clone()].copy_from_slice(&self.u[range.clone()]);
+                self.east_u[range.clone()].copy_from_slice(&self.u[range.clone()]);
+                (self.interior[j], self.interior_body[j]) = (0.0, 0.0);
+                self.interior_exchange[range].fill(0.0);
+                continue;
+            };
+            // A wall's ghost is the mirror image of its neighbour: the velocities
+            // reversed, their slopes unchanged.
+            let c = match j {
+                0 => 1,
+                j if j == nx + 1 => nx,
+                j => j,
+            };
+            let west_recon = j > 0 && self.slopes[j - 1].is_some();
+            let east_recon = j <= nx && self.slopes[j + 1].is_some();
+            for a in 0..n {
+                let u = |i: usize| self.u[i * n + a];
+                let du = 0.5 * limiter.slope(u(c) - u(c - 1), u(c + 1) - u(c));
+                let own = u(j);
+                self.west_u[j * n + a] = if west_recon { own - du } else { own };
+                self.east_u[j * n + a] = if east_recon { own + du } else { own };
+            }
+            let (w, e) = muscl::edges(self.cells[j], s);
+            let mean_edge = muscl::Edge {
+                h: h[j],
+                u: self.u_mean[j],
+                eta: h[j] + b[j],
+            };
+            let plane = mesh.z[j] - b[j];
+            let (w, west) = if west_recon {
+                (w, edge_side(w, &self.west_u[range.clone()], l_frac, plane))
+            } else {
+                (mean_edge, mean)
+            };
+            let (e, east) = if east_recon {
+                (e, edge_side(e, &self.east_u[range.clone()], l_frac, plane))
+            } else {
+                (mean_edge, mean)
+            };
+            (self.west[j], self.east[j]) = (west, east);
+            let out = &mut self.interior_exchange[range.clone()];
+            if west_recon || east_recon {
+                (self.interior[j], self.interior_body[j]) = muscl::interior_source(g_n, w, e);
+                let frac = Fractions {
+                    l: l_frac,
+                    inv: &self.inv_l,
+                    below: &self.l_below,
+                };
+                let (u_w, u_e) = (&self.west_u[range.clone()], &self.east_u[range]);
+                exchange_terms(frac, w.h, e.h, u_w, u_e, out);
+            } else {
+                (self.interior[j], self.interior_body[j]) = (0.0, 0.0);
+                out.fill(0.0);
+            }
+        }
+    }
+
+    /// Order 2, N > 1: [`Self::interfaces`] on the edge states of
+    /// [`Self::reconstruct_layers`], with ΔC deciding from the drive between the cell
+    /// centres as in [`Self::muscl_interfaces`].
+    fn muscl_layer_interfaces<F: FaceFriction>(
+        &mut self,
+        mesh: &Line,
+        dt: f64,
+        l_frac: &[f64],
+        h: &[f64],
+        faces: &F,
+    ) {
+        let (nx, n) = (mesh.nx, self.layers);
+        let (g_n, dx) = (mesh.g_n, mesh.dx);
+        let z = &mesh.z[..nx + 2];
+        for k in 0..=nx {
+            let (left, right) = (self.east[k], self.west[k + 1]);
+            let mu_of = |speed: f64, h: f64, _drive: f64| faces.mu(k, speed, h, g_n * h);
+            let centres = (h[k + 1] + z[k + 1]) - (h[k] + z[k]);
+            let edges = (right.h + right.z) - (left.h + left.z);
+            let missing = -g_n * (centres - edges) / dx;
+            let friction = |drive: f64, mu: f64| {
+                let threshold = g_n * mu;
+                -(drive + missing).clamp(-threshold, threshold)
+            };
+            let extra = faces.potential_jump(k);
+            let found =
+                interface_with_friction(mu_of, left, right, extra, friction, (g_n, g_n), dx, dt);
+            let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
+            let Some((c, l, r)) = found else {
+                self.flux_h[k] = 0.0;
+                (self.share_left[k], self.share_right[k]) = (0.0, 0.0);
+                (self.body_left[k], self.body_right[k]) = (0.0, 0.0);
+                (self.exchange_left[k], self.exchange_right[k]) = (0.0, 0.0);
+                fluxes.fill(0.0);
+                self.exchange[k * n..(k + 1) * n].fill(0.0);
+                if !self.layer_flux.is_empty() {
+                    self.layer_flux[k * n..(k + 1) * n].fill(0.0);
+                }
+                continue;
+            };
+            self.flux_h[k] = mass_flux(&c, l, r);
+            (self.share_left[k], self.share_right[k]) = (c.share_left, c.share_right);
+            (self.body_left[k], self.body_right[k]) = (c.body_left, c.body_right);
+            (self.exchange_left[k], self.exchange_right[k]) = (c.exchange_left, c.exchange_right);
+            let u_l = &self.east_u[k * n..(k + 1) * n];
+            let u_r = &self.west_u[(k + 1) * n..(k + 2) * n];
+            let seen = |u: f64, at_rest: bool| if at_rest { 0.0 } else { u };
+            let exchange = &mut self.exchange[k * n..(k + 1) * n];
+            if c.left_at_rest || c.right_at_rest {
+                exchange.fill(0.0);
+            } else {
+                let frac = Fractions {
+                    l: l_frac,
+                    inv: &self.inv_l,
+                    below: &self.l_below,
+                };
+                exchange_terms(frac, l.h, r.h, u_l, u_r, exchange);
+            }
+            for a in 0..n {
+                let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
+                fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur);
+            }
+            if !self.layer_flux.is_empty() {
+                // As in [`Self::interfaces`], with the edge velocities.
+                let (ml, mr) = (l.u, r.u);
+                let h_f = l.h.min(r.h);
+                let out = &mut self.layer_flux[k * n..(k + 1) * n];
+                for a in 0..n {
+                    let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
+                    out[a] = 0.5 * h_f * ((ul - ml) + (ur - mr));
+                }
+            }
+        }
+    }
+
+    /// Order 2, N > 1: [`Self::update_layers`] with each cell's interior pressure force
+    /// and interior exchange term.
+    fn update_layers_muscl(&self, state: &mut LayeredState, nx: usize, r: f64) {
+        let n = self.layers;
+        for i in 1..=nx {
+            let hn = self.h_new[i];
+            let h_old = state.h[i];
+            state.h[i] = if hn < 0.0 { 0.0 } else { hn };
+            let body = self.body_left[i] + self.body_right[i - 1] + self.interior_body[i];
+            // As in the monolayer's order-2 update: a reconstructed cell keeps its whole
+            // gravity source (the near-dry rule is for first-order cells).
+            let drained = if self.slopes[i].is_some() {
+                0.0
+            } else {
+                drained_fraction(state.h[i], h_old)
+            };
+            let source =
+                self.share_left[i] + self.share_right[i - 1] + self.interior[i] - body * drained;
+            let (right, left) = (i * n, (i - 1) * n);
+            let (w_right, w_left) = (self.exchange_left[i], self.exchange_right[i - 1]);
+            let inner = &self.interior_exchange[i * n..(i + 1) * n];
+            let hu = &mut state.hu[i * n..(i + 1) * n];
+            for (a, q) in hu.iter_mut().enumerate() {
+                let exchange = w_right * self.exchange[right + a]
+                    + w_left * self.exchange[left + a]
+                    + inner[a];
+                *q -= r * (self.flux_hu[right + a] - self.flux_hu[left + a] + source + exchange);
+            }
+            if state.h[i] <= H_DRY {
+                hu.fill(0.0);
+            }
+        }
+    }
+}
+
+/// The face state of a reconstructed edge with layer velocities `u` (N > 1): ū, the
+/// shear term 3 Σ l_α (u_α − ū)² of the wave speed and the basal u_1; no velocity
+/// where the edge is dry.
+fn edge_side(e: muscl::Edge, u: &[f64], l_frac: &[f64], plane: f64) -> Side {
+    let b = e.eta - e.h;
+    let (mean, shear, base) = if e.h > H_DRY {
+        let mean: f64 = u.iter().zip(l_frac).map(|(u, l)| l * u).sum();
+        let spread: f64 = u
+            .iter()
+            .zip(l_frac)
+            .map(|(u, l)| l * (u - mean) * (u - mean))
+            .sum();
+        (mean, 3.0 * spread, u[0])
+    } else {
+        (0.0, 0.0, 0.0)
+    };
+    Side {
+        h: e.h,
+        u: mean,
+        b,
+        z: b + plane,
+        shear,
+        u_base: base,
+        sqrt_h: e.h.sqrt(),
     }
 }

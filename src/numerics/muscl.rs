@@ -63,6 +63,12 @@
 //! the friction step, which sees the interior forces too, kept moving (a Coulomb
 //! deposit at its repose angle slid for ever with its faces closed).
 //!
+//! N layers ([`super::hydrostatic`], `reconstruct_layers`): the same slopes of h and
+//! η, and one limited slope per layer velocity u_α (the velocity slope of [`Slopes`]
+//! is then unused); a cell is first order where any layer is slower than the static
+//! friction's impulse per step and two cells from a dry cell, besides the rules above
+//! (docs/numerics.md, "Second order", N > 1 layers).
+//!
 //! Walls: the ghost is the mirror image of the edge cell, with mirrored slopes
 //! ([`Slopes::mirrored`]), so that no mass crosses the wall.
 //!

@@ -27,16 +27,29 @@
 //! stage returns Uⁿ exactly (the first-order step holds it), the second returns
 //! q* = −Δt (the cell's pressure force), and F_{Δt/2} holds ½q* exactly when F_Δt held
 //! q*: masses at rest stay at rest, to the bit.
+//!
+//! N > 1 layers ([`HeunLayers`]): the same scheme with the N-layer hyperbolic step of
+//! [`super::hydrostatic`] at order 2 and the μ(I) viscous columns V_Δt of
+//! [`super::viscous`] in place of F_Δt,
+//!
+//!   U⁽¹⁾ = V_Δt(H_Δt(Uⁿ)),   Uⁿ⁺¹ = V_{Δt/2}(½ Uⁿ + ½ H_Δt(U⁽¹⁾)),
+//!
+//! where U holds h, every layer's discharge and the tracers (h c per layer: their
+//! average is the average of two conservative updates, so mass and tracer content are
+//! conserved exactly). The viscous step's coefficients frozen at tⁿ (`prepare`) serve
+//! both of its calls. At rest the argument above holds column by column: the basal
+//! Coulomb threshold of V_{Δt/2} is half that of V_Δt.
 
 use super::friction::CoulombFrictionStep;
 use super::friction_2d::{CellFriction, FrictionStep2d};
 use super::hydrostatic::HydrostaticStep;
 use super::hydrostatic_2d::HydrostaticStep2d;
 use super::muscl::Limiter;
+use super::viscous::{MultilayerViscousStep, ViscousOptions};
 use super::workers::Workers;
 use super::{Stage, StageError};
 use crate::grid::{Line, Raster2d};
-use crate::physics::rheology::BasalFriction;
+use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
 use crate::state::layered::LayeredState;
 use crate::state::State2d;
@@ -208,5 +221,75 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for Heun2d<L> {
         let done = self.friction.apply(raster, 0.5 * dt, state);
         state.tiles.touch();
         done
+    }
+}
+
+/// Heun's method around the N-layer hyperbolic step and the viscous columns (module
+/// documentation, "N > 1 layers").
+#[derive(Debug)]
+pub struct HeunLayers<L: BasalFriction + LocalFriction> {
+    hyperbolic: HydrostaticStep<L>,
+    viscous: MultilayerViscousStep<L>,
+    /// Uⁿ: h, the layer discharges and each tracer, with ghosts.
+    h0: Vec<f64>,
+    hu0: Vec<f64>,
+    tracers0: Vec<Vec<f64>>,
+}
+
+impl<L: BasalFriction + LocalFriction> HeunLayers<L> {
+    /// The step for the layer fractions `l` (N = `l.len()` > 1).
+    pub fn new(law: L, nx: usize, l: &[f64], opts: ViscousOptions, limiter: Limiter) -> Self {
+        let n = l.len();
+        HeunLayers {
+            hyperbolic: HydrostaticStep::second_order_with_layers(law, nx, n, limiter),
+            viscous: MultilayerViscousStep::new(law, nx, l, opts),
+            h0: vec![0.0; nx + 2],
+            hu0: vec![0.0; (nx + 2) * n],
+            tracers0: Vec::new(),
+        }
+    }
+}
+
+impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for HeunLayers<L> {
+    fn name(&self) -> &'static str {
+        "ssp_rk2"
+    }
+
+    fn prepare(&mut self, mesh: &Line, state: &LayeredState) {
+        self.viscous.prepare(mesh, state);
+    }
+
+    fn full_step(&mut self, dt_full: f64) {
+        self.viscous.full_step(dt_full);
+    }
+
+    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+        let n = state.layers;
+        self.h0.copy_from_slice(&state.h);
+        self.hu0.copy_from_slice(&state.hu);
+        self.tracers0.resize_with(state.tracers.len(), Vec::new);
+        for (saved, t) in self.tracers0.iter_mut().zip(&state.tracers) {
+            saved.clone_from(&t.q);
+        }
+        self.hyperbolic.apply(mesh, dt, state)?;
+        self.viscous.apply(mesh, dt, state)?;
+        self.hyperbolic.apply(mesh, dt, state)?;
+        for (j, (h, h0)) in state.h.iter_mut().zip(&self.h0).enumerate() {
+            *h = 0.5 * (*h0 + *h);
+            let (q, q0) = (
+                &mut state.hu[j * n..(j + 1) * n],
+                &self.hu0[j * n..(j + 1) * n],
+            );
+            for (q, q0) in q.iter_mut().zip(q0) {
+                *q = if *h <= H_DRY { 0.0 } else { 0.5 * (*q0 + *q) };
+            }
+        }
+        for (t, saved) in state.tracers.iter_mut().zip(&self.tracers0) {
+            for (q, q0) in t.q.iter_mut().zip(saved) {
+                *q = 0.5 * (*q0 + *q);
+            }
+        }
+        state.fill_ghosts(mesh);
+        self.viscous.apply(mesh, 0.5 * dt, state)
     }
 }

@@ -25,6 +25,8 @@ pub struct Case {
     pub stop_at_rest: bool,
     /// `[numerics]` (order 1 by default).
     pub numerics: Numerics,
+    /// `model.layers` (1 by default; equal fractions, hydrostatic pressure).
+    pub layers: usize,
 }
 
 impl Case {
@@ -45,6 +47,7 @@ impl Case {
             every: 0.1,
             stop_at_rest: false,
             numerics: Numerics::default(),
+            layers: 1,
         }
     }
 
@@ -84,10 +87,10 @@ impl Case {
             model: ModelSpec {
                 kind: ModelKind::Granular,
                 pressure: Pressure::Hydrostatic,
-                layers: 1,
+                layers: self.layers,
             },
             multilayer: MultilayerSpec {
-                layer_fractions: vec![1.0],
+                layer_fractions: vec![1.0 / self.layers as f64; self.layers],
                 basal: BasalCondition::Coulomb,
                 regularization: Regularization::Delta { delta: 1e-5 },
                 sidewall: None,

@@ -17,7 +17,7 @@ use crate::numerics::nonhydrostatic::NhFrictionStep;
 use crate::numerics::projection::monolayer::MonolayerOperator;
 use crate::numerics::projection::multilayer::SharedOperator;
 use crate::numerics::projection::{ProjectionStage, ThomasSolver};
-use crate::numerics::ssp_rk2::HeunSplitting;
+use crate::numerics::ssp_rk2::{HeunLayers, HeunSplitting};
 use crate::numerics::viscous::{MultilayerViscousStep, ViscosityTime, ViscousOptions};
 use crate::numerics::Stage;
 use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, MuI, Voellmy};
@@ -60,7 +60,7 @@ pub struct Stages<'a> {
     pub pressure: Pressure,
     pub multilayer: &'a MultilayerSpec,
     /// `Some(limiter)`: the second-order step (`numerics.order = 2`; the validation
-    /// allows it for the monolayer hydrostatic model only).
+    /// allows it for the hydrostatic model, N ≥ 1 layers, local and Cartesian lines).
     pub second_order: Option<Limiter>,
 }
 
@@ -81,8 +81,18 @@ impl WithLaw for Stages<'_> {
             ];
         }
         if let Some(limiter) = self.second_order {
-            assert!(self.pressure == Pressure::Hydrostatic && l.len() == 1);
-            return vec![Box::new(HeunSplitting::new(law, nx, limiter))];
+            assert!(self.pressure == Pressure::Hydrostatic);
+            if l.len() == 1 {
+                return vec![Box::new(HeunSplitting::new(law, nx, limiter))];
+            }
+            let opts = ViscousOptions {
+                basal: spec.basal,
+                regularization: spec.regularization,
+                sidewall: spec.sidewall,
+                c_msm: spec.c_msm,
+                viscosity: spec.viscosity,
+            };
+            return vec![Box::new(HeunLayers::new(law, nx, l, opts, limiter))];
         }
         let mut stages: Self::Out = vec![Box::new(HydrostaticStep::with_layers(law, nx, l.len()))];
         match (self.pressure, l.len()) {

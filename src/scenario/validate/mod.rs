@@ -625,9 +625,9 @@ fn line_boundary(b: RawBoundary) -> Res<Boundaries> {
     })
 }
 
-/// `[numerics]`: order 2 exists for the monolayer hydrostatic granular model, on a line
-/// and on a raster in all three frames (docs/numerics.md, "Second order"); any other
-/// model refuses it by name.
+/// `[numerics]`: order 2 exists for the hydrostatic granular model: on a line with any
+/// number of layers (local and Cartesian frames), on a raster with one layer in all
+/// three frames (docs/numerics.md, "Second order"); any other model refuses it by name.
 fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics> {
     let order = int_in("numerics.order", n.order.unwrap_or(1), 1, 2)? as u8;
     let limiters = [
@@ -646,7 +646,7 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
             err(
                 "numerics.order",
                 format!(
-                    "order 2 is implemented for the monolayer hydrostatic granular model; {what}: use numerics.order = 1"
+                    "order 2 is implemented for the hydrostatic granular model (any model.layers on a line, one layer on a raster); {what}: use numerics.order = 1"
                 ),
             )
         };
@@ -659,8 +659,8 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
         if model.pressure == Pressure::NonHydrostatic {
             return refuse("model.pressure is \"nonhydrostatic\"");
         }
-        if model.layers > 1 {
-            return refuse(&format!("model.layers is {}", model.layers));
+        if model.layers > 1 && domain.plane.is_some() {
+            return refuse(&format!("model.layers is {} on a raster", model.layers));
         }
         if domain.plane.is_none() && domain.coordinates == Coordinates::BedNormal {
             return refuse("domain.coordinates is \"bed_normal\" on a line (order 2 is written for the local and Cartesian frames of a line, and for every frame of a raster)");
@@ -904,9 +904,14 @@ t_end = 2.0
         let s = load(MINIMAL).unwrap();
         assert_eq!(s.numerics, Numerics::default());
         assert_eq!(s.numerics.order, 1);
+        let s = load_set(MINIMAL, &["numerics.order=2", "model.layers=3"]).unwrap();
+        assert_eq!((s.numerics.order, s.model.layers), (2, 3));
         for (sets, what) in [
-            (&["model.layers=3"][..], "model.layers is 3"),
             (&["model.pressure=nonhydrostatic"][..], "nonhydrostatic"),
+            (
+                &["model.layers=3", "model.pressure=nonhydrostatic"][..],
+                "nonhydrostatic",
+            ),
         ] {
             let sets = [sets, &["numerics.order=2"]].concat();
             let e = load_set(MINIMAL, &sets).unwrap_err();
