@@ -133,13 +133,13 @@ fn run_and_measure(
         max_pfv: 0.0,
         area: 0.0,
     };
-    for j in 0..y.len() {
+    for (j, &yc) in y.iter().enumerate() {
         for (i, &xc) in x.iter().enumerate() {
             let k = j * x.len() + i;
             m.max_pfv = m.max_pfv.max(pfv[k]);
             if pft[k] > PFT_THRESHOLD {
                 m.area += cell;
-                m.runout = m.runout.max(beyond(xc, y[j]));
+                m.runout = m.runout.max(beyond(xc, yc));
             }
         }
     }

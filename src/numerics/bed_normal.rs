@@ -106,8 +106,7 @@ pub(crate) fn face<L: BasalFriction>(
     (slope_l, slope_r): (f64, f64),
     law_of: impl Fn(f64) -> L,
     centres: Option<((f64, f64), (f64, f64))>,
-    d: f64,
-    dt: f64,
+    (d, dt): (f64, f64),
 ) -> FaceFlux {
     // The normal thickness of the cells (a ghost's geometry is its edge cell's).
     let (hn_l, hn_r) = (cos_l * l.side.h, cos_r * r.side.h);

@@ -381,7 +381,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     }
 
     /// The step for `layers` ≥ 1 layers with the second-order reconstruction (N = 1:
-    /// [`Self::second_order`]; N > 1: [`Self::reconstruct_layers`]).
+    /// [`Self::second_order`]; N > 1: `reconstruct_layers`).
     pub fn second_order_with_layers(law: L, nx: usize, layers: usize, limiter: Limiter) -> Self {
         let mut step = Self::with_layers(law, nx, layers);
         if layers > 1 {

@@ -1045,7 +1045,7 @@ impl<'a, L: BasalFriction, const BN: bool, const O2: bool> Ctx<'a, L, BN, O2> {
         let law_of = |drive: f64| self.face_law(drive, cells);
         let (cos, slopes) = ((m.cos[cl], m.cos[cr]), (slope_t(cl), slope_t(cr)));
         let centres = centres.map(|c| ((c.l.0, c.l.1), (c.r.0, c.r.1)));
-        bed_normal::face(l, r, cos, slopes, law_of, centres, d, self.dt)
+        bed_normal::face(l, r, cos, slopes, law_of, centres, (d, self.dt))
     }
 
     /// A face with a wall on the left (`wall_l`), the right or both sides: the wall

@@ -14,10 +14,10 @@
 //! (docs/numerics.md).
 //!
 //! The scheme is the raster's ([`super::hydrostatic_2d`]) on one row: every face is
-//! [`bed_normal::face`] (the 1-D face kernel with the face's gravity g c_f², potential
+//! `bed_normal::face` (the 1-D face kernel with the face's gravity g c_f², potential
 //! b/c_f², wave bounds with G⁻¹_xx = c_f², ΔC against the covariant drive with the
 //! normal stress c_f (g + b_xx u²)₊, the drained-face upwinding) and every cell
-//! [`bed_normal::update`] (lower, the faces' flat update, the geodesic term, raise,
+//! `bed_normal::update` (lower, the faces' flat update, the geodesic term, raise,
 //! the desingularised film velocity), the draining-time limiter (Bollermann et al.
 //! 2013) as on a raster. Where the raster passes the y-quantities of a state
 //! invariant in y (v = 0, b_y = 0, the tangential drive and momentum 0, its y-faces
@@ -179,7 +179,7 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for BedNormalLineStep<L> {
             let (cl, cr) = (k.clamp(1, nx) - 1, (k + 1).clamp(1, nx) - 1);
             let (l, rt) = (&self.sides[k], &self.sides[k + 1]);
             let (cos, slopes) = ((m.cos[cl], m.cos[cr]), (m.gy[cl], m.gy[cr]));
-            self.faces[k] = bed_normal::face(l, rt, cos, slopes, |_| law, None, mesh.dx, dt);
+            self.faces[k] = bed_normal::face(l, rt, cos, slopes, |_| law, None, (mesh.dx, dt));
         }
         let mut worst = self.update(m, state, (dt, r), false);
         if worst.0 < 0.0 {
