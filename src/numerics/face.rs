@@ -113,26 +113,37 @@ pub fn interface_with_zoned_transverse_drive<M: Fn(f64, f64, f64) -> f64>(
     dx: f64,
     dt: f64,
 ) -> Option<(Interface, Side, Side)> {
-    let (sl, sr) = (l.sqrt_h, r.sqrt_h);
-    let disk = |drive: f64, mu: f64| {
-        let threshold = g_n * mu;
-        let drive_t = if drive_t == (0.0, 0.0) {
-            0.0
-        } else {
-            (sl * drive_t.0 + sr * drive_t.1) / (sl + sr)
-        };
-        if drive_t == 0.0 {
-            -drive.clamp(-threshold, threshold)
-        } else {
-            let magnitude = drive.hypot(drive_t);
-            if magnitude <= threshold {
-                -drive
-            } else {
-                -drive * (threshold / magnitude)
-            }
-        }
-    };
+    let weights = (l.sqrt_h, r.sqrt_h);
+    let disk = |drive: f64, mu: f64| disk_friction(drive, g_n * mu, weights, drive_t);
     interface_with_friction(mu_of, l, r, extra, disk, (g_n, g_n), dx, dt)
+}
+
+/// The friction force that ΔC treats as bed against the normal drive `drive`: the
+/// Coulomb force of radius `threshold` = g_n μ against the whole drive (d_n, d_t),
+/// capped at the disk, with d_t the mean of the sides' tangential drives `drive_t`
+/// weighted by their √h `(wl, wr)` (0 when both are 0: the scalar clamp).
+#[inline(always)]
+pub(crate) fn disk_friction(
+    drive: f64,
+    threshold: f64,
+    (wl, wr): (f64, f64),
+    drive_t: (f64, f64),
+) -> f64 {
+    let drive_t = if drive_t == (0.0, 0.0) {
+        0.0
+    } else {
+        (wl * drive_t.0 + wr * drive_t.1) / (wl + wr)
+    };
+    if drive_t == 0.0 {
+        -drive.clamp(-threshold, threshold)
+    } else {
+        let magnitude = drive.hypot(drive_t);
+        if magnitude <= threshold {
+            -drive
+        } else {
+            -drive * (threshold / magnitude)
+        }
+    }
 }
 
 /// The interface with the friction that ΔC treats as bed given by `friction(d_n, μ)`:

@@ -73,8 +73,8 @@
 
 use super::bed_normal::{self, face_sources, FaceFlux, FaceSide};
 use super::face::{
-    drained_fraction, interface_with_friction, interface_with_zoned_transverse_drive,
-    layer_momentum_flux, mass_flux, transverse_flux, Side,
+    disk_friction, drained_fraction, interface_with_friction,
+    interface_with_zoned_transverse_drive, layer_momentum_flux, mass_flux, transverse_flux, Side,
 };
 use super::friction_2d::CellFriction;
 use super::muscl::Limiter;
@@ -1272,30 +1272,6 @@ impl<'a, L: BasalFriction, const BN: bool, const O2: bool> Ctx<'a, L, BN, O2> {
         };
         // Ghost-inclusive column i + 1 and row j + 1.
         [x_face(i), x_face(i + 1), y_face(j), y_face(j + 1)]
-    }
-}
-
-/// The friction force that ΔC treats as bed at an order-2 face of the flat frames: the
-/// disk of [`super::face::interface_with_zoned_transverse_drive`] (the same operations)
-/// against the normal drive `drive` (with the centres' part added by the caller), of
-/// radius `threshold` = g_n μ, with the tangential drives `drive_t` of the two sides
-/// weighted by their √h `(wl, wr)`.
-#[inline(always)]
-fn disk_friction(drive: f64, threshold: f64, (wl, wr): (f64, f64), drive_t: (f64, f64)) -> f64 {
-    let drive_t = if drive_t == (0.0, 0.0) {
-        0.0
-    } else {
-        (wl * drive_t.0 + wr * drive_t.1) / (wl + wr)
-    };
-    if drive_t == 0.0 {
-        -drive.clamp(-threshold, threshold)
-    } else {
-        let magnitude = drive.hypot(drive_t);
-        if magnitude <= threshold {
-            -drive
-        } else {
-            -drive * (threshold / magnitude)
-        }
     }
 }
 
