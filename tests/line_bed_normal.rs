@@ -10,6 +10,7 @@
 //! elsewhere.
 
 use super::terrain_2d::{material, raster, tan_deg};
+use super::terrain_2d_bed_normal::arc_point_mass;
 use granflow::grid::{BoundaryKind, Coordinates, Line, LineSpec, Sides};
 use granflow::model::granular::config::{MultilayerSpec, Pressure};
 use granflow::model::granular::{pipeline, Granular};
@@ -351,22 +352,6 @@ fn a_release_in_a_bed_normal_bowl_conserves_mass_and_stays_positive() {
     eprintln!("mass {mass0} → {mass}, fastest {fastest:.3} m/s");
     assert!((mass - mass0).abs() < 1e-13 * mass0, "{mass0} → {mass}");
     assert!(fastest > 1.0, "it flows");
-}
-
-/// A point mass on the arc b = R − √(R² − x²) (a bowl of radius R), released at rest
-/// at the angle φ₀, with Coulomb friction on the normal stress g cos φ + U²/R (U²/R
-/// dropped without `curvature`): its arclength from the release at time t.
-fn arc_point_mass(radius: f64, phi0: f64, mu: f64, curvature: bool, t: f64) -> f64 {
-    let (mut phi, mut speed) = (phi0, 0.0f64);
-    let n = 200_000;
-    let dt = t / n as f64;
-    let kappa = if curvature { 1.0 / radius } else { 0.0 };
-    for _ in 0..n {
-        let acc = G * phi.sin() - mu * (G * phi.cos() + speed * speed * kappa);
-        speed = (speed + dt * acc).max(0.0);
-        phi -= dt * speed / radius;
-    }
-    radius * (phi0 - phi)
 }
 
 /// A thin Coulomb layer (4 m long, 2 cm thick) released on a circular bowl of radius

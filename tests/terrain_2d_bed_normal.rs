@@ -141,8 +141,8 @@ fn voellmy_on_a_dem_plane_reaches_salms_terminal_speed() {
 /// A point mass on the arc b = R − √(R² − x²) (a bowl of radius R), released at rest
 /// at the angle φ₀, with Coulomb friction on the normal stress g cos φ + U²/R:
 /// dU/dt = g sin φ − μ (g cos φ + U²/R) along s = R φ (downslope positive). Returns
-/// the arclength from the release at time t, and the time the mass first stops.
-fn arc_point_mass(radius: f64, phi0: f64, mu: f64, curvature: bool, t: f64) -> f64 {
+/// the arclength from the release at time t (U²/R dropped without `curvature`).
+pub(crate) fn arc_point_mass(radius: f64, phi0: f64, mu: f64, curvature: bool, t: f64) -> f64 {
     let (mut phi, mut speed) = (phi0, 0.0f64);
     let n = 200_000;
     let dt = t / n as f64;
