@@ -69,10 +69,13 @@ SHORTENED = {
     r"--example flow_cost -- (?!.*cells=\[3162)": (
         "--set time.t_end=5",
         "a hockey-stick run to its stop takes 10 s of CPU, the full sweep a minute"),
-    r"^python scripts/error_vs_runtime\.py --orders": (
+    r"^python scripts/error_vs_runtime\.py --orders(?! --cases thacker2d)": (
         "--cases ritter,mangeney --limiters mc",
         "the whole order study (four cases, three limiters, a 5120-cell collapse) takes "
         "minutes of CPU"),
+    r"^python scripts/error_vs_runtime\.py --orders --cases thacker2d,collapse2d": (
+        "--limiters mc",
+        "the raster cases with one limiter take 20 s of CPU, with three a minute"),
 }
 
 NOT_RUN = {
