@@ -10,22 +10,22 @@ use granflow::physics::GRAVITY as G;
 use granflow::scenario::{BoundaryKind, FrictionLaw, Limiter, MonolayerShear, Numerics};
 use granflow::simulation::Simulation;
 
-const ORDER_1: Numerics = Numerics {
+pub(crate) const ORDER_1: Numerics = Numerics {
     order: 1,
     limiter: Limiter::VanLeer,
 };
 
-fn order_2(limiter: Limiter) -> Numerics {
+pub(crate) fn order_2(limiter: Limiter) -> Numerics {
     Numerics { order: 2, limiter }
 }
 
 /// Both orders, with the default limiter at order 2.
-fn both() -> [Numerics; 2] {
+pub(crate) fn both() -> [Numerics; 2] {
     [ORDER_1, order_2(Numerics::default().limiter)]
 }
 
 /// Deterministic stand-in for a random number in [0, 1).
-fn rand01(x: f64) -> f64 {
+pub(crate) fn rand01(x: f64) -> f64 {
     let mut z = x.to_bits().wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -33,7 +33,7 @@ fn rand01(x: f64) -> f64 {
     (z >> 11) as f64 / (1u64 << 53) as f64
 }
 
-fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(a, b)| (a - b).abs())

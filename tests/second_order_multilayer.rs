@@ -13,34 +13,7 @@ use granflow::scenario::{load_file, BoundaryKind, FrictionLaw, Limiter, Monolaye
 use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
 
-const ORDER_1: Numerics = Numerics {
-    order: 1,
-    limiter: Limiter::VanLeer,
-};
-
-fn order_2(limiter: Limiter) -> Numerics {
-    Numerics { order: 2, limiter }
-}
-
-fn both() -> [Numerics; 2] {
-    [ORDER_1, order_2(Numerics::default().limiter)]
-}
-
-/// Deterministic stand-in for a random number in [0, 1) (as `second_order.rs`).
-fn rand01(x: f64) -> f64 {
-    let mut z = x.to_bits().wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    (z >> 11) as f64 / (1u64 << 53) as f64
-}
-
-fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max)
-}
+use super::second_order::{both, max_abs_diff, order_2, rand01, ORDER_1};
 
 fn mu_i() -> FrictionLaw {
     FrictionLaw::MuI {
