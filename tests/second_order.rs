@@ -197,29 +197,46 @@ fn wet_dry_fronts_stay_positive_and_mass_is_conserved_in_both_orders() {
 #[test]
 fn frictionless_lake_at_rest_over_a_random_bed_in_both_orders() {
     for numerics in both() {
-        let mut case = Case::new(0.0, 10.0, 200);
-        case.numerics = numerics;
-        case.t_end = 1.0;
-        case.every = 0.25;
-        // Emerging islands and submerged bumps.
-        let bed = |x: f64| 0.7 * rand01(x) * (-(x - 5.0).powi(2) / 8.0).exp();
-        let mut sim = case.build(bed, |_, b| (0.5 - b).max(0.0), |_| 0.0);
-        let h0 = sim.state.h_interior().to_vec();
-        assert!(h0.contains(&0.0), "the bed must emerge somewhere");
-        let (sink, _) = run(&mut sim);
-        assert!(sim.steps > 50);
-        for snap in &sink.snapshots {
-            assert!(snap.u.iter().all(|u| u.abs() <= 1e-13), "t = {}", snap.t);
-            assert!(max_abs_diff(&snap.h, &h0) <= 1e-13, "t = {}", snap.t);
-        }
+        lake_at_rest_over_a_random_bed(numerics, 1);
+    }
+}
+
+/// A frictionless lake of `layers` layers over a random bed with emerging islands and
+/// submerged bumps stays at rest (|u|, |Δh| ≤ 1e-13) with `numerics`.
+pub(crate) fn lake_at_rest_over_a_random_bed(numerics: Numerics, layers: usize) {
+    let mut case = Case::new(0.0, 10.0, 200);
+    case.numerics = numerics;
+    case.layers = layers;
+    case.t_end = 1.0;
+    case.every = 0.25;
+    let bed = |x: f64| 0.7 * rand01(x) * (-(x - 5.0).powi(2) / 8.0).exp();
+    let mut sim = case.build(bed, |_, b| (0.5 - b).max(0.0), |_| 0.0);
+    let h0 = sim.state.h_interior().to_vec();
+    assert!(h0.contains(&0.0), "the bed must emerge somewhere");
+    let (sink, _) = run(&mut sim);
+    assert!(sim.steps > 50);
+    for snap in &sink.snapshots {
+        assert_eq!(snap.u.len(), layers * 200);
+        assert!(snap.u.iter().all(|u| u.abs() <= 1e-13), "t = {}", snap.t);
+        assert!(max_abs_diff(&snap.h, &h0) <= 1e-13, "t = {}", snap.t);
     }
 }
 
 /// Escalante et al. 2023, §5.3 (as `well_balanced.rs`): a μ(I) mass (μ_s = tan 20°) on
 /// a random bed with a free surface of slope `surface_deg`.
 fn random_bed_mass(numerics: Numerics, surface_deg: f64) -> (Vec<f64>, Simulation<Granular>) {
+    random_bed_mass_of(numerics, surface_deg, 1)
+}
+
+/// [`random_bed_mass`] with `layers` layers.
+pub(crate) fn random_bed_mass_of(
+    numerics: Numerics,
+    surface_deg: f64,
+    layers: usize,
+) -> (Vec<f64>, Simulation<Granular>) {
     let mut case = Case::new(-3.0, 1.0, 300);
     case.numerics = numerics;
+    case.layers = layers;
     case.mesh.left = BoundaryKind::Outflow;
     case.mesh.right = BoundaryKind::Outflow;
     case.law = FrictionLaw::MuI {

@@ -9,11 +9,14 @@ use crate::common::{l1, observed_order, run, tan_deg, Case};
 use granflow::model::granular::Granular;
 use granflow::output::memory::MemorySink;
 use granflow::physics::GRAVITY as G;
-use granflow::scenario::{load_file, BoundaryKind, FrictionLaw, Limiter, MonolayerShear, Numerics};
+use granflow::scenario::{load_file, FrictionLaw, Limiter, MonolayerShear, Numerics};
 use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
 
-use super::second_order::{both, max_abs_diff, order_2, rand01, ORDER_1};
+use super::second_order::{
+    both, lake_at_rest_over_a_random_bed, max_abs_diff, order_2, rand01, random_bed_mass_of,
+    ORDER_1,
+};
 
 fn mu_i() -> FrictionLaw {
     FrictionLaw::MuI {
@@ -41,40 +44,14 @@ fn shear_layers(sim: &mut Simulation<Granular>, shear: impl Fn(f64) -> f64) {
 #[test]
 fn lake_at_rest_with_four_layers_over_a_random_bed_in_both_orders() {
     for numerics in both() {
-        let mut case = Case::new(0.0, 10.0, 200);
-        case.numerics = numerics;
-        case.layers = 4;
-        case.t_end = 1.0;
-        case.every = 0.25;
-        let bed = |x: f64| 0.7 * rand01(x) * (-(x - 5.0).powi(2) / 8.0).exp();
-        let mut sim = case.build(bed, |_, b| (0.5 - b).max(0.0), |_| 0.0);
-        let h0 = sim.state.h_interior().to_vec();
-        assert!(h0.contains(&0.0), "the bed must emerge somewhere");
-        let (sink, _) = run(&mut sim);
-        assert!(sim.steps > 50);
-        for snap in &sink.snapshots {
-            assert_eq!(snap.u.len(), 4 * 200);
-            assert!(snap.u.iter().all(|u| u.abs() <= 1e-13), "t = {}", snap.t);
-            assert!(max_abs_diff(&snap.h, &h0) <= 1e-13, "t = {}", snap.t);
-        }
+        lake_at_rest_over_a_random_bed(numerics, 4);
     }
 }
 
 /// The μ(I) mass of `second_order.rs` (Escalante et al. 2023, §5.3: μ_s = tan 20° on a
 /// random bed, free surface of slope `surface_deg`) with four layers.
 fn random_bed_mass(numerics: Numerics, surface_deg: f64) -> (Vec<f64>, Simulation<Granular>) {
-    let mut case = Case::new(-3.0, 1.0, 300);
-    case.numerics = numerics;
-    case.layers = 4;
-    case.mesh.left = BoundaryKind::Outflow;
-    case.mesh.right = BoundaryKind::Outflow;
-    case.law = mu_i();
-    case.t_end = 1.0;
-    case.every = 0.25;
-    let bed = |x: f64| 2.0 / (x + 4.0) - 0.5 + (-10.0 * (x + 1.5).powi(2)).exp() + 0.15 * rand01(x);
-    let slope = tan_deg(surface_deg);
-    let sim = case.build(bed, move |x, b| 0.8 - slope * (x - 2.0) - b, |_| 0.0);
-    (sim.state.h_interior().to_vec(), sim)
+    random_bed_mass_of(numerics, surface_deg, 4)
 }
 
 /// Largest |u_α| and |h − h⁰| over the snapshots of a run of [`random_bed_mass`].
