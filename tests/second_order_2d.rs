@@ -7,6 +7,7 @@
 //! Thacker's paraboloid is 2 away from the shoreline.
 
 use super::terrain_2d::{material, raster, tan_deg};
+use super::terrain_2d_tiles::cone_across_tiles;
 use granflow::grid::{BoundaryKind, Coordinates, Grid, Line, LineSpec, Raster2d, Sides};
 use granflow::model::granular::Granular;
 use granflow::model::granular_2d::{self, Granular2d};
@@ -381,50 +382,13 @@ fn order_2_tiles_and_threads_give_the_full_sweeps_bits() {
 }
 
 fn tiles_and_threads(coordinates: Coordinates) {
-    let (nx, ny) = (75, 50);
-    let spec = granflow::grid::RasterSpec {
-        nx,
-        ny,
-        x_min: 0.0,
-        x_max: 7.5,
-        y_min: 0.0,
-        y_max: 5.0,
-        sides: Sides {
-            west: WALL,
-            east: OUTFLOW,
-            south: WALL,
-            north: OUTFLOW,
-        },
-        coordinates,
-        slope_deg: if coordinates == Coordinates::Local {
-            30.0
-        } else {
-            0.0
-        },
-    };
-    let noise = |k: usize| ((k as f64 * 0.618_033_988_75).fract() - 0.5) * 0.02;
     let tilt = if coordinates == Coordinates::Local {
         0.0
     } else {
         tan_deg(30.0)
     };
-    let bed: Vec<f64> = (0..nx * ny)
-        .map(|k| noise(k) - tilt * 0.1 * (k % nx) as f64)
-        .collect();
-    let walls: Vec<bool> = (0..nx * ny)
-        .map(|k| (30..35).contains(&(k % nx)) && (14..18).contains(&(k / nx)))
-        .collect();
-    let r = Raster2d::with_walls(spec, bed, walls.clone()).unwrap();
-    let h: Vec<f64> = (0..nx * ny)
-        .map(|k| {
-            let (x, y) = (r.x(k % nx) - 1.2, r.y(k / nx) - 1.5);
-            if walls[k] {
-                0.0
-            } else {
-                (0.3 - 0.4 * (x * x + y * y).sqrt()).max(0.0)
-            }
-        })
-        .collect();
+    let (r, h) = cone_across_tiles(coordinates, tilt);
+    let (nx, ny) = (r.nx(), r.ny());
     let zeros = vec![0.0; nx * ny];
     let law = FrictionLaw::Coulomb { mu: tan_deg(20.0) };
     let model = Granular2d::new(&r, 1e-3);

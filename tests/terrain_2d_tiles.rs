@@ -125,8 +125,12 @@ fn the_bundled_raster_scenarios_give_the_full_sweeps_bits_on_one_two_and_four_th
 /// the full sweep's state to the bit, the run loop's copy of the state (of the tiles
 /// that changed) equals the state, and the stepped tiles cover the flow and little
 /// more: while the flow is on a small part of the raster, so is the work.
-#[test]
-fn a_flow_across_tile_edges_gives_the_full_sweeps_bits_at_every_step() {
+/// The raster of [`a_flow_across_tile_edges_gives_the_full_sweeps_bits_at_every_step`]
+/// (75 × 50 cells of 0.1 m, partial last tiles, walls west and south, outflow east and
+/// north, a block of wall cells astride a tile corner, a bed of small noise falling by
+/// `tilt` along x; in local coordinates on a 30° plane, else horizontal) and its cone
+/// of thickness 0.3 − 0.4 r about (1.2, 1.5).
+pub(crate) fn cone_across_tiles(coordinates: Coordinates, tilt: f64) -> (Raster2d, Vec<f64>) {
     let (nx, ny) = (75, 50);
     let spec = RasterSpec {
         nx,
@@ -141,11 +145,17 @@ fn a_flow_across_tile_edges_gives_the_full_sweeps_bits_at_every_step() {
             south: BoundaryKind::Wall,
             north: BoundaryKind::Outflow,
         },
-        coordinates: Coordinates::Local,
-        slope_deg: 30.0,
+        coordinates,
+        slope_deg: if coordinates == Coordinates::Local {
+            30.0
+        } else {
+            0.0
+        },
     };
     let noise = |k: usize| ((k as f64 * 0.618_033_988_75).fract() - 0.5) * 0.02;
-    let bed: Vec<f64> = (0..nx * ny).map(noise).collect();
+    let bed: Vec<f64> = (0..nx * ny)
+        .map(|k| noise(k) - tilt * 0.1 * (k % nx) as f64)
+        .collect();
     // A block of wall cells in the path, astride a tile corner (column 32, row 16).
     let walls: Vec<bool> = (0..nx * ny)
         .map(|k| (30..35).contains(&(k % nx)) && (14..18).contains(&(k / nx)))
@@ -161,6 +171,13 @@ fn a_flow_across_tile_edges_gives_the_full_sweeps_bits_at_every_step() {
             }
         })
         .collect();
+    (raster, h)
+}
+
+#[test]
+fn a_flow_across_tile_edges_gives_the_full_sweeps_bits_at_every_step() {
+    let (raster, h) = cone_across_tiles(Coordinates::Local, 0.0);
+    let (nx, ny) = (raster.nx(), raster.ny());
     let zeros = vec![0.0; nx * ny];
     let law = FrictionLaw::Coulomb {
         mu: 20f64.to_radians().tan(),
