@@ -7,6 +7,8 @@ and for the scheme's two orders (--orders).
     python scripts/error_vs_runtime.py --orders [--granflow PATH] [--out DIR]
                                        [--cases ritter,stoker,mangeney,collapse,thacker2d,collapse2d]
                                        [--limiters minmod,van_leer,mc]
+    python scripts/error_vs_runtime.py --basilisk-radial BINARY [--granflow PATH] [--out DIR]
+                                       [--passes 3]
 
 --orders: numerics.order = 1 and 2 (order 2 with each limiter of --limiters) on
   ritter    the dry dam break (scenarios/dam_break_dry.toml): L1(h) against the exact
@@ -33,6 +35,16 @@ It prints one table per case (cells, order, limiter, error, observed order betwe
 successive grids, wall time from /summary/wall_time_s, CPU time: user + system of the
 run's process) and writes DIR/orders.csv. One run at a time (rasters on
 `--threads`, default 1).
+
+--basilisk-radial: the radial collapse side by side with Basilisk's saint-venant.h
+  (BINARY built from benches/basilisk/saint_venant_radial.c with Basilisk's qcc):
+  granflow's orders 1 and 2 (MC) and Basilisk's orders 1 and 2 on 40², 80², 160² cells,
+  each deposit at t = 1 s against the same reference (granflow's order 2 on 320²,
+  averaged onto the coarser grid; L1(h) relative to the mass), and the distance between
+  the two codes' 320² order-2 deposits (how much the reference favours granflow).
+  granflow writes snapshots at 0 and 1 s only (output.every = 1), Basilisk its final h
+  as text. CPU: user + system of each process, median of --passes passes interleaved
+  between the codes. Writes DIR/basilisk_radial.csv.
 
 Runs, through one `granflow sweep` per slope, the collapse of Escalante et al. 2023, §5.1/§5.5
 (scenarios/nh_multilayer_collapse.toml: domain [-0.2, 3] m, 640 cells, Table 1
@@ -316,6 +328,69 @@ def orders_2d(args, name, out, schemes, rows):
                                  error=v, observed_order=o, wall_s=wall, cpu_s=cpu))
 
 
+def basilisk_radial_h(binary, n, order, path):
+    """Basilisk's deposit on n × n cells: (h as granflow's (ny, nx) array, CPU s)."""
+    import resource
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run([binary, str(n), str(order), str(path)], check=True, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    x, y, h = np.loadtxt(path, unpack=True)
+    dx = 3.0 / n
+    i = np.rint((x + 1.5) / dx - 0.5).astype(int)
+    j = np.rint((y + 1.5) / dx - 0.5).astype(int)
+    grid = np.full((n, n), np.nan)
+    grid[j, i] = h
+    if np.isnan(grid).any():
+        raise RuntimeError(f"{binary}: {n}² cells expected, some missing")
+    return grid, cpu
+
+
+def basilisk_radial(args):
+    """The radial collapse side by side with Basilisk (module documentation)."""
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    scenario = ROOT / "scenarios" / "radial_collapse.toml"
+    fine, grids = 320, [40, 80, 160]
+    few = ["output.every=1"]
+    x, y, ref, _, _, cpu = raster_run(args.granflow, scenario, fine, few + ["numerics.order=2", "numerics.limiter=mc"],
+                                      out / "radial_granflow_ref.h5", 1)
+    if not (np.allclose(x, -1.5 + 3.0 / fine * (np.arange(fine) + 0.5))
+            and np.allclose(y, -1.5 + 3.0 / fine * (np.arange(fine) + 0.5))):
+        raise RuntimeError("granflow's y axis is not increasing: the Basilisk grid cannot be matched")
+    bas_ref, bas_cpu = basilisk_radial_h(args.basilisk_radial, fine, 2, out / "radial_basilisk_ref.txt")
+    gap = float(np.abs(bas_ref - ref).sum() / ref.sum())
+    print(f"reference: granflow order 2 (mc) on {fine}², CPU {cpu:.2f} s; Basilisk order 2 on {fine}², "
+          f"CPU {bas_cpu:.2f} s; L1 distance between the two {gap:.4e}")
+    runs = {}
+    for p in range(args.passes):
+        for n in grids:
+            for code, order in (("granflow", 1), ("granflow", 2), ("basilisk", 1), ("basilisk", 2)):
+                if code == "granflow":
+                    sets = few + [f"numerics.order={order}"] + (["numerics.limiter=mc"] if order == 2 else [])
+                    _, _, h, _, _, c = raster_run(args.granflow, scenario, n, sets,
+                                                  out / f"radial_granflow_o{order}_{n}.h5", 1)
+                else:
+                    h, c = basilisk_radial_h(args.basilisk_radial, n, order, out / f"radial_basilisk_o{order}_{n}.txt")
+                r = coarsen2d(ref, fine // n)
+                err = float(np.abs(h - r).sum() / r.sum())
+                runs.setdefault((code, order, n), []).append((err, c))
+    rows = []
+    print(f"\n{'code':9} {'order':>5} {'cells':>6} {'L1(h) rel.':>11} {'CPU s (median)':>15}  CPU s of each pass")
+    for (code, order, n), v in sorted(runs.items()):
+        cpus = [c for _, c in v]
+        med = float(np.median(cpus))
+        print(f"{code:9} {order:5} {n:5}² {v[0][0]:11.4e} {med:15.4f}  {' '.join(f'{c:.4f}' for c in cpus)}")
+        rows.append(dict(code=code, order=order, cells=n * n, error=v[0][0], cpu_s=med))
+    with open(out / "basilisk_radial.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    print(f"\nwrote {out / 'basilisk_radial.csv'}")
+    return 0
+
+
 def orders_study(args):
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -383,6 +458,9 @@ def orders_study(args):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--orders", action="store_true", help="the order study (module documentation)")
+    ap.add_argument("--basilisk-radial", metavar="BINARY",
+                    help="the radial collapse side by side with this Basilisk binary (module documentation)")
+    ap.add_argument("--passes", type=int, default=3, help="interleaved passes (--basilisk-radial)")
     ap.add_argument("--cases", default="ritter,stoker,mangeney,collapse")
     ap.add_argument("--limiters", default="minmod,van_leer,mc")
     ap.add_argument("--granflow", default=shutil.which("granflow") or str(ROOT / "target/release/granflow"))
@@ -395,6 +473,11 @@ def main():
     if not pathlib.Path(args.granflow).exists():
         print(f"error: granflow binary not found: {args.granflow} (cargo build --release)", file=sys.stderr)
         return 2
+    if args.basilisk_radial:
+        if not pathlib.Path(args.basilisk_radial).exists():
+            print(f"error: Basilisk binary not found: {args.basilisk_radial}", file=sys.stderr)
+            return 2
+        return basilisk_radial(args)
     if args.orders:
         known = ("ritter", "stoker", "mangeney", "collapse", "thacker2d", "collapse2d")
         bad = [c for c in args.cases.split(",") if c not in known]
