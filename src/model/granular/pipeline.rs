@@ -61,7 +61,9 @@ pub struct Stages<'a> {
     pub pressure: Pressure,
     pub multilayer: &'a MultilayerSpec,
     /// `Some(limiter)`: the second-order step (`numerics.order = 2`; the validation
-    /// allows it for N ≥ 1 layers, hydrostatic or not, on local and Cartesian lines).
+    /// allows it on local and Cartesian lines for the hydrostatic model, N ≥ 1 layers,
+    /// and the non-hydrostatic monolayer; the N-layer non-hydrostatic step is built
+    /// here too, for the tests, see `nh_heun`).
     pub second_order: Option<Limiter>,
 }
 
