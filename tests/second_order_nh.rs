@@ -339,11 +339,13 @@ fn wedge(numerics: Numerics, cells: usize) -> [f64; 4] {
 }
 
 /// The non-hydrostatic wedge at order 2 on 640 … 10240 cells (docs/validation.md,
-/// "Non-hydrostatic runout under refinement", order 2): the toe at its first stop
-/// (t = 1.1 s) converges faster than at order 1 (differences shrink by more than 2
-/// per refinement from 1280 cells on), the mass median converges, and the 1 mm
-/// front at t = 3 s, which a surge over the stopped deposit carries on, is printed
-/// with its differences.
+/// "Non-hydrostatic runout under refinement", the wedge at order 2): the toe at its
+/// first stop (t = 1.1 s) converges, its change shrinking by more than 2 per refinement
+/// (33.1, 14.9, 3.6, 0.7 mm; order 1: 46.9, 43.8, 21.2, 9.7 mm); the mass median
+/// converges up to 5120 cells (changes below 1 mm); the surge over the stopped deposit
+/// does not, at order 2 as at order 1: the 99 % mass quantile moves 8.2, 42.5, 91.7,
+/// 177.1, 367.7 mm after t = 1.1 s, more than 1.5 times as far at each refinement
+/// (on 10240 cells it moves the median by 2.6 mm).
 #[test]
 #[ignore = "slow: refinement study"]
 fn nh_wedge_under_refinement_at_order_2() {
@@ -376,7 +378,13 @@ fn nh_wedge_under_refinement_at_order_2() {
         );
     }
     assert!(
-        median[3].abs() < 1e-3 && median[2].abs() < 2e-3,
+        median[..3].iter().all(|d| d.abs() < 1e-3),
         "median: {median:?}"
     );
+    for k in 1..r.len() {
+        assert!(
+            r[k][3] > 1.5 * r[k - 1][3] && r[k - 1][3] > 0.0,
+            "surge: {r:?}"
+        );
+    }
 }
