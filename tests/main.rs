@@ -42,6 +42,7 @@ mod scenarios;
 mod second_order;
 mod second_order_2d;
 mod second_order_multilayer;
+mod second_order_nh;
 mod submarine;
 mod submarine_paper;
 mod sweep;

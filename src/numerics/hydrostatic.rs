@@ -391,6 +391,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         }
         let dry = Side::monolayer(0.0, 0.0, 0.0, 0.0);
         step.limiter = Some(limiter);
+        step.tracers = TracerTransport::second_order(limiter);
         step.interior = vec![0.0; nx + 2];
         step.interior_body = vec![0.0; nx + 2];
         step.west = vec![dry; nx + 2];

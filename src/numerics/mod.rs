@@ -20,6 +20,7 @@ pub mod linalg;
 pub mod line_bed_normal;
 pub mod muscl;
 pub mod muscl_2d;
+pub mod nh_heun;
 pub mod nh_multilayer;
 
 pub mod nonhydrostatic;

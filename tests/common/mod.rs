@@ -25,8 +25,10 @@ pub struct Case {
     pub stop_at_rest: bool,
     /// `[numerics]` (order 1 by default).
     pub numerics: Numerics,
-    /// `model.layers` (1 by default; equal fractions, hydrostatic pressure).
+    /// `model.layers` (1 by default; equal fractions).
     pub layers: usize,
+    /// `model.pressure` (hydrostatic by default).
+    pub pressure: Pressure,
 }
 
 impl Case {
@@ -48,6 +50,7 @@ impl Case {
             stop_at_rest: false,
             numerics: Numerics::default(),
             layers: 1,
+            pressure: Pressure::Hydrostatic,
         }
     }
 
@@ -86,7 +89,7 @@ impl Case {
             friction_zones: None,
             model: ModelSpec {
                 kind: ModelKind::Granular,
-                pressure: Pressure::Hydrostatic,
+                pressure: self.pressure,
                 layers: self.layers,
             },
             multilayer: MultilayerSpec {

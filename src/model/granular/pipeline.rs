@@ -12,6 +12,7 @@ use crate::numerics::friction::{BedNormalFrictionStep, CoulombFrictionStep};
 use crate::numerics::hydrostatic::HydrostaticStep;
 use crate::numerics::line_bed_normal::BedNormalLineStep;
 use crate::numerics::muscl::Limiter;
+use crate::numerics::nh_heun::NhHeun;
 use crate::numerics::nh_multilayer::NhViscousStep;
 use crate::numerics::nonhydrostatic::NhFrictionStep;
 use crate::numerics::projection::monolayer::MonolayerOperator;
@@ -60,7 +61,9 @@ pub struct Stages<'a> {
     pub pressure: Pressure,
     pub multilayer: &'a MultilayerSpec,
     /// `Some(limiter)`: the second-order step (`numerics.order = 2`; the validation
-    /// allows it for the hydrostatic model, N ≥ 1 layers, local and Cartesian lines).
+    /// allows it on local and Cartesian lines for the hydrostatic model, N ≥ 1 layers,
+    /// and the non-hydrostatic monolayer; the N-layer non-hydrostatic step is built
+    /// here too, for the tests, see `nh_heun`).
     pub second_order: Option<Limiter>,
 }
 
@@ -81,7 +84,12 @@ impl WithLaw for Stages<'_> {
             ];
         }
         if let Some(limiter) = self.second_order {
-            assert!(self.pressure == Pressure::Hydrostatic);
+            if self.pressure == Pressure::NonHydrostatic {
+                // Heun's method around the whole split step (`nh_heun`): the first-order
+                // step 2 and projection below, after the order-2 hyperbolic step.
+                let rest = non_hydrostatic_rest(law, mesh, spec);
+                return vec![Box::new(NhHeun::new(law, nx, l.len(), limiter, rest))];
+            }
             if l.len() == 1 {
                 return vec![Box::new(HeunSplitting::new(law, nx, limiter))];
             }
@@ -107,40 +115,52 @@ impl WithLaw for Stages<'_> {
                 };
                 stages.push(Box::new(MultilayerViscousStep::new(law, nx, l, opts)));
             }
-            (Pressure::NonHydrostatic, 1) => {
-                stages.push(Box::new(NhFrictionStep::new(law, mesh)));
-                stages.push(Box::new(ProjectionStage::new(
-                    MonolayerOperator::new(mesh),
-                    ThomasSolver::default(),
-                    nx,
-                )));
-            }
-            (Pressure::NonHydrostatic, n) => {
-                // Escalante et al. 2023, §4: explicit p^n and the μ(I) viscous step with the total
-                // pressures, then the exact N-layer projection.
-                let opts = ViscousOptions {
-                    basal: spec.basal,
-                    regularization: spec.regularization,
-                    sidewall: spec.sidewall,
-                    c_msm: spec.c_msm,
-                    viscosity: spec.viscosity,
-                };
-                let viscous = MultilayerViscousStep::new(law, nx, l, opts);
-                // One operator for the explicit pⁿ terms and the projection.
-                let operator = SharedOperator::new(mesh, l);
-                let lagged = spec.viscosity == ViscosityTime::Lagged;
-                stages.push(Box::new(
-                    NhViscousStep::with_operator(mesh, operator.clone(), viscous).lagged(lagged),
-                ));
-                stages.push(Box::new(ProjectionStage::new(
-                    operator,
-                    BandedCholesky::new(n, nx + 1),
-                    nx,
-                )));
-            }
+            (Pressure::NonHydrostatic, _) => stages.extend(non_hydrostatic_rest(law, mesh, spec)),
         }
         stages
     }
+}
+
+/// Steps 2 and 3 of a non-hydrostatic run, after the hyperbolic step: the explicit pⁿ
+/// terms with the friction (N = 1) or the μ(I) viscous step (N > 1), then the
+/// projection.
+fn non_hydrostatic_rest<L: BasalFriction + LocalFriction + 'static>(
+    law: L,
+    mesh: &Line,
+    spec: &MultilayerSpec,
+) -> Vec<Box<dyn Stage<Line, LayeredState>>> {
+    let (nx, l) = (mesh.nx, &spec.layer_fractions);
+    if l.len() == 1 {
+        return vec![
+            Box::new(NhFrictionStep::new(law, mesh)),
+            Box::new(ProjectionStage::new(
+                MonolayerOperator::new(mesh),
+                ThomasSolver::default(),
+                nx,
+            )),
+        ];
+    }
+    // Escalante et al. 2023, §4: explicit p^n and the μ(I) viscous step with the total
+    // pressures, then the exact N-layer projection.
+    let opts = ViscousOptions {
+        basal: spec.basal,
+        regularization: spec.regularization,
+        sidewall: spec.sidewall,
+        c_msm: spec.c_msm,
+        viscosity: spec.viscosity,
+    };
+    let viscous = MultilayerViscousStep::new(law, nx, l, opts);
+    // One operator for the explicit pⁿ terms and the projection.
+    let operator = SharedOperator::new(mesh, l);
+    let lagged = spec.viscosity == ViscosityTime::Lagged;
+    vec![
+        Box::new(NhViscousStep::with_operator(mesh, operator.clone(), viscous).lagged(lagged)),
+        Box::new(ProjectionStage::new(
+            operator,
+            BandedCholesky::new(l.len(), nx + 1),
+            nx,
+        )),
+    ]
 }
 
 /// The pipeline of a granular run with friction law `law`.

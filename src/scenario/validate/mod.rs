@@ -646,7 +646,7 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
             err(
                 "numerics.order",
                 format!(
-                    "order 2 is implemented for the hydrostatic granular model (any model.layers on a line, one layer on a raster); {what}: use numerics.order = 1"
+                    "order 2 is implemented for the granular model (hydrostatic: any model.layers on a line, one layer on a raster; non-hydrostatic: one layer on a line); {what}: use numerics.order = 1"
                 ),
             )
         };
@@ -656,8 +656,14 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
         if model.kind == crate::model::ModelKind::Submarine {
             return refuse("model.kind is \"submarine\"");
         }
-        if model.pressure == Pressure::NonHydrostatic {
-            return refuse("model.pressure is \"nonhydrostatic\"");
+        if model.pressure == Pressure::NonHydrostatic && domain.plane.is_some() {
+            return refuse("model.pressure is \"nonhydrostatic\" on a raster");
+        }
+        if model.pressure == Pressure::NonHydrostatic && model.layers > 1 {
+            return refuse(&format!(
+                "model.pressure is \"nonhydrostatic\" with model.layers = {} (order 2 is written for the non-hydrostatic monolayer)",
+                model.layers
+            ));
         }
         if model.layers > 1 && domain.plane.is_some() {
             return refuse(&format!("model.layers is {} on a raster", model.layers));
