@@ -16,6 +16,7 @@ pub mod friction;
 pub mod friction_2d;
 pub mod hydrostatic;
 pub mod hydrostatic_2d;
+pub mod layers_2d;
 pub mod linalg;
 pub mod line_bed_normal;
 pub mod muscl;
