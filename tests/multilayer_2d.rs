@@ -1,7 +1,10 @@
 //! The multilayer model on a raster (`numerics/layers_2d.rs`,
 //! `state/layered_raster.rs`): a raster run invariant in y is, row by row and step by
 //! step, the line's multilayer run to the bit (N = 1, 4, 20; flow along x in the local
-//! frame and along y in the Cartesian frame), on any number of threads.
+//! frame and along y in the Cartesian frame), on any number of threads; with the μ(I)
+//! viscous columns (`numerics/viscous_2d.rs`; Coulomb and no-slip beds, both
+//! regularisations) and over an erodible bed of grains at rest (Fernández-Nieto et
+//! al. 2016, §4.2) too.
 
 use super::terrain_2d::{material, raster, tan_deg};
 use granflow::grid::{BoundaryKind, Coordinates, Line, LineSpec, Raster2d, Sides};
@@ -9,6 +12,10 @@ use granflow::model::granular::Granular;
 use granflow::model::Model;
 use granflow::numerics::hydrostatic::HydrostaticStep;
 use granflow::numerics::layers_2d::LayersStep2d;
+use granflow::numerics::viscous::{
+    BasalCondition, MultilayerViscousStep, Regularization, ViscosityTime, ViscousOptions,
+};
+use granflow::numerics::viscous_2d::ViscousColumns2d;
 use granflow::numerics::workers::Workers;
 use granflow::numerics::Stage;
 use granflow::physics::rheology::{MonolayerShear, MuI};
@@ -46,10 +53,25 @@ struct Case {
     steps: usize,
 }
 
+/// The viscous options of the tests: `basal` with the bound regularisation (Coulomb)
+/// or δ = 1e-4 1/s (no slip).
+pub(crate) fn viscous(basal: BasalCondition) -> ViscousOptions {
+    ViscousOptions {
+        basal,
+        regularization: match basal {
+            BasalCondition::Coulomb => Regularization::Bound,
+            BasalCondition::NoSlip => Regularization::Delta { delta: 1e-4 },
+        },
+        sidewall: None,
+        c_msm: false,
+        viscosity: ViscosityTime::Frozen,
+    }
+}
+
 /// A sheared profile: layer α of N moves at (0.2 + 0.8 α/N) m/s down the slope where
-/// the layer is thicker than 1 cm.
+/// the layer is thicker than 5 cm (a thinner erodible bed starts at rest).
 fn layer_speed(h: f64, a: usize, n: usize) -> f64 {
-    if h > 0.01 {
+    if h > 0.05 {
         0.2 + 0.8 * a as f64 / n as f64
     } else {
         0.0
@@ -59,7 +81,7 @@ fn layer_speed(h: f64, a: usize, n: usize) -> f64 {
 /// Runs the hyperbolic step on the line and on the raster (flow along x, or along y
 /// when `transposed`) with the line's time steps and checks every row, layer and
 /// step to the bit.
-fn check(case: &Case, n: usize, transposed: bool, threads: usize) {
+fn check(case: &Case, n: usize, transposed: bool, threads: usize, opts: Option<ViscousOptions>) {
     let (x_min, x_max) = (-1.0, 1.0);
     let spec = LineSpec {
         x_min,
@@ -129,7 +151,9 @@ fn check(case: &Case, n: usize, transposed: bool, threads: usize) {
         }
     }
     let workers = Workers::new(threads).unwrap();
-    let mut step_2d = LayersStep2d::new(mu_i(), &r, &l, workers);
+    let mut step_2d = LayersStep2d::new(mu_i(), &r, &l, workers.clone());
+    let mut visc_1d = opts.map(|o| MultilayerViscousStep::new(mu_i(), case.nx, &l, o));
+    let mut visc_2d = opts.map(|o| ViscousColumns2d::new(mu_i(), &r, &l, o, workers));
 
     let model = Granular {
         h_bed: vec![0.0; case.nx],
@@ -142,8 +166,16 @@ fn check(case: &Case, n: usize, transposed: bool, threads: usize) {
         let speed = model.diagnose(&line, &state).signal_speed;
         assert!(speed > 0.0);
         let dt = 0.3 * line.dx / speed;
+        if let (Some(v1), Some(v2)) = (&mut visc_1d, &mut visc_2d) {
+            v1.prepare(&line, &state);
+            v2.prepare(&r, &state_2d);
+        }
         step_1d.apply(&line, dt, &mut state).unwrap();
         step_2d.apply(&r, dt, &mut state_2d).unwrap();
+        if let (Some(v1), Some(v2)) = (&mut visc_1d, &mut visc_2d) {
+            v1.apply(&line, dt, &mut state).unwrap();
+            v2.apply(&r, dt, &mut state_2d).unwrap();
+        }
         for k in 0..nx * ny {
             let c = along(k) + 1;
             assert_eq!(
@@ -198,7 +230,7 @@ fn cases() -> Vec<Case> {
 fn hyperbolic_runs_invariant_in_y_reproduce_the_line_bit_for_bit() {
     for n in [1, 4, 20] {
         for case in cases() {
-            check(&case, n, false, 1);
+            check(&case, n, false, 1, None);
         }
     }
 }
@@ -206,7 +238,7 @@ fn hyperbolic_runs_invariant_in_y_reproduce_the_line_bit_for_bit() {
 #[test]
 fn hyperbolic_runs_invariant_in_x_reproduce_the_line_along_y() {
     for n in [1, 4] {
-        check(&cases()[1], n, true, 1);
+        check(&cases()[1], n, true, 1, None);
     }
 }
 
@@ -216,6 +248,50 @@ fn hyperbolic_bits_do_not_depend_on_the_threads() {
     case.ny = 40;
     case.steps = 40;
     for threads in [2, 4] {
-        check(&case, 4, false, threads);
+        check(&case, 4, false, threads, None);
+        check(
+            &case,
+            4,
+            false,
+            threads,
+            Some(viscous(BasalCondition::Coulomb)),
+        );
+    }
+}
+
+#[test]
+fn viscous_runs_invariant_in_y_reproduce_the_line_bit_for_bit() {
+    for n in [4, 20] {
+        for basal in [BasalCondition::Coulomb, BasalCondition::NoSlip] {
+            for case in cases() {
+                check(&case, n, false, 1, Some(viscous(basal)));
+            }
+        }
+    }
+    // Flow along y: the v components take the line's operations.
+    check(
+        &cases()[1],
+        4,
+        true,
+        1,
+        Some(viscous(BasalCondition::Coulomb)),
+    );
+}
+
+/// A release over an erodible bed: 2 cm of grains at rest on the whole slope
+/// (Fernández-Nieto et al. 2016, §4.2), which the flow sets moving.
+#[test]
+fn viscous_runs_over_an_erodible_bed_reproduce_the_line_bit_for_bit() {
+    let case = Case {
+        coordinates: Coordinates::Local,
+        slope_deg: 22.0,
+        bed: |_| 0.0,
+        h0: |x| if x < -0.5 { 0.12 } else { 0.02 },
+        nx: 60,
+        ny: 3,
+        steps: 150,
+    };
+    for n in [4, 20] {
+        check(&case, n, false, 1, Some(viscous(BasalCondition::Coulomb)));
     }
 }

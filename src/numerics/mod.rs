@@ -29,6 +29,8 @@ pub mod ssp_rk2;
 pub mod tracer;
 pub mod two_layer;
 pub mod viscous;
+pub mod viscous_2d;
+pub mod viscous_columns;
 pub mod water_nh;
 pub mod workers;
 
