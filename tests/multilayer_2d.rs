@@ -11,7 +11,7 @@ use granflow::grid::{BoundaryKind, Coordinates, Line, LineSpec, Raster2d, Sides}
 use granflow::model::granular::Granular;
 use granflow::model::Model;
 use granflow::numerics::hydrostatic::HydrostaticStep;
-use granflow::numerics::layers_2d::LayersStep2d;
+use granflow::numerics::layers_2d::{self, LayersStep2d};
 use granflow::numerics::viscous::{
     BasalCondition, MultilayerViscousStep, Regularization, ViscosityTime, ViscousOptions,
 };
@@ -293,5 +293,279 @@ fn viscous_runs_over_an_erodible_bed_reproduce_the_line_bit_for_bit() {
     };
     for n in [4, 20] {
         check(&case, n, false, 1, Some(viscous(BasalCondition::Coulomb)));
+    }
+}
+
+/// Hyperbolic and viscous stages of a layered raster, one step of Δt.
+fn step_2d(
+    r: &Raster2d,
+    (hyp, visc): (&mut LayersStep2d<MuI>, &mut ViscousColumns2d<MuI>),
+    dt: f64,
+    state: &mut LayeredRaster,
+) {
+    visc.prepare(r, state);
+    hyp.apply(r, dt, state).unwrap();
+    visc.apply(r, dt, state).unwrap();
+}
+
+/// Relative L1 error of `u` against `exact`.
+fn relative_l1(u: &[f64], exact: &[f64]) -> f64 {
+    let d: f64 = u.iter().zip(exact).map(|(u, e)| (u - e).abs()).sum();
+    d / exact.iter().map(|e| e.abs()).sum::<f64>()
+}
+
+/// Midpoints of the layers of a column of thickness `h`.
+fn midpoints(l: &[f64], h: f64) -> Vec<f64> {
+    let mut below = 0.0;
+    l.iter()
+        .map(|&l| {
+            let z = (below + 0.5 * l) * h;
+            below += l;
+            z
+        })
+        .collect()
+}
+
+/// The Bagnold flow of Fernández-Nieto et al. 2016, §4.1.1 (eq. 29; scenarios/bagnold.toml:
+/// μ_s = 0.38, μ_2 = 0.62, I_0 = 0.279, d_s = 4 cm, φ = 0.62, no slip, δ = 1e-5 1/s,
+/// h = 1 m on a slope of tan 0.43) on the line and on a raster whose steepest descent
+/// makes the angle `angle_deg` with the x axis: the local frame's plane along x
+/// carries tan θ_x = G cos φ and the bed the slope G sin φ along y (G = tan 0.43), the
+/// ghosts continue both. Starting at rest, after `t_end` the layer speeds |(u, v)_α| of
+/// every cell are compared with the exact profile
+/// |u|(z) = (2/3) I_G √(φ g_n)/d_s (h^{3/2} − (h − z)^{3/2}), μ(I_G) = G, and the
+/// direction with the slope's. Returns (relative L1 error, largest |h − 1|, largest
+/// angle error in radians).
+fn bagnold_2d(n: usize, angle_deg: f64, t_end: f64) -> (f64, f64, f64) {
+    let (mu_s, mu_2, i0, d_s, phi) = (0.38, 0.62, 0.279, 0.04, 0.62);
+    let law = MuI {
+        mu_s,
+        mu_2,
+        i0,
+        d_s,
+        phi,
+        shear: MonolayerShear::Bagnold,
+    };
+    let slope = 0.43f64.tan();
+    let angle = angle_deg.to_radians();
+    let (tan_x, tan_y) = (slope * angle.cos(), slope * angle.sin());
+    let (nx, ny, dx) = (3, 3, 1.0 / 30.0);
+    let sides = Sides::all(OUTFLOW);
+    let slope_deg = tan_x.atan().to_degrees();
+    let mut r: Raster2d = raster(
+        nx,
+        ny,
+        (0.0, nx as f64 * dx),
+        (0.0, ny as f64 * dx),
+        sides,
+        Coordinates::Local,
+        slope_deg,
+        |_, y| -y * tan_y,
+    );
+    // The south and north ghosts continue the bed's slope along y (the raster's
+    // outflow copies the edge row's bed; the line's Bagnold column continues the plane).
+    let tan_theta = slope_deg.to_radians().tan();
+    for c in 0..nx + 2 {
+        let x = (c as f64 - 0.5) * dx;
+        for (row, y) in [(0, -0.5 * dx), (ny + 1, (ny as f64 + 0.5) * dx)] {
+            let g = row * (nx + 2) + c;
+            r.b_ghost[g] = -y * tan_y;
+            r.z[g] = r.b_ghost[g] - x * tan_theta;
+        }
+    }
+    let l = fractions(n);
+    let cells = nx * ny;
+    let zeros = vec![0.0; cells];
+    let mut state = LayeredRaster::from_velocities((nx, ny), &l, vec![1.0; cells], &zeros, &zeros);
+    let opts = ViscousOptions {
+        basal: BasalCondition::NoSlip,
+        regularization: Regularization::Delta { delta: 1e-5 },
+        sidewall: None,
+        c_msm: false,
+        viscosity: ViscosityTime::Frozen,
+    };
+    let mut hyp = LayersStep2d::new(law, &r, &l, Workers::serial());
+    let mut visc = ViscousColumns2d::new(law, &r, &l, opts, Workers::serial());
+    let mut t = 0.0;
+    while t < t_end {
+        let speed = layers_2d::signal_speed(&r, &state);
+        let dt = (0.5 * dx / speed).min(t_end - t);
+        step_2d(&r, (&mut hyp, &mut visc), dt, &mut state);
+        t += dt;
+    }
+    let g_n = r.g_n;
+    let i_g = i0 * (slope - mu_s) / (mu_2 - slope);
+    let scale = 2.0 / 3.0 * i_g * (phi * g_n).sqrt() / d_s;
+    let (mut speeds, mut exact) = (Vec::new(), Vec::new());
+    let (mut dh, mut d_angle) = (0.0f64, 0.0f64);
+    for cell in 0..cells {
+        let h = state.h[cell];
+        dh = dh.max((h - 1.0).abs());
+        for (a, z) in midpoints(&l, h).into_iter().enumerate() {
+            let (u, v) = state.layer_velocity(cell, a);
+            speeds.push(u.hypot(v));
+            exact.push(scale * (h.powf(1.5) - (h - z).powf(1.5)));
+            d_angle = d_angle.max((v.atan2(u) - angle).abs());
+        }
+    }
+    (relative_l1(&speeds, &exact), dh, d_angle)
+}
+
+/// The line's Bagnold column (one cell between outflows, as the line's test runs it)
+/// after `t_end`: the relative L1 error of its layer velocities.
+fn bagnold_line(n: usize, t_end: f64) -> f64 {
+    let (mu_s, mu_2, i0, d_s, phi) = (0.38, 0.62, 0.279, 0.04, 0.62);
+    let law = MuI {
+        mu_s,
+        mu_2,
+        i0,
+        d_s,
+        phi,
+        shear: MonolayerShear::Bagnold,
+    };
+    let spec = LineSpec {
+        x_min: 0.0,
+        x_max: 1.0 / 30.0,
+        cells: 1,
+        slope_deg: 0.43f64.to_degrees(),
+        coordinates: Coordinates::Local,
+        left: OUTFLOW,
+        right: OUTFLOW,
+    };
+    let line = Line::new(&spec, vec![0.0]);
+    let l = fractions(n);
+    let mut state = LayeredState::from_profiles(&line, &l, &[1.0], &[0.0]);
+    let opts = ViscousOptions {
+        basal: BasalCondition::NoSlip,
+        regularization: Regularization::Delta { delta: 1e-5 },
+        sidewall: None,
+        c_msm: false,
+        viscosity: ViscosityTime::Frozen,
+    };
+    let mut hyp = HydrostaticStep::with_layers(law, 1, n);
+    let mut visc = MultilayerViscousStep::new(law, 1, &l, opts);
+    let model = Granular {
+        h_bed: vec![0.0],
+        front_threshold: 1e-3,
+        static_threshold: 1e-3,
+        rest_speed: 0.0,
+    };
+    let mut t = 0.0;
+    while t < t_end {
+        let speed = model.diagnose(&line, &state).signal_speed;
+        let dt = (0.5 * line.dx / speed).min(t_end - t);
+        visc.prepare(&line, &state);
+        hyp.apply(&line, dt, &mut state).unwrap();
+        visc.apply(&line, dt, &mut state).unwrap();
+        t += dt;
+    }
+    let h = state.h[1];
+    let slope = 0.43f64.tan();
+    let i_g = i0 * (slope - mu_s) / (mu_2 - slope);
+    let scale = 2.0 / 3.0 * i_g * (phi * line.g_n).sqrt() / d_s;
+    let exact: Vec<f64> = midpoints(&l, h)
+        .iter()
+        .map(|z| scale * (h.powf(1.5) - (h - z).powf(1.5)))
+        .collect();
+    let u: Vec<f64> = (0..n).map(|a| state.hu[n + a] / h).collect();
+    relative_l1(&u, &exact)
+}
+
+/// Uniform steady flow of N layers on a raster plane whose slope makes 0°, 30° and 45°
+/// with the x axis reproduces the line's Bagnold profile (Fernández-Nieto et al. 2016,
+/// §4.1.1) to the line's error: the column problem is the line's with g_n G for the
+/// drive, and the relative error of its steady solution does not depend on g_n.
+#[test]
+fn bagnold_profile_on_an_inclined_raster_plane_in_any_direction() {
+    let t_end = 200.0;
+    for n in [4, 8] {
+        let line = bagnold_line(n, t_end);
+        for angle in [0.0, 30.0, 45.0] {
+            let (error, dh, d_angle) = bagnold_2d(n, angle, t_end);
+            println!(
+                "Bagnold on a raster, N = {n}, {angle}° to x: L1 error {error:.4e} (line {line:.4e}), max |h − 1| {dh:.1e}, direction error {d_angle:.1e} rad"
+            );
+            assert!(dh < 1e-9, "N = {n}, {angle}°: max |h − 1| = {dh:e}");
+            assert!(
+                d_angle < 1e-9,
+                "N = {n}, {angle}°: direction error {d_angle:e}"
+            );
+            assert!(
+                (error - line).abs() <= 1e-3 * line,
+                "N = {n}, {angle}°: L1 error {error:e}, line {line:e}"
+            );
+        }
+    }
+}
+
+/// Deterministic pseudo-random numbers in [0, 1).
+fn rand01(k: u64) -> f64 {
+    let mut z = k.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// A granular layer below its repose on a random 2-D bed (the set-up of the
+/// monolayer's test in `terrain_2d.rs`: 0.1 m thick, the discrete surface slope inside
+/// the disk |∇η| ≤ 0.6 μ_s, μ_s = tan 25°; Cartesian, and local on a 10° plane) stays
+/// at rest with N layers and the viscous columns, up to the creep that the δ
+/// regularisation allows, as on the line (Escalante et al. 2023, Table 6;
+/// `multilayer::multilayer_mass_at_repose_stays_at_rest_to_order_delta`): after 200
+/// steps (0.92 s) the largest |h − h⁰| and |(u, v)_α| are within 100 δ (plus
+/// round-off) for δ = 1e-10 and 1e-15 1/s.
+#[test]
+fn mass_below_repose_on_a_random_bed_stays_at_rest_with_layers() {
+    let (nx, ny) = (30, 24);
+    let dx = 1.0 / nx as f64;
+    let mu_s = tan_deg(25.0);
+    let amp = 0.3 * mu_s * dx;
+    let law = MuI { mu_s, ..mu_i() };
+    for (coordinates, slope) in [(Coordinates::Cartesian, 0.0), (Coordinates::Local, 10.0)] {
+        let r: Raster2d = raster(
+            nx,
+            ny,
+            (0.0, 1.0),
+            (0.0, 0.8),
+            Sides::all(WALL),
+            coordinates,
+            slope,
+            |x, y| amp * rand01(((x * 1e4) as u64) << 20 ^ (y * 1e4) as u64),
+        );
+        let h0 = vec![0.1; nx * ny];
+        let dt = 0.4 * dx / (9.81f64 * 0.1).sqrt();
+        for (n, delta) in [(4, 1e-10), (4, 1e-15), (20, 1e-15)] {
+            let l = fractions(n);
+            let zeros = vec![0.0; nx * ny];
+            let mut state =
+                LayeredRaster::from_velocities((nx, ny), &l, h0.clone(), &zeros, &zeros);
+            let mut hyp = LayersStep2d::new(law, &r, &l, Workers::serial());
+            let opts = ViscousOptions {
+                regularization: Regularization::Delta { delta },
+                ..viscous(BasalCondition::Coulomb)
+            };
+            let mut visc = ViscousColumns2d::new(law, &r, &l, opts, Workers::serial());
+            for _ in 0..200 {
+                step_2d(&r, (&mut hyp, &mut visc), dt, &mut state);
+            }
+            let dh = state
+                .h
+                .iter()
+                .zip(&h0)
+                .fold(0.0f64, |m, (h, h0)| m.max((h - h0).abs()));
+            let speed = (0..nx * ny * n)
+                .map(|k| state.hu[k].hypot(state.hv[k]) / state.h[k / n])
+                .fold(0.0f64, f64::max);
+            println!(
+                "at rest, {coordinates:?}, N = {n}, δ = {delta:e}: max |h − h0| {dh:.2e}, max |(u, v)_α| {speed:.2e}"
+            );
+            let what = format!("{coordinates:?}, N = {n}, δ = {delta:e}");
+            assert!(dh <= 100.0 * delta + 1e-14, "{what}: max |h − h0| = {dh:e}");
+            assert!(
+                speed <= 100.0 * delta + 1e-14,
+                "{what}: max speed {speed:e}"
+            );
+        }
     }
 }

@@ -58,7 +58,7 @@ use super::workers::{Disjoint, Workers};
 use super::{Stage, StageError};
 use crate::grid::{BoundaryKind, Coordinates, Raster2d};
 use crate::physics::rheology::BasalFriction;
-use crate::physics::shallow::{velocity, H_DRY};
+use crate::physics::shallow::{sheared_celerity, velocity, H_DRY};
 use crate::state::layered_raster::LayeredRaster;
 use std::sync::Mutex;
 
@@ -714,4 +714,29 @@ impl<L: BasalFriction> Stage<Raster2d, LayeredRaster> for LayersStep2d<L> {
         std::mem::swap(&mut state.hv, &mut self.hv_new);
         Ok(())
     }
+}
+
+/// The largest signal speed of a layered raster state, max over the cells of
+/// max(|ū| + c_x, |v̄| + c_y) with c = √(g_n h + 3 Σ l_α (u_α − ū)²) along each axis
+/// (the outer wave speeds of a sheared column, as the faces bound them); the step
+/// Δt = CFL min(Δx, Δy)/s keeps the unsplit update within its faces' waves.
+pub fn signal_speed(raster: &Raster2d, state: &LayeredRaster) -> f64 {
+    let n = state.layers;
+    let mut view = vec![0.0; 10 + 2 * n];
+    let mut fastest = 0.0f64;
+    for (cell, &h) in state.h.iter().enumerate() {
+        if h <= H_DRY {
+            continue;
+        }
+        let q = (
+            &state.hu[cell * n..(cell + 1) * n],
+            &state.hv[cell * n..(cell + 1) * n],
+        );
+        column_velocities(h, q, (1.0, 1.0), &state.l, &mut view);
+        let g_n = raster.g_n;
+        let along_x = view[MEAN_U].abs() + sheared_celerity(g_n, h, view[SHEAR_X]);
+        let along_y = view[MEAN_V].abs() + sheared_celerity(g_n, h, view[SHEAR_Y]);
+        fastest = fastest.max(along_x.max(along_y));
+    }
+    fastest
 }
