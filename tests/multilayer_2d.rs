@@ -99,9 +99,9 @@ fn check(case: &Case, n: usize, transposed: bool, threads: usize, opts: Option<V
     let l = fractions(n);
     let h0: Vec<f64> = line.x.iter().map(|&x| (case.h0)(x)).collect();
     let mut state = LayeredState::from_profiles(&line, &l, &h0, &vec![0.0; case.nx]);
-    for i in 0..case.nx {
+    for (i, &h) in h0.iter().enumerate() {
         for a in 0..n {
-            state.hu[(i + 1) * n + a] = h0[i] * layer_speed(h0[i], a, n);
+            state.hu[(i + 1) * n + a] = h * layer_speed(h, a, n);
         }
     }
     state.fill_ghosts(&line);

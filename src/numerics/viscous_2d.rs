@@ -175,9 +175,10 @@ impl<L: BasalFriction + LocalFriction> Ctx<'_, L> {
         let n = self.l.len();
         let dt_over_h = dt / h;
         col.c[0] = [0.0; 2];
-        for a in 1..n {
-            let c = dt_over_h * frozen[a] * self.inv_gap[a];
-            col.c[a] = [c, c];
+        let couplings = col.c.iter_mut().zip(frozen).zip(self.inv_gap).skip(1);
+        for ((c, nu), gap) in couplings {
+            let c_a = dt_over_h * nu * gap;
+            *c = [c_a, c_a];
         }
         for a in 0..n {
             let d = self.l[a] * h;
@@ -305,8 +306,8 @@ impl<L: BasalFriction + LocalFriction> Stage<Raster2d, LayeredRaster> for Viscou
                 std::mem::take(&mut col.qv),
             );
             for j in raster.band_rows(band) {
-                for cell in j * nx..(j + 1) * nx {
-                    let hc = h[cell];
+                let row = j * nx..(j + 1) * nx;
+                for (cell, &hc) in row.clone().zip(&h[row]) {
                     // SAFETY: each band reads and writes its own cells.
                     unsafe {
                         for a in 0..n {

@@ -118,11 +118,11 @@ impl<L: LocalFriction> ColumnRheology<'_, L> {
 
 /// Eliminates K column systems at once (lanes) from the top down: couplings `c` (c[0]
 /// unused), diagonals `d` without the couplings and right-hand sides `r`, per layer.
-/// The reduced diagonal of layer a is e_a + c_a, with e_{a−1} = d_{a−1} + c_a e_a/(e_a
-/// + c_a): written so, no coupling is subtracted from another, and a rigid column
-/// (couplings ≫ l_a h, e.g. δ → 0 at rest) keeps its mass e ≈ Σ l h to round-off.
-/// Leaves the bottom equation d[0] u_1 = r[0] (− the bed's friction) and, in d[a]
-/// (a ≥ 1), 1/(e_a + c_a) for [`substitute_up`].
+/// The reduced diagonal of layer a is e_a + c_a, with
+/// e_{a−1} = d_{a−1} + c_a e_a/(e_a + c_a): written so, no coupling is subtracted from
+/// another, and a rigid column (couplings ≫ l_a h, e.g. δ → 0 at rest) keeps its mass
+/// e ≈ Σ l h to round-off. Leaves the bottom equation d[0] u_1 = r[0] (less the bed's
+/// friction) and, in d[a] (a ≥ 1), 1/(e_a + c_a) for [`substitute_up`].
 #[inline(always)]
 pub(crate) fn eliminate_down<const K: usize>(
     c: &[[f64; K]],
