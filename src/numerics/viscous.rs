@@ -80,75 +80,11 @@ pub const SIDEWALL_DELTA_U: f64 = 1e-5;
 /// Columns solved together (see `solve_columns`).
 const LANES: usize = 4;
 
-/// Condition at the bed of the multilayer model (Fernández-Nieto et al. 2016, eq. 28 and end of §3.3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BasalCondition {
-    /// Coulomb friction μ(I_{1/2}) p_b u_1/|u_1| (`rheology.basal = "coulomb"`).
-    Coulomb,
-    /// u = 0 at the bed, stress from the rheology with ∂_z u ≈ 2u_1/h_1 (`"no_slip"`).
-    NoSlip,
-}
-
-/// How the μ(I) viscosity η = μ(I) p / |∂_z u| is kept finite where the shear vanishes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Regularization {
-    /// η = μ p / √(‖D‖² + δ²) (Escalante et al. 2023, eq. 10), `rheology.delta` = δ in 1/s.
-    Delta { delta: f64 },
-    /// η = μ p / max(‖D‖, μ p/η_M), η_M = 250 ρ √(g h³) (Fernández-Nieto et al. 2016, eq. 6 and 25).
-    Bound,
-}
-
-/// Where the sidewall friction of a channel of width W enters the multilayer model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SidewallForm {
-    /// Jop's term μ_w (H − z)/W added to μ(I) (Fernández-Nieto et al. 2016, eq. 30).
-    Jop,
-    /// A friction force −l_α h (2/W) μ_w p_α u_α/|u_α| on each layer (Escalante et al. 2023, eq. 36).
-    Layer,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sidewall {
-    /// Wall friction coefficient μ_w.
-    pub mu_w: f64,
-    /// Channel width W (m).
-    pub width: f64,
-    pub form: SidewallForm,
-}
-
-/// Options of the viscous step (from the scenario's `rheology` table).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ViscousOptions {
-    pub basal: BasalCondition,
-    pub regularization: Regularization,
-    pub sidewall: Option<Sidewall>,
-    /// Second-order strain rate of Fernández-Nieto et al. 2016, eq. (32).
-    pub c_msm: bool,
-    /// Where the viscosities are taken: at t^n (the paper's scheme) or at the new speed.
-    pub viscosity: ViscosityTime,
-}
-
-/// Where the viscous step takes its viscosities, inertial numbers and basal friction
-/// (`rheology.viscosity`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum ViscosityTime {
-    /// Frozen at t^n: one linear solve per column (Escalante et al. 2023, §4 "Step 2").
-    Frozen,
-    /// As `Frozen`, but with the non-hydrostatic pressure the velocities they are
-    /// frozen from are those of the previous viscous solve, before its projection
-    /// ([`crate::numerics::nh_multilayer`]). The same as `Frozen` without a
-    /// projection (hydrostatic runs) and for N = 1; the default.
-    Lagged,
-    /// At the new speed u^{n+1}: the column equations are solved by damped Newton
-    /// (module documentation) until the residual of every layer's equation, in m/s,
-    /// is at most `tolerance` (plus the round-off of its evaluation) or a full Newton
-    /// correction is; a column still above it after `max_iterations` solves fails the
-    /// step.
-    Implicit {
-        tolerance: f64,
-        max_iterations: usize,
-    },
-}
+// The options are defined beside the column kernel that reads them (`viscous_columns`,
+// which the line and the raster both call) and are the step's options here.
+pub use super::viscous_columns::{
+    BasalCondition, Regularization, Sidewall, SidewallForm, ViscosityTime, ViscousOptions,
+};
 
 /// The implicit viscous step, generic over the rheology (a constant μ or μ(I)).
 #[derive(Debug)]
