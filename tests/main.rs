@@ -28,6 +28,7 @@ mod hostile;
 mod hostile_outputs;
 mod line_bed_normal;
 mod multilayer;
+mod multilayer_2d;
 mod newcomer;
 mod nh_multilayer;
 mod nonhydrostatic;

@@ -284,13 +284,13 @@ pub struct HydrostaticStep<L: BasalFriction> {
 
 /// The layer fractions as the exchange terms use them.
 #[derive(Debug, Clone, Copy)]
-struct Fractions<'a> {
+pub(crate) struct Fractions<'a> {
     /// l_α.
-    l: &'a [f64],
+    pub(crate) l: &'a [f64],
     /// 1/l_α.
-    inv: &'a [f64],
+    pub(crate) inv: &'a [f64],
     /// Σ_{β≤α} l_β.
-    below: &'a [f64],
+    pub(crate) below: &'a [f64],
 }
 
 /// The exchange terms 𝓑_α of one interface (N > 1), written into `out` (N values).
@@ -299,21 +299,46 @@ struct Fractions<'a> {
 /// ΔG_{α+1/2} = Σ_{β≤α} l_β Δq_β − (Σ_{β≤α} l_β) Δq̄ is a running sum, so the whole
 /// interface costs one pass over the layers after the one for Δq̄.
 #[inline(always)]
-fn exchange_terms(frac: Fractions, h_l: f64, h_r: f64, u_l: &[f64], u_r: &[f64], out: &mut [f64]) {
+pub(crate) fn exchange_terms(
+    frac: Fractions,
+    h_l: f64,
+    h_r: f64,
+    u_l: &[f64],
+    u_r: &[f64],
+    out: &mut [f64],
+) {
+    carried_exchange_terms(frac, (h_l, h_r), (u_l, u_r), (u_l, u_r), out);
+}
+
+/// The exchange terms of a quantity t_α carried by the vertical mass exchange of one
+/// interface: −(t̃_{α+1/2} ΔG_{α+1/2} − t̃_{α−1/2} ΔG_{α−1/2})/l_α, with ΔG from the
+/// normal velocities `u` = (u_l, u_r) and t̃ the mean of the interface values of `t`
+/// on both sides. With t = u this is [`exchange_terms`] (the same operations); on a
+/// raster the tangential velocity of each layer is the t of a face
+/// (`numerics::layers_2d`).
+#[inline(always)]
+pub(crate) fn carried_exchange_terms(
+    frac: Fractions,
+    (h_l, h_r): (f64, f64),
+    (u_l, u_r): (&[f64], &[f64]),
+    (t_l, t_r): (&[f64], &[f64]),
+    out: &mut [f64],
+) {
     let n = frac.l.len();
     let (l, inv_l, l_below) = (frac.l, &frac.inv[..n], &frac.below[..n]);
     let (u_l, u_r, out) = (&u_l[..n], &u_r[..n], &mut out[..n]);
+    let (t_l, t_r) = (&t_l[..n], &t_r[..n]);
     let mut dq_mean = 0.0;
     for a in 0..n {
         dq_mean += l[a] * (h_r * u_r[a] - h_l * u_l[a]);
     }
-    // Running Σ_{β≤α} l_β Δq_β, and the flux ũ_{α+1/2} ΔG_{α+1/2} below layer α + 1.
+    // Running Σ_{β≤α} l_β Δq_β, and the flux t̃_{α+1/2} ΔG_{α+1/2} below layer α + 1.
     let mut partial = 0.0;
     let mut below = 0.0;
     for a in 0..n - 1 {
         partial += l[a] * (h_r * u_r[a] - h_l * u_l[a]);
         let g_jump = partial - l_below[a] * dq_mean;
-        let above = 0.25 * (u_l[a] + u_l[a + 1] + u_r[a] + u_r[a + 1]) * g_jump;
+        let above = 0.25 * (t_l[a] + t_l[a + 1] + t_r[a] + t_r[a + 1]) * g_jump;
         out[a] = (below - above) * inv_l[a];
         below = above;
     }

@@ -16,6 +16,7 @@ pub mod friction;
 pub mod friction_2d;
 pub mod hydrostatic;
 pub mod hydrostatic_2d;
+pub mod layers_2d;
 pub mod linalg;
 pub mod line_bed_normal;
 pub mod muscl;
@@ -29,6 +30,8 @@ pub mod ssp_rk2;
 pub mod tracer;
 pub mod two_layer;
 pub mod viscous;
+pub mod viscous_2d;
+pub mod viscous_columns;
 pub mod water_nh;
 pub mod workers;
 

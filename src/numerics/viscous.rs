@@ -62,12 +62,12 @@
 //! is — and every layer moves with it. A cell dry at t^n and wetted by step 1 freezes its
 //! coefficients from the state after step 1.
 
+use super::viscous_columns::{column_fractions, eliminate_down, substitute_up, ColumnRheology};
 use super::{Stage, StageError};
 use crate::grid::Line;
 use crate::physics::rheology::coulomb_update;
 use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::{velocity, H_DRY};
-use crate::physics::GRAVITY;
 use crate::state::layered::LayeredState;
 
 /// Thickness (m) below which a cell is solved as a monolayer (Escalante et al. 2023, Remark 2).
@@ -80,75 +80,11 @@ pub const SIDEWALL_DELTA_U: f64 = 1e-5;
 /// Columns solved together (see `solve_columns`).
 const LANES: usize = 4;
 
-/// Condition at the bed of the multilayer model (Fernández-Nieto et al. 2016, eq. 28 and end of §3.3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BasalCondition {
-    /// Coulomb friction μ(I_{1/2}) p_b u_1/|u_1| (`rheology.basal = "coulomb"`).
-    Coulomb,
-    /// u = 0 at the bed, stress from the rheology with ∂_z u ≈ 2u_1/h_1 (`"no_slip"`).
-    NoSlip,
-}
-
-/// How the μ(I) viscosity η = μ(I) p / |∂_z u| is kept finite where the shear vanishes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Regularization {
-    /// η = μ p / √(‖D‖² + δ²) (Escalante et al. 2023, eq. 10), `rheology.delta` = δ in 1/s.
-    Delta { delta: f64 },
-    /// η = μ p / max(‖D‖, μ p/η_M), η_M = 250 ρ √(g h³) (Fernández-Nieto et al. 2016, eq. 6 and 25).
-    Bound,
-}
-
-/// Where the sidewall friction of a channel of width W enters the multilayer model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SidewallForm {
-    /// Jop's term μ_w (H − z)/W added to μ(I) (Fernández-Nieto et al. 2016, eq. 30).
-    Jop,
-    /// A friction force −l_α h (2/W) μ_w p_α u_α/|u_α| on each layer (Escalante et al. 2023, eq. 36).
-    Layer,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sidewall {
-    /// Wall friction coefficient μ_w.
-    pub mu_w: f64,
-    /// Channel width W (m).
-    pub width: f64,
-    pub form: SidewallForm,
-}
-
-/// Options of the viscous step (from the scenario's `rheology` table).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ViscousOptions {
-    pub basal: BasalCondition,
-    pub regularization: Regularization,
-    pub sidewall: Option<Sidewall>,
-    /// Second-order strain rate of Fernández-Nieto et al. 2016, eq. (32).
-    pub c_msm: bool,
-    /// Where the viscosities are taken: at t^n (the paper's scheme) or at the new speed.
-    pub viscosity: ViscosityTime,
-}
-
-/// Where the viscous step takes its viscosities, inertial numbers and basal friction
-/// (`rheology.viscosity`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum ViscosityTime {
-    /// Frozen at t^n: one linear solve per column (Escalante et al. 2023, §4 "Step 2").
-    Frozen,
-    /// As `Frozen`, but with the non-hydrostatic pressure the velocities they are
-    /// frozen from are those of the previous viscous solve, before its projection
-    /// ([`crate::numerics::nh_multilayer`]). The same as `Frozen` without a
-    /// projection (hydrostatic runs) and for N = 1; the default.
-    Lagged,
-    /// At the new speed u^{n+1}: the column equations are solved by damped Newton
-    /// (module documentation) until the residual of every layer's equation, in m/s,
-    /// is at most `tolerance` (plus the round-off of its evaluation) or a full Newton
-    /// correction is; a column still above it after `max_iterations` solves fails the
-    /// step.
-    Implicit {
-        tolerance: f64,
-        max_iterations: usize,
-    },
-}
+// The options are defined beside the column kernel that reads them (`viscous_columns`,
+// which the line and the raster both call) and are the step's options here.
+pub use super::viscous_columns::{
+    BasalCondition, Regularization, Sidewall, SidewallForm, ViscosityTime, ViscousOptions,
+};
 
 /// The implicit viscous step, generic over the rheology (a constant μ or μ(I)).
 #[derive(Debug)]
@@ -227,15 +163,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
     pub fn new(law: L, nx: usize, l: &[f64], opts: ViscousOptions) -> Self {
         let n = l.len();
         assert!(n >= 2, "the viscous step is for N > 1 layers");
-        let mut above = vec![0.0; n + 1];
-        for a in (0..n).rev() {
-            above[a] = above[a + 1] + l[a];
-        }
-        let inv_sqrt_above = above[..n].iter().map(|a| 1.0 / a.sqrt()).collect();
-        let mut inv_gap = vec![0.0; n];
-        for a in 1..n {
-            inv_gap[a] = 2.0 / (l[a - 1] + l[a]);
-        }
+        let (above, inv_sqrt_above, inv_gap) = column_fractions(l);
         let implicit = |v: Vec<f64>| match opts.viscosity {
             ViscosityTime::Frozen | ViscosityTime::Lagged => Vec::new(),
             ViscosityTime::Implicit { .. } => v,
@@ -289,33 +217,28 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         self.stats
     }
 
+    /// The column-local rheology shared with the raster (`viscous_columns.rs`).
+    #[inline(always)]
+    fn rheology(&self) -> ColumnRheology<'_, L> {
+        ColumnRheology {
+            law: self.law,
+            opts: self.opts,
+            above: &self.above,
+            inv_sqrt_above: &self.inv_sqrt_above,
+        }
+    }
+
     /// Jop's sidewall friction μ_w (H − z)/W at depth `depth` below the surface.
     #[inline(always)]
     fn jop(&self, depth: f64) -> f64 {
-        match self.opts.sidewall {
-            Some(Sidewall {
-                mu_w,
-                width,
-                form: SidewallForm::Jop,
-            }) => mu_w * depth / width,
-            _ => 0.0,
-        }
+        self.rheology().jop(depth)
     }
 
     /// ν = μ p / R(s): the frozen viscosity over density for strain rate `s`, friction
     /// `mu` and pressure over density `p`; `nu_max` = ν_M of the bound regularisation.
     #[inline(always)]
     fn viscosity(&self, mu: f64, p: f64, s: f64, nu_max: f64) -> f64 {
-        let stress = mu * p;
-        let r = match self.opts.regularization {
-            Regularization::Delta { delta } => (s * s + 4.0 * delta * delta).sqrt(),
-            Regularization::Bound => s.max(stress / nu_max),
-        };
-        if r > 0.0 {
-            stress / r
-        } else {
-            0.0
-        }
+        self.rheology().viscosity(mu, p, s, nu_max)
     }
 
     /// The tangent dσ/dγ of the interface stress σ = ν(s) γ (over density) with respect
@@ -407,10 +330,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
         // Pressures are those of the column's own depth, as the pressure force of step 1.
         let p_b = g_n * h;
         let scale = self.law.inertial_scale(p_b);
-        let nu_max = match self.opts.regularization {
-            Regularization::Bound => 250.0 * (GRAVITY * h * h * h).sqrt(),
-            Regularization::Delta { .. } => f64::INFINITY,
-        };
+        let nu_max = self.rheology().nu_max(h);
         if !self.p_nh.is_empty() {
             self.freeze_cell_nonhydrostatic(mesh, hs, l, around, i, nu_max);
             return;
@@ -426,13 +346,13 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
                     // dμ_b/d|u_1|.
                     self.tangent[0] = self.law.mu_slope_at(shear * scale) * scale * inv_h1;
                 }
-                self.law.mu_at(shear * scale) + self.jop(h)
+                self.rheology().bed(h, p_b, scale, nu_max, shear)
             }
             BasalCondition::NoSlip => {
                 let shear = (2.0 * u[0] * inv_h1).abs();
-                let mu = self.law.mu_at(shear * scale) + self.jop(h);
-                let nu = self.viscosity(mu, p_b, shear, nu_max);
+                let nu = self.rheology().bed(h, p_b, scale, nu_max, shear);
                 if !self.tangent.is_empty() {
+                    let mu = self.law.mu_at(shear * scale) + self.jop(h);
                     let slope = self.law.mu_slope_at(shear * scale) * scale;
                     self.tangent[0] = self.tangent_of(nu, mu, slope, p_b, shear, shear, nu_max);
                 }
@@ -455,9 +375,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
                 shear.abs()
             };
             let p = p_b * self.above[a];
-            let mu =
-                self.law.mu_at(s * scale * self.inv_sqrt_above[a]) + self.jop(h * self.above[a]);
-            let nu = self.viscosity(mu, p, s, nu_max);
+            let (mu, nu) = self.rheology().interface(a, (h, p_b, scale, nu_max), s);
             self.frozen[base + a] = nu;
             if !self.tangent.is_empty() {
                 let ds = scale * self.inv_sqrt_above[a];
@@ -650,33 +568,14 @@ fn eliminate_column<const K: usize>(
     r: &mut [[f64; K]],
     basal: BasalCondition,
     impulses: [f64; K],
-    mut put: impl FnMut(usize, [f64; K]),
+    put: impl FnMut(usize, [f64; K]),
 ) {
-    let n = d.len();
-    for a in (1..n).rev() {
-        let (lower, upper) = d.split_at_mut(a);
-        let (r_lower, r_upper) = r.split_at_mut(a);
-        let (d_a, d_below) = (&mut upper[0], &mut lower[a - 1]);
-        let (r_a, r_below) = (&r_upper[0], &mut r_lower[a - 1]);
-        for k in 0..K {
-            let inv = 1.0 / (d_a[k] + c[a][k]);
-            let m = c[a][k] * inv;
-            d_below[k] += m * d_a[k];
-            r_below[k] += m * r_a[k];
-            d_a[k] = inv;
-        }
-    }
-    let mut u_below: [f64; K] = std::array::from_fn(|k| match basal {
+    eliminate_down(c, d, r);
+    let u_below: [f64; K] = std::array::from_fn(|k| match basal {
         BasalCondition::Coulomb => coulomb_update(r[0][k], impulses[k]) / d[0][k],
         BasalCondition::NoSlip => r[0][k] / d[0][k],
     });
-    put(0, u_below);
-    for a in 1..n {
-        for k in 0..K {
-            u_below[k] = (r[a][k] + c[a][k] * u_below[k]) * d[a][k];
-        }
-        put(a, u_below);
-    }
+    substitute_up(c, d, r, u_below, put);
 }
 
 impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for MultilayerViscousStep<L> {
@@ -1160,6 +1059,7 @@ mod tests {
     use crate::grid::{BoundaryKind, Coordinates};
     use crate::grid::{Line, LineSpec};
     use crate::physics::rheology::{Coulomb, MonolayerShear, MuI};
+    use crate::physics::GRAVITY;
 
     fn mesh(cells: usize, slope_deg: f64) -> Line {
         let spec = LineSpec {

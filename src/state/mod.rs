@@ -15,6 +15,7 @@
 pub mod dilatant;
 pub mod layered;
 pub mod layered_2d;
+pub mod layered_raster;
 pub mod tiles;
 pub mod two_layer;
 pub mod water_column;
