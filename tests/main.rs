@@ -41,6 +41,7 @@ mod run_report;
 mod scenarios;
 mod second_order;
 mod second_order_2d;
+mod second_order_dilatant;
 mod second_order_multilayer;
 mod submarine;
 mod submarine_paper;

@@ -346,6 +346,15 @@ fn validate(
         &initial,
         &time,
     )?;
+    if numerics.order == 2
+        && dilatancy
+            .is_some_and(|d| d.options.scheme != crate::numerics::dilatant::step::SchemeKind::Split)
+    {
+        return err(
+            "numerics.order",
+            "order 2 of the dilatant model is written for dilatancy.scheme = \"split\" (the default); the Appendix B scheme has order 1 only: use numerics.order = 1",
+        );
+    }
     let mut viscous_keys = ViscousKeys::of(&raw_rheology);
     if dilatancy.is_some() {
         // The wall keys belong to the dilatant law (Bouchut et al. 2021, eq. 4.1).
@@ -650,11 +659,11 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
                 ),
             )
         };
-        if model.kind == crate::model::ModelKind::Dilatant {
-            return refuse("model.kind is \"dilatant\"");
-        }
         if model.kind == crate::model::ModelKind::Submarine {
-            return refuse("model.kind is \"submarine\"");
+            return err(
+                "numerics.order",
+                "order 2 is not available for model.kind = \"submarine\": its two-layer face kernel carries the layers' non-conservative coupling and the curved line's cos θ terms, which a reconstruction would also have to integrate inside every cell, and its Coulomb rule holds a deposit because τ_crit cancels each face's static part between cell means exactly; use numerics.order = 1",
+            );
         }
         if model.pressure == Pressure::NonHydrostatic {
             return refuse("model.pressure is \"nonhydrostatic\"");
