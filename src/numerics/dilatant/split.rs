@@ -93,6 +93,12 @@
 //! the operations of the monolayer's friction step with the same μ(I): the run is the
 //! Savage–Hutter μ(I) run bit for bit (`tests/dilatant.rs`).
 //!
+//! Order 2 ([`SplitScheme::second_order`], run by [`super::heun`]): the hyperbolic
+//! step with the reconstruction of [`crate::numerics::muscl`], the potential ζ
+//! reconstructed as the surface (`split_potential`) and φ transported
+//! with limited linear profiles in its donor cells (`transport_second_order`). Order 1
+//! keeps every operation above.
+//!
 //! Errors: a step that would make h negative is refused as the Savage–Hutter one is
 //! (the run retries with a smaller Δt); φ outside (0, 1) after a sub-step is an error
 //! naming the place and the stage. Either way the state is left as it was at t^n.
@@ -623,11 +629,13 @@ impl SplitScheme {
         let r = dt / mesh.dx;
         if self.limiter.is_some() {
             // The interior force −g_c h ∂_x ζ of the reconstructed cells, with h^n.
-            let (h_old, g_c) = (&self.backup[0], mesh.g_n);
-            for j in 1..=mesh.nx {
-                let rise = self.interior[j];
-                if rise != 0.0 && s.h[j] > H_DRY {
-                    s.hu[j] -= r * g_c * h_old[j] * rise;
+            let (h_old, g_c, nx) = (&self.backup[0], mesh.g_n, mesh.nx);
+            let cells = s.h[1..=nx].iter().zip(&mut s.hu[1..=nx]);
+            for ((h, q), (h_old, rise)) in
+                cells.zip(h_old[1..=nx].iter().zip(&self.interior[1..=nx]))
+            {
+                if *rise != 0.0 && *h > H_DRY {
+                    *q -= r * g_c * h_old * rise;
                 }
             }
         }
