@@ -928,11 +928,22 @@ t_end = 2.0
             assert!(e.message().contains(what), "{e}");
         }
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
-        for (file, what) in [
-            ("dilatancy_dense.toml", "dilatant"),
-            ("submarine_landslide.toml", "submarine"),
+        // The dilatant model takes it with its split scheme (the default), not with
+        // the Appendix B scheme.
+        let dilatant = load_file(
+            &root.join("dilatancy_dense.toml"),
+            &["numerics.order=2".to_owned()],
+        );
+        assert_eq!(dilatant.unwrap().numerics.order, 2);
+        for (file, extra, what) in [
+            (
+                "dilatancy_dense.toml",
+                "dilatancy.scheme=\"appendix_b\"",
+                "split",
+            ),
+            ("submarine_landslide.toml", "numerics.order=2", "submarine"),
         ] {
-            let sets = ["numerics.order=2".to_owned()];
+            let sets = ["numerics.order=2".to_owned(), extra.to_owned()];
             let e = load_file(&root.join(file), &sets).unwrap_err();
             assert!(e.to_string().contains("numerics.order"), "{file}: {e}");
             assert!(e.message().contains(what), "{file}: {e}");
