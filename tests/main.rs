@@ -42,6 +42,7 @@ mod run_report;
 mod scenarios;
 mod second_order;
 mod second_order_2d;
+mod second_order_dilatant;
 mod second_order_multilayer;
 mod second_order_nh;
 mod submarine;

@@ -5,6 +5,7 @@
 
 use crate::grid::Line;
 use crate::model::dilatant::{Dilatant, DilatantScheme, REST_SPEED};
+use crate::numerics::dilatant::heun::HeunSplit;
 use crate::numerics::dilatant::split::SplitScheme;
 use crate::numerics::dilatant::step::SchemeKind;
 use crate::numerics::Stage;
@@ -29,7 +30,14 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
     let (stage, rest_depth, rest_speed): (Box<dyn Stage<Line, DilatantState>>, f64, f64) =
         match spec.options.scheme {
             SchemeKind::Split => {
-                let scheme = SplitScheme::new(spec.law, spec.options, mesh.nx, scn.material.phi);
+                let (law, opt, nx, phi) = (spec.law, spec.options, mesh.nx, scn.material.phi);
+                // Order 2: Heun's method around the split step with the second-order
+                // reconstruction (validation allows it for the split scheme only).
+                let scheme: Box<dyn Stage<Line, DilatantState>> = if scn.numerics.order == 2 {
+                    Box::new(HeunSplit::new(law, opt, nx, phi, scn.numerics.limiter))
+                } else {
+                    Box::new(SplitScheme::new(law, opt, nx, phi))
+                };
                 // K = 0: the Savage–Hutter run's exact rest (bit for bit). K > 0: a mass
                 // near its static threshold μ_1 + K(φ − φ_stat) compacts as it creeps and
                 // comes to rest only asymptotically (backward-Euler friction, split.rs),
@@ -39,7 +47,7 @@ pub fn build(scn: &Scenario) -> Simulation<Dilatant> {
                 } else {
                     (spec.law.d, REST_SPEED)
                 };
-                (Box::new(scheme), depth, speed)
+                (scheme, depth, speed)
             }
             SchemeKind::AppendixB => (
                 Box::new(DilatantScheme::new(spec.law, spec.options, mesh.nx)),

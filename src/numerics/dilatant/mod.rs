@@ -14,10 +14,14 @@
 //! 3. the semi-implicit dilatancy step (3.15)–(3.19) ([`source`]), unconditionally
 //!    stable: it never shortens Δt, whatever K and d.
 //!
+//! At `numerics.order = 2` the split scheme runs with the second-order reconstruction
+//! inside Heun's method ([`heun`]).
+//!
 //! [`crate::state::DilatantState`] holds the conservative variables and [`step`] runs one time step,
 //! refusing any state with φh < 0 or φ ∉ (0, 1) with the cell and the time.
 
 pub mod flux;
+pub mod heun;
 pub mod reconstruction;
 pub mod source;
 pub mod split;

@@ -346,6 +346,15 @@ fn validate(
         &initial,
         &time,
     )?;
+    if numerics.order == 2
+        && dilatancy
+            .is_some_and(|d| d.options.scheme != crate::numerics::dilatant::step::SchemeKind::Split)
+    {
+        return err(
+            "numerics.order",
+            "order 2 of the dilatant model is written for dilatancy.scheme = \"split\" (the default); the Appendix B scheme has order 1 only: use numerics.order = 1",
+        );
+    }
     let mut viscous_keys = ViscousKeys::of(&raw_rheology);
     if dilatancy.is_some() {
         // The wall keys belong to the dilatant law (Bouchut et al. 2021, eq. 4.1).
@@ -646,15 +655,15 @@ fn numerics(n: RawNumerics, model: &ModelSpec, domain: &Domain) -> Res<Numerics>
             err(
                 "numerics.order",
                 format!(
-                    "order 2 is implemented for the granular model (hydrostatic: any model.layers on a line, one layer on a raster; non-hydrostatic: one layer on a line); {what}: use numerics.order = 1"
+                    "order 2 is implemented for the granular model (hydrostatic: any model.layers on a line, one layer on a raster; non-hydrostatic: one layer on a line) and the dilatant model's split scheme; {what}: use numerics.order = 1"
                 ),
             )
         };
-        if model.kind == crate::model::ModelKind::Dilatant {
-            return refuse("model.kind is \"dilatant\"");
-        }
         if model.kind == crate::model::ModelKind::Submarine {
-            return refuse("model.kind is \"submarine\"");
+            return err(
+                "numerics.order",
+                "order 2 is not available for model.kind = \"submarine\": its two-layer face kernel carries the layers' non-conservative coupling and the curved line's cos θ terms, which a reconstruction would also have to integrate inside every cell, and its Coulomb rule holds a deposit because τ_crit cancels each face's static part between cell means exactly; use numerics.order = 1",
+            );
         }
         if model.pressure == Pressure::NonHydrostatic && domain.plane.is_some() {
             return refuse("model.pressure is \"nonhydrostatic\" on a raster");
@@ -925,11 +934,22 @@ t_end = 2.0
             assert!(e.message().contains(what), "{e}");
         }
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
-        for (file, what) in [
-            ("dilatancy_dense.toml", "dilatant"),
-            ("submarine_landslide.toml", "submarine"),
+        // The dilatant model takes it with its split scheme (the default), not with
+        // the Appendix B scheme.
+        let dilatant = load_file(
+            &root.join("dilatancy_dense.toml"),
+            &["numerics.order=2".to_owned()],
+        );
+        assert_eq!(dilatant.unwrap().numerics.order, 2);
+        for (file, extra, what) in [
+            (
+                "dilatancy_dense.toml",
+                "dilatancy.scheme=\"appendix_b\"",
+                "split",
+            ),
+            ("submarine_landslide.toml", "numerics.order=2", "submarine"),
         ] {
-            let sets = ["numerics.order=2".to_owned()];
+            let sets = ["numerics.order=2".to_owned(), extra.to_owned()];
             let e = load_file(&root.join(file), &sets).unwrap_err();
             assert!(e.to_string().contains("numerics.order"), "{file}: {e}");
             assert!(e.message().contains(what), "{file}: {e}");
