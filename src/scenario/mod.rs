@@ -402,8 +402,8 @@ pub struct Scenario {
 }
 
 /// `[numerics]`: first-order scheme (the default) or the second-order one
-/// (`order = 2`: MUSCL reconstruction and Heun's method, the monolayer hydrostatic
-/// model on a line only; docs/numerics.md).
+/// (`order = 2`: MUSCL reconstruction and Heun's method; the models that have it are
+/// listed in docs/scenario-format.md, `numerics.order`; docs/numerics.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Numerics {
     /// 1 or 2.
