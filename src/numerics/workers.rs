@@ -29,8 +29,8 @@ use std::thread::JoinHandle;
 
 /// Waits of a helper between calls: spin-loop hints (a few tens of µs), then yields
 /// of its core (the caller's serial work between two calls of a step), then sleep.
-const SPINS: u32 = 1 << 12;
-const YIELDS: u32 = 1 << 8;
+const SPINS: u32 = 1 << 10;
+const YIELDS: u32 = 1 << 7;
 
 /// The threads of one run's 2-D stages: `None` runs serially.
 #[derive(Debug, Clone, Default)]
