@@ -27,10 +27,12 @@ use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering::*};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, TryLockError};
 use std::thread::JoinHandle;
 
-/// Waits of a helper between calls: spin-loop hints (a few tens of µs), then yields
-/// of its core (the caller's serial work between two calls of a step), then sleep.
-const SPINS: u32 = 1 << 10;
-const YIELDS: u32 = 1 << 7;
+/// Waits of a helper between calls: a few spin-loop hints and yields of its core (the
+/// caller's serial work between two calls of a step is short), then sleep. Long spins
+/// cost more than they save on a shared machine: a helper that spent its time slices
+/// spinning is scheduled late when it holds a tile the caller waits for.
+const SPINS: u32 = 1 << 6;
+const YIELDS: u32 = 1 << 5;
 
 /// The threads of one run's 2-D stages: `None` runs serially.
 #[derive(Debug, Clone, Default)]
