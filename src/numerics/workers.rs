@@ -1,260 +1,40 @@
-//! Threads inside one run: the tiles and bands of a 2-D stage run on a small pool of
-//! threads that the stages of one pipeline share and own.
+//! Threads inside one run: the tiles and bands of a 2-D stage run on a rayon pool that
+//! the stages of one pipeline share and own.
 //!
-//! With one thread there is no pool and the work runs in order on the caller's thread.
-//! With N, the caller and N − 1 helper threads share each call's tasks: each stepped
-//! tile (the stages, the maps, the copy of the state: [`Workers::tiles`]) or band of
-//! rows (the diagnostics, whose sums go band by band: [`Workers::map_bands`]) is one
-//! task, and a thread that finishes one takes the next not yet taken (one atomic
-//! counter), so the dry and wet parts of a run balance. The partition does not depend
-//! on the number of threads, each task writes only its own cells, and every reduction
-//! is combined in a fixed order (band order for sums) or by an order-free rule (the
-//! first minimum in cell order): the results are the same bits for 1, 2 or 4 threads.
-//! Scratch is allocated once by the stage (per thread), so no task allocates.
-//!
-//! Why not a general work-stealing pool: a step of a raster run that follows the flow
-//! is about seven parallel calls of under 3 ms each, over a few dozen tiles. A call
-//! that hands its work to a pool and sleeps until the pool is done costs two wake-ups
-//! across threads, and the caller's thread sits idle while it waits. Here the caller
-//! works on the call's tasks itself, and a helper waits for the next call by spinning
-//! briefly, then yielding, then sleeping (it is woken by the next call), so back-to-back
-//! calls within a step cost an atomic store and a few loads.
+//! With one thread there is no pool and the work runs in order on the caller's thread
+//! (no rayon at all). With more, each stepped tile (the stages, the maps, the copy of
+//! the state: [`Workers::tiles`]) or band of rows (the diagnostics, whose sums go band
+//! by band: [`Workers::map_bands`]) is one task
+//! (`with_max_len(1)`: a thread that runs out of work steals single tasks, so the dry
+//! and wet parts of a run balance). The partition does not depend on the number of
+//! threads, each task writes only its own cells, and every reduction is combined in a
+//! fixed order (band order for sums) or by an order-free rule (the first minimum in
+//! cell order): the results are the same bits for 1, 2 or 4 threads. Scratch is
+//! allocated once by the stage (per thread), so no task allocates.
 
-use std::any::Any;
+use rayon::prelude::*;
 use std::ops::Range;
-use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering::*};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard, TryLockError};
-use std::thread::JoinHandle;
-
-/// Waits of a helper between calls: a few spin-loop hints and yields of its core (the
-/// caller's serial work between two calls of a step is short), then sleep. Long spins
-/// cost more than they save on a shared machine: a helper that spent its time slices
-/// spinning is scheduled late when it holds a tile the caller waits for.
-const SPINS: u32 = 1 << 6;
-const YIELDS: u32 = 1 << 5;
+use std::sync::Arc;
 
 /// The threads of one run's 2-D stages: `None` runs serially.
 #[derive(Debug, Clone, Default)]
 pub struct Workers {
-    pool: Option<Arc<Pool>>,
+    pool: Option<Arc<rayon::ThreadPool>>,
 }
-
-/// A call's tasks as the helpers see them: `f(thread, task)` for task < `tasks`.
-#[derive(Clone, Copy)]
-struct Job {
-    f: &'static (dyn Fn(usize, usize) + Sync),
-    tasks: usize,
-}
-
-/// What the caller and the helpers share.
-struct Shared {
-    /// Bumped by every call (the helpers wait for it to change).
-    generation: AtomicU64,
-    /// The call's tasks may be taken (set once the job is in place, cleared when the
-    /// caller has found no task left).
-    open: AtomicBool,
-    /// The next task not yet taken.
-    next: AtomicUsize,
-    /// Helpers inside the current call: the caller returns once it is 0.
-    active: AtomicUsize,
-    job: Mutex<Option<Job>>,
-    /// The first panic of a helper's task, re-raised on the caller's thread.
-    panic: Mutex<Option<Box<dyn Any + Send>>>,
-    /// Sleeping helpers, woken by the next call.
-    sleepers: AtomicUsize,
-    sleep: Mutex<()>,
-    wake: Condvar,
-    shutdown: AtomicBool,
-}
-
-/// The helper threads of a [`Workers`] and the lock that lets one call at a time use them.
-struct Pool {
-    threads: usize,
-    shared: Arc<Shared>,
-    helpers: Vec<JoinHandle<()>>,
-    caller: Mutex<()>,
-}
-
-impl std::fmt::Debug for Pool {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Pool({} threads)", self.threads)
-    }
-}
-
-fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-impl Shared {
-    /// Takes and runs tasks of `job` on thread `thread` until none is left.
-    fn work(&self, job: Job, thread: usize) {
-        loop {
-            let k = self.next.fetch_add(1, Relaxed);
-            if k >= job.tasks {
-                return;
-            }
-            (job.f)(thread, k);
-        }
-    }
-
-    /// Helper `thread`'s life: wait for a call, join it, until the pool is dropped.
-    fn helper(&self, thread: usize) {
-        let mut seen = self.generation.load(Acquire);
-        loop {
-            let mut waits = 0u32;
-            loop {
-                if self.shutdown.load(Acquire) {
-                    return;
-                }
-                let g = self.generation.load(Acquire);
-                if g != seen {
-                    seen = g;
-                    break;
-                }
-                waits += 1;
-                if waits < SPINS {
-                    std::hint::spin_loop();
-                } else if waits < SPINS + YIELDS {
-                    std::thread::yield_now();
-                } else {
-                    let guard = lock(&self.sleep);
-                    self.sleepers.fetch_add(1, SeqCst);
-                    // Checked under the lock the caller takes to wake: no lost wake-up.
-                    let guard =
-                        if self.generation.load(SeqCst) == seen && !self.shutdown.load(SeqCst) {
-                            self.wake.wait(guard).unwrap_or_else(|e| e.into_inner())
-                        } else {
-                            guard
-                        };
-                    self.sleepers.fetch_sub(1, SeqCst);
-                    drop(guard);
-                    waits = 0;
-                }
-            }
-            // Join the call if its tasks are still open (else it is over: wait again).
-            self.active.fetch_add(1, SeqCst);
-            if self.open.load(SeqCst) {
-                let job = *lock(&self.job);
-                if let Some(job) = job {
-                    if let Err(p) = catch_unwind(AssertUnwindSafe(|| self.work(job, thread))) {
-                        lock(&self.panic).get_or_insert(p);
-                    }
-                }
-            }
-            self.active.fetch_sub(1, SeqCst);
-        }
-    }
-}
-
-impl Pool {
-    fn new(threads: usize) -> Result<Pool, String> {
-        let shared = Arc::new(Shared {
-            generation: AtomicU64::new(0),
-            open: AtomicBool::new(false),
-            next: AtomicUsize::new(0),
-            active: AtomicUsize::new(0),
-            job: Mutex::new(None),
-            panic: Mutex::new(None),
-            sleepers: AtomicUsize::new(0),
-            sleep: Mutex::new(()),
-            wake: Condvar::new(),
-            shutdown: AtomicBool::new(false),
-        });
-        let mut pool = Pool {
-            threads,
-            shared,
-            helpers: Vec::with_capacity(threads - 1),
-            caller: Mutex::new(()),
-        };
-        for thread in 1..threads {
-            let shared = Arc::clone(&pool.shared);
-            let helper = std::thread::Builder::new()
-                .name(format!("granflow-band-{thread}"))
-                .spawn(move || shared.helper(thread))
-                .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
-            pool.helpers.push(helper);
-        }
-        Ok(pool)
-    }
-
-    /// `f(thread, k)` for every task k < `tasks`, shared by the caller (thread 0) and
-    /// the helpers. A second call while one runs (from another thread, or from inside a
-    /// task) runs its tasks serially on its own thread: the same results.
-    fn run(&self, tasks: usize, f: &(dyn Fn(usize, usize) + Sync)) {
-        let _one_call = match self.caller.try_lock() {
-            Ok(guard) => guard,
-            Err(TryLockError::Poisoned(e)) => e.into_inner(),
-            Err(TryLockError::WouldBlock) => {
-                (0..tasks).for_each(|k| f(0, k));
-                return;
-            }
-        };
-        if tasks <= 1 {
-            (0..tasks).for_each(|k| f(0, k));
-            return;
-        }
-        // SAFETY: the helpers call `f` only while they are counted in `active` and the
-        // call is open, and this function returns (ending `f`'s borrow) only once the
-        // call is closed and `active` is 0; the job is cleared before the return.
-        let f: &'static (dyn Fn(usize, usize) + Sync) = unsafe { std::mem::transmute(f) };
-        let s = &*self.shared;
-        *lock(&s.job) = Some(Job { f, tasks });
-        s.next.store(0, SeqCst);
-        s.open.store(true, SeqCst);
-        s.generation.fetch_add(1, SeqCst);
-        if s.sleepers.load(SeqCst) > 0 {
-            let _guard = lock(&s.sleep);
-            s.wake.notify_all();
-        }
-        let mine = catch_unwind(AssertUnwindSafe(|| s.work(Job { f, tasks }, 0)));
-        s.open.store(false, SeqCst);
-        let mut waits = 0u32;
-        while s.active.load(SeqCst) != 0 {
-            waits += 1;
-            if waits < SPINS {
-                std::hint::spin_loop();
-            } else {
-                std::thread::yield_now();
-            }
-        }
-        *lock(&s.job) = None;
-        if let Err(p) = mine {
-            resume_unwind(p);
-        }
-        if let Some(p) = lock(&s.panic).take() {
-            resume_unwind(p);
-        }
-    }
-}
-
-impl Drop for Pool {
-    fn drop(&mut self) {
-        self.shared.shutdown.store(true, SeqCst);
-        {
-            let _guard = lock(&self.shared.sleep);
-            self.shared.wake.notify_all();
-        }
-        for helper in self.helpers.drain(..) {
-            let _ = helper.join();
-        }
-    }
-}
-
-/// A pointer to a slice's elements that the tasks of one call write at disjoint
-/// indices (for results of any type, [`Workers::map_bands`]).
-struct Slots<T>(*mut T);
-// SAFETY: each task writes its own index only (see `map_bands`).
-unsafe impl<T: Send> Sync for Slots<T> {}
 
 impl Workers {
-    /// `threads` ≤ 1: serial, no pool. More: the caller and `threads` − 1 helpers.
+    /// `threads` ≤ 1: serial, no pool. More: a pool of that many threads.
     pub fn new(threads: usize) -> Result<Workers, String> {
         if threads <= 1 {
             return Ok(Workers::default());
         }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|k| format!("granflow-band-{k}"))
+            .build()
+            .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
         Ok(Workers {
-            pool: Some(Arc::new(Pool::new(threads)?)),
+            pool: Some(Arc::new(pool)),
         })
     }
 
@@ -273,53 +53,48 @@ impl Workers {
         match &self.pool {
             None => (0..bands).map(f).collect(),
             Some(pool) => {
-                let mut out: Vec<Option<T>> = (0..bands).map(|_| None).collect();
-                let slots = Slots(out.as_mut_ptr());
-                let slots = &slots;
-                // SAFETY: task k writes slot k < bands alone, and `out` outlives the call.
-                pool.run(bands, &|_, k| unsafe { *slots.0.add(k) = Some(f(k)) });
-                out.into_iter()
-                    .map(|v| v.expect("every band computed"))
-                    .collect()
+                pool.install(|| (0..bands).into_par_iter().with_max_len(1).map(f).collect())
             }
         }
     }
 
-    /// Copies `src` into `dst` (the same length) in chunks of `chunk` values, one task
-    /// each: the run loop's copy of the state of t^n.
+    /// Copies `src` into `dst` (the same length) band by band (chunks of `chunk`
+    /// values): the run loop's copy of the state of t^n.
     pub fn copy(&self, chunk: usize, dst: &mut [f64], src: &[f64]) {
         assert_eq!(dst.len(), src.len(), "a copy between buffers of one length");
         match &self.pool {
             None => dst.copy_from_slice(src),
-            Some(pool) => {
-                let n = src.len();
-                let d = Disjoint::new(dst);
-                pool.run(n.div_ceil(chunk.max(1)), &|_, k| {
-                    let cells = k * chunk..((k + 1) * chunk).min(n);
-                    // SAFETY: chunk k is this task's alone.
-                    unsafe { d.slice(cells.clone()) }.copy_from_slice(&src[cells]);
-                });
-            }
+            Some(pool) => pool.install(|| {
+                dst.par_chunks_mut(chunk)
+                    .zip(src.par_chunks(chunk))
+                    .with_max_len(1)
+                    .for_each(|(d, s)| d.copy_from_slice(s));
+            }),
         }
     }
 
     /// The number of threads (1 when serial): the run's tasks index per-thread scratch
     /// with [`Self::tiles`]'s first argument, below it.
     pub fn threads(&self) -> usize {
-        self.pool.as_ref().map_or(1, |p| p.threads)
+        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
     }
 
     /// Calls `f(thread, t)` for every tile `t` of `tiles`, `thread` < [`Self::threads`]
-    /// the index of the thread that runs it (for its scratch). Each tile is one task:
-    /// the threads share the tiles wherever the flow is, each taking the next tile not
-    /// yet taken.
+    /// the index of the thread that runs it (for its scratch). Each tile is one task
+    /// (`with_max_len(1)`): the threads share the tiles wherever the flow is, and a
+    /// thread that runs out of work steals single tiles.
     pub fn tiles<F>(&self, tiles: &[u32], f: F)
     where
         F: Fn(usize, usize) + Sync + Send,
     {
         match &self.pool {
             None => tiles.iter().for_each(|&t| f(0, t as usize)),
-            Some(pool) => pool.run(tiles.len(), &|thread, k| f(thread, tiles[k] as usize)),
+            Some(pool) => pool.install(|| {
+                tiles
+                    .par_iter()
+                    .with_max_len(1)
+                    .for_each(|&t| f(rayon::current_thread_index().unwrap_or(0), t as usize))
+            }),
         }
     }
 }
@@ -394,7 +169,8 @@ impl<'a, T: Copy> Disjoint<'a, T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::sync::atomic::AtomicUsize;
+    use std::panic::{catch_unwind, AssertUnwindSafe};
+    use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 
     #[test]
     fn every_task_runs_once_and_bands_come_back_in_order() {
@@ -445,7 +221,7 @@ mod tests {
     }
 
     #[test]
-    fn a_call_from_inside_a_task_runs_serially() {
+    fn a_call_from_inside_a_task_runs_its_tasks() {
         let w = Workers::new(2).expect("a pool");
         let outer: Vec<u32> = (0..8).collect();
         let total = AtomicUsize::new(0);
