@@ -234,8 +234,8 @@ impl WithLaw for Stages2d<'_> {
 }
 
 /// The pipeline hyperbolic → friction of a 2-D run with friction law `law` on
-/// `threads` threads: 1 runs fully serially (no rayon); more give both stages one
-/// shared rayon pool of that many threads, owned by the pipeline. The results are the
+/// `threads` threads: 1 runs fully serially; more give both stages one shared pool of
+/// that many threads (`numerics::workers`), owned by the pipeline. The results are the
 /// same bits for any `threads` (`numerics::workers`).
 pub fn pipeline(
     law: &FrictionLaw,
@@ -413,12 +413,14 @@ impl Model for Granular2d {
             Disjoint::new(&mut backup.hv[..]),
         );
         self.workers.tiles(tiles.stepped(), |_, t| {
-            for k in tiles.row_segments(t).flatten() {
-                // SAFETY: cell k is in tile t, this task's alone.
+            for cells in tiles.row_segments(t) {
+                // SAFETY: the cells are in tile t, this task's alone.
                 unsafe {
-                    h.set(k, state.h[k]);
-                    hu.set(k, state.hu[k]);
-                    hv.set(k, state.hv[k]);
+                    h.slice(cells.clone())
+                        .copy_from_slice(&state.h[cells.clone()]);
+                    hu.slice(cells.clone())
+                        .copy_from_slice(&state.hu[cells.clone()]);
+                    hv.slice(cells.clone()).copy_from_slice(&state.hv[cells]);
                 }
             }
         });

@@ -1606,7 +1606,7 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
 
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
         let nx = raster.nx();
-        state.refresh_tiles(nx, raster.ny());
+        state.refresh_tiles_on(nx, raster.ny(), &self.workers);
         self.reconstruct(raster, dt, state);
         let mut worst = self.update_pass(raster, dt, state);
         if worst.0 < 0.0 {
@@ -1628,13 +1628,18 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
         let tile_worst = &self.tile_worst;
         self.workers.tiles(tiles.stepped(), |_, t| {
             let clip = tile_worst[t].0 < 0.0;
-            for k in tiles.row_segments(t).flatten() {
-                let hn = h_new[k];
-                // SAFETY: cell k is in tile t, this task's alone.
+            for cells in tiles.row_segments(t) {
+                // SAFETY: the cells are in tile t, this task's alone.
+                let h = unsafe { h.slice(cells.clone()) };
+                h.copy_from_slice(&h_new[cells.clone()]);
+                if clip {
+                    h.iter_mut().filter(|h| **h < 0.0).for_each(|h| *h = 0.0);
+                }
+                // SAFETY: as above.
                 unsafe {
-                    h.set(k, if clip && hn < 0.0 { 0.0 } else { hn });
-                    hu.set(k, hu_new[k]);
-                    hv.set(k, hv_new[k]);
+                    hu.slice(cells.clone())
+                        .copy_from_slice(&hu_new[cells.clone()]);
+                    hv.slice(cells.clone()).copy_from_slice(&hv_new[cells]);
                 }
             }
         });

@@ -13,6 +13,7 @@
 //! allocated once by the stage (per thread), so no task allocates.
 
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::Arc;
 
 /// The threads of one run's 2-D stages: `None` runs serially.
@@ -137,6 +138,22 @@ impl<'a, T: Copy> Disjoint<'a, T> {
         unsafe { *self.ptr.add(i) = v }
     }
 
+    /// The elements `range` as one slice (bounds-checked), for copies of whole rows.
+    ///
+    /// # Safety
+    /// No other task reads or writes an index of `range` while the slice lives.
+    #[inline(always)]
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn slice(&self, range: Range<usize>) -> &mut [T] {
+        assert!(
+            range.start <= range.end && range.end <= self.len,
+            "range {range:?} out of {}",
+            self.len
+        );
+        // SAFETY: in bounds (checked), and exclusive to this task (the caller's contract).
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.len()) }
+    }
+
     /// Reads index `i` (bounds-checked).
     ///
     /// # Safety
@@ -146,5 +163,73 @@ impl<'a, T: Copy> Disjoint<'a, T> {
         assert!(i < self.len, "index {i} out of {}", self.len);
         // SAFETY: in bounds (checked), and not written by another task (the contract).
         unsafe { *self.ptr.add(i) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::panic::{catch_unwind, AssertUnwindSafe};
+    use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+
+    #[test]
+    fn every_task_runs_once_and_bands_come_back_in_order() {
+        for threads in [1, 2, 4] {
+            let w = Workers::new(threads).expect("a pool");
+            assert_eq!(w.threads(), threads);
+            // Many calls in a row, as the stages of a run's steps make them.
+            for round in 0..200 {
+                let n = 1 + round % 70;
+                let tiles: Vec<u32> = (0..n as u32).map(|t| 3 * t).collect();
+                let mut seen = vec![0usize; 3 * n];
+                let d = Disjoint::new(&mut seen);
+                let calls = AtomicUsize::new(0);
+                w.tiles(&tiles, |thread, t| {
+                    assert!(thread < threads);
+                    calls.fetch_add(1, Relaxed);
+                    // SAFETY: each tile is one task.
+                    unsafe { d.set(t, d.get(t) + 1) };
+                });
+                assert_eq!(calls.load(Relaxed), n);
+                assert!(seen
+                    .iter()
+                    .enumerate()
+                    .all(|(t, &c)| c == usize::from(t % 3 == 0)));
+                let squares = w.map_bands(n, |k| vec![k * k]);
+                assert!(squares.iter().enumerate().all(|(k, v)| v == &[k * k]));
+            }
+            let src: Vec<f64> = (0..1000).map(f64::from).collect();
+            let mut dst = vec![0.0; 1000];
+            w.copy(64, &mut dst, &src);
+            assert_eq!(dst, src);
+        }
+    }
+
+    #[test]
+    fn a_panic_in_a_task_reaches_the_caller_and_the_pool_goes_on() {
+        let w = Workers::new(2).expect("a pool");
+        let tiles: Vec<u32> = (0..64).collect();
+        let caught = catch_unwind(AssertUnwindSafe(|| {
+            w.tiles(&tiles, |_, t| assert!(t != 40, "task 40 fails"));
+        }));
+        assert!(caught.is_err());
+        let done = AtomicUsize::new(0);
+        w.tiles(&tiles, |_, _| {
+            done.fetch_add(1, Relaxed);
+        });
+        assert_eq!(done.load(Relaxed), 64);
+    }
+
+    #[test]
+    fn a_call_from_inside_a_task_runs_its_tasks() {
+        let w = Workers::new(2).expect("a pool");
+        let outer: Vec<u32> = (0..8).collect();
+        let total = AtomicUsize::new(0);
+        w.tiles(&outer, |_, _| {
+            w.tiles(&outer, |_, _| {
+                total.fetch_add(1, Relaxed);
+            });
+        });
+        assert_eq!(total.load(Relaxed), 64);
     }
 }

@@ -9,6 +9,7 @@
 //! next step classifies every tile again.
 
 use super::tiles::Tiles;
+use crate::numerics::workers::Workers;
 
 /// h, hu, hv per cell (nx·ny each, row-major), and the active tiles.
 #[derive(Debug)]
@@ -62,6 +63,12 @@ impl State2d {
     /// on a raster of `nx` × `ny` cells and builds the stepped set (`state::tiles`).
     pub fn refresh_tiles(&mut self, nx: usize, ny: usize) {
         self.tiles.refresh((nx, ny), &self.h, &self.hu, &self.hv);
+    }
+
+    /// [`Self::refresh_tiles`] with the changed tiles classified on `workers`.
+    pub fn refresh_tiles_on(&mut self, nx: usize, ny: usize, workers: &Workers) {
+        let fields = (&self.h[..], &self.hu[..], &self.hv[..]);
+        self.tiles.refresh_on((nx, ny), fields, workers);
     }
 
     /// Classifies the tiles if they are unknown (a stage that follows another in the

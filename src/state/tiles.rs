@@ -28,6 +28,7 @@
 //! step.
 
 use crate::grid::raster::BAND_ROWS;
+use crate::numerics::workers::{Disjoint, Workers};
 use crate::physics::shallow::H_DRY;
 use std::ops::Range;
 
@@ -226,7 +227,18 @@ impl Tiles {
     /// Classifies the tiles for the state (`h`, `hu`, `hv`) on `nx` × `ny` cells: every
     /// tile if unknown, else the tiles a stage changed since the last refresh; then
     /// builds the stepped set.
-    pub fn refresh(&mut self, (nx, ny): (usize, usize), h: &[f64], hu: &[f64], hv: &[f64]) {
+    pub fn refresh(&mut self, dims: (usize, usize), h: &[f64], hu: &[f64], hv: &[f64]) {
+        self.refresh_on(dims, (h, hu, hv), &Workers::serial());
+    }
+
+    /// [`Self::refresh`] with the changed tiles classified on `workers`, one task per
+    /// tile (each writes its own flags: the same flags on any number of threads).
+    pub fn refresh_on(
+        &mut self,
+        (nx, ny): (usize, usize),
+        (h, hu, hv): (&[f64], &[f64], &[f64]),
+        workers: &Workers,
+    ) {
         if !self.known_for(nx, ny) {
             self.nx = nx;
             self.ny = ny;
@@ -239,10 +251,16 @@ impl Tiles {
                 self.flags[t] = self.classify(t, h, hu, hv);
             }
         } else if self.pending {
-            for k in 0..self.stepped.len() {
-                let t = self.stepped[k] as usize;
-                self.flags[t] = self.classify(t, h, hu, hv);
-            }
+            // The flags are taken out while the tasks write them (classifying reads
+            // the rest of the tiles, not the flags).
+            let mut flags = std::mem::take(&mut self.flags);
+            let out = Disjoint::new(&mut flags[..]);
+            let tiles = &*self;
+            workers.tiles(&tiles.stepped, |_, t| {
+                // SAFETY: entry t is this task's alone.
+                unsafe { out.set(t, tiles.classify(t, h, hu, hv)) };
+            });
+            self.flags = flags;
         } else {
             return;
         }
