@@ -1606,7 +1606,8 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
 
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
         let nx = raster.nx();
-        state.refresh_tiles_on(nx, raster.ny(), &self.workers);
+        let workers = &self.workers;
+        state.refresh_tiles_on(nx, raster.ny(), &|tiles, f| workers.tiles(tiles, f));
         self.reconstruct(raster, dt, state);
         let mut worst = self.update_pass(raster, dt, state);
         if worst.0 < 0.0 {

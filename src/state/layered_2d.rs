@@ -9,7 +9,6 @@
 //! next step classifies every tile again.
 
 use super::tiles::Tiles;
-use crate::numerics::workers::Workers;
 
 /// h, hu, hv per cell (nx·ny each, row-major), and the active tiles.
 #[derive(Debug)]
@@ -65,10 +64,11 @@ impl State2d {
         self.tiles.refresh((nx, ny), &self.h, &self.hu, &self.hv);
     }
 
-    /// [`Self::refresh_tiles`] with the changed tiles classified on `workers`.
-    pub fn refresh_tiles_on(&mut self, nx: usize, ny: usize, workers: &Workers) {
+    /// [`Self::refresh_tiles`] with the changed tiles classified by `run`
+    /// ([`super::tiles::Tiles::refresh_on`]).
+    pub fn refresh_tiles_on(&mut self, nx: usize, ny: usize, run: super::tiles::TileRunner) {
         let fields = (&self.h[..], &self.hu[..], &self.hv[..]);
-        self.tiles.refresh_on((nx, ny), fields, workers);
+        self.tiles.refresh_on((nx, ny), fields, run);
     }
 
     /// Classifies the tiles if they are unknown (a stage that follows another in the

@@ -13,6 +13,7 @@
 //! - [`DilatantState`] ([`dilatant`]): the compressible μ(I)–φ model (Bouchut et al. 2021).
 
 pub mod dilatant;
+pub mod disjoint;
 pub mod layered;
 pub mod layered_2d;
 pub mod layered_raster;

@@ -27,10 +27,14 @@
 //! stages has unknown tiles (`touch`): they are classified from every cell at the next
 //! step.
 
+use super::disjoint::Disjoint;
 use crate::grid::raster::BAND_ROWS;
-use crate::numerics::workers::{Disjoint, Workers};
 use crate::physics::shallow::H_DRY;
 use std::ops::Range;
+
+/// Runs `f(thread, t)` for every tile t of a list (module documentation of
+/// [`Tiles::refresh_on`]).
+pub type TileRunner<'r> = &'r dyn Fn(&[u32], &(dyn Fn(usize, usize) + Sync));
 
 /// Columns per tile (the rows are a band's, [`BAND_ROWS`]): a tile's face work is one
 /// column of x-faces more than its own (1/32 extra) and its bookkeeping one flag.
@@ -228,16 +232,20 @@ impl Tiles {
     /// tile if unknown, else the tiles a stage changed since the last refresh; then
     /// builds the stepped set.
     pub fn refresh(&mut self, dims: (usize, usize), h: &[f64], hu: &[f64], hv: &[f64]) {
-        self.refresh_on(dims, (h, hu, hv), &Workers::serial());
+        self.refresh_on(dims, (h, hu, hv), &|tiles, f| {
+            tiles.iter().for_each(|&t| f(0, t as usize))
+        });
     }
 
-    /// [`Self::refresh`] with the changed tiles classified on `workers`, one task per
-    /// tile (each writes its own flags: the same flags on any number of threads).
+    /// [`Self::refresh`] with the changed tiles classified by `run`, one task per tile:
+    /// `run(tiles, f)` calls `f(thread, t)` once for every t of `tiles`, in any order and
+    /// on any threads (the stages pass their `numerics::workers::Workers::tiles`). Each
+    /// task writes its own flags: the same flags on any number of threads.
     pub fn refresh_on(
         &mut self,
         (nx, ny): (usize, usize),
         (h, hu, hv): (&[f64], &[f64], &[f64]),
-        workers: &Workers,
+        run: TileRunner,
     ) {
         if !self.known_for(nx, ny) {
             self.nx = nx;
@@ -256,7 +264,7 @@ impl Tiles {
             let mut flags = std::mem::take(&mut self.flags);
             let out = Disjoint::new(&mut flags[..]);
             let tiles = &*self;
-            workers.tiles(&tiles.stepped, |_, t| {
+            run(&tiles.stepped, &|_, t| {
                 // SAFETY: entry t is this task's alone.
                 unsafe { out.set(t, tiles.classify(t, h, hu, hv)) };
             });
