@@ -6,7 +6,7 @@
 //! regularisations) and over an erodible bed of grains at rest (Fernández-Nieto et
 //! al. 2016, §4.2) too.
 
-use super::terrain_2d::{material, raster, tan_deg};
+use super::terrain_2d::{invariant_raster, material, raster, tan_deg};
 use granflow::grid::{BoundaryKind, Coordinates, Line, LineSpec, Raster2d, Sides};
 use granflow::model::granular::Granular;
 use granflow::model::Model;
@@ -107,33 +107,13 @@ fn check(case: &Case, n: usize, transposed: bool, threads: usize, opts: Option<V
     state.fill_ghosts(&line);
     let mut step_1d = HydrostaticStep::with_layers(mu_i(), case.nx, n);
 
-    let bed = case.bed;
-    let (sides, (nx, ny), xr, yr) = if transposed {
-        let sides = Sides {
-            west: WALL,
-            east: WALL,
-            south: WALL,
-            north: OUTFLOW,
-        };
-        (sides, (case.ny, case.nx), (0.0, 0.3), (x_min, x_max))
-    } else {
-        let sides = Sides {
-            west: WALL,
-            east: OUTFLOW,
-            south: WALL,
-            north: WALL,
-        };
-        (sides, (case.nx, case.ny), (x_min, x_max), (0.0, 0.3))
-    };
-    let r: Raster2d = raster(
-        nx,
-        ny,
-        xr,
-        yr,
-        sides,
+    let (r, nx, ny) = invariant_raster(
+        (case.nx, case.ny),
+        (x_min, x_max),
+        transposed,
         case.coordinates,
         case.slope_deg,
-        move |x, y| bed(if transposed { y } else { x }),
+        case.bed,
     );
     let along = |k: usize| if transposed { k / nx } else { k % nx };
     let h: Vec<f64> = (0..nx * ny).map(|k| h0[along(k)]).collect();

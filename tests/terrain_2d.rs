@@ -41,6 +41,49 @@ fn rand01(k: u64) -> f64 {
     (z >> 11) as f64 / (1u64 << 53) as f64
 }
 
+/// The raster of a line case copied across a second dimension: `n.0` cells along
+/// x in `x_range` and `n.1` across y in [0, 0.3] m, the line's bed b(x), a wall on
+/// each side but the line's outflow end (east); `transposed`: the same along y
+/// (outflow north). Returns it with its (nx, ny).
+pub(crate) fn invariant_raster(
+    n: (usize, usize),
+    x_range: (f64, f64),
+    transposed: bool,
+    coordinates: Coordinates,
+    slope_deg: f64,
+    bed: fn(f64) -> f64,
+) -> (Raster2d, usize, usize) {
+    let (x_min, x_max) = x_range;
+    let (sides, (nx, ny), xr, yr) = if transposed {
+        let sides = Sides {
+            west: WALL,
+            east: WALL,
+            south: WALL,
+            north: OUTFLOW,
+        };
+        (sides, (n.1, n.0), (0.0, 0.3), (x_min, x_max))
+    } else {
+        let sides = Sides {
+            west: WALL,
+            east: OUTFLOW,
+            south: WALL,
+            north: WALL,
+        };
+        (sides, (n.0, n.1), (x_min, x_max), (0.0, 0.3))
+    };
+    let r = raster(
+        nx,
+        ny,
+        xr,
+        yr,
+        sides,
+        coordinates,
+        slope_deg,
+        move |x, y| bed(if transposed { y } else { x }),
+    );
+    (r, nx, ny)
+}
+
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn raster(
     nx: usize,
@@ -156,33 +199,13 @@ fn check_invariant(case: &Invariant, transposed: bool, threads: usize) {
     let mut state = LayeredState::from_profiles(&line, &[1.0], &h0, &vec![0.0; case.nx]);
     let mut pipe_1d = law_pipeline(&case.law, case.nx);
 
-    let bed = case.bed;
-    let (sides, (nx, ny), xr, yr) = if transposed {
-        let sides = Sides {
-            west: WALL,
-            east: WALL,
-            south: WALL,
-            north: OUTFLOW,
-        };
-        (sides, (case.ny, case.nx), (0.0, 0.3), (x_min, x_max))
-    } else {
-        let sides = Sides {
-            west: WALL,
-            east: OUTFLOW,
-            south: WALL,
-            north: WALL,
-        };
-        (sides, (case.nx, case.ny), (x_min, x_max), (0.0, 0.3))
-    };
-    let r = raster(
-        nx,
-        ny,
-        xr,
-        yr,
-        sides,
+    let (r, nx, ny) = invariant_raster(
+        (case.nx, case.ny),
+        (x_min, x_max),
+        transposed,
         case.coordinates,
         case.slope_deg,
-        move |x, y| bed(if transposed { y } else { x }),
+        case.bed,
     );
     let along = |k: usize| if transposed { k / nx } else { k % nx };
     let h: Vec<f64> = (0..nx * ny).map(|k| h0[along(k)]).collect();
