@@ -774,27 +774,8 @@ impl SplitScheme {
                 phi[j]
             };
         }
-        for j in lo..end {
-            let (hj, f_in, f_out) = (h[j], flux[j - 1], flux[j]);
-            if hj <= 0.0 || (f_in == 0.0 && f_out == 0.0) {
-                // Dry, or nothing crosses (a mass at rest): φ stays (already copied).
-                continue;
-            }
-            let p = phi[j];
-            let up_out = if f_out > 0.0 { donor[j] } else { donor[j + 1] };
-            let up_in = if f_in > 0.0 { donor[j - 1] } else { donor[j] };
-            let change = f_out * (up_out - p) - f_in * (up_in - p);
-            let value = p - r * change / hj;
-            if !(value > 0.0 && value < 1.0) {
-                return Err(StageError::Inadmissible {
-                    cell: j - 1,
-                    quantity: "volume fraction φ (transport)",
-                    value,
-                });
-            }
-            out[j] = value;
-        }
-        Ok(())
+        // Each face carries its donor's φ: the west and east edges of a cell are the same.
+        update_phi(out, h, flux, phi, r, lo..end, (donor, donor))
     }
 
     /// Step 2 at order 2: φ^{n+1} from the mass fluxes of the hyperbolic step with the
@@ -854,26 +835,7 @@ impl SplitScheme {
                 (west[j], east[j]) = (phi[j], phi[j]);
             }
         }
-        for j in lo..end {
-            let (hj, f_in, f_out) = (h[j], flux[j - 1], flux[j]);
-            if hj <= 0.0 || (f_in == 0.0 && f_out == 0.0) {
-                continue;
-            }
-            let p = phi[j];
-            let up_out = if f_out > 0.0 { east[j] } else { west[j + 1] };
-            let up_in = if f_in > 0.0 { east[j - 1] } else { west[j] };
-            let change = f_out * (up_out - p) - f_in * (up_in - p);
-            let value = p - r * change / hj;
-            if !(value > 0.0 && value < 1.0) {
-                return Err(StageError::Inadmissible {
-                    cell: j - 1,
-                    quantity: "volume fraction φ (transport)",
-                    value,
-                });
-            }
-            out[j] = value;
-        }
-        Ok(())
+        update_phi(out, h, flux, phi, r, lo..end, (west, east))
     }
 
     /// Step 3: friction and dilatancy, cell by cell.
@@ -1151,6 +1113,43 @@ impl Stage<Line, DilatantState> for SplitScheme {
     fn apply(&mut self, mesh: &Line, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
         self.step(mesh, state, dt)
     }
+}
+
+/// The conservative update of φh for cells `cells` from the mass fluxes `flux` (face k
+/// between cells k and k + 1) and the φ each face carries, its upwind cell's edge
+/// value (`edges` = (west, east) per cell): φ_j^{n+1} = φ_j − r (𝓕_E (φ_E − φ_j) −
+/// 𝓕_W (φ_W − φ_j))/h_j^{n+1}, written into `out`. Dry cells and cells that nothing
+/// crosses (a mass at rest) keep the φ already copied there. A φ outside (0, 1) is
+/// refused, naming its cell.
+fn update_phi(
+    out: &mut [f64],
+    h: &[f64],
+    flux: &[f64],
+    phi: &[f64],
+    r: f64,
+    cells: std::ops::Range<usize>,
+    (west, east): (&[f64], &[f64]),
+) -> Result<(), StageError> {
+    for j in cells {
+        let (hj, f_in, f_out) = (h[j], flux[j - 1], flux[j]);
+        if hj <= 0.0 || (f_in == 0.0 && f_out == 0.0) {
+            continue;
+        }
+        let p = phi[j];
+        let up_out = if f_out > 0.0 { east[j] } else { west[j + 1] };
+        let up_in = if f_in > 0.0 { east[j - 1] } else { west[j] };
+        let change = f_out * (up_out - p) - f_in * (up_in - p);
+        let value = p - r * change / hj;
+        if !(value > 0.0 && value < 1.0) {
+            return Err(StageError::Inadmissible {
+                cell: j - 1,
+                quantity: "volume fraction φ (transport)",
+                value,
+            });
+        }
+        out[j] = value;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
