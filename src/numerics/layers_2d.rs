@@ -22,7 +22,7 @@
 //!   flux the line's [`super::face::layer_momentum_flux`];
 //! - the tangential component of each layer carried by that layer's upwinded flux
 //!   ([`super::face::transverse_flux`] with the layer's normal velocity);
-//! - the exchange term 𝓑 of the line ([`super::hydrostatic::carried_exchange_terms`])
+//! - the exchange term 𝓑 of the line (`super::hydrostatic::carried_exchange_terms`)
 //!   for both components with the same ΔG, the jump of the normal discharges; each
 //!   cell takes its own-depth share of it, as on the line;
 //! - ΔC's friction a disk against the bottom layer's drive (normal and tangential:

@@ -8,10 +8,10 @@
 //!
 //! with ν frozen at t^n (`rheology.viscosity` = "frozen" or "lagged", the same for a
 //! hydrostatic run). Each column is the line's: its coefficients come from the
-//! column kernel of `viscous_columns.rs` ([`ColumnRheology`]) with the strain rates of
+//! column kernel of `viscous_columns.rs` (`ColumnRheology`) with the strain rates of
 //! the vector shear, and its system — the same matrix for both components — is
-//! eliminated with the two components as two lanes ([`eliminate_down`],
-//! [`substitute_up`]). At a Coulomb bed the bottom equation d (u, v)_1 = r − Δt σ s,
+//! eliminated with the two components as two lanes (`eliminate_down`,
+//! `substitute_up`). At a Coulomb bed the bottom equation d (u, v)_1 = r − Δt σ s,
 //! |s| ≤ 1, s = (u, v)_1/|(u, v)_1|, is solved as a vector: (u, v)_1 = 0 if
 //! |r| ≤ Δt σ (the static threshold is a disk), else r (|r| − Δt σ)/(|r| d); where one
 //! component of r is zero the scalar rule of the line acts on the other. The basal

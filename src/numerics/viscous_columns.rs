@@ -12,11 +12,11 @@
 //! computed as `hypot` of the two components, which is |∂_z u| to the bit where v ≡ 0.
 //!
 //! The system l_α h u_α − Δt (couplings) = l_α q*_α is the same for every component of
-//! the velocity (the coefficients are scalars): [`eliminate_down`] reduces any number
+//! the velocity (the coefficients are scalars): `eliminate_down` reduces any number
 //! of right-hand sides (lanes: four columns of the line, or the two components of one
 //! raster column) to the bottom equation d u_1 = r − Δt σ s, s ∈ Sgn(u_1), which the
 //! caller solves (the line: per lane; the raster: as a vector, the disk
-//! |Δt σ s| ≤ Δt σ), and [`substitute_up`] returns the layers above.
+//! |Δt σ s| ≤ Δt σ), and `substitute_up` returns the layers above.
 
 use crate::physics::rheology::LocalFriction;
 use crate::physics::GRAVITY;
