@@ -154,7 +154,7 @@
 
 use super::face::{
     drained_fraction, interface, interface_with_friction, layer_momentum_flux, mass_flux,
-    monolayer_fluxes, Side,
+    monolayer_fluxes, Interface, Side,
 };
 use super::muscl::{self, Limiter};
 use super::tracer::TracerTransport;
@@ -477,77 +477,95 @@ impl<L: BasalFriction> HydrostaticStep<L> {
     ) {
         let (nx, n) = (mesh.nx, self.layers);
         let (g_n, dx) = (mesh.g_n, mesh.dx);
-        let side = |j: usize| Side {
+        let side = |step: &Self, j: usize| Side {
             h: h[j],
-            u: self.u_mean[j],
+            u: step.u_mean[j],
             b: mesh.b_ghost[j],
             z: mesh.z[j],
-            shear: self.shear[j],
-            u_base: self.u[j * n],
+            shear: step.shear[j],
+            u_base: step.u[j * n],
             sqrt_h: h[j].max(0.0).sqrt(),
         };
-        let mut left = side(0);
+        let mut left = side(self, 0);
         for k in 0..=nx {
-            let right = side(k + 1);
-            let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
+            let right = side(self, k + 1);
             let mu_of = |speed: f64, h: f64| faces.mu(k, speed, h, g_n * h);
             let extra = faces.potential_jump(k);
-            let Some((c, l, r)) = interface(mu_of, left, right, extra, g_n, dx, dt) else {
-                // The cell update reads every interface's fluxes: they must be zero here.
-                self.flux_h[k] = 0.0;
-                self.share_left[k] = 0.0;
-                self.share_right[k] = 0.0;
-                self.body_left[k] = 0.0;
-                self.body_right[k] = 0.0;
-                self.exchange_left[k] = 0.0;
-                self.exchange_right[k] = 0.0;
-                fluxes.fill(0.0);
-                self.exchange[k * n..(k + 1) * n].fill(0.0);
-                if !self.layer_flux.is_empty() {
-                    self.layer_flux[k * n..(k + 1) * n].fill(0.0);
-                }
-                left = right;
-                continue;
-            };
-            self.flux_h[k] = mass_flux(&c, l, r);
-            self.share_left[k] = c.share_left;
-            self.share_right[k] = c.share_right;
-            self.body_left[k] = c.body_left;
-            self.body_right[k] = c.body_right;
-            self.exchange_left[k] = c.exchange_left;
-            self.exchange_right[k] = c.exchange_right;
-            let u_l = &self.u[k * n..(k + 1) * n];
-            let u_r = &self.u[(k + 1) * n..(k + 2) * n];
-            let seen = |u: f64, at_rest: bool| if at_rest { 0.0 } else { u };
-            let exchange = &mut self.exchange[k * n..(k + 1) * n];
-            if c.left_at_rest || c.right_at_rest {
-                // One side at rest, the other dry: no velocity anywhere, no exchange.
-                exchange.fill(0.0);
-            } else {
-                let frac = Fractions {
-                    l: l_frac,
-                    inv: &self.inv_l,
-                    below: &self.l_below,
-                };
-                exchange_terms(frac, l.h, r.h, u_l, u_r, exchange);
+            let found = interface(mu_of, left, right, extra, g_n, dx, dt);
+            self.store_layer_face(k, found, l_frac, false);
+            left = right;
+        }
+    }
+
+    /// N > 1: stores face k's mass flux, pressure and exchange shares, each layer's
+    /// momentum flux and exchange term 𝓑 (and the tracers' layer fluxes) from the face
+    /// kernel's result `found` (zeros where it found no flux: the cell update reads
+    /// every face). The layer velocities the fluxes see are the cells' own u_α, or
+    /// with `edges` the reconstruction's east and west edge velocities (order 2).
+    fn store_layer_face(
+        &mut self,
+        k: usize,
+        found: Option<(Interface, Side, Side)>,
+        l_frac: &[f64],
+        edges: bool,
+    ) {
+        let n = self.layers;
+        let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
+        let Some((c, l, r)) = found else {
+            self.flux_h[k] = 0.0;
+            (self.share_left[k], self.share_right[k]) = (0.0, 0.0);
+            (self.body_left[k], self.body_right[k]) = (0.0, 0.0);
+            (self.exchange_left[k], self.exchange_right[k]) = (0.0, 0.0);
+            fluxes.fill(0.0);
+            self.exchange[k * n..(k + 1) * n].fill(0.0);
+            if !self.layer_flux.is_empty() {
+                self.layer_flux[k * n..(k + 1) * n].fill(0.0);
             }
+            return;
+        };
+        self.flux_h[k] = mass_flux(&c, l, r);
+        (self.share_left[k], self.share_right[k]) = (c.share_left, c.share_right);
+        (self.body_left[k], self.body_right[k]) = (c.body_left, c.body_right);
+        (self.exchange_left[k], self.exchange_right[k]) = (c.exchange_left, c.exchange_right);
+        let (u_l, u_r) = if edges {
+            (
+                &self.east_u[k * n..(k + 1) * n],
+                &self.west_u[(k + 1) * n..(k + 2) * n],
+            )
+        } else {
+            (
+                &self.u[k * n..(k + 1) * n],
+                &self.u[(k + 1) * n..(k + 2) * n],
+            )
+        };
+        let seen = |u: f64, at_rest: bool| if at_rest { 0.0 } else { u };
+        let exchange = &mut self.exchange[k * n..(k + 1) * n];
+        if c.left_at_rest || c.right_at_rest {
+            // One side at rest, the other dry: no velocity anywhere, no exchange.
+            exchange.fill(0.0);
+        } else {
+            let frac = Fractions {
+                l: l_frac,
+                inv: &self.inv_l,
+                below: &self.l_below,
+            };
+            exchange_terms(frac, l.h, r.h, u_l, u_r, exchange);
+        }
+        for a in 0..n {
+            let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
+            fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur);
+        }
+        if !self.layer_flux.is_empty() {
+            // d_α = h_f ½((u_α − ū)_L + (u_α − ū)_R) with the velocities as the
+            // fluxes see them (0 at rest) and the thinner side's depth h_f
+            // (module documentation of `tracer.rs`).
+            let (ml, mr) = (l.u, r.u);
+            let h_f = l.h.min(r.h);
+            let out = &mut self.layer_flux[k * n..(k + 1) * n];
             for a in 0..n {
                 let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
-                fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur);
+                out[a] = 0.5 * h_f * ((ul - ml) + (ur - mr));
             }
-            if !self.layer_flux.is_empty() {
-                // d_α = h_f ½((u_α − ū)_L + (u_α − ū)_R) with the velocities as the
-                // fluxes see them (0 at rest) and the thinner side's depth h_f
-                // (module documentation of `tracer.rs`).
-                let (ml, mr) = (l.u, r.u);
-                let h_f = l.h.min(r.h);
-                let out = &mut self.layer_flux[k * n..(k + 1) * n];
-                for a in 0..n {
-                    let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
-                    out[a] = 0.5 * h_f * ((ul - ml) + (ur - mr));
-                }
-            }
-            left = right;
         }
     }
 
@@ -1139,7 +1157,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
         h: &[f64],
         faces: &F,
     ) {
-        let (nx, n) = (mesh.nx, self.layers);
+        let nx = mesh.nx;
         let (g_n, dx) = (mesh.g_n, mesh.dx);
         let z = &mesh.z[..nx + 2];
         for k in 0..=nx {
@@ -1155,51 +1173,7 @@ impl<L: BasalFriction> HydrostaticStep<L> {
             let extra = faces.potential_jump(k);
             let found =
                 interface_with_friction(mu_of, left, right, extra, friction, (g_n, g_n), dx, dt);
-            let fluxes = &mut self.flux_hu[k * n..(k + 1) * n];
-            let Some((c, l, r)) = found else {
-                self.flux_h[k] = 0.0;
-                (self.share_left[k], self.share_right[k]) = (0.0, 0.0);
-                (self.body_left[k], self.body_right[k]) = (0.0, 0.0);
-                (self.exchange_left[k], self.exchange_right[k]) = (0.0, 0.0);
-                fluxes.fill(0.0);
-                self.exchange[k * n..(k + 1) * n].fill(0.0);
-                if !self.layer_flux.is_empty() {
-                    self.layer_flux[k * n..(k + 1) * n].fill(0.0);
-                }
-                continue;
-            };
-            self.flux_h[k] = mass_flux(&c, l, r);
-            (self.share_left[k], self.share_right[k]) = (c.share_left, c.share_right);
-            (self.body_left[k], self.body_right[k]) = (c.body_left, c.body_right);
-            (self.exchange_left[k], self.exchange_right[k]) = (c.exchange_left, c.exchange_right);
-            let u_l = &self.east_u[k * n..(k + 1) * n];
-            let u_r = &self.west_u[(k + 1) * n..(k + 2) * n];
-            let seen = |u: f64, at_rest: bool| if at_rest { 0.0 } else { u };
-            let exchange = &mut self.exchange[k * n..(k + 1) * n];
-            if c.left_at_rest || c.right_at_rest {
-                exchange.fill(0.0);
-            } else {
-                let frac = Fractions {
-                    l: l_frac,
-                    inv: &self.inv_l,
-                    below: &self.l_below,
-                };
-                exchange_terms(frac, l.h, r.h, u_l, u_r, exchange);
-            }
-            for a in 0..n {
-                let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
-                fluxes[a] = layer_momentum_flux(&c, c.h_minus, c.h_plus, ul, ur);
-            }
-            if !self.layer_flux.is_empty() {
-                // As in [`Self::interfaces`], with the edge velocities.
-                let (ml, mr) = (l.u, r.u);
-                let h_f = l.h.min(r.h);
-                let out = &mut self.layer_flux[k * n..(k + 1) * n];
-                for a in 0..n {
-                    let (ul, ur) = (seen(u_l[a], c.left_at_rest), seen(u_r[a], c.right_at_rest));
-                    out[a] = 0.5 * h_f * ((ul - ml) + (ur - mr));
-                }
-            }
+            self.store_layer_face(k, found, l_frac, true);
         }
     }
 
