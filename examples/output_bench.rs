@@ -85,6 +85,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             p_nh: None,
             layers: nl,
             extra: &[],
+            layer_uv: None,
         })?;
         times.push(start.elapsed());
     }

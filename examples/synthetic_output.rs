@@ -121,6 +121,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 p_nh: nh.then_some(&p[..]),
                 layers: nl,
                 extra: &[],
+                layer_uv: None,
             })?;
         }
     }

@@ -358,6 +358,9 @@ class Checker:
         h = np.where(walls, 0.0, h)
         if (h < 0).any():
             self.fail(f"/snapshots/h has negative values (min {np.nanmin(h):.3g})")
+        nl = int(f.attrs.get("layers", 1))
+        if nl > 1:
+            self.raster_layers(nt, nl, ny, nx, h)
         # The volume: sum(h) dx dy of each snapshot against /diagnostics/mass.
         dx = float(f.attrs["dx"]) if nx > 1 else np.nan
         dy = float(f.attrs["dy"]) if ny > 1 else np.nan
@@ -382,6 +385,29 @@ class Checker:
         return (f"model {f.attrs['model']} on a {nx} x {ny} raster, nt={nt} snapshots, "
                 f"{len(td)} step records, mass checked at {checked} snapshot(s), "
                 f"status {status}")
+
+    def raster_layers(self, nt, nl, ny, nx, h):
+        """A layered raster run: the velocity of every layer, whose depth mean is
+        /snapshots/u, v (a convex combination: between the slowest and the fastest
+        layer), and the static interface, between the bed and the top."""
+        f = self.f
+        for name, shape in (("u_layers", (nt, nl, ny, nx)), ("v_layers", (nt, nl, ny, nx)),
+                            ("static_interface", (nt, ny, nx))):
+            if f"snapshots/{name}" not in f:
+                self.fail(f"dataset /snapshots/{name} is missing (layers = {nl})")
+            elif f[f"snapshots/{name}"].shape != shape:
+                self.fail(f"/snapshots/{name} has shape {f[f'snapshots/{name}'].shape}, "
+                          f"expected {shape}")
+        if self.problems:
+            raise Problems
+        for mean, layers in (("u", "u_layers"), ("v", "v_layers")):
+            a, q = f[f"snapshots/{mean}"][:], f[f"snapshots/{layers}"][:]
+            tol = 1e-12 * (1.0 + np.abs(q).max(initial=0.0))
+            if (a < q.min(axis=1) - tol).any() or (a > q.max(axis=1) + tol).any():
+                self.fail(f"/snapshots/{mean} is not a mean of /snapshots/{layers}")
+        si = f["snapshots/static_interface"][:]
+        if (si < 0).any() or (si > h * (1 + 1e-12)).any():
+            self.fail("/snapshots/static_interface is not between the bed and the top")
 
     def maps(self, nx, ny, h):
         """/maps of a finished raster run."""
@@ -411,7 +437,8 @@ class Checker:
             # cos θ = 1/√(1 + |∇b|²) from centred differences of the cell-centre bed
             # (one-sided at the edges), as the solver forms it. Beside a wall (NaN bed)
             # the gradient is unknown here and the cell is skipped.
-            peak = h.max(axis=0)
+            # Over an erodible bed the maps count the flow above it, h − h_bed.
+            peak = (h - f["grid/h_bed"][:][~walls]).max(axis=0)
             frame = f.attrs.get("coordinates", "")
             frame = frame.decode() if isinstance(frame, bytes) else str(frame)
             if frame == "bed_normal" and nx > 1 and ny > 1:

@@ -29,6 +29,7 @@ mod hostile_outputs;
 mod line_bed_normal;
 mod multilayer;
 mod multilayer_2d;
+mod multilayer_2d_scenario;
 mod newcomer;
 mod nh_multilayer;
 mod nonhydrostatic;

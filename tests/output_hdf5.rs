@@ -138,6 +138,7 @@ impl Synth {
             p_nh: nh.then_some(&p[..]),
             layers: self.nl,
             extra: &[],
+            layer_uv: None,
         })
         .unwrap();
     }
@@ -492,6 +493,7 @@ fn bad_calls_are_errors() {
         p_nh: None,
         layers: FULL.nl,
         extra: &[],
+        layer_uv: None,
     };
     let err = sink.snapshot(&view).unwrap_err().to_string();
     assert!(err.contains("u has 7 values, expected 14"), "{err}");
@@ -520,6 +522,7 @@ fn optional_fields_cannot_change_between_snapshots() {
         p_nh: None,
         layers: FULL.nl,
         extra: &[],
+        layer_uv: None,
     };
     sink.snapshot(&view).unwrap();
     view.w = Some(&w);
@@ -772,6 +775,7 @@ fn the_checker_refuses_non_finite_diagnostics_and_snapshots() {
                 p_nh: None,
                 layers: 1,
                 extra: &[],
+                layer_uv: None,
                 shape: None,
             })
             .unwrap();

@@ -494,6 +494,7 @@ impl Model for Granular2d {
             p_nh: None,
             layers: 1,
             extra: &[],
+            layer_uv: None,
         })
     }
 }

@@ -22,6 +22,7 @@
 pub mod dilatant;
 pub mod granular;
 pub mod granular_2d;
+pub mod layers_2d;
 pub mod raster_maps;
 pub mod submarine;
 pub mod tracker;

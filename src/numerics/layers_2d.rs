@@ -721,10 +721,20 @@ impl<L: BasalFriction> Stage<Raster2d, LayeredRaster> for LayersStep2d<L> {
 /// (the outer wave speeds of a sheared column, as the faces bound them); the step
 /// Δt = CFL min(Δx, Δy)/s keeps the unsplit update within its faces' waves.
 pub fn signal_speed(raster: &Raster2d, state: &LayeredRaster) -> f64 {
+    signal_speed_of(raster, state, 0..state.cells())
+}
+
+/// [`signal_speed`] over the cells `cells` alone (a band of a parallel pass).
+pub fn signal_speed_of(
+    raster: &Raster2d,
+    state: &LayeredRaster,
+    cells: std::ops::Range<usize>,
+) -> f64 {
     let n = state.layers;
     let mut view = vec![0.0; 10 + 2 * n];
     let mut fastest = 0.0f64;
-    for (cell, &h) in state.h.iter().enumerate() {
+    for cell in cells {
+        let h = state.h[cell];
         if h <= H_DRY {
             continue;
         }

@@ -128,7 +128,9 @@ struct Shape {
 const MAX_PENDING_STEPS: usize = 8192;
 
 /// Names of `/snapshots` datasets that a per-cell field may not take.
-const FIXED_SNAPSHOT_NAMES: [&str; 8] = ["t", "h", "u", "v", "w", "p_nh", "x", "y"];
+const FIXED_SNAPSHOT_NAMES: [&str; 10] = [
+    "t", "h", "u", "v", "w", "p_nh", "x", "y", "u_layers", "v_layers",
+];
 
 impl Shape {
     /// Checks the lengths of a snapshot's arrays.
@@ -140,7 +142,9 @@ impl Shape {
         };
         expect("layer count", Some(snap.layers), nl)?;
         expect("h", Some(snap.h.len()), nx)?;
-        expect("u", Some(snap.u.len()), nl * nx)?;
+        // A raster's `u` is one value per cell (a layered raster's depth mean).
+        let u_values = if self.raster.is_some() { nx } else { nl * nx };
+        expect("u", Some(snap.u.len()), u_values)?;
         match (self.raster, snap.v) {
             (Some(_), None) => return Err("a raster snapshot without v".into()),
             (None, Some(_)) => return Err("v in a snapshot that is not on a raster".into()),
@@ -151,6 +155,16 @@ impl Shape {
                 return Err(format!(
                     "snapshot of shape (ny, nx) = ({ny}, {nx}) on a {rx} × {ry} raster"
                 ));
+            }
+        }
+        match (self.raster.is_some() && nl > 1, snap.layer_uv) {
+            (true, None) => return Err("a layered raster snapshot without layer velocities".into()),
+            (false, Some(_)) => {
+                return Err("layer velocities in a snapshot that is not of a layered raster".into())
+            }
+            (_, uv) => {
+                expect("u_layers", uv.map(|uv| uv.0.len()), nl * nx)?;
+                expect("v_layers", uv.map(|uv| uv.1.len()), nl * nx)?;
             }
         }
         expect("w", snap.w.map(<[f64]>::len), nl * nx)?;
@@ -478,6 +492,7 @@ impl OutputSink for Hdf5Sink {
             + snap.v.map_or(0, <[f64]>::len)
             + snap.w.map_or(0, <[f64]>::len)
             + snap.p_nh.map_or(0, <[f64]>::len)
+            + snap.layer_uv.map_or(0, |uv| uv.0.len() + uv.1.len())
             + snap.extra.iter().map(|f| f.data.len()).sum::<usize>();
         self.claim(self.batch_bytes(values, true))?;
         // Fixed only once the batch may go ahead: a refused snapshot leaves no trace.
@@ -762,6 +777,7 @@ mod tests {
             p_nh: None,
             layers: 2,
             extra,
+            layer_uv: None,
         }
     }
 
@@ -923,6 +939,7 @@ mod tests {
                 p_nh: None,
                 layers: 1,
                 extra: &[],
+                layer_uv: None,
             })
             .unwrap();
         }

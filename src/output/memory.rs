@@ -17,6 +17,8 @@ pub struct Snapshot {
     pub p_nh: Option<Vec<f64>>,
     /// Model-specific per-cell fields (name, nx values).
     pub extra: Vec<(String, Vec<f64>)>,
+    /// The layer velocities (u_α, v_α) of a layered raster run, layer-major.
+    pub layer_uv: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 impl Snapshot {
@@ -69,6 +71,7 @@ impl OutputSink for MemorySink {
                 .iter()
                 .map(|f| (f.name.to_string(), f.data.to_vec()))
                 .collect(),
+            layer_uv: snap.layer_uv.map(|(u, v)| (u.to_vec(), v.to_vec())),
         });
         Ok(())
     }

@@ -160,6 +160,10 @@ pub struct SnapshotView<'a> {
     pub layers: usize,
     /// Model-specific per-cell fields; the same names in every snapshot of a run.
     pub extra: &'a [CellField<'a>],
+    /// The velocities (u_α, v_α) of every layer of a layered raster run (nl > 1),
+    /// layer-major (α·nx·ny + cell): `/snapshots/u_layers`, `v_layers`. `None`
+    /// elsewhere (a line's layers are in `u`).
+    pub layer_uv: Option<(&'a [f64], &'a [f64])>,
 }
 
 /// What a raster run gathers over the whole run, handed to the sink once before

@@ -348,7 +348,12 @@ impl Scenario {
         let nh = self.model.pressure == Pressure::NonHydrostatic;
         // h, u per layer, w per layer (non-hydrostatic), up to three model fields;
         // p_nh at the (nl + 1) interfaces of the nx + 1 faces.
-        let per_cell = 1 + nl + if nh { nl } else { 0 } + 3;
+        // A layered raster: h, ū, v̄, u_α, v_α and the static interface.
+        let per_cell = if self.domain.plane.is_some() && nl > 1 {
+            4 + 2 * nl
+        } else {
+            1 + nl + if nh { nl } else { 0 } + 3
+        };
         let p_nh = if nh { (nl + 1) * (nx + 1) } else { 0 };
         crate::output::budget::OutputEstimate::new(
             nx,

@@ -69,6 +69,9 @@ pub fn build(scn: &Scenario) -> Box<dyn Run> {
 /// one. The results do not depend on `threads`.
 pub fn build_threads(scn: &Scenario, threads: usize) -> Box<dyn Run> {
     match scn.model.kind {
+        ModelKind::Granular if scn.domain.plane.is_some() && scn.model.layers > 1 => {
+            Box::new(granular_2d::build_layers(scn, threads.max(1)))
+        }
         ModelKind::Granular if scn.domain.plane.is_some() => {
             Box::new(build_granular_2d(scn, threads.max(1)))
         }
@@ -99,6 +102,15 @@ pub fn build_granular_2d(
     threads: usize,
 ) -> Simulation<crate::model::granular_2d::Granular2d> {
     granular_2d::build(scn, threads)
+}
+
+/// The multilayer μ(I) model (`model.layers` > 1) on a raster domain, on `threads`
+/// threads.
+pub fn build_layers_2d(
+    scn: &Scenario,
+    threads: usize,
+) -> Simulation<crate::model::layers_2d::Layers2d> {
+    granular_2d::build_layers(scn, threads)
 }
 
 /// The line of a scenario, with its bed sampled at the cell centres.

@@ -144,6 +144,7 @@ impl Model for Dilatant {
             p_nh: None,
             layers: 1,
             extra: &extra,
+            layer_uv: None,
         })
     }
 }

@@ -115,6 +115,7 @@ impl Model for Granular {
             p_nh: nh.as_ref().map(|(_, p)| p.as_slice()),
             layers: n,
             extra: if n > 1 { &extra } else { &[] },
+            layer_uv: None,
         })
     }
 }

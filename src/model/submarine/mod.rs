@@ -203,6 +203,7 @@ impl Model for Submarine {
             p_nh: None,
             layers: 1,
             extra: &extra,
+            layer_uv: None,
         })
     }
 }

@@ -193,6 +193,23 @@ fn write_raster_layout(
     frames(&s, "h", &[ny, nx], "m", &[Dim::Y, Dim::X])?;
     frames(&s, "u", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
     frames(&s, "v", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
+    if info.layers > 1 {
+        // The layered model's velocity profiles: `u`, `v` above are the depth means.
+        let layers: Vec<f64> = (0..info.layers).map(|k| k as f64).collect();
+        let layer = s
+            .new_dataset::<f64>()
+            .shape([info.layers])
+            .create("layer")?;
+        layer.write_raw(&layers)?;
+        units(&layer, "1")?;
+        dimension_scale(&layer, Dim::Layer)?;
+        let axes = [Dim::Layer, Dim::Y, Dim::X];
+        for (name, along) in [("u_layers", "x"), ("v_layers", "y")] {
+            let ds = frames(&s, name, &[info.layers, ny, nx], "m/s", &axes)?;
+            let text = format!("velocity along {along} of each layer, bottom layer first");
+            description(&ds, &text)?;
+        }
+    }
     step_groups(file, info, &RASTER_STEP_DATASETS)?;
     let summary = file.root_group().group("summary")?;
     summary.set_attr_numeric("wall_cells", &(r.wall_cells as i64))?;
@@ -408,6 +425,8 @@ pub(super) fn append_snapshot(file: &H5File, snap: &SnapshotView) -> rust_hdf5::
         ("snapshots/v", snap.v),
         ("snapshots/w", snap.w),
         ("snapshots/p_nh", snap.p_nh),
+        ("snapshots/u_layers", snap.layer_uv.map(|uv| uv.0)),
+        ("snapshots/v_layers", snap.layer_uv.map(|uv| uv.1)),
     ];
     for (name, data) in fields {
         if let Some(data) = data {
@@ -591,10 +610,13 @@ pub(super) const RASTER_CHUNK_VALUES: usize = 1 << 17;
 pub(super) const RASTER_DEFLATE_LEVEL: u32 = 1;
 
 /// The chunk of a field of frames `frame`: (1, frame…) on a line; on a raster
-/// (`frame` = [ny, nx]) a band of rows of about [`RASTER_CHUNK_VALUES`] values.
+/// (`frame` = [ny, nx], or [nl, ny, nx] per layer) a band of rows of one layer of
+/// about [`RASTER_CHUNK_VALUES`] values.
 pub(super) fn frame_chunk(frame: &[usize], raster: bool) -> Vec<usize> {
+    let rows = |ny: usize, nx: usize| (RASTER_CHUNK_VALUES / nx.max(1)).clamp(1, ny.max(1));
     match *frame {
-        [ny, nx] if raster => vec![1, (RASTER_CHUNK_VALUES / nx.max(1)).clamp(1, ny.max(1)), nx],
+        [ny, nx] if raster => vec![1, rows(ny, nx), nx],
+        [_, ny, nx] if raster => vec![1, 1, rows(ny, nx), nx],
         _ => std::iter::once(1).chain(frame.iter().copied()).collect(),
     }
 }

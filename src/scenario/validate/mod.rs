@@ -368,6 +368,13 @@ fn validate(
         raw_output.static_threshold,
         model.layers,
     )?;
+    plane::layered_raster_fits(
+        &domain,
+        &model,
+        &multilayer,
+        friction_zones.is_some(),
+        &sampled,
+    )?;
     if domain.plane.is_some() {
         plane::check_profiles(&domain, &sampled, &bed, &initial)?;
     } else {

@@ -221,17 +221,20 @@ pub(super) fn raster_keys(
         }
         return Ok(());
     }
-    let why = "is not available on a raster domain (the 2-D model is the hydrostatic Savage–Hutter monolayer)";
+    let why = "is not available on a raster domain (the 2-D models are the hydrostatic Savage–Hutter monolayer and the hydrostatic multilayer μ(I) model)";
     if model.kind != ModelKind::Granular {
         return err(
             "model.kind",
             format!("\"{}\" {why}; use \"granular\"", model.kind.name()),
         );
     }
-    if model.layers != 1 {
+    if model.layers > 1 && domain.coordinates == Coordinates::BedNormal {
         return err(
-            "model.layers",
-            format!("{} layers {why}; use 1", model.layers),
+            "domain.coordinates",
+            format!(
+                "\"bed_normal\" (the default on a raster) is the frame of the monolayer; the multilayer model (model.layers = {}) is written in the local and Cartesian frames: use domain.coordinates = \"local\" or \"cartesian\", or model.layers = 1",
+                model.layers
+            ),
         );
     }
     if model.pressure != Pressure::Hydrostatic {
@@ -248,6 +251,83 @@ pub(super) fn raster_keys(
         if given {
             return err(key, why);
         }
+    }
+    Ok(())
+}
+
+/// The multilayer model on a raster (`model.layers` > 1) takes the line's keys but
+/// not those its raster stages do not implement: wall cells (nodata in the bed), the
+/// sidewall friction and the C-MSM correction of a channel, the implicit viscosity,
+/// friction zones; and its state must fit in memory. Each is refused by its key.
+pub(super) fn layered_raster_fits(
+    domain: &Domain,
+    model: &ModelSpec,
+    multilayer: &crate::model::granular::config::MultilayerSpec,
+    zoned: bool,
+    sampled: &Sampled,
+) -> Res<()> {
+    let n = model.layers;
+    if domain.plane.is_none() || n == 1 {
+        return Ok(());
+    }
+    let not_yet = |what: &str| {
+        format!("{what} is not available for the multilayer model on a raster (model.layers = {n})")
+    };
+    let cells = domain.cell_count();
+    if cells.saturating_mul(n) > MAX_CELLS as usize {
+        return err(
+            "model.layers",
+            format!(
+                "{n} layers × {cells} cells = {} unknowns per field is more than {MAX_CELLS} (the state would not fit in memory); use fewer layers or a coarser raster",
+                cells.saturating_mul(n)
+            ),
+        );
+    }
+    let walls = sampled.wall.iter().filter(|&&w| w).count();
+    if walls > 0 {
+        return err(
+            "bed.b",
+            format!(
+                "{}: the bed has {walls} cells without data (wall cells); fill them, crop the domain to the data, or use model.layers = 1",
+                not_yet("a bed with nodata cells")
+            ),
+        );
+    }
+    if zoned {
+        return err(
+            "rheology.mu",
+            format!(
+                "{}; give one number, or use model.layers = 1",
+                not_yet("a friction field (zones)")
+            ),
+        );
+    }
+    if multilayer.sidewall.is_some() {
+        return err(
+            "rheology.channel_width",
+            format!(
+                "{}; remove rheology.mu_w and rheology.channel_width",
+                not_yet("sidewall friction (a channel's walls)")
+            ),
+        );
+    }
+    if multilayer.c_msm {
+        return err(
+            "rheology.c_msm",
+            format!("{}; remove it", not_yet("the C-MSM correction")),
+        );
+    }
+    if matches!(
+        multilayer.viscosity,
+        crate::numerics::viscous::ViscosityTime::Implicit { .. }
+    ) {
+        return err(
+            "rheology.viscosity",
+            format!(
+                "{}; use \"lagged\" (the default) or \"frozen\"",
+                not_yet("\"implicit\"")
+            ),
+        );
     }
     Ok(())
 }
