@@ -77,6 +77,7 @@ pub const BUNDLED: &[Bundled] = &[
     bundled!("nh_multilayer_collapse"),
     bundled!("nh_multilayer_convergence"),
     bundled!("radial_collapse"),
+    bundled!("radial_collapse_layers"),
     bundled!("sidewall_channel"),
     bundled!("submarine_landslide"),
     bundled!("transient_channel"),

@@ -251,3 +251,136 @@ fn a_layered_raster_refuses_nodata_beds_and_friction_fields() {
     }
     load_in(&scenario("flat.asc", "mu = 0.4", 3), dir.path()).expect("a full bed and one μ");
 }
+
+/// The radial collapse of `scenarios/radial_collapse_layers.toml` on n × n cells with
+/// `layers` layers, on one thread: the final state's runout along +x and, at
+/// t = 0.3 s, the profile at the front (see [`front_profile`]); and the CPU time.
+struct RadialRun {
+    runout: f64,
+    profile: FrontProfile,
+    seconds: f64,
+}
+
+/// The column at the front at t = 0.3 s: the outermost cell on the +x axis whose
+/// thickness exceeds 5 mm; its x, h, and the velocity along x of each layer.
+#[derive(Debug)]
+struct FrontProfile {
+    x: f64,
+    h: f64,
+    u: Vec<f64>,
+}
+
+/// Thickness along the +x axis: the mean of the two rows beside y = 0 (n even).
+fn axis_profile(h: &[f64], n: usize) -> Vec<f64> {
+    let (a, b) = (n / 2 - 1, n / 2);
+    (0..n)
+        .map(|i| 0.5 * (h[a * n + i] + h[b * n + i]))
+        .collect()
+}
+
+/// Where the axis profile last exceeds `threshold`, linearly between cell centres.
+fn front_along_x(p: &[f64], x: impl Fn(usize) -> f64, threshold: f64) -> f64 {
+    let n = p.len();
+    let i = (n / 2..n)
+        .rev()
+        .find(|&i| p[i] > threshold)
+        .expect("a wet axis");
+    if i + 1 == n {
+        return x(i);
+    }
+    let s = (p[i] - threshold) / (p[i] - p[i + 1]);
+    x(i) + s * (x(i + 1) - x(i))
+}
+
+fn radial_run(n: usize, layers: usize) -> RadialRun {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/radial_collapse_layers.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let sets = [
+        format!("domain.cells=[{n},{n}]"),
+        format!("model.layers={layers}"),
+    ];
+    let scn = granflow::scenario::load_str(&text, path.parent().unwrap(), &sets).unwrap();
+    let mut run = granflow::setup::build_threads(&scn, 1);
+    let mut sink = MemorySink::default();
+    let start = std::time::Instant::now();
+    run.run(&mut sink, &mut |_| {}).expect("the collapse runs");
+    let seconds = start.elapsed().as_secs_f64();
+    let dx = 3.0 / n as f64;
+    let x = |i: usize| -1.5 + (i as f64 + 0.5) * dx;
+    let last = sink.snapshots.last().unwrap();
+    let runout = front_along_x(&axis_profile(&last.h, n), x, 1e-3);
+    let at = sink
+        .snapshots
+        .iter()
+        .find(|s| (s.t - 0.3).abs() < 1e-9)
+        .expect("a snapshot at 0.3 s");
+    let p = axis_profile(&at.h, n);
+    let i = (n / 2..n).rev().find(|&i| p[i] > 5e-3).unwrap();
+    let cells = n * n;
+    let (a, b) = ((n / 2 - 1) * n + i, (n / 2) * n + i);
+    let u = match &at.layer_uv {
+        Some((u, _)) => (0..layers)
+            .map(|l| 0.5 * (u[l * cells + a] + u[l * cells + b]))
+            .collect(),
+        None => vec![0.5 * (at.u[a] + at.u[b])],
+    };
+    RadialRun {
+        runout,
+        profile: FrontProfile {
+            x: x(i),
+            h: p[i],
+            u,
+        },
+        seconds,
+    }
+}
+
+/// The radial collapse with 10 layers against one (the depth-averaged model), on
+/// 40², 80² and 160² cells: the velocity profile u(z) at the front at t = 0.3 s and
+/// the runouts along +x of the deposits. The difference of the runouts converges with
+/// Δx (its changes shrink), and the ten layers carry a sheared profile at the front,
+/// slowest at the bed. Prints the table of docs/validation.md ("radial-layers").
+#[test]
+#[ignore = "slow: refinement study"]
+fn radial_collapse_with_ten_layers_against_one_converges_with_dx() {
+    let mut differences = Vec::new();
+    println!(
+        "| cells | runout, N = 1 (m) | runout, N = 10 (m) | difference (m) | wall s, N = 1 / 10 |"
+    );
+    println!("|---|---|---|---|---|");
+    let mut profiles = Vec::new();
+    for n in [40, 80, 160] {
+        let (one, ten) = (radial_run(n, 1), radial_run(n, 10));
+        let d = ten.runout - one.runout;
+        println!(
+            "| {n}² | {:.4} | {:.4} | {d:+.4} | {:.2} / {:.2} |",
+            one.runout, ten.runout, one.seconds, ten.seconds
+        );
+        differences.push(d);
+        profiles.push((n, one.profile, ten.profile));
+    }
+    for (n, one, ten) in &profiles {
+        println!(
+            "{n}²: N = 1 at x = {:.4} m, h = {:.4} m: u = {:.4} m/s",
+            one.x, one.h, one.u[0]
+        );
+        let u: Vec<String> = ten.u.iter().map(|u| format!("{u:.4}")).collect();
+        println!(
+            "{n}²: N = 10 at x = {:.4} m, h = {:.4} m: u_α = [{}] m/s (bed first)",
+            ten.x,
+            ten.h,
+            u.join(", ")
+        );
+        let u = &ten.u;
+        assert!(
+            u[9] > u[0] + 0.05 && u.windows(2).all(|w| w[1] >= w[0] - 1e-3),
+            "{u:?}"
+        );
+    }
+    let changes = [
+        (differences[1] - differences[0]).abs(),
+        (differences[2] - differences[1]).abs(),
+    ];
+    println!("changes of the difference: {changes:?}");
+    assert!(changes[1] < changes[0], "{differences:?}");
+}

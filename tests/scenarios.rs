@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use granflow::model::{Diagnostics, Model};
 use granflow::output::memory::MemorySink;
 use granflow::scenario::load_file;
-use granflow::setup::{build_granular, build_granular_2d};
+use granflow::setup::{build_granular, build_granular_2d, build_layers_2d};
 use granflow::simulation::Simulation;
 
 fn scenario_files() -> Vec<PathBuf> {
@@ -35,7 +35,9 @@ fn every_scenario_loads_and_runs_a_few_steps() {
     assert!(files.len() >= 5, "{files:?}");
     for path in files {
         let scn = load_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let (m0, d) = if scn.domain.plane.is_some() {
+        let (m0, d) = if scn.domain.plane.is_some() && scn.model.layers > 1 {
+            few_steps(&mut build_layers_2d(&scn, 1), scn.output.every)
+        } else if scn.domain.plane.is_some() {
             few_steps(&mut build_granular_2d(&scn, 1), scn.output.every)
         } else {
             few_steps(&mut build_granular(&scn), scn.output.every)

@@ -122,11 +122,12 @@ fn raster_keys_are_refused_with_their_key_and_line() {
     );
     assert!(m.contains("depends on y"), "{m}");
     fails_at(&line.replace("h = 0.1", "h = 0.1\nv = 1.0"), d, "initial.v");
-    // The 1-D models' keys on a raster.
+    // The 1-D models' keys on a raster (the multilayer model runs there: its keys
+    // are checked in multilayer_2d_scenario).
     fails_at(
-        &format!("{RADIAL}\n[model]\nlayers = 2\n"),
+        &format!("{RADIAL}\n[model]\npressure = \"nonhydrostatic\"\n"),
         d,
-        "model.layers",
+        "model.pressure",
     );
     fails_at(&with("h = \"", "w = 0.1\nh = \""), d, "initial.w");
     // Gauges are points inside the domain.

@@ -96,11 +96,16 @@ pub fn build_granular(scn: &Scenario) -> Simulation<Granular> {
     granular::build(scn)
 }
 
-/// The run of a granular scenario on a raster domain (2-D), on `threads` threads.
+/// The run of a granular scenario on a raster domain (2-D) with one layer, on
+/// `threads` threads ([`build_layers_2d`] for more layers).
 pub fn build_granular_2d(
     scn: &Scenario,
     threads: usize,
 ) -> Simulation<crate::model::granular_2d::Granular2d> {
+    assert_eq!(
+        scn.model.layers, 1,
+        "a multilayer raster scenario is built by build_layers_2d"
+    );
     granular_2d::build(scn, threads)
 }
 
