@@ -51,6 +51,8 @@ CHECKS = {
         "terrain_2d_reference", "coulomb_mass_on_a_curved_thalweg_stops_on_its_energy_line"),
     "centrifugal": cargo_test(
         "terrain_2d_reference", "centrifugal_term_on_the_curved_thalweg_steepens_the_travel_angle"),
+    "radial_layers": cargo_test(
+        "multilayer_2d_scenario", "radial_collapse_with_ten_layers_against_one_converges_with_dx"),
     "rotation": cargo_test(
         "terrain_2d", "rotated_releases_agree_within_a_tolerance_that_shrinks_with_the_cell_size"),
     "stoker": cargo_test("analytic", "stoker_wet_dam_break_converges"),

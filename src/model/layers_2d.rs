@@ -31,7 +31,6 @@ use crate::model::raster_maps::RasterMaps;
 use crate::model::tracker::Tracker;
 use crate::model::{first_maximum, Diagnostics, Model};
 use crate::numerics::layers_2d::{signal_speed_of, LayersStep2d};
-use crate::numerics::viscous::ViscousOptions;
 use crate::numerics::viscous_2d::ViscousColumns2d;
 use crate::numerics::workers::Workers;
 use crate::numerics::Stage;
@@ -84,8 +83,11 @@ impl Layers2d {
         }
     }
 
-    /// The model over the erodible bed `h_bed` (one per cell, row-major).
+    /// The model over the erodible bed `h_bed` (one per cell, row-major; empty: none).
     pub fn with_erodible_bed(mut self, h_bed: Vec<f64>) -> Layers2d {
+        if h_bed.is_empty() {
+            return self;
+        }
         assert_eq!(h_bed.len(), self.h_bed.len(), "one erodible bed per cell");
         self.h_bed = h_bed;
         self
@@ -303,13 +305,7 @@ impl WithLaw for Stages<'_> {
 
     fn with<L: BasalFriction + LocalFriction + 'static>(self, law: L) -> Self::Out {
         let (spec, l) = (self.spec, &self.spec.layer_fractions);
-        let opts = ViscousOptions {
-            basal: spec.basal,
-            regularization: spec.regularization,
-            sidewall: spec.sidewall,
-            c_msm: spec.c_msm,
-            viscosity: spec.viscosity,
-        };
+        let opts = spec.viscous_options();
         vec![
             Box::new(LayersStep2d::new(law, self.raster, l, self.workers.clone())),
             Box::new(ViscousColumns2d::new(

@@ -165,12 +165,8 @@ pub fn build_layers(scn: &Scenario, threads: usize) -> Simulation<Layers2d> {
         scn.multilayer.static_threshold,
     )
     .with_workers(workers.clone())
-    .with_film_thickness(scn.time.film_thickness);
-    let model = if scn.initial.has_erodible_bed() {
-        model.with_erodible_bed(erodible.clone())
-    } else {
-        model
-    };
+    .with_film_thickness(scn.time.film_thickness)
+    .with_erodible_bed(erodible.clone());
     let stages = layers_2d::pipeline(
         &scn.friction,
         &scn.material,

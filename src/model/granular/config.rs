@@ -1,7 +1,9 @@
 //! The granular model's own options, as validated from the scenario (`scenario/`
 //! fills them; the model never reads the TOML).
 
-use crate::numerics::viscous::{BasalCondition, Regularization, Sidewall, ViscosityTime};
+use crate::numerics::viscous::{
+    BasalCondition, Regularization, Sidewall, ViscosityTime, ViscousOptions,
+};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pressure {
@@ -24,4 +26,17 @@ pub struct MultilayerSpec {
     pub viscosity: ViscosityTime,
     /// Speed (m/s) above which a layer flows, for `/snapshots/static_interface`.
     pub static_threshold: f64,
+}
+
+impl MultilayerSpec {
+    /// The options of the μ(I) viscous step (line and raster).
+    pub fn viscous_options(&self) -> ViscousOptions {
+        ViscousOptions {
+            basal: self.basal,
+            regularization: self.regularization,
+            sidewall: self.sidewall,
+            c_msm: self.c_msm,
+            viscosity: self.viscosity,
+        }
+    }
 }

@@ -19,7 +19,7 @@ use crate::numerics::projection::monolayer::MonolayerOperator;
 use crate::numerics::projection::multilayer::SharedOperator;
 use crate::numerics::projection::{ProjectionStage, ThomasSolver};
 use crate::numerics::ssp_rk2::{HeunLayers, HeunSplitting};
-use crate::numerics::viscous::{MultilayerViscousStep, ViscosityTime, ViscousOptions};
+use crate::numerics::viscous::{MultilayerViscousStep, ViscosityTime};
 use crate::numerics::Stage;
 use crate::physics::rheology::{BasalFriction, Coulomb, FrictionLaw, LocalFriction, MuI, Voellmy};
 use crate::physics::Material;
@@ -93,26 +93,14 @@ impl WithLaw for Stages<'_> {
             if l.len() == 1 {
                 return vec![Box::new(HeunSplitting::new(law, nx, limiter))];
             }
-            let opts = ViscousOptions {
-                basal: spec.basal,
-                regularization: spec.regularization,
-                sidewall: spec.sidewall,
-                c_msm: spec.c_msm,
-                viscosity: spec.viscosity,
-            };
+            let opts = spec.viscous_options();
             return vec![Box::new(HeunLayers::new(law, nx, l, opts, limiter))];
         }
         let mut stages: Self::Out = vec![Box::new(HydrostaticStep::with_layers(law, nx, l.len()))];
         match (self.pressure, l.len()) {
             (Pressure::Hydrostatic, 1) => stages.push(Box::new(CoulombFrictionStep::new(law))),
             (Pressure::Hydrostatic, _) => {
-                let opts = ViscousOptions {
-                    basal: spec.basal,
-                    regularization: spec.regularization,
-                    sidewall: spec.sidewall,
-                    c_msm: spec.c_msm,
-                    viscosity: spec.viscosity,
-                };
+                let opts = spec.viscous_options();
                 stages.push(Box::new(MultilayerViscousStep::new(law, nx, l, opts)));
             }
             (Pressure::NonHydrostatic, _) => stages.extend(non_hydrostatic_rest(law, mesh, spec)),
@@ -142,13 +130,7 @@ fn non_hydrostatic_rest<L: BasalFriction + LocalFriction + 'static>(
     }
     // Escalante et al. 2023, §4: explicit p^n and the μ(I) viscous step with the total
     // pressures, then the exact N-layer projection.
-    let opts = ViscousOptions {
-        basal: spec.basal,
-        regularization: spec.regularization,
-        sidewall: spec.sidewall,
-        c_msm: spec.c_msm,
-        viscosity: spec.viscosity,
-    };
+    let opts = spec.viscous_options();
     let viscous = MultilayerViscousStep::new(law, nx, l, opts);
     // One operator for the explicit pⁿ terms and the projection.
     let operator = SharedOperator::new(mesh, l);

@@ -47,8 +47,6 @@ pub mod multilayer;
 
 use super::linalg::{thomas_rows, PressureRows, ScalarRow};
 use super::{Stage, StageError};
-use crate::grid::Line;
-use crate::state::layered::LayeredState;
 
 /// Solves the (block-)tridiagonal pressure system of one projection, given row by row.
 pub trait PressureSolver: Send + std::fmt::Debug {
@@ -74,22 +72,31 @@ impl PressureSolver for ThomasSolver {
     }
 }
 
-/// The discrete constraint and correction of one non-hydrostatic model.
-pub trait ProjectionOperator: Send + std::fmt::Debug {
+/// The shape of a projection's system, whatever its grid: the row type its
+/// [`PressureSolver`] must solve and the unknowns per site.
+pub trait PressureBlocks {
     /// Row type of its system (what its [`PressureSolver`] must solve).
     type Row;
 
     /// Unknowns per face (the number of layers whose base pressure is unknown).
     fn block(&self) -> usize;
+}
 
-    /// Forms the system A Π = −𝒞(U) for the impulses Π = Δt p̃ at the nx + 1 faces
+/// The discrete constraint and correction of one non-hydrostatic model on grid `G`
+/// with state `S`. The line's operators (`monolayer`, `multilayer`) give scalar and
+/// block-tridiagonal rows; an operator on a raster implements this trait for
+/// `Raster2d` with rows of its 2-D stencil (five blocks per face), and a solver for
+/// them (multigrid or a sparse Cholesky) implements [`PressureSolver`] for that row
+/// type: [`ProjectionStage`] runs either unchanged.
+pub trait ProjectionOperator<G, S>: PressureBlocks + Send + std::fmt::Debug {
+    /// Forms the system A Π = −𝒞(U) for the impulses Π = Δt p̃ at the faces
     /// from the state after friction, and solves it with `solver` into `pi`. Rows that
     /// carry no constraint (dry faces, outflow boundaries) are conditions on Π instead.
-    fn solve<S: PressureSolver<Row = Self::Row>>(
+    fn solve<P: PressureSolver<Row = Self::Row>>(
         &mut self,
-        mesh: &Line,
-        state: &LayeredState,
-        solver: &mut S,
+        grid: &G,
+        state: &S,
+        solver: &mut P,
         pi: &mut [f64],
     );
 
@@ -98,7 +105,7 @@ pub trait ProjectionOperator: Send + std::fmt::Debug {
     /// pressure, p ← p + Π/Δt_p, resetting it to 0 on faces without a constraint.
     /// `dt_p` is the step of the rate ([`ProjectionStage`]: the step taken, or the full
     /// step when the step taken was shortened to land on an output time).
-    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt_p: f64);
+    fn correct(&mut self, grid: &G, state: &mut S, pi: &[f64], dt_p: f64);
 }
 
 /// The full step of the current step attempt ([`Stage::full_step`]) for a stage that
@@ -129,15 +136,16 @@ impl FullStep {
 
 /// The "projection" stage: form and solve the pressure system, correct.
 #[derive(Debug)]
-pub struct ProjectionStage<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> {
+pub struct ProjectionStage<O: PressureBlocks, P: PressureSolver<Row = O::Row>> {
     operator: O,
-    solver: S,
+    solver: P,
     pi: Vec<f64>,
     dt_full: FullStep,
 }
 
-impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> ProjectionStage<O, S> {
-    pub fn new(operator: O, solver: S, nx: usize) -> Self {
+impl<O: PressureBlocks, P: PressureSolver<Row = O::Row>> ProjectionStage<O, P> {
+    /// The stage on a line of `nx` cells (unknowns at its nx + 1 faces).
+    pub fn new(operator: O, solver: P, nx: usize) -> Self {
         let m = operator.block();
         ProjectionStage {
             operator,
@@ -153,8 +161,10 @@ impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> ProjectionStage<O, 
     }
 }
 
-impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> Stage<Line, LayeredState>
-    for ProjectionStage<O, S>
+impl<G, S, O, P> Stage<G, S> for ProjectionStage<O, P>
+where
+    O: ProjectionOperator<G, S>,
+    P: PressureSolver<Row = O::Row>,
 {
     fn name(&self) -> &'static str {
         "projection"
@@ -164,11 +174,11 @@ impl<O: ProjectionOperator, S: PressureSolver<Row = O::Row>> Stage<Line, Layered
         self.dt_full.set(dt_full);
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(&mut self, grid: &G, dt: f64, state: &mut S) -> Result<(), StageError> {
         self.operator
-            .solve(mesh, state, &mut self.solver, &mut self.pi);
+            .solve(grid, state, &mut self.solver, &mut self.pi);
         let dt_p = self.dt_full.pressure_step(dt);
-        self.operator.correct(mesh, state, &self.pi, dt_p);
+        self.operator.correct(grid, state, &self.pi, dt_p);
         Ok(())
     }
 }

@@ -55,7 +55,7 @@
 
 use std::ops::Range;
 
-use super::{PressureSolver, ProjectionOperator};
+use super::{PressureBlocks, PressureSolver, ProjectionOperator};
 use crate::grid::Line;
 use crate::numerics::linalg::{PressureRows, ScalarRow};
 
@@ -253,13 +253,15 @@ impl PressureRows for MonolayerRows<'_> {
     }
 }
 
-impl ProjectionOperator for MonolayerOperator {
+impl PressureBlocks for MonolayerOperator {
     type Row = ScalarRow;
 
     fn block(&self) -> usize {
         1
     }
+}
 
+impl ProjectionOperator<Line, LayeredState> for MonolayerOperator {
     fn solve<S: PressureSolver<Row = ScalarRow>>(
         &mut self,
         mesh: &Line,

@@ -71,7 +71,7 @@ use std::ops::Range;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::monolayer::{doubled_bed, face_depth, wet_threshold, ConstraintResidual};
-use super::{PressureSolver, ProjectionOperator};
+use super::{PressureBlocks, PressureSolver, ProjectionOperator};
 use crate::grid::BoundaryKind;
 use crate::grid::Line;
 use crate::numerics::banded::{BandedCholesky, StencilRow};
@@ -918,13 +918,15 @@ impl MultilayerRows<'_> {
     }
 }
 
-impl ProjectionOperator for MultilayerOperator {
+impl PressureBlocks for MultilayerOperator {
     type Row = StencilRow;
 
     fn block(&self) -> usize {
         self.layers
     }
+}
 
+impl ProjectionOperator<Line, LayeredState> for MultilayerOperator {
     fn solve<S: PressureSolver<Row = StencilRow>>(
         &mut self,
         mesh: &Line,
@@ -979,13 +981,15 @@ impl SharedOperator {
     }
 }
 
-impl ProjectionOperator for SharedOperator {
+impl PressureBlocks for SharedOperator {
     type Row = StencilRow;
 
     fn block(&self) -> usize {
         self.lock().layers
     }
+}
 
+impl ProjectionOperator<Line, LayeredState> for SharedOperator {
     fn solve<S: PressureSolver<Row = StencilRow>>(
         &mut self,
         mesh: &Line,

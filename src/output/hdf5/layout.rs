@@ -59,14 +59,7 @@ pub(super) fn write_layout(
     x.write_raw(grid.x)?;
     units(&x, "m")?;
     dimension_scale(&x, Dim::X)?;
-    let layers: Vec<f64> = (0..info.layers).map(|k| k as f64).collect();
-    let layer = s
-        .new_dataset::<f64>()
-        .shape([info.layers])
-        .create("layer")?;
-    layer.write_raw(&layers)?;
-    units(&layer, "1")?;
-    dimension_scale(&layer, Dim::Layer)?;
+    layer_scale(&s, info.layers)?;
     if info.pressure == "nonhydrostatic" {
         // The axes of p_nh: the nl + 1 layer interfaces (0 the bed) and the nx + 1
         // cell faces.
@@ -195,14 +188,7 @@ fn write_raster_layout(
     frames(&s, "v", &[ny, nx], "m/s", &[Dim::Y, Dim::X])?;
     if info.layers > 1 {
         // The layered model's velocity profiles: `u`, `v` above are the depth means.
-        let layers: Vec<f64> = (0..info.layers).map(|k| k as f64).collect();
-        let layer = s
-            .new_dataset::<f64>()
-            .shape([info.layers])
-            .create("layer")?;
-        layer.write_raw(&layers)?;
-        units(&layer, "1")?;
-        dimension_scale(&layer, Dim::Layer)?;
+        layer_scale(&s, info.layers)?;
         let axes = [Dim::Layer, Dim::Y, Dim::X];
         for (name, along) in [("u_layers", "x"), ("v_layers", "y")] {
             let ds = frames(&s, name, &[info.layers, ny, nx], "m/s", &axes)?;
@@ -218,6 +204,16 @@ fn write_raster_layout(
         summary.set_attr_numeric("release_volume_on_walls", &release.volume_on_walls)?;
     }
     Ok(())
+}
+
+/// `/snapshots/layer`: the layer indices 0 … `layers` − 1, the dimension scale of the
+/// per-layer fields.
+fn layer_scale(s: &H5Group, layers: usize) -> rust_hdf5::Result<()> {
+    let index: Vec<f64> = (0..layers).map(|k| k as f64).collect();
+    let layer = s.new_dataset::<f64>().shape([layers]).create("layer")?;
+    layer.write_raw(&index)?;
+    units(&layer, "1")?;
+    dimension_scale(&layer, Dim::Layer)
 }
 
 /// Writes the maps of a raster run, `/maps/<name>` (ny, nx): created with their units
