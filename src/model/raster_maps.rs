@@ -48,6 +48,7 @@ use crate::grid::raster::Raster2d;
 use crate::grid::Grid;
 use crate::model::tracker::Tracker;
 use crate::numerics::workers::{Disjoint, Workers};
+use crate::output::maps::MAPS;
 use crate::output::{CellField, OutputError, OutputSink, RunMaps};
 use crate::state::layered_2d::State2d;
 
@@ -456,46 +457,31 @@ impl RasterMaps {
         ]
     }
 
-    /// The maps with their names, units and descriptions, in file order; `ppr` is
-    /// described with the density the run used.
+    /// The maps with their names, units and descriptions, in file order
+    /// ([`crate::output::maps::MAPS`]); `ppr` is described with the density the run
+    /// used.
     fn fields<'a>(values: &'a [Cow<'a, [f64]>; 5], ppr: &'a str) -> [CellField<'a>; 5] {
-        let names: [(&str, &str, &str); 5] = [
-            (
-                "h_max",
-                "m",
-                "peak flow thickness (pft): the largest flow thickness normal to the bed over the run",
-            ),
-            (
-                "speed_max",
-                "m/s",
-                "peak flow velocity (pfv): the largest flow speed along the bed surface over the run, where the thickness exceeds output.front_threshold",
-            ),
-            ("ppr", "Pa", ppr),
-            (
-                "arrival_time",
-                "s",
-                "arrival time: when the flow thickness first exceeded output.front_threshold (NaN where never reached)",
-            ),
-            (
-                "deposit",
-                "m",
-                "deposit: the flow thickness normal to the bed at the end of the run (at the snapshot's time while it runs)",
-            ),
-        ];
-        std::array::from_fn(|i| CellField {
-            name: names[i].0,
-            units: names[i].1,
-            description: names[i].2,
-            data: &values[i],
+        std::array::from_fn(|i| {
+            let map = &MAPS[i];
+            CellField {
+                name: map.dataset,
+                units: map.units,
+                description: if map.dataset == "ppr" {
+                    ppr
+                } else {
+                    map.description
+                },
+                data: &values[i],
+            }
         })
     }
 
-    /// The description of the `ppr` map, which names the density. Descriptions are
-    /// ASCII, as the units are: a GeoTIFF export copies them into an ASCII tag.
+    /// The description of the `ppr` map, which names the density (ASCII, as the
+    /// units are).
     fn ppr_description(&self) -> String {
         format!(
-            "peak pressure (ppr): the largest rho |u|^2 over the run, in Pa (1 kPa = 1000 Pa), with the flow density rho = {} kg/m^3 (material.phi x material.rho_s)",
-            self.density
+            "{}, with the flow density rho = {} kg/m^3 (material.phi x material.rho_s)",
+            MAPS[2].description, self.density
         )
     }
 }

@@ -9,6 +9,7 @@ pub mod budget;
 pub mod csv;
 pub mod gauges;
 pub mod hdf5;
+pub mod maps;
 pub mod memory;
 pub mod stop_reason;
 pub mod tee;

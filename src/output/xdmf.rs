@@ -20,7 +20,7 @@ use super::OutputError;
 pub const XDMF_HEAD: &str = "<?xml version=\"1.0\" ?>\n<!-- written by granflow -->\n";
 
 /// The datasets of `/maps` (written by raster runs at their end).
-pub const MAP_NAMES: [&str; 5] = ["h_max", "speed_max", "ppr", "arrival_time", "deposit"];
+pub const MAP_NAMES: [&str; 5] = super::maps::MAP_DATASETS;
 
 /// What the XDMF file describes.
 #[derive(Debug, Clone, Copy)]

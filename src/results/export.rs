@@ -20,6 +20,7 @@ use super::run_file::{north_up, RunFile};
 use super::{write_raster_band, ResultsError};
 use crate::gis::geotiff::Band;
 use crate::gis::netcdf::{FieldSpec, NetCdfWriter};
+use crate::output::maps::{MapKind, MAPS};
 use crate::sweep::naming::format_float;
 
 /// A field that can be exported: its name, where it comes from, units, long name.
@@ -33,39 +34,25 @@ pub struct Field {
     pub long_name: &'static str,
 }
 
-/// The maps, in their default order.
+/// The maps, in their default order (the peak fields first, then the deposit and the
+/// arrival time), as the table of `output::maps` names them.
 pub const MAP_FIELDS: [Field; 5] = [
-    Field {
-        name: "pft",
-        source: "h_max",
-        units: "m",
-        long_name: "peak flow thickness normal to the bed",
-    },
-    Field {
-        name: "pfv",
-        source: "speed_max",
-        units: "m/s",
-        long_name: "peak flow speed along the bed surface",
-    },
-    Field {
-        name: "ppr",
-        source: "ppr",
-        units: "Pa",
-        long_name: "peak pressure rho |u|^2",
-    },
-    Field {
-        name: "deposit",
-        source: "deposit",
-        units: "m",
-        long_name: "deposit thickness",
-    },
-    Field {
-        name: "arrival_time",
-        source: "arrival_time",
-        units: "s",
-        long_name: "arrival time of the flow",
-    },
+    map_field(&MAPS[0]),
+    map_field(&MAPS[1]),
+    map_field(&MAPS[2]),
+    map_field(&MAPS[4]),
+    map_field(&MAPS[3]),
 ];
+
+/// The export field of a map.
+const fn map_field(m: &MapKind) -> Field {
+    Field {
+        name: m.short,
+        source: m.dataset,
+        units: m.units,
+        long_name: m.long_name,
+    }
+}
 
 /// The snapshot fields.
 pub const SNAPSHOT_FIELDS: [Field; 4] = [
