@@ -192,8 +192,10 @@ impl Granular2d {
     }
 }
 
-/// The stages of a 2-D run for the friction of its cells: hyperbolic → friction, or
-/// at order 2 (`limiter`) Heun's method around both ([`Heun2d`]).
+/// The stages of a 2-D run for the friction of its cells: hyperbolic → friction as one
+/// stage, the friction applied in the hyperbolic step's last pass over the tiles
+/// ([`HydrostaticStep2d::then_friction`], the same bits as two stages), or at order 2
+/// (`limiter`) Heun's method around both ([`Heun2d`]).
 fn stages<L: BasalFriction + 'static>(
     friction: CellFriction<L>,
     raster: &Raster2d,
@@ -203,14 +205,10 @@ fn stages<L: BasalFriction + 'static>(
     if let Some(limiter) = limiter {
         return vec![Box::new(Heun2d::new(friction, raster, workers, limiter))];
     }
-    vec![
-        Box::new(HydrostaticStep2d::with_friction(
-            friction.clone(),
-            raster,
-            workers.clone(),
-        )),
-        Box::new(FrictionStep2d::with_friction(friction, workers)),
-    ]
+    let step = FrictionStep2d::with_friction(friction.clone(), workers.clone());
+    vec![Box::new(
+        HydrostaticStep2d::with_friction(friction, raster, workers).then_friction(step),
+    )]
 }
 
 /// The stages of a 2-D run for one friction law, uniform over the raster.
