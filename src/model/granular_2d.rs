@@ -355,39 +355,38 @@ impl Model for Granular2d {
         let bands = self
             .workers
             .map_bands(raster.bands(), |k| self.band_diagnostics(raster, state, k));
-        let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
-        let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
-        let mut front = f64::NEG_INFINITY;
-        let wet_cells = bands.iter().map(|b| b.wet).sum();
-        for b in &bands {
-            mass += b.mass;
-            ke += b.ke;
-            q_sum += b.q_sum;
-            max_speed = max_speed.max(b.max_speed2);
-            signal = signal.max(b.signal);
-            h_max = h_max.max(b.h_max);
-            front = front.max(b.front);
+        combine(raster, state, &bands)
+    }
+
+    /// The diagnostics and the copy of the state of t^n ([`Self::save_state`]) in one
+    /// pass: each band's task forms its diagnostics, then copies its stepped tiles (the
+    /// same sums in the same order, the same copy).
+    fn diagnose_and_save(
+        &self,
+        raster: &Raster2d,
+        state: &State2d,
+        backup: &mut State2d,
+    ) -> Diagnostics {
+        if !copies_stepped_tiles(backup, state) {
+            self.save_state(backup, state);
+            return self.diagnose(raster, state);
         }
-        let non_finite_at = if (mass + q_sum).is_finite() {
-            None
-        } else {
-            (0..state.h.len())
-                .find(|&k| {
-                    !(state.h[k].is_finite() && state.hu[k].is_finite() && state.hv[k].is_finite())
-                })
-                .or(Some(0))
-        };
-        let area = raster.cell_area();
-        Diagnostics {
-            mass: mass * area,
-            kinetic_energy: 0.5 * ke * area,
-            max_speed: max_speed.sqrt(),
-            signal_speed: signal,
-            front_x: if front.is_finite() { front } else { f64::NAN },
-            h_max,
-            non_finite_at,
-            wet_cells: Some(wet_cells),
-        }
+        let tiles = &state.tiles;
+        let (h, hu, hv) = (
+            Disjoint::new(&mut backup.h[..]),
+            Disjoint::new(&mut backup.hu[..]),
+            Disjoint::new(&mut backup.hv[..]),
+        );
+        let bands = self.workers.map_bands(raster.bands(), |band| {
+            let d = self.band_diagnostics(raster, state, band);
+            for t in tiles.band_tiles(band).filter(|&t| tiles.is_stepped(t)) {
+                // SAFETY: tile t is in band `band`, this task's alone.
+                unsafe { copy_tile(tiles, t, (&h, &hu, &hv), state) };
+            }
+            d
+        });
+        backup.tiles.clone_from(tiles);
+        combine(raster, state, &bands)
     }
 
     /// The copy in chunks of 2¹⁴ values (128 kB) on the run's threads: a plain copy
@@ -396,7 +395,7 @@ impl Model for Granular2d {
     /// changed (its stepped tiles, `state::tiles`) differ between the two: they alone
     /// are copied.
     fn save_state(&self, backup: &mut State2d, state: &State2d) {
-        if !(state.tiles.is_known() && backup.tiles.known_as(&state.tiles)) {
+        if !copies_stepped_tiles(backup, state) {
             let chunk = 1 << 14;
             self.workers.copy(chunk, &mut backup.h, &state.h);
             self.workers.copy(chunk, &mut backup.hu, &state.hu);
@@ -411,16 +410,8 @@ impl Model for Granular2d {
             Disjoint::new(&mut backup.hv[..]),
         );
         self.workers.tiles(tiles.stepped(), |_, t| {
-            for cells in tiles.row_segments(t) {
-                // SAFETY: the cells are in tile t, this task's alone.
-                unsafe {
-                    h.slice(cells.clone())
-                        .copy_from_slice(&state.h[cells.clone()]);
-                    hu.slice(cells.clone())
-                        .copy_from_slice(&state.hu[cells.clone()]);
-                    hv.slice(cells.clone()).copy_from_slice(&state.hv[cells]);
-                }
-            }
+            // SAFETY: tile t is this task's alone.
+            unsafe { copy_tile(tiles, t, (&h, &hu, &hv), state) };
         });
         backup.tiles.clone_from(tiles);
     }
@@ -504,4 +495,66 @@ impl Model for Granular2d {
 /// docs/gis.md, "When a hazard run stops").
 fn film_counts(film: f64, raster: &Raster2d, k: usize, h: f64) -> bool {
     film == 0.0 || raster.metric().map_or(1.0, |m| m.cos[k]) * h >= film
+}
+
+/// The diagnostics of `state` from its bands' parts `bands`, added in band order.
+fn combine(raster: &Raster2d, state: &State2d, bands: &[BandDiagnostics]) -> Diagnostics {
+    let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
+    let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
+    let mut front = f64::NEG_INFINITY;
+    let wet_cells = bands.iter().map(|b| b.wet).sum();
+    for b in bands {
+        mass += b.mass;
+        ke += b.ke;
+        q_sum += b.q_sum;
+        max_speed = max_speed.max(b.max_speed2);
+        signal = signal.max(b.signal);
+        h_max = h_max.max(b.h_max);
+        front = front.max(b.front);
+    }
+    let non_finite_at = if (mass + q_sum).is_finite() {
+        None
+    } else {
+        (0..state.h.len())
+            .find(|&k| {
+                !(state.h[k].is_finite() && state.hu[k].is_finite() && state.hv[k].is_finite())
+            })
+            .or(Some(0))
+    };
+    let area = raster.cell_area();
+    Diagnostics {
+        mass: mass * area,
+        kinetic_energy: 0.5 * ke * area,
+        max_speed: max_speed.sqrt(),
+        signal_speed: signal,
+        front_x: if front.is_finite() { front } else { f64::NAN },
+        h_max,
+        non_finite_at,
+        wet_cells: Some(wet_cells),
+    }
+}
+
+/// Whether [`Granular2d::save_state`] copies only the stepped tiles of `state` into
+/// `backup`: the backup holds a copy of the state with known tiles of the same raster.
+fn copies_stepped_tiles(backup: &State2d, state: &State2d) -> bool {
+    state.tiles.is_known() && backup.tiles.known_as(&state.tiles)
+}
+
+/// Copies the cells of tile `t` of `state` into the backup's fields `(h, hu, hv)`.
+///
+/// # Safety
+/// No other task reads or writes the backup's cells of tile `t` meanwhile.
+unsafe fn copy_tile(
+    tiles: &Tiles,
+    t: usize,
+    (h, hu, hv): (&Disjoint<f64>, &Disjoint<f64>, &Disjoint<f64>),
+    state: &State2d,
+) {
+    for cells in tiles.row_segments(t) {
+        h.slice(cells.clone())
+            .copy_from_slice(&state.h[cells.clone()]);
+        hu.slice(cells.clone())
+            .copy_from_slice(&state.hu[cells.clone()]);
+        hv.slice(cells.clone()).copy_from_slice(&state.hv[cells]);
+    }
 }

@@ -136,6 +136,11 @@ impl Tiles {
             .map(move |t| self.cells(t).1)
     }
 
+    /// The tiles of band `band` (row of tiles), west to east.
+    pub fn band_tiles(&self, band: usize) -> Range<usize> {
+        band * self.cols..(band + 1) * self.cols
+    }
+
     /// Whether the tiles are classified for a raster of `nx` × `ny` cells.
     pub fn known_for(&self, nx: usize, ny: usize) -> bool {
         self.nx == nx && self.ny == ny && nx > 0
