@@ -194,6 +194,9 @@ pub struct HydrostaticStep2d<L: BasalFriction> {
     /// whether it has a draining cell (false outside a step).
     tile_worst: Vec<(f64, usize)>,
     tile_drains: Vec<bool>,
+    /// The stepped tiles that the limited pass visits (a draining cell in them or in a
+    /// tile next to them), allocated once.
+    near_drains: Vec<u32>,
     /// One scratch per thread (each locked by its own thread only).
     scratch: Vec<Mutex<TileScratch>>,
     /// Order 2: the slopes of the second-order reconstruction ([`muscl_2d`]).
@@ -232,6 +235,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             drain: vec![1.0; cells],
             tile_worst: vec![(f64::INFINITY, 0); tiles],
             tile_drains: vec![false; tiles],
+            near_drains: Vec::with_capacity(tiles),
             scratch,
             recon: None,
             friction_step: None,
@@ -1537,25 +1541,12 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let (nx, ny) = (raster.nx(), raster.ny());
         let r = (dt / raster.dx(), dt / raster.dy());
         let tiles = &state.tiles;
-        let cols = tiles.cols();
-        let rows_of_tiles = tiles.count() / cols.max(1);
+        let near = self.tiles_near_drains(tiles);
         let (out, friction, _, workers, recon) = self.outputs();
         let ctx = Ctx::<L, BN, O2>::new(friction, raster, state, dt).with_recon(recon);
-        // A tile changes only if it or a tile next to it has a draining cell (the
-        // flags are false outside the stepped tiles).
-        // SAFETY (reads of `drains` and `drain`): this pass writes neither.
-        let drains = |t: usize| unsafe { out.drains.get(t) };
+        // SAFETY (reads of `drain`): this pass does not write it.
         let theta = |k: usize| unsafe { out.drain.get(k) };
-        workers.tiles(tiles.stepped(), |_, t| {
-            let (band, col) = (t / cols, t % cols);
-            let near = drains(t)
-                || (col > 0 && drains(t - 1))
-                || (col + 1 < cols && drains(t + 1))
-                || (band > 0 && drains(t - cols))
-                || (band + 1 < rows_of_tiles && drains(t + cols));
-            if !near {
-                return;
-            }
+        workers.tiles(&near, |_, t| {
             let (rows, columns) = tiles.cells(t);
             let mut worst = (f64::INFINITY, 0usize);
             for j in rows {
@@ -1586,7 +1577,30 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             // SAFETY: entry t is this task's alone.
             unsafe { out.worst.set(t, worst) };
         });
+        self.near_drains = near;
         self.worst(tiles)
+    }
+
+    /// The stepped tiles the limited pass may change, taken out of the stage (put back
+    /// by the caller): a tile changes only if it or a tile next to it has a draining
+    /// cell (the flags are false outside the stepped tiles). The others keep the
+    /// unlimited pass's values and smallest thickness, and cost the pass no task.
+    fn tiles_near_drains(&mut self, tiles: &Tiles) -> Vec<u32> {
+        let mut near = std::mem::take(&mut self.near_drains);
+        near.clear();
+        let cols = tiles.cols();
+        let rows_of_tiles = tiles.count() / cols.max(1);
+        let drains = |t: usize| self.tile_drains[t];
+        near.extend(tiles.stepped().iter().filter(|&&t| {
+            let t = t as usize;
+            let (band, col) = (t / cols, t % cols);
+            drains(t)
+                || (col > 0 && drains(t - 1))
+                || (col + 1 < cols && drains(t + 1))
+                || (band > 0 && drains(t - cols))
+                || (band + 1 < rows_of_tiles && drains(t + cols))
+        }));
+        near
     }
 
     /// The smallest new thickness over the stepped tiles, first in cell order.
