@@ -558,3 +558,133 @@ unsafe fn copy_tile(
         hv.slice(cells.clone()).copy_from_slice(&state.hv[cells]);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{BoundaryKind, Coordinates, RasterSpec, Sides};
+
+    /// A 70 × 40 raster (3 × 3 tiles) on a plane of 30° with a wavy bed, walls west
+    /// and south and outflow east and north, in `coordinates`, with a cone released
+    /// near the west edge: its flow crosses tiles, drains at its fronts and leaves by
+    /// the east side.
+    fn cone(coordinates: Coordinates) -> (Raster2d, State2d) {
+        let (nx, ny) = (70, 40);
+        let sides = Sides {
+            west: BoundaryKind::Wall,
+            east: BoundaryKind::Outflow,
+            south: BoundaryKind::Wall,
+            north: BoundaryKind::Outflow,
+        };
+        let spec = RasterSpec {
+            nx,
+            ny,
+            x_min: 0.0,
+            x_max: 3.5,
+            y_min: 0.0,
+            y_max: 2.0,
+            sides,
+            coordinates,
+            slope_deg: if coordinates == Coordinates::Local {
+                30.0
+            } else {
+                0.0
+            },
+        };
+        let bed = |x: f64, y: f64| match coordinates {
+            Coordinates::Local => 0.02 * (3.0 * x).sin() * (2.0 * y).cos(),
+            _ => -0.5 * x + 0.05 * (3.0 * x).sin() * (2.0 * y).cos(),
+        };
+        let b = (0..nx * ny)
+            .map(|k| bed(spec.x(k % nx), spec.y(k / nx)))
+            .collect();
+        let raster = Raster2d::new(spec, b).unwrap();
+        let h = (0..nx * ny)
+            .map(|k| {
+                let (x, y) = (raster.x(k % nx) - 0.5, raster.y(k / nx) - 0.9);
+                (0.2 - 0.6 * (x * x + y * y).sqrt()).max(0.0)
+            })
+            .collect();
+        let zero = vec![0.0; nx * ny];
+        (raster, State2d::from_velocities(h, &zero, &zero))
+    }
+
+    /// Whether two states hold the same bits.
+    fn same_bits(a: &State2d, b: &State2d) -> bool {
+        let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits());
+        same(&a.h, &b.h) && same(&a.hu, &b.hu) && same(&a.hv, &b.hv)
+    }
+
+    #[test]
+    fn the_fused_order_one_stage_is_hyperbolic_then_friction_to_the_bit() {
+        let law = Voellmy { mu: 0.2, xi: 500.0 };
+        for coordinates in [Coordinates::Local, Coordinates::BedNormal] {
+            for threads in [1, 2] {
+                let (raster, s0) = cone(coordinates);
+                let workers = Workers::new(threads).unwrap();
+                let friction = CellFriction::Uniform(law);
+                let mut fused = stages(friction.clone(), &raster, workers.clone(), None);
+                assert_eq!(fused.len(), 1);
+                assert_eq!(fused[0].name(), "hyperbolic+friction");
+                let mut apart: Vec<Box<dyn Stage<Raster2d, State2d>>> = vec![
+                    Box::new(HydrostaticStep2d::with_friction(
+                        friction.clone(),
+                        &raster,
+                        workers.clone(),
+                    )),
+                    Box::new(FrictionStep2d::with_friction(friction, workers)),
+                ];
+                let (mut a, mut b) = (s0.clone(), s0);
+                let model = Granular2d::new(&raster, 1e-3);
+                let mut stepped = Vec::new();
+                for step in 0..150 {
+                    let s = model.diagnose(&raster, &a).signal_speed;
+                    let dt = 0.4 * raster.dx().min(raster.dy()) / s;
+                    fused[0].apply(&raster, dt, &mut a).unwrap();
+                    for stage in &mut apart {
+                        stage.apply(&raster, dt, &mut b).unwrap();
+                    }
+                    assert!(
+                        same_bits(&a, &b),
+                        "{coordinates:?}, {threads} threads: step {step}"
+                    );
+                    // The flags the fused stage set as it wrote the tiles are those of
+                    // a classification of every cell (`touch`).
+                    let (nx, ny) = (raster.nx(), raster.ny());
+                    let mut fresh = b.clone();
+                    fresh.tiles.touch();
+                    fresh.refresh_tiles(nx, ny);
+                    a.refresh_tiles(nx, ny);
+                    assert_eq!(a.tiles.stepped(), fresh.tiles.stepped(), "step {step}");
+                    for t in 0..a.tiles.count() {
+                        assert_eq!(a.tiles.is_visited(t), fresh.tiles.is_visited(t));
+                    }
+                    stepped.push(a.tiles.stepped().len());
+                }
+                // The flow crossed tiles: the stepped set grew from the release's.
+                assert!(stepped.iter().max() > stepped.first(), "{stepped:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn diagnostics_with_the_copy_of_the_state_are_the_diagnostics_and_the_copy() {
+        let law = Voellmy { mu: 0.2, xi: 500.0 };
+        for threads in [1, 2] {
+            let (raster, mut state) = cone(Coordinates::Local);
+            let workers = Workers::new(threads).unwrap();
+            let model = Granular2d::new(&raster, 1e-3).with_workers(workers.clone());
+            let mut stage = stages(CellFriction::Uniform(law), &raster, workers, None);
+            // The first copy is whole (unknown tiles), the later ones of stepped tiles.
+            let mut backup = state.clone();
+            backup.h.fill(7.0);
+            for _ in 0..40 {
+                let d = model.diagnose_and_save(&raster, &state, &mut backup);
+                let plain = model.diagnose(&raster, &state);
+                assert_eq!(format!("{d:?}"), format!("{plain:?}"));
+                assert!(same_bits(&backup, &state));
+                stage[0].apply(&raster, 1e-3, &mut state).unwrap();
+            }
+        }
+    }
+}
