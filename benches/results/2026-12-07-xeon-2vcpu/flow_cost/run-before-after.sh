@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Before/after on the hockey-stick run of docs/performance.md ("Cost that follows the
-# flow"): builds `examples/flow_cost.rs` at two commits (default: BEFORE = main, AFTER =
-# h36f, the raster step in fewer parallel passes), each in a detached worktree with its
+# flow"): builds `examples/flow_cost.rs` at two commits (default: AFTER = h36f, the
+# raster step in fewer parallel passes, and BEFORE = the commit of main it branched
+# from; give BEFORE = main and AFTER = the merged commit once it is merged), each in a
+# detached worktree with its
 # own target directory (kept between calls, so a second call builds nothing), then runs
 # them with run-idle.sh: PASSES (default 5) interleaved passes of one and two threads,
 # AFTER as "this" and BEFORE as "base", and the medians of each. Run it from the
@@ -11,8 +13,8 @@
 #   benches/results/2026-12-07-xeon-2vcpu/flow_cost/run-before-after.sh [BEFORE] [AFTER]
 #   BUILD_ONLY=1 benches/results/2026-12-07-xeon-2vcpu/flow_cost/run-before-after.sh
 set -euo pipefail
-before=${1:-main}
 after=${2:-h36f}
+before=${1:-$(git merge-base main "$after")}
 root=$(git rev-parse --show-toplevel)
 work=${WORK:-/tmp/flow-cost-before-after}
 mkdir -p "$work"
