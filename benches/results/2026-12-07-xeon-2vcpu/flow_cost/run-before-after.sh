@@ -3,9 +3,8 @@
 # flow"): builds `examples/flow_cost.rs` at two commits (default: AFTER = h36f, the
 # raster step in fewer parallel passes, and BEFORE = the commit of main it branched
 # from; give BEFORE = main and AFTER = the merged commit once it is merged), each in a
-# detached worktree with its
-# own target directory (kept between calls, so a second call builds nothing), then runs
-# them with run-idle.sh: PASSES (default 5) interleaved passes of one and two threads,
+# detached worktree with its own target directory (kept between calls, so a second call
+# builds nothing), then runs them with run-idle.sh: PASSES (default 5) interleaved passes of one and two threads,
 # AFTER as "this" and BEFORE as "base", and the medians of each. Run it from the
 # repository's root on an idle machine (run-idle.sh prints the load average before and
 # after; build first, then wait for the load to fall, with BUILD_ONLY=1).
