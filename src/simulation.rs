@@ -88,6 +88,9 @@ pub struct Simulation<M: Model> {
     /// Signal speed of the current state when the run loop has already computed it
     /// with the diagnostics (saves a pass); None when stale.
     signal_speed: Option<f64>,
+    /// Whether `backup` already holds the current state (copied with the diagnostics,
+    /// [`Model::diagnose_and_save`]); false when stale.
+    saved: bool,
     /// What the run gathers over its steps (maps of a raster run), if anything.
     tracker: Option<Box<dyn Tracker<M::Grid, M::State>>>,
 }
@@ -159,6 +162,7 @@ impl<M: Model> Simulation<M> {
             t: 0.0,
             steps: 0,
             signal_speed: None,
+            saved: false,
             tracker: None,
         }
     }
@@ -189,10 +193,14 @@ impl<M: Model> Simulation<M> {
         self.model.diagnose(&self.grid, &self.state)
     }
 
-    /// Diagnostics of the current state, remembering its signal speed for the next Δt.
+    /// Diagnostics of the current state, remembering its signal speed for the next Δt;
+    /// the state is copied into the backup of the next step in the same pass.
     fn diagnose_for_next_step(&mut self) -> Diagnostics {
-        let d = self.diagnostics();
+        let d = self
+            .model
+            .diagnose_and_save(&self.grid, &self.state, &mut self.backup);
         self.signal_speed = Some(d.signal_speed);
+        self.saved = true;
         d
     }
 
@@ -224,7 +232,9 @@ impl<M: Model> Simulation<M> {
         let mut dt_full = self.cfl_dt(s);
         let mut dt = dt_full.min(dt_max);
         let mut last_failure = None;
-        self.model.save_state(&mut self.backup, &self.state);
+        if !std::mem::take(&mut self.saved) {
+            self.model.save_state(&mut self.backup, &self.state);
+        }
         for _ in 0..=MAX_RETRIES {
             let attempt = self
                 .pipeline
@@ -345,6 +355,8 @@ impl<M: Model> Simulation<M> {
         tally.settle(&d0, 0.0, self.config.settle_fraction);
         tally.front_end(&d0, 0.0, self.x_last());
         let result = self.run_loop(sink, progress, &mut tally, d0);
+        // The state may be changed between runs: the next step copies it.
+        (self.signal_speed, self.saved) = (None, false);
         let status = match &result {
             Ok(status) => status.to_string(),
             Err(e) => format!("failed: {}", failure_message(e)),

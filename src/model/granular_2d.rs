@@ -192,8 +192,10 @@ impl Granular2d {
     }
 }
 
-/// The stages of a 2-D run for the friction of its cells: hyperbolic → friction, or
-/// at order 2 (`limiter`) Heun's method around both ([`Heun2d`]).
+/// The stages of a 2-D run for the friction of its cells: hyperbolic → friction as one
+/// stage, the friction applied in the hyperbolic step's last pass over the tiles
+/// ([`HydrostaticStep2d::then_friction`], the same bits as two stages), or at order 2
+/// (`limiter`) Heun's method around both ([`Heun2d`]).
 fn stages<L: BasalFriction + 'static>(
     friction: CellFriction<L>,
     raster: &Raster2d,
@@ -203,14 +205,10 @@ fn stages<L: BasalFriction + 'static>(
     if let Some(limiter) = limiter {
         return vec![Box::new(Heun2d::new(friction, raster, workers, limiter))];
     }
-    vec![
-        Box::new(HydrostaticStep2d::with_friction(
-            friction.clone(),
-            raster,
-            workers.clone(),
-        )),
-        Box::new(FrictionStep2d::with_friction(friction, workers)),
-    ]
+    let step = FrictionStep2d::with_friction(friction.clone(), workers.clone());
+    vec![Box::new(
+        HydrostaticStep2d::with_friction(friction, raster, workers).then_friction(step),
+    )]
 }
 
 /// The stages of a 2-D run for one friction law, uniform over the raster.
@@ -357,39 +355,38 @@ impl Model for Granular2d {
         let bands = self
             .workers
             .map_bands(raster.bands(), |k| self.band_diagnostics(raster, state, k));
-        let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
-        let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
-        let mut front = f64::NEG_INFINITY;
-        let wet_cells = bands.iter().map(|b| b.wet).sum();
-        for b in &bands {
-            mass += b.mass;
-            ke += b.ke;
-            q_sum += b.q_sum;
-            max_speed = max_speed.max(b.max_speed2);
-            signal = signal.max(b.signal);
-            h_max = h_max.max(b.h_max);
-            front = front.max(b.front);
+        combine(raster, state, &bands)
+    }
+
+    /// The diagnostics and the copy of the state of t^n ([`Self::save_state`]) in one
+    /// pass: each band's task forms its diagnostics, then copies its stepped tiles (the
+    /// same sums in the same order, the same copy).
+    fn diagnose_and_save(
+        &self,
+        raster: &Raster2d,
+        state: &State2d,
+        backup: &mut State2d,
+    ) -> Diagnostics {
+        if !copies_stepped_tiles(backup, state) {
+            self.save_state(backup, state);
+            return self.diagnose(raster, state);
         }
-        let non_finite_at = if (mass + q_sum).is_finite() {
-            None
-        } else {
-            (0..state.h.len())
-                .find(|&k| {
-                    !(state.h[k].is_finite() && state.hu[k].is_finite() && state.hv[k].is_finite())
-                })
-                .or(Some(0))
-        };
-        let area = raster.cell_area();
-        Diagnostics {
-            mass: mass * area,
-            kinetic_energy: 0.5 * ke * area,
-            max_speed: max_speed.sqrt(),
-            signal_speed: signal,
-            front_x: if front.is_finite() { front } else { f64::NAN },
-            h_max,
-            non_finite_at,
-            wet_cells: Some(wet_cells),
-        }
+        let tiles = &state.tiles;
+        let (h, hu, hv) = (
+            Disjoint::new(&mut backup.h[..]),
+            Disjoint::new(&mut backup.hu[..]),
+            Disjoint::new(&mut backup.hv[..]),
+        );
+        let bands = self.workers.map_bands(raster.bands(), |band| {
+            let d = self.band_diagnostics(raster, state, band);
+            for t in tiles.band_tiles(band).filter(|&t| tiles.is_stepped(t)) {
+                // SAFETY: tile t is in band `band`, this task's alone.
+                unsafe { copy_tile(tiles, t, (&h, &hu, &hv), state) };
+            }
+            d
+        });
+        backup.tiles.clone_from(tiles);
+        combine(raster, state, &bands)
     }
 
     /// The copy in chunks of 2¹⁴ values (128 kB) on the run's threads: a plain copy
@@ -398,7 +395,7 @@ impl Model for Granular2d {
     /// changed (its stepped tiles, `state::tiles`) differ between the two: they alone
     /// are copied.
     fn save_state(&self, backup: &mut State2d, state: &State2d) {
-        if !(state.tiles.is_known() && backup.tiles.known_as(&state.tiles)) {
+        if !copies_stepped_tiles(backup, state) {
             let chunk = 1 << 14;
             self.workers.copy(chunk, &mut backup.h, &state.h);
             self.workers.copy(chunk, &mut backup.hu, &state.hu);
@@ -413,16 +410,8 @@ impl Model for Granular2d {
             Disjoint::new(&mut backup.hv[..]),
         );
         self.workers.tiles(tiles.stepped(), |_, t| {
-            for cells in tiles.row_segments(t) {
-                // SAFETY: the cells are in tile t, this task's alone.
-                unsafe {
-                    h.slice(cells.clone())
-                        .copy_from_slice(&state.h[cells.clone()]);
-                    hu.slice(cells.clone())
-                        .copy_from_slice(&state.hu[cells.clone()]);
-                    hv.slice(cells.clone()).copy_from_slice(&state.hv[cells]);
-                }
-            }
+            // SAFETY: tile t is this task's alone.
+            unsafe { copy_tile(tiles, t, (&h, &hu, &hv), state) };
         });
         backup.tiles.clone_from(tiles);
     }
@@ -507,4 +496,196 @@ impl Model for Granular2d {
 /// docs/gis.md, "When a hazard run stops").
 fn film_counts(film: f64, raster: &Raster2d, k: usize, h: f64) -> bool {
     film == 0.0 || raster.metric().map_or(1.0, |m| m.cos[k]) * h >= film
+}
+
+/// The diagnostics of `state` from its bands' parts `bands`, added in band order.
+fn combine(raster: &Raster2d, state: &State2d, bands: &[BandDiagnostics]) -> Diagnostics {
+    let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
+    let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
+    let mut front = f64::NEG_INFINITY;
+    let wet_cells = bands.iter().map(|b| b.wet).sum();
+    for b in bands {
+        mass += b.mass;
+        ke += b.ke;
+        q_sum += b.q_sum;
+        max_speed = max_speed.max(b.max_speed2);
+        signal = signal.max(b.signal);
+        h_max = h_max.max(b.h_max);
+        front = front.max(b.front);
+    }
+    let non_finite_at = if (mass + q_sum).is_finite() {
+        None
+    } else {
+        (0..state.h.len())
+            .find(|&k| {
+                !(state.h[k].is_finite() && state.hu[k].is_finite() && state.hv[k].is_finite())
+            })
+            .or(Some(0))
+    };
+    let area = raster.cell_area();
+    Diagnostics {
+        mass: mass * area,
+        kinetic_energy: 0.5 * ke * area,
+        max_speed: max_speed.sqrt(),
+        signal_speed: signal,
+        front_x: if front.is_finite() { front } else { f64::NAN },
+        h_max,
+        non_finite_at,
+        wet_cells: Some(wet_cells),
+    }
+}
+
+/// Whether [`Granular2d::save_state`] copies only the stepped tiles of `state` into
+/// `backup`: the backup holds a copy of the state with known tiles of the same raster.
+fn copies_stepped_tiles(backup: &State2d, state: &State2d) -> bool {
+    state.tiles.is_known() && backup.tiles.known_as(&state.tiles)
+}
+
+/// Copies the cells of tile `t` of `state` into the backup's fields `(h, hu, hv)`.
+///
+/// # Safety
+/// No other task reads or writes the backup's cells of tile `t` meanwhile.
+unsafe fn copy_tile(
+    tiles: &Tiles,
+    t: usize,
+    (h, hu, hv): (&Disjoint<f64>, &Disjoint<f64>, &Disjoint<f64>),
+    state: &State2d,
+) {
+    for cells in tiles.row_segments(t) {
+        h.slice(cells.clone())
+            .copy_from_slice(&state.h[cells.clone()]);
+        hu.slice(cells.clone())
+            .copy_from_slice(&state.hu[cells.clone()]);
+        hv.slice(cells.clone()).copy_from_slice(&state.hv[cells]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{BoundaryKind, Coordinates, RasterSpec, Sides};
+
+    /// A 70 × 40 raster (3 × 3 tiles) on a plane of 30° with a wavy bed, walls west
+    /// and south and outflow east and north, in `coordinates`, with a cone released
+    /// near the west edge: its flow crosses tiles, drains at its fronts and leaves by
+    /// the east side.
+    fn cone(coordinates: Coordinates) -> (Raster2d, State2d) {
+        let (nx, ny) = (70, 40);
+        let sides = Sides {
+            west: BoundaryKind::Wall,
+            east: BoundaryKind::Outflow,
+            south: BoundaryKind::Wall,
+            north: BoundaryKind::Outflow,
+        };
+        let spec = RasterSpec {
+            nx,
+            ny,
+            x_min: 0.0,
+            x_max: 3.5,
+            y_min: 0.0,
+            y_max: 2.0,
+            sides,
+            coordinates,
+            slope_deg: if coordinates == Coordinates::Local {
+                30.0
+            } else {
+                0.0
+            },
+        };
+        let bed = |x: f64, y: f64| match coordinates {
+            Coordinates::Local => 0.02 * (3.0 * x).sin() * (2.0 * y).cos(),
+            _ => -0.5 * x + 0.05 * (3.0 * x).sin() * (2.0 * y).cos(),
+        };
+        let b = (0..nx * ny)
+            .map(|k| bed(spec.x(k % nx), spec.y(k / nx)))
+            .collect();
+        let raster = Raster2d::new(spec, b).unwrap();
+        let h = (0..nx * ny)
+            .map(|k| {
+                let (x, y) = (raster.x(k % nx) - 0.5, raster.y(k / nx) - 0.9);
+                (0.2 - 0.6 * (x * x + y * y).sqrt()).max(0.0)
+            })
+            .collect();
+        let zero = vec![0.0; nx * ny];
+        (raster, State2d::from_velocities(h, &zero, &zero))
+    }
+
+    /// Whether two states hold the same bits.
+    fn same_bits(a: &State2d, b: &State2d) -> bool {
+        let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits());
+        same(&a.h, &b.h) && same(&a.hu, &b.hu) && same(&a.hv, &b.hv)
+    }
+
+    #[test]
+    fn the_fused_order_one_stage_is_hyperbolic_then_friction_to_the_bit() {
+        let law = Voellmy { mu: 0.2, xi: 500.0 };
+        for coordinates in [Coordinates::Local, Coordinates::BedNormal] {
+            for threads in [1, 2] {
+                let (raster, s0) = cone(coordinates);
+                let workers = Workers::new(threads).unwrap();
+                let friction = CellFriction::Uniform(law);
+                let mut fused = stages(friction.clone(), &raster, workers.clone(), None);
+                assert_eq!(fused.len(), 1);
+                assert_eq!(fused[0].name(), "hyperbolic+friction");
+                let mut apart: Vec<Box<dyn Stage<Raster2d, State2d>>> = vec![
+                    Box::new(HydrostaticStep2d::with_friction(
+                        friction.clone(),
+                        &raster,
+                        workers.clone(),
+                    )),
+                    Box::new(FrictionStep2d::with_friction(friction, workers)),
+                ];
+                let (mut a, mut b) = (s0.clone(), s0);
+                let model = Granular2d::new(&raster, 1e-3);
+                let mut stepped = Vec::new();
+                for step in 0..150 {
+                    let s = model.diagnose(&raster, &a).signal_speed;
+                    let dt = 0.4 * raster.dx().min(raster.dy()) / s;
+                    fused[0].apply(&raster, dt, &mut a).unwrap();
+                    for stage in &mut apart {
+                        stage.apply(&raster, dt, &mut b).unwrap();
+                    }
+                    assert!(
+                        same_bits(&a, &b),
+                        "{coordinates:?}, {threads} threads: step {step}"
+                    );
+                    // The flags the fused stage set as it wrote the tiles are those of
+                    // a classification of every cell (`touch`).
+                    let (nx, ny) = (raster.nx(), raster.ny());
+                    let mut fresh = b.clone();
+                    fresh.tiles.touch();
+                    fresh.refresh_tiles(nx, ny);
+                    a.refresh_tiles(nx, ny);
+                    assert_eq!(a.tiles.stepped(), fresh.tiles.stepped(), "step {step}");
+                    for t in 0..a.tiles.count() {
+                        assert_eq!(a.tiles.is_visited(t), fresh.tiles.is_visited(t));
+                    }
+                    stepped.push(a.tiles.stepped().len());
+                }
+                // The flow crossed tiles: the stepped set grew from the release's.
+                assert!(stepped.iter().max() > stepped.first(), "{stepped:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn diagnostics_with_the_copy_of_the_state_are_the_diagnostics_and_the_copy() {
+        let law = Voellmy { mu: 0.2, xi: 500.0 };
+        for threads in [1, 2] {
+            let (raster, mut state) = cone(Coordinates::Local);
+            let workers = Workers::new(threads).unwrap();
+            let model = Granular2d::new(&raster, 1e-3).with_workers(workers.clone());
+            let mut stage = stages(CellFriction::Uniform(law), &raster, workers, None);
+            // The first copy is whole (unknown tiles), the later ones of stepped tiles.
+            let mut backup = state.clone();
+            backup.h.fill(7.0);
+            for _ in 0..40 {
+                let d = model.diagnose_and_save(&raster, &state, &mut backup);
+                let plain = model.diagnose(&raster, &state);
+                assert_eq!(format!("{d:?}"), format!("{plain:?}"));
+                assert!(same_bits(&backup, &state));
+                stage[0].apply(&raster, 1e-3, &mut state).unwrap();
+            }
+        }
+    }
 }

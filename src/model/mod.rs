@@ -97,6 +97,20 @@ pub trait Model: Send + 'static {
         backup.clone_from(state);
     }
 
+    /// [`Self::diagnose`] of `state` and [`Self::save_state`] of it into `backup`: the
+    /// run loop calls it after every accepted step, whose state is the next step's
+    /// t^n, so that a model whose passes over the cells are parallel does both in one.
+    /// The default does one after the other.
+    fn diagnose_and_save(
+        &self,
+        grid: &Self::Grid,
+        state: &Self::State,
+        backup: &mut Self::State,
+    ) -> Diagnostics {
+        self.save_state(backup, state);
+        self.diagnose(grid, state)
+    }
+
     /// Largest speed (m/s) of a mass that counts as at rest (0: exactly at rest).
     fn rest_speed(&self) -> f64 {
         0.0

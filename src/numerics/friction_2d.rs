@@ -126,33 +126,43 @@ pub fn bed_normal_friction<L: BasalFriction>(
     (qx * scale, qy * scale)
 }
 
+impl<L: BasalFriction> FrictionStep2d<L> {
+    /// The discharge (hu, hv) = `q` of cell `k` of thickness `h` after the friction
+    /// step of `dt` on `raster`: the rule of the module documentation, in the raster's
+    /// frame, with the cell's law. The stage applies it to every cell of the stepped
+    /// tiles; the order-1 hyperbolic step applies it as it writes its new state
+    /// (`HydrostaticStep2d::then_friction`), with the same operations.
+    #[inline(always)]
+    pub fn cell(&self, raster: &Raster2d, k: usize, q: (f64, f64), h: f64, dt: f64) -> (f64, f64) {
+        match (raster.metric(), &self.friction) {
+            (Some(m), friction) => bed_normal_friction(&friction.at(k), m, k, q, h, dt),
+            (None, CellFriction::Uniform(law)) => vector_friction(law, q.0, q.1, h, dt, raster.g_n),
+            (None, CellFriction::PerCell(laws)) => {
+                vector_friction(&laws[k], q.0, q.1, h, dt, raster.g_n)
+            }
+        }
+    }
+}
+
 impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
     fn name(&self) -> &'static str {
         "friction"
     }
 
     /// Over the stepped tiles only (`state::tiles`), one task per tile: a cell outside
-    /// them holds no discharge, which the friction leaves as it is.
+    /// them holds no discharge, which the friction leaves as it is. The tiles it wrote
+    /// are pending (a discharge it stops may leave a tile with no live cell).
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
-        let (g_n, nx) = (raster.g_n, raster.nx());
-        state.ensure_tiles(nx, raster.ny());
+        state.ensure_tiles(raster.nx(), raster.ny());
         let State2d { h, hu, hv, tiles } = state;
-        let (h, tiles, friction) = (&*h, &*tiles, &self.friction);
+        let (h, tiles) = (&*h, &*tiles);
         let (hu, hv) = (Disjoint::new(hu), Disjoint::new(hv));
-        let metric = raster.metric();
+        let this = &*self;
         self.workers.tiles(tiles.stepped(), |_, t| {
             for k in tiles.row_segments(t).flatten() {
                 // SAFETY: cell k is in tile t, this task's alone.
                 let q = unsafe { (hu.get(k), hv.get(k)) };
-                let (qx, qy) = match (metric, friction) {
-                    (Some(m), _) => bed_normal_friction(&friction.at(k), m, k, q, h[k], dt),
-                    (None, CellFriction::Uniform(law)) => {
-                        vector_friction(law, q.0, q.1, h[k], dt, g_n)
-                    }
-                    (None, CellFriction::PerCell(laws)) => {
-                        vector_friction(&laws[k], q.0, q.1, h[k], dt, g_n)
-                    }
-                };
+                let (qx, qy) = this.cell(raster, k, q, h[k], dt);
                 // SAFETY: as above.
                 unsafe {
                     hu.set(k, qx);
@@ -160,6 +170,7 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
                 }
             }
         });
+        state.tiles.mark_pending();
         Ok(())
     }
 }

@@ -76,7 +76,7 @@ use super::face::{
     disk_friction, drained_fraction, interface_with_friction,
     interface_with_zoned_transverse_drive, layer_momentum_flux, mass_flux, transverse_flux, Side,
 };
-use super::friction_2d::CellFriction;
+use super::friction_2d::{CellFriction, FrictionStep2d};
 use super::muscl::Limiter;
 use super::muscl_2d::{self, AxisSlopes, Mean, Reconstruction};
 use super::workers::Disjoint;
@@ -87,7 +87,7 @@ use crate::grid::{BedMetric, BoundaryKind, Raster2d};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{velocity, H_DRY};
 use crate::physics::GRAVITY;
-use crate::state::tiles::{Tiles, TILE_COLS};
+use crate::state::tiles::{TileRunner, Tiles, TILE_COLS};
 use crate::state::State2d;
 use std::ops::Range;
 use std::sync::Mutex;
@@ -194,10 +194,16 @@ pub struct HydrostaticStep2d<L: BasalFriction> {
     /// whether it has a draining cell (false outside a step).
     tile_worst: Vec<(f64, usize)>,
     tile_drains: Vec<bool>,
+    /// The stepped tiles that the limited pass visits (a draining cell in them or in a
+    /// tile next to them), allocated once.
+    near_drains: Vec<u32>,
     /// One scratch per thread (each locked by its own thread only).
     scratch: Vec<Mutex<TileScratch>>,
     /// Order 2: the slopes of the second-order reconstruction ([`muscl_2d`]).
     recon: Option<Reconstruction>,
+    /// The friction step applied to every cell as the new state is written
+    /// ([`Self::then_friction`]); `None`: the caller's.
+    friction_step: Option<FrictionStep2d<L>>,
 }
 
 impl<L: BasalFriction> HydrostaticStep2d<L> {
@@ -229,9 +235,22 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             drain: vec![1.0; cells],
             tile_worst: vec![(f64::INFINITY, 0); tiles],
             tile_drains: vec![false; tiles],
+            near_drains: Vec::with_capacity(tiles),
             scratch,
             recon: None,
+            friction_step: None,
         }
+    }
+
+    /// The step followed by the friction step `friction` in its last pass (the order-1
+    /// pipeline's hyperbolic → friction as one stage, named "hyperbolic+friction"):
+    /// each cell of the new state gets the friction update of
+    /// [`FrictionStep2d::cell`] as it is written, and each stepped tile is classified
+    /// in the same task (`state::tiles`, `write_classified`), with the same operations
+    /// and bits as the two stages one after the other and one pass instead of three.
+    pub fn then_friction(mut self, friction: FrictionStep2d<L>) -> Self {
+        self.friction_step = Some(friction);
+        self
     }
 
     /// The step with the second-order reconstruction of [`muscl_2d`] and `limiter`
@@ -1522,25 +1541,12 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let (nx, ny) = (raster.nx(), raster.ny());
         let r = (dt / raster.dx(), dt / raster.dy());
         let tiles = &state.tiles;
-        let cols = tiles.cols();
-        let rows_of_tiles = tiles.count() / cols.max(1);
+        let near = self.tiles_near_drains(tiles);
         let (out, friction, _, workers, recon) = self.outputs();
         let ctx = Ctx::<L, BN, O2>::new(friction, raster, state, dt).with_recon(recon);
-        // A tile changes only if it or a tile next to it has a draining cell (the
-        // flags are false outside the stepped tiles).
-        // SAFETY (reads of `drains` and `drain`): this pass writes neither.
-        let drains = |t: usize| unsafe { out.drains.get(t) };
+        // SAFETY (reads of `drain`): this pass does not write it.
         let theta = |k: usize| unsafe { out.drain.get(k) };
-        workers.tiles(tiles.stepped(), |_, t| {
-            let (band, col) = (t / cols, t % cols);
-            let near = drains(t)
-                || (col > 0 && drains(t - 1))
-                || (col + 1 < cols && drains(t + 1))
-                || (band > 0 && drains(t - cols))
-                || (band + 1 < rows_of_tiles && drains(t + cols));
-            if !near {
-                return;
-            }
+        workers.tiles(&near, |_, t| {
             let (rows, columns) = tiles.cells(t);
             let mut worst = (f64::INFINITY, 0usize);
             for j in rows {
@@ -1571,7 +1577,30 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
             // SAFETY: entry t is this task's alone.
             unsafe { out.worst.set(t, worst) };
         });
+        self.near_drains = near;
         self.worst(tiles)
+    }
+
+    /// The stepped tiles the limited pass may change, taken out of the stage (put back
+    /// by the caller): a tile changes only if it or a tile next to it has a draining
+    /// cell (the flags are false outside the stepped tiles). The others keep the
+    /// unlimited pass's values and smallest thickness, and cost the pass no task.
+    fn tiles_near_drains(&mut self, tiles: &Tiles) -> Vec<u32> {
+        let mut near = std::mem::take(&mut self.near_drains);
+        near.clear();
+        let cols = tiles.cols();
+        let rows_of_tiles = tiles.count() / cols.max(1);
+        let drains = |t: usize| self.tile_drains[t];
+        near.extend(tiles.stepped().iter().filter(|&&t| {
+            let t = t as usize;
+            let (band, col) = (t / cols, t % cols);
+            drains(t)
+                || (col > 0 && drains(t - 1))
+                || (col + 1 < cols && drains(t + 1))
+                || (band > 0 && drains(t - cols))
+                || (band + 1 < rows_of_tiles && drains(t + cols))
+        }));
+        near
     }
 
     /// The smallest new thickness over the stepped tiles, first in cell order.
@@ -1601,7 +1630,10 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
 
 impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
     fn name(&self) -> &'static str {
-        "hyperbolic"
+        match self.friction_step {
+            None => "hyperbolic",
+            Some(_) => "hyperbolic+friction",
+        }
     }
 
     fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
@@ -1621,31 +1653,57 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
                 h: worst.0,
             });
         }
-        // The new state of the stepped tiles, with round-off below zero (kept for the
-        // test above) clipped, one task per tile; the other tiles are unchanged.
+        self.write_new_state(raster, dt, state);
+        state.tiles.count_updates();
+        Ok(())
+    }
+}
+
+impl<L: BasalFriction> HydrostaticStep2d<L> {
+    /// The new state into the stepped tiles of `state`, with round-off below zero
+    /// (kept for the test of `apply`) clipped, one task per tile; the other tiles are
+    /// unchanged. With [`Self::then_friction`] each cell also gets the friction step
+    /// and each tile its flags as the task leaves it; without, the tiles are pending.
+    fn write_new_state(&self, raster: &Raster2d, dt: f64, state: &mut State2d) {
         let State2d { h, hu, hv, tiles } = state;
         let (h, hu, hv) = (Disjoint::new(h), Disjoint::new(hu), Disjoint::new(hv));
         let (h_new, hu_new, hv_new) = (&self.h_new, &self.hu_new, &self.hv_new);
         let tile_worst = &self.tile_worst;
-        self.workers.tiles(tiles.stepped(), |_, t| {
+        let write = |tiles: &Tiles, t: usize| {
             let clip = tile_worst[t].0 < 0.0;
             for cells in tiles.row_segments(t) {
                 // SAFETY: the cells are in tile t, this task's alone.
-                let h = unsafe { h.slice(cells.clone()) };
+                let (h, hu, hv) = unsafe {
+                    (
+                        h.slice(cells.clone()),
+                        hu.slice(cells.clone()),
+                        hv.slice(cells.clone()),
+                    )
+                };
                 h.copy_from_slice(&h_new[cells.clone()]);
                 if clip {
                     h.iter_mut().filter(|h| **h < 0.0).for_each(|h| *h = 0.0);
                 }
-                // SAFETY: as above.
-                unsafe {
-                    hu.slice(cells.clone())
-                        .copy_from_slice(&hu_new[cells.clone()]);
-                    hv.slice(cells.clone()).copy_from_slice(&hv_new[cells]);
+                hu.copy_from_slice(&hu_new[cells.clone()]);
+                hv.copy_from_slice(&hv_new[cells.clone()]);
+                if let Some(friction) = &self.friction_step {
+                    for (i, k) in cells.enumerate() {
+                        (hu[i], hv[i]) = friction.cell(raster, k, (hu[i], hv[i]), h[i], dt);
+                    }
                 }
             }
+        };
+        let run: TileRunner = &|list, f| self.workers.tiles(list, f);
+        if self.friction_step.is_none() {
+            run(tiles.stepped(), &|_, t| write(tiles, t));
+            tiles.mark_pending();
+            return;
+        }
+        // SAFETY (the reads): the cells are in tile t, written by this task above.
+        let cell = |k: usize| unsafe { (h.get(k), hu.get(k), hv.get(k)) };
+        tiles.write_classified(run, &|tiles, t| {
+            write(tiles, t);
+            tiles.bits(t, cell)
         });
-        tiles.count_updates();
-        tiles.mark_pending();
-        Ok(())
     }
 }

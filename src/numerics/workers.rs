@@ -82,13 +82,19 @@ impl Workers {
     /// Calls `f(thread, t)` for every tile `t` of `tiles`, `thread` < [`Self::threads`]
     /// the index of the thread that runs it (for its scratch). Each tile is one task
     /// (`with_max_len(1)`): the threads share the tiles wherever the flow is, and a
-    /// thread that runs out of work steals single tiles.
+    /// thread that runs out of work steals single tiles. A single tile runs on the
+    /// caller's thread, with no hand-off to the pool (as thread 0 outside the pool,
+    /// while the pool is idle).
     pub fn tiles<F>(&self, tiles: &[u32], f: F)
     where
         F: Fn(usize, usize) + Sync + Send,
     {
         match &self.pool {
             None => tiles.iter().for_each(|&t| f(0, t as usize)),
+            Some(_) if tiles.len() <= 1 => {
+                let thread = rayon::current_thread_index().unwrap_or(0);
+                tiles.iter().for_each(|&t| f(thread, t as usize))
+            }
             Some(pool) => pool.install(|| {
                 tiles
                     .par_iter()

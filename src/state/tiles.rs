@@ -19,13 +19,16 @@
 //! full sweep, the empty cells left out adding nothing.
 //!
 //! Bookkeeping per step is over the tiles (one flag each), never over the cells of the
-//! raster: after the hyperbolic stage writes the stepped tiles it marks the set
-//! pending, and the next step's hyperbolic stage re-classifies those tiles alone
-//! (`refresh`) before it builds the new stepped set. Until then (the friction stage,
-//! the diagnostics, the maps, the copy of the state) the stepped set is the set of
-//! tiles the last step may have changed. A state whose fields were written outside the
-//! stages has unknown tiles (`touch`): they are classified from every cell at the next
-//! step.
+//! raster: a stage that writes cells of the stepped tiles marks the set pending
+//! (`mark_pending`), and the next step's hyperbolic stage re-classifies those tiles
+//! alone (`refresh`) before it builds the new stepped set. The stage that writes the
+//! stepped tiles last in a step may instead classify each tile in the same task that
+//! writes it (`write_classified`: the order-1 hyperbolic step with its friction), so
+//! that the next refresh only rebuilds the stepped set from the flags, with no pass
+//! over the cells. Until then (the diagnostics, the maps, the copy of the state) the
+//! stepped set is the set of tiles the last step may have changed. A state whose
+//! fields were written outside the stages has unknown tiles (`touch`): they are
+//! classified from every cell at the next step.
 
 use super::disjoint::Disjoint;
 use crate::grid::raster::BAND_ROWS;
@@ -74,8 +77,11 @@ pub struct Tiles {
     stepped_flag: Vec<bool>,
     /// The stepped tiles, in increasing order.
     stepped: Vec<u32>,
-    /// The stepped tiles were changed by a stage and are not classified since.
+    /// The stepped tiles were changed by a stage: the stepped set is to be rebuilt.
     pending: bool,
+    /// The flags of the pending tiles are those of their cells as the last stage left
+    /// them ([`Tiles::write_classified`]): the rebuild needs no pass over the cells.
+    classified: bool,
     /// Every tile is stepped (the full sweep, for comparison).
     every: bool,
     /// Cell updates of the accepted steps (the cells of their stepped tiles).
@@ -96,7 +102,8 @@ impl Clone for Tiles {
         self.flags.clone_from(&source.flags);
         self.stepped_flag.clone_from(&source.stepped_flag);
         self.stepped.clone_from(&source.stepped);
-        (self.pending, self.every) = (source.pending, source.every);
+        (self.pending, self.classified) = (source.pending, source.classified);
+        self.every = source.every;
         self.updates = source.updates;
     }
 }
@@ -127,6 +134,11 @@ impl Tiles {
         (band * self.cols..(band + 1) * self.cols)
             .filter(move |&t| pick(self, t))
             .map(move |t| self.cells(t).1)
+    }
+
+    /// The tiles of band `band` (row of tiles), west to east.
+    pub fn band_tiles(&self, band: usize) -> Range<usize> {
+        band * self.cols..(band + 1) * self.cols
     }
 
     /// Whether the tiles are classified for a raster of `nx` × `ny` cells.
@@ -226,6 +238,32 @@ impl Tiles {
     /// next [`Self::refresh`]).
     pub fn mark_pending(&mut self) {
         self.pending = true;
+        self.classified = false;
+    }
+
+    /// Runs `write(tiles, t)` for every stepped tile t with `run` (one task per tile, any
+    /// order, any threads), each task writing the cells of its own tile and returning
+    /// their bits from [`Tiles::bits`] as it left them; the stepped set is then pending
+    /// with those flags, so the next [`Self::refresh_on`] only rebuilds the stepped
+    /// set. For the stage that writes the stepped tiles last in a step.
+    pub fn write_classified(
+        &mut self,
+        run: TileRunner,
+        write: &(dyn Fn(&Tiles, usize) -> u8 + Sync),
+    ) {
+        // The flags are taken out while the tasks write them (a task reads the rest of
+        // the tiles, never the flags).
+        let mut flags = std::mem::take(&mut self.flags);
+        let out = Disjoint::new(&mut flags[..]);
+        let tiles = &*self;
+        run(&tiles.stepped, &|_, t| {
+            let bits = write(tiles, t);
+            // SAFETY: entry t is this task's alone.
+            unsafe { out.set(t, bits) };
+        });
+        self.flags = flags;
+        self.pending = true;
+        self.classified = true;
     }
 
     /// Classifies the tiles for the state (`h`, `hu`, `hv`) on `nx` × `ny` cells: every
@@ -258,17 +296,10 @@ impl Tiles {
             for t in 0..self.count() {
                 self.flags[t] = self.classify(t, h, hu, hv);
             }
+        } else if self.pending && self.classified {
+            // The flags were set as the tiles were written.
         } else if self.pending {
-            // The flags are taken out while the tasks write them (classifying reads
-            // the rest of the tiles, not the flags).
-            let mut flags = std::mem::take(&mut self.flags);
-            let out = Disjoint::new(&mut flags[..]);
-            let tiles = &*self;
-            run(&tiles.stepped, &|_, t| {
-                // SAFETY: entry t is this task's alone.
-                unsafe { out.set(t, tiles.classify(t, h, hu, hv)) };
-            });
-            self.flags = flags;
+            self.write_classified(run, &|tiles, t| tiles.classify(t, h, hu, hv));
         } else {
             return;
         }
@@ -278,6 +309,13 @@ impl Tiles {
 
     /// The bits of tile `t` from its cells.
     fn classify(&self, t: usize, h: &[f64], hu: &[f64], hv: &[f64]) -> u8 {
+        self.bits(t, |k| (h[k], hu[k], hv[k]))
+    }
+
+    /// The flags of tile `t` from its cells, `cell(k)` being the (h, hu, hv) of cell k
+    /// (for [`Self::write_classified`]'s tasks).
+    #[inline]
+    pub fn bits(&self, t: usize, cell: impl Fn(usize) -> (f64, f64, f64)) -> u8 {
         let (rows, cols) = self.cells(t);
         let (first_row, last_row) = (rows.start, rows.end - 1);
         let (first_col, last_col) = (cols.start, cols.end - 1);
@@ -285,11 +323,11 @@ impl Tiles {
         for j in rows {
             let row = j * self.nx;
             for i in cols.clone() {
-                let k = row + i;
-                if h[k].to_bits() | hu[k].to_bits() | hv[k].to_bits() != 0 {
+                let (h, hu, hv) = cell(row + i);
+                if h.to_bits() | hu.to_bits() | hv.to_bits() != 0 {
                     bits |= NONEMPTY;
                 }
-                if is_live(h[k], hu[k], hv[k]) {
+                if is_live(h, hu, hv) {
                     bits |= LIVE;
                     if i == first_col {
                         bits |= WEST;
