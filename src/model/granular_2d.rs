@@ -21,6 +21,7 @@
 
 use crate::grid::Raster2d;
 use crate::model::granular::pipeline::{with_law, WithLaw};
+use crate::model::band_sums::{self, BandSums};
 use crate::model::{first_maximum, Diagnostics, Model};
 use crate::numerics::friction_2d::{CellFriction, FrictionStep2d};
 use crate::numerics::hydrostatic_2d::HydrostaticStep2d;
@@ -63,20 +64,6 @@ pub struct Granular2d {
     film: f64,
 }
 
-/// One band's part of the diagnostics (sums and extrema over its cells).
-#[derive(Debug, Clone, Copy)]
-struct BandDiagnostics {
-    mass: f64,
-    ke: f64,
-    q_sum: f64,
-    max_speed2: f64,
-    signal: f64,
-    h_max: f64,
-    front: f64,
-    /// Cells with h > H_DRY.
-    wet: usize,
-}
-
 impl Granular2d {
     /// The model on `raster` with the front threshold `front_threshold` (m).
     pub fn new(raster: &Raster2d, front_threshold: f64) -> Granular2d {
@@ -107,7 +94,7 @@ impl Granular2d {
     /// tiles are unknown, else those of its visited tiles (non-empty or stepped,
     /// `state::tiles`), in row-major order either way (the cells left out are +0 and add
     /// nothing).
-    fn band_diagnostics(&self, raster: &Raster2d, state: &State2d, band: usize) -> BandDiagnostics {
+    fn band_diagnostics(&self, raster: &Raster2d, state: &State2d, band: usize) -> BandSums {
         let nx = raster.nx();
         let rows = raster.band_rows(band);
         if !state.tiles.is_known() {
@@ -133,19 +120,10 @@ impl Granular2d {
         raster: &Raster2d,
         state: &State2d,
         cells: impl Iterator<Item = std::ops::Range<usize>>,
-    ) -> BandDiagnostics {
+    ) -> BandSums {
         let g_n = raster.g_n;
         let nx = raster.nx();
-        let mut d = BandDiagnostics {
-            mass: 0.0,
-            ke: 0.0,
-            q_sum: 0.0,
-            max_speed2: 0.0,
-            signal: 0.0,
-            h_max: 0.0,
-            front: f64::NEG_INFINITY,
-            wet: 0,
-        };
+        let mut d = BandSums::empty();
         for k in cells.flatten() {
             let (h, qx, qy) = (state.h[k], state.hu[k], state.hv[k]);
             // An empty cell (every bit +0) changes no sum or extremum.
@@ -499,40 +477,12 @@ fn film_counts(film: f64, raster: &Raster2d, k: usize, h: f64) -> bool {
 }
 
 /// The diagnostics of `state` from its bands' parts `bands`, added in band order.
-fn combine(raster: &Raster2d, state: &State2d, bands: &[BandDiagnostics]) -> Diagnostics {
-    let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
-    let (mut max_speed, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
-    let mut front = f64::NEG_INFINITY;
-    let wet_cells = bands.iter().map(|b| b.wet).sum();
-    for b in bands {
-        mass += b.mass;
-        ke += b.ke;
-        q_sum += b.q_sum;
-        max_speed = max_speed.max(b.max_speed2);
-        signal = signal.max(b.signal);
-        h_max = h_max.max(b.h_max);
-        front = front.max(b.front);
-    }
-    let non_finite_at = if (mass + q_sum).is_finite() {
-        None
-    } else {
-        (0..state.h.len())
-            .find(|&k| {
-                !(state.h[k].is_finite() && state.hu[k].is_finite() && state.hv[k].is_finite())
-            })
-            .or(Some(0))
-    };
-    let area = raster.cell_area();
-    Diagnostics {
-        mass: mass * area,
-        kinetic_energy: 0.5 * ke * area,
-        max_speed: max_speed.sqrt(),
-        signal_speed: signal,
-        front_x: if front.is_finite() { front } else { f64::NAN },
-        h_max,
-        non_finite_at,
-        wet_cells: Some(wet_cells),
-    }
+fn combine(raster: &Raster2d, state: &State2d, bands: &[BandSums]) -> Diagnostics {
+    band_sums::combine(bands, raster.cell_area(), || {
+        (0..state.h.len()).find(|&k| {
+            !(state.h[k].is_finite() && state.hu[k].is_finite() && state.hv[k].is_finite())
+        })
+    })
 }
 
 /// Whether [`Granular2d::save_state`] copies only the stepped tiles of `state` into

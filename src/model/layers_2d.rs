@@ -29,6 +29,7 @@ use crate::model::granular::config::MultilayerSpec;
 use crate::model::granular::pipeline::{with_law, WithLaw};
 use crate::model::raster_maps::RasterMaps;
 use crate::model::tracker::Tracker;
+use crate::model::band_sums::{self, BandSums};
 use crate::model::{first_maximum, Diagnostics, Model};
 use crate::numerics::layers_2d::{signal_speed_of, LayersStep2d};
 use crate::numerics::viscous_2d::ViscousColumns2d;
@@ -56,19 +57,6 @@ pub struct Layers2d {
     film: f64,
     /// The run's threads, for the diagnostics.
     workers: Workers,
-}
-
-/// One band's part of the diagnostics.
-#[derive(Debug, Clone, Copy)]
-struct BandDiagnostics {
-    mass: f64,
-    ke: f64,
-    q_sum: f64,
-    max_speed2: f64,
-    signal: f64,
-    h_max: f64,
-    front: f64,
-    wet: usize,
 }
 
 impl Layers2d {
@@ -110,19 +98,13 @@ impl Layers2d {
         raster: &Raster2d,
         state: &LayeredRaster,
         band: usize,
-    ) -> BandDiagnostics {
+    ) -> BandSums {
         let (nx, n) = (raster.nx(), state.layers);
         let rows = raster.band_rows(band);
         let cells = rows.start * nx..rows.end * nx;
-        let mut d = BandDiagnostics {
-            mass: 0.0,
-            ke: 0.0,
-            q_sum: 0.0,
-            max_speed2: 0.0,
+        let mut d = BandSums {
             signal: signal_speed_of(raster, state, cells.clone()),
-            h_max: 0.0,
-            front: f64::NEG_INFINITY,
-            wet: 0,
+            ..BandSums::empty()
         };
         for k in cells {
             let h = state.h[k];
@@ -194,42 +176,15 @@ impl Model for Layers2d {
         let bands = self
             .workers
             .map_bands(raster.bands(), |k| self.band_diagnostics(raster, state, k));
-        let (mut mass, mut ke, mut q_sum) = (0.0, 0.0, 0.0);
-        let (mut max_speed2, mut signal, mut h_max) = (0.0f64, 0.0f64, 0.0f64);
-        let mut front = f64::NEG_INFINITY;
-        for b in &bands {
-            mass += b.mass;
-            ke += b.ke;
-            q_sum += b.q_sum;
-            max_speed2 = max_speed2.max(b.max_speed2);
-            signal = signal.max(b.signal);
-            h_max = h_max.max(b.h_max);
-            front = front.max(b.front);
-        }
-        let non_finite_at = if (mass + q_sum).is_finite() {
-            None
-        } else {
-            let n = state.layers;
-            (0..state.cells())
-                .find(|&k| {
-                    let column = state.hu[k * n..(k + 1) * n]
-                        .iter()
-                        .chain(&state.hv[k * n..(k + 1) * n]);
-                    !state.h[k].is_finite() || column.clone().any(|q| !q.is_finite())
-                })
-                .or(Some(0))
-        };
-        let area = raster.cell_area();
-        Diagnostics {
-            mass: mass * area,
-            kinetic_energy: 0.5 * ke * area,
-            max_speed: max_speed2.sqrt(),
-            signal_speed: signal,
-            front_x: if front.is_finite() { front } else { f64::NAN },
-            h_max,
-            non_finite_at,
-            wet_cells: Some(bands.iter().map(|b| b.wet).sum()),
-        }
+        let n = state.layers;
+        band_sums::combine(&bands, raster.cell_area(), || {
+            (0..state.cells()).find(|&k| {
+                let column = state.hu[k * n..(k + 1) * n]
+                    .iter()
+                    .chain(&state.hv[k * n..(k + 1) * n]);
+                !state.h[k].is_finite() || column.clone().any(|q| !q.is_finite())
+            })
+        })
     }
 
     /// The layers keep regularised creep velocities (Escalante et al. 2023, Remark 2):

@@ -19,6 +19,7 @@
 //!   [`CurvedLine`](crate::grid::CurvedLine).
 //! - [`dilatant`]: the compressible μ(I)–φ model of Bouchut et al. 2021 (volume fraction φ).
 
+pub(crate) mod band_sums;
 pub mod dilatant;
 pub mod granular;
 pub mod granular_2d;
