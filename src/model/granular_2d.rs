@@ -20,8 +20,8 @@
 //! `/grid/h_bed` count h − h_i.
 
 use crate::grid::Raster2d;
-use crate::model::granular::pipeline::{with_law, WithLaw};
 use crate::model::band_sums::{self, BandSums};
+use crate::model::granular::pipeline::{with_law, WithLaw};
 use crate::model::{first_maximum, Diagnostics, Model};
 use crate::numerics::friction_2d::{CellFriction, FrictionStep2d};
 use crate::numerics::hydrostatic_2d::HydrostaticStep2d;

@@ -25,11 +25,11 @@
 //! flow ([`LayeredMaps`]).
 
 use crate::grid::Raster2d;
+use crate::model::band_sums::{self, BandSums};
 use crate::model::granular::config::MultilayerSpec;
 use crate::model::granular::pipeline::{with_law, WithLaw};
 use crate::model::raster_maps::RasterMaps;
 use crate::model::tracker::Tracker;
-use crate::model::band_sums::{self, BandSums};
 use crate::model::{first_maximum, Diagnostics, Model};
 use crate::numerics::layers_2d::{signal_speed_of, LayersStep2d};
 use crate::numerics::viscous_2d::ViscousColumns2d;
@@ -93,12 +93,7 @@ impl Layers2d {
         self
     }
 
-    fn band_diagnostics(
-        &self,
-        raster: &Raster2d,
-        state: &LayeredRaster,
-        band: usize,
-    ) -> BandSums {
+    fn band_diagnostics(&self, raster: &Raster2d, state: &LayeredRaster, band: usize) -> BandSums {
         let (nx, n) = (raster.nx(), state.layers);
         let rows = raster.band_rows(band);
         let cells = rows.start * nx..rows.end * nx;
