@@ -304,20 +304,12 @@ impl LayeredMaps {
 
 /// The depth-averaged flow of `state` (h, Σ_α l_α (hu)_α, Σ_α l_α (hv)_α) into `mean`.
 fn average_into(mean: &mut State2d, state: &LayeredRaster) {
-    let (cells, n) = (state.cells(), state.layers);
+    let cells = state.cells();
     mean.h.clone_from(&state.h);
     mean.hu.resize(cells, 0.0);
     mean.hv.resize(cells, 0.0);
-    let column = |q: &[f64], k: usize| -> f64 {
-        q[k * n..(k + 1) * n]
-            .iter()
-            .zip(&state.l)
-            .map(|(q, l)| q * l)
-            .sum()
-    };
     for k in 0..cells {
-        mean.hu[k] = column(&state.hu, k);
-        mean.hv[k] = column(&state.hv, k);
+        (mean.hu[k], mean.hv[k]) = state.mean_discharge(k);
     }
 }
 

@@ -61,9 +61,7 @@ pub struct ViscousColumns2d<L: BasalFriction + LocalFriction> {
     opts: ViscousOptions,
     layers: usize,
     workers: Workers,
-    above: Vec<f64>,
-    inv_sqrt_above: Vec<f64>,
-    inv_gap: Vec<f64>,
+    fractions: Fractions,
     /// Frozen at t^n, per cell and slot (N), cell-major: slot 0 the bed (μ_b, or ν_{1/2}
     /// without slip), slot α the interface ν_{α+1/2}; NaN in slot 0 of a cell dry at t^n.
     frozen: Vec<f64>,
@@ -106,9 +104,11 @@ impl<L: BasalFriction + LocalFriction> ViscousColumns2d<L> {
             opts,
             layers: n,
             workers,
-            above,
-            inv_sqrt_above,
-            inv_gap,
+            fractions: Fractions {
+                above,
+                inv_sqrt_above,
+                inv_gap,
+            },
             frozen: vec![0.0; raster.nx() * raster.ny() * n],
             bands: (0..raster.bands() as u32).collect(),
             scratch: (0..threads).map(|_| Mutex::new(column.clone())).collect(),
@@ -121,12 +121,37 @@ impl<L: BasalFriction + LocalFriction> ViscousColumns2d<L> {
     }
 }
 
+/// The column sums of the layer fractions that the coefficients use
+/// (`column_fractions`).
+#[derive(Debug)]
+struct Fractions {
+    above: Vec<f64>,
+    inv_sqrt_above: Vec<f64>,
+    inv_gap: Vec<f64>,
+}
+
 /// What the bands read.
 struct Ctx<'a, L> {
     rheology: ColumnRheology<'a, L>,
     inv_gap: &'a [f64],
     l: &'a [f64],
     g_n: f64,
+}
+
+impl<'a, L> Ctx<'a, L> {
+    fn new(law: L, opts: ViscousOptions, f: &'a Fractions, l: &'a [f64], g_n: f64) -> Self {
+        Ctx {
+            rheology: ColumnRheology {
+                law,
+                opts,
+                above: &f.above,
+                inv_sqrt_above: &f.inv_sqrt_above,
+            },
+            inv_gap: &f.inv_gap,
+            l,
+            g_n,
+        }
+    }
 }
 
 impl<L: BasalFriction + LocalFriction> Ctx<'_, L> {
@@ -233,17 +258,7 @@ impl<L: BasalFriction + LocalFriction> Stage<Raster2d, LayeredRaster> for Viscou
 
     fn prepare(&mut self, raster: &Raster2d, state: &LayeredRaster) {
         let n = self.layers;
-        let ctx = Ctx {
-            rheology: ColumnRheology {
-                law: self.law,
-                opts: self.opts,
-                above: &self.above,
-                inv_sqrt_above: &self.inv_sqrt_above,
-            },
-            inv_gap: &self.inv_gap,
-            l: &state.l,
-            g_n: raster.g_n,
-        };
+        let ctx = Ctx::new(self.law, self.opts, &self.fractions, &state.l, raster.g_n);
         let nx = raster.nx();
         let frozen = Disjoint::new(&mut self.frozen);
         let scratch = &self.scratch;
@@ -281,19 +296,9 @@ impl<L: BasalFriction + LocalFriction> Stage<Raster2d, LayeredRaster> for Viscou
         state: &mut LayeredRaster,
     ) -> Result<(), StageError> {
         let n = self.layers;
-        let ctx = Ctx {
-            rheology: ColumnRheology {
-                law: self.law,
-                opts: self.opts,
-                above: &self.above,
-                inv_sqrt_above: &self.inv_sqrt_above,
-            },
-            inv_gap: &self.inv_gap,
-            l: &state.l,
-            g_n: raster.g_n,
-        };
+        let ctx = Ctx::new(self.law, self.opts, &self.fractions, &state.l, raster.g_n);
         let (nx, g_n, law, l) = (raster.nx(), raster.g_n, self.law, &state.l);
-        let frozen = Disjoint::new(&mut self.frozen);
+        let frozen = &self.frozen;
         let h = &state.h;
         let (hu, hv) = (Disjoint::new(&mut state.hu), Disjoint::new(&mut state.hv));
         let scratch = &self.scratch;
@@ -325,12 +330,7 @@ impl<L: BasalFriction + LocalFriction> Stage<Raster2d, LayeredRaster> for Viscou
                         qu.fill(x);
                         qv.fill(y);
                     } else {
-                        // SAFETY: each band reads its own cells.
-                        unsafe {
-                            for (a, c) in coef.iter_mut().enumerate() {
-                                *c = frozen.get(cell * n + a);
-                            }
-                        }
+                        coef.copy_from_slice(&frozen[cell * n..(cell + 1) * n]);
                         if coef[0].is_nan() {
                             // Dry at t^n, wetted by step 1: its coefficients come from
                             // this state.

@@ -86,8 +86,8 @@ impl LayeredRaster {
         self.h.len()
     }
 
-    /// The depth-averaged velocity (ū, v̄) of `cell` (0 in a dry cell).
-    pub fn mean_velocity(&self, cell: usize) -> (f64, f64) {
+    /// The depth-averaged discharges (h ū, h v̄) = Σ_α l_α (hu, hv)_α of `cell`.
+    pub fn mean_discharge(&self, cell: usize) -> (f64, f64) {
         let n = self.layers;
         let mean = |q: &[f64]| -> f64 {
             q[cell * n..(cell + 1) * n]
@@ -96,8 +96,14 @@ impl LayeredRaster {
                 .map(|(q, l)| q * l)
                 .sum()
         };
+        (mean(&self.hu), mean(&self.hv))
+    }
+
+    /// The depth-averaged velocity (ū, v̄) of `cell` (0 in a dry cell).
+    pub fn mean_velocity(&self, cell: usize) -> (f64, f64) {
+        let (qx, qy) = self.mean_discharge(cell);
         let h = self.h[cell];
-        (velocity(h, mean(&self.hu)), velocity(h, mean(&self.hv)))
+        (velocity(h, qx), velocity(h, qy))
     }
 
     /// The velocity (u_α, v_α) of layer `a` in `cell` (0 in a dry cell).
