@@ -306,6 +306,25 @@ fn midpoints(l: &[f64], h: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The μ(I) law of the Bagnold tests (bagnold.toml's material).
+fn bagnold_law() -> MuI {
+    MuI {
+        mu_s: 0.38,
+        mu_2: 0.62,
+        i0: 0.279,
+        d_s: 0.04,
+        phi: 0.62,
+        shear: MonolayerShear::Bagnold,
+    }
+}
+
+/// (2/3) I_G √(φ g_n)/d_s of the Bagnold profile on slope tan θ = `slope`, where
+/// μ(I_G) = `slope`.
+fn bagnold_scale(law: &MuI, slope: f64, g_n: f64) -> f64 {
+    let i_g = law.i0 * (slope - law.mu_s) / (law.mu_2 - slope);
+    2.0 / 3.0 * i_g * (law.phi * g_n).sqrt() / law.d_s
+}
+
 /// The Bagnold flow of Fernández-Nieto et al. 2016, §4.1.1 (eq. 29; scenarios/bagnold.toml:
 /// μ_s = 0.38, μ_2 = 0.62, I_0 = 0.279, d_s = 4 cm, φ = 0.62, no slip, δ = 1e-5 1/s,
 /// h = 1 m on a slope of tan 0.43) on the line and on a raster whose steepest descent
@@ -317,15 +336,7 @@ fn midpoints(l: &[f64], h: f64) -> Vec<f64> {
 /// direction with the slope's. Returns (relative L1 error, largest |h − 1|, largest
 /// angle error in radians).
 fn bagnold_2d(n: usize, angle_deg: f64, t_end: f64) -> (f64, f64, f64) {
-    let (mu_s, mu_2, i0, d_s, phi) = (0.38, 0.62, 0.279, 0.04, 0.62);
-    let law = MuI {
-        mu_s,
-        mu_2,
-        i0,
-        d_s,
-        phi,
-        shear: MonolayerShear::Bagnold,
-    };
+    let law = bagnold_law();
     let slope = 0.43f64.tan();
     let angle = angle_deg.to_radians();
     let (tan_x, tan_y) = (slope * angle.cos(), slope * angle.sin());
@@ -374,8 +385,7 @@ fn bagnold_2d(n: usize, angle_deg: f64, t_end: f64) -> (f64, f64, f64) {
         t += dt;
     }
     let g_n = r.g_n;
-    let i_g = i0 * (slope - mu_s) / (mu_2 - slope);
-    let scale = 2.0 / 3.0 * i_g * (phi * g_n).sqrt() / d_s;
+    let scale = bagnold_scale(&law, slope, g_n);
     let (mut speeds, mut exact) = (Vec::new(), Vec::new());
     let (mut dh, mut d_angle) = (0.0f64, 0.0f64);
     for cell in 0..cells {
@@ -394,15 +404,7 @@ fn bagnold_2d(n: usize, angle_deg: f64, t_end: f64) -> (f64, f64, f64) {
 /// The line's Bagnold column (one cell between outflows, as the line's test runs it)
 /// after `t_end`: the relative L1 error of its layer velocities.
 fn bagnold_line(n: usize, t_end: f64) -> f64 {
-    let (mu_s, mu_2, i0, d_s, phi) = (0.38, 0.62, 0.279, 0.04, 0.62);
-    let law = MuI {
-        mu_s,
-        mu_2,
-        i0,
-        d_s,
-        phi,
-        shear: MonolayerShear::Bagnold,
-    };
+    let law = bagnold_law();
     let spec = LineSpec {
         x_min: 0.0,
         x_max: 1.0 / 30.0,
@@ -441,8 +443,7 @@ fn bagnold_line(n: usize, t_end: f64) -> f64 {
     }
     let h = state.h[1];
     let slope = 0.43f64.tan();
-    let i_g = i0 * (slope - mu_s) / (mu_2 - slope);
-    let scale = 2.0 / 3.0 * i_g * (phi * line.g_n).sqrt() / d_s;
+    let scale = bagnold_scale(&law, slope, line.g_n);
     let exact: Vec<f64> = midpoints(&l, h)
         .iter()
         .map(|z| scale * (h.powf(1.5) - (h - z).powf(1.5)))
