@@ -28,6 +28,7 @@ use crate::grid::Raster2d;
 use crate::model::band_sums::{self, BandSums};
 use crate::model::granular::config::MultilayerSpec;
 use crate::model::granular::pipeline::{with_law, WithLaw};
+use crate::model::granular::profiles::interface_height;
 use crate::model::raster_maps::RasterMaps;
 use crate::model::tracker::Tracker;
 use crate::model::{first_maximum, Diagnostics, Model};
@@ -148,10 +149,7 @@ impl Layers2d {
                     let (u, v) = state.layer_velocity(k, a);
                     u * u + v * v > thr2
                 });
-                match flowing {
-                    Some(a) => state.l[..a].iter().sum::<f64>() * h,
-                    None => h,
-                }
+                interface_height(&state.l, h, flowing)
             })
             .collect()
     }

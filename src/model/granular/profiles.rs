@@ -72,10 +72,17 @@ pub fn static_interface(state: &LayeredState, threshold: f64, out: &mut [f64]) {
             continue;
         }
         let q = &state.hu[j * n..(j + 1) * n];
-        *out = match q.iter().position(|&q| velocity(h, q).abs() > threshold) {
-            Some(a) => state.l[..a].iter().sum::<f64>() * h,
-            None => h,
-        };
+        let flowing = q.iter().position(|&q| velocity(h, q).abs() > threshold);
+        *out = interface_height(&state.l, h, flowing);
+    }
+}
+
+/// Height above the bed of the base of layer `flowing` (the lowest flowing layer) in a
+/// column of thickness `h` and layer fractions `l`: h when no layer flows.
+pub(crate) fn interface_height(l: &[f64], h: f64, flowing: Option<usize>) -> f64 {
+    match flowing {
+        Some(a) => l[..a].iter().sum::<f64>() * h,
+        None => h,
     }
 }
 
