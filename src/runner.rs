@@ -46,7 +46,7 @@ pub fn check(scn: &Scenario) -> Box<dyn Run> {
 pub fn run_to_files(
     scn: &Scenario,
     h5: &Path,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<RunReport, RunFailure> {
     run_to_files_within(scn, h5, Some(OUTPUT_LIMIT), progress)
 }
@@ -56,7 +56,7 @@ pub fn run_to_files_within(
     scn: &Scenario,
     h5: &Path,
     limit: Option<u64>,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<RunReport, RunFailure> {
     run_to_files_threads(scn, h5, limit, 1, progress)
 }
@@ -67,7 +67,7 @@ pub fn run_to_files_threads(
     h5: &Path,
     limit: Option<u64>,
     threads: usize,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<RunReport, RunFailure> {
     let mut sim = build_threads(scn, threads);
     let front_csv = front_csv_path(h5);

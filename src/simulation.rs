@@ -323,7 +323,7 @@ impl<M: Model> Simulation<M> {
     pub fn run(
         &mut self,
         sink: &mut dyn OutputSink,
-        progress: &mut dyn FnMut(Progress),
+        progress: &mut (dyn FnMut(Progress) + Send),
     ) -> Result<RunSummary, RunError> {
         let wall = Instant::now();
         let grid = GridData {
@@ -354,7 +354,10 @@ impl<M: Model> Simulation<M> {
         };
         tally.settle(&d0, 0.0, self.config.settle_fraction);
         tally.front_end(&d0, 0.0, self.x_last());
-        let result = self.run_loop(sink, progress, &mut tally, d0);
+        let result = match self.model.workers().filter(|w| w.threads() > 1).cloned() {
+            Some(workers) => workers.install(|| self.run_loop(sink, progress, &mut tally, d0)),
+            None => self.run_loop(sink, progress, &mut tally, d0),
+        };
         // The state may be changed between runs: the next step copies it.
         (self.signal_speed, self.saved) = (None, false);
         let status = match &result {
@@ -381,7 +384,7 @@ impl<M: Model> Simulation<M> {
     fn run_loop(
         &mut self,
         sink: &mut dyn OutputSink,
-        progress: &mut dyn FnMut(Progress),
+        progress: &mut (dyn FnMut(Progress) + Send),
         tally: &mut Tally,
         d0: Diagnostics,
     ) -> Result<&'static str, RunError> {
@@ -416,7 +419,7 @@ impl<M: Model> Simulation<M> {
     fn time_loop(
         &mut self,
         sink: &mut dyn OutputSink,
-        progress: &mut dyn FnMut(Progress),
+        progress: &mut (dyn FnMut(Progress) + Send),
         tally: &mut Tally,
         mut gauges: Option<&mut Gauges>,
     ) -> Result<&'static str, RunError> {

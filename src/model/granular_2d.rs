@@ -337,8 +337,8 @@ impl Model for Granular2d {
     }
 
     /// The diagnostics and the copy of the state of t^n ([`Self::save_state`]) in one
-    /// pass: each band's task forms its diagnostics, then copies its stepped tiles (the
-    /// same sums in the same order, the same copy).
+    /// pass: a task per band forms its diagnostics and a task per stepped tile copies
+    /// it (the same sums in the same order, the same copy).
     fn diagnose_and_save(
         &self,
         raster: &Raster2d,
@@ -355,14 +355,13 @@ impl Model for Granular2d {
             Disjoint::new(&mut backup.hu[..]),
             Disjoint::new(&mut backup.hv[..]),
         );
-        let bands = self.workers.map_bands(raster.bands(), |band| {
-            let d = self.band_diagnostics(raster, state, band);
-            for t in tiles.band_tiles(band).filter(|&t| tiles.is_stepped(t)) {
-                // SAFETY: tile t is in band `band`, this task's alone.
-                unsafe { copy_tile(tiles, t, (&h, &hu, &hv), state) };
-            }
-            d
-        });
+        let bands = self.workers.map_bands_and_tiles(
+            raster.bands(),
+            |band| self.band_diagnostics(raster, state, band),
+            tiles.stepped(),
+            // SAFETY: tile t is this task's alone.
+            |t| unsafe { copy_tile(tiles, t, (&h, &hu, &hv), state) },
+        );
         backup.tiles.clone_from(tiles);
         combine(raster, state, &bands)
     }
@@ -417,6 +416,10 @@ impl Model for Granular2d {
 
     fn bed_layer(&self) -> &[f64] {
         &self.h_bed
+    }
+
+    fn workers(&self) -> Option<&Workers> {
+        Some(&self.workers)
     }
 
     /// The top of the flow b + h and the thickness h.

@@ -203,6 +203,10 @@ impl Model for Layers2d {
         &self.h_bed
     }
 
+    fn workers(&self) -> Option<&Workers> {
+        Some(&self.workers)
+    }
+
     /// The top of the flow b + h and the thickness h.
     fn gauge_cell(&self, raster: &Raster2d, state: &LayeredRaster, i: usize) -> Option<(f64, f64)> {
         use crate::grid::Grid;

@@ -29,6 +29,7 @@ pub mod submarine;
 pub mod tracker;
 
 use crate::grid::Grid;
+use crate::numerics::workers::Workers;
 use crate::output::{OutputError, OutputSink};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -126,6 +127,14 @@ pub trait Model: Send + 'static {
 
     /// Thickness of the initial erodible bed per cell (`/grid/h_bed`), zeros if none.
     fn bed_layer(&self) -> &[f64];
+
+    /// The threads the model's stages run on, when it has more than one: the run loop
+    /// then runs on one of them ([`Workers::install`]), so that a stage's parallel pass
+    /// starts from a thread of the pool (no hand-off to the pool and no wake-up of the
+    /// caller at its end). `None` (the default): the caller's thread.
+    fn workers(&self) -> Option<&Workers> {
+        None
+    }
 
     /// Gauge values of physical cell `i` (0-based): (free-surface elevation, grain
     /// depth), in m. The run loop interpolates them linearly between cell centres

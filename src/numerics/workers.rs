@@ -11,6 +11,11 @@
 //! fixed order (band order for sums) or by an order-free rule (the first minimum in
 //! cell order): the results are the same bits for 1, 2 or 4 threads. Scratch is
 //! allocated once by the stage (per thread), so no task allocates.
+//!
+//! A raster run's time loop itself runs on one of the pool's threads
+//! ([`Workers::install`], called by the run loop through `Model::workers`): a pass
+//! then starts and ends on a thread that takes its share of the tasks, where a caller
+//! outside the pool would hand each pass over and sleep until it ends.
 
 pub use crate::state::disjoint::Disjoint;
 use rayon::prelude::*;
@@ -38,6 +43,18 @@ impl Workers {
         })
     }
 
+    /// Runs `f` on a thread of the pool (on the caller's without one), the caller
+    /// waiting: the parallel passes `f` starts then begin and end on a thread of the
+    /// pool, which takes its share of the tasks, instead of a caller that hands every
+    /// pass to the pool and sleeps until it ends (two wake-ups per pass, tens of µs on
+    /// a virtual machine).
+    pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        match &self.pool {
+            None => f(),
+            Some(pool) => pool.install(f),
+        }
+    }
+
     /// Serial execution.
     pub fn serial() -> Workers {
         Workers::default()
@@ -54,6 +71,51 @@ impl Workers {
             None => (0..bands).map(f).collect(),
             Some(pool) => {
                 pool.install(|| (0..bands).into_par_iter().with_max_len(1).map(f).collect())
+            }
+        }
+    }
+
+    /// [`Self::map_bands`] and [`Self::tiles`] in one pass: `band(k)` for every band
+    /// k < `bands` (returned in band order) and `tile(t)` for every tile of `tiles`,
+    /// one task each, the bands first. A pass whose bands are few and unequal (a flow
+    /// in two or three bands of rows) keeps both threads busy with the tiles' tasks.
+    pub fn map_bands_and_tiles<T, B, F>(
+        &self,
+        bands: usize,
+        band: B,
+        tiles: &[u32],
+        tile: F,
+    ) -> Vec<T>
+    where
+        T: Send,
+        B: Fn(usize) -> T + Sync + Send,
+        F: Fn(usize) + Sync + Send,
+    {
+        match &self.pool {
+            None => {
+                let out = (0..bands).map(&band).collect();
+                tiles.iter().for_each(|&t| tile(t as usize));
+                out
+            }
+            Some(pool) => {
+                let task = |k: usize| match k.checked_sub(bands) {
+                    None => Some(band(k)),
+                    Some(i) => {
+                        tile(tiles[i] as usize);
+                        None
+                    }
+                };
+                let all: Vec<Option<T>> = pool.install(|| {
+                    (0..bands + tiles.len())
+                        .into_par_iter()
+                        .with_max_len(1)
+                        .map(task)
+                        .collect()
+                });
+                all.into_iter()
+                    .take(bands)
+                    .map(|b| b.expect("a band's result"))
+                    .collect()
             }
         }
     }
@@ -142,6 +204,51 @@ mod tests {
             w.copy(64, &mut dst, &src);
             assert_eq!(dst, src);
         }
+    }
+
+    #[test]
+    fn bands_and_tiles_in_one_pass_run_each_once_and_bands_come_back_in_order() {
+        for threads in [1, 2, 4] {
+            let w = Workers::new(threads).expect("a pool");
+            for round in 0..100 {
+                let (bands, n) = (1 + round % 9, round % 40);
+                let tiles: Vec<u32> = (0..n as u32).map(|t| 2 * t + 1).collect();
+                let mut seen = vec![0usize; 2 * n + 1];
+                let d = Disjoint::new(&mut seen);
+                let sums = w.map_bands_and_tiles(
+                    bands,
+                    |k| k * 10,
+                    &tiles,
+                    // SAFETY: each tile is one task.
+                    |t| unsafe { d.set(t, d.get(t) + 1) },
+                );
+                assert_eq!(sums, (0..bands).map(|k| k * 10).collect::<Vec<_>>());
+                assert!(seen
+                    .iter()
+                    .enumerate()
+                    .all(|(t, &c)| c == usize::from(t % 2 == 1)));
+            }
+        }
+    }
+
+    #[test]
+    fn install_runs_on_a_thread_of_the_pool_and_its_passes_use_every_thread() {
+        let w = Workers::new(2).expect("a pool");
+        assert_eq!(rayon::current_thread_index(), None);
+        let tiles: Vec<u32> = (0..64).collect();
+        let used = w.install(|| {
+            assert!(rayon::current_thread_index().is_some());
+            let used: Vec<AtomicUsize> = (0..2).map(|_| AtomicUsize::new(0)).collect();
+            w.tiles(&tiles, |thread, _| {
+                // Long enough tasks that the second thread takes some.
+                std::thread::sleep(std::time::Duration::from_micros(200));
+                used[thread].fetch_add(1, Relaxed);
+            });
+            used.iter().map(|u| u.load(Relaxed)).collect::<Vec<_>>()
+        });
+        assert_eq!(used.iter().sum::<usize>(), 64);
+        assert!(used.iter().all(|&u| u > 0), "{used:?}");
+        assert_eq!(Workers::serial().install(|| 7), 7);
     }
 
     #[test]

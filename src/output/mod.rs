@@ -354,8 +354,9 @@ impl RunSummary {
     }
 }
 
-/// Where a run's results go.
-pub trait OutputSink {
+/// Where a run's results go. `Send`: a raster run's loop runs on its own threads
+/// ([`crate::numerics::workers::Workers::install`]), and writes from there.
+pub trait OutputSink: Send {
     fn begin(&mut self, info: &RunInfo, grid: &GridData) -> Result<(), OutputError>;
     fn snapshot(&mut self, snap: &SnapshotView) -> Result<(), OutputError>;
     /// Called after every time step (and once for t = 0).

@@ -21,7 +21,7 @@ pub trait Run: Send {
     fn run(
         &mut self,
         sink: &mut dyn OutputSink,
-        progress: &mut dyn FnMut(Progress),
+        progress: &mut (dyn FnMut(Progress) + Send),
     ) -> Result<RunSummary, RunError>;
     /// Names of the pipeline's stages, in order.
     fn stage_names(&self) -> Vec<&'static str>;
@@ -39,7 +39,7 @@ impl<M: crate::model::Model> Run for Simulation<M> {
     fn run(
         &mut self,
         sink: &mut dyn OutputSink,
-        progress: &mut dyn FnMut(Progress),
+        progress: &mut (dyn FnMut(Progress) + Send),
     ) -> Result<RunSummary, RunError> {
         Simulation::run(self, sink, progress)
     }

@@ -49,7 +49,7 @@ pub fn run_one(
     run: &Prepared,
     dir: &Path,
     force: bool,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut (dyn FnMut(Progress) + Send),
 ) -> RunRecord {
     let name = &run.point.name;
     let h5 = h5_path(dir, name);
