@@ -358,7 +358,7 @@ impl Model for Granular2d {
         let bands = self.workers.map_bands_and_tiles(
             raster.bands(),
             |band| self.band_diagnostics(raster, state, band),
-            tiles.stepped(),
+            tiles.stepped_by_load(),
             // SAFETY: tile t is this task's alone.
             |t| unsafe { copy_tile(tiles, t, (&h, &hu, &hv), state) },
         );
@@ -386,7 +386,7 @@ impl Model for Granular2d {
             Disjoint::new(&mut backup.hu[..]),
             Disjoint::new(&mut backup.hv[..]),
         );
-        self.workers.tiles(tiles.stepped(), |_, t| {
+        self.workers.tiles(tiles.stepped_by_load(), |_, t| {
             // SAFETY: tile t is this task's alone.
             unsafe { copy_tile(tiles, t, (&h, &hu, &hv), state) };
         });

@@ -335,7 +335,7 @@ impl Tracker<Raster2d, State2d> for RasterMaps {
             // threads share the flow's tiles): the maps of the others stand.
             part_reached.resize(tiles.count(), 0);
             let reached = Disjoint::new(&mut part_reached[..]);
-            workers.tiles(tiles.stepped(), |_, t| {
+            workers.tiles(tiles.stepped_by_load(), |_, t| {
                 let n = tiles
                     .row_segments(t)
                     .flatten()

@@ -158,7 +158,7 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
         let (h, tiles) = (&*h, &*tiles);
         let (hu, hv) = (Disjoint::new(hu), Disjoint::new(hv));
         let this = &*self;
-        self.workers.tiles(tiles.stepped(), |_, t| {
+        self.workers.tiles(tiles.stepped_by_load(), |_, t| {
             for k in tiles.row_segments(t).flatten() {
                 // SAFETY: cell k is in tile t, this task's alone.
                 let q = unsafe { (hu.get(k), hv.get(k)) };

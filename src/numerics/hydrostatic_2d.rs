@@ -1431,7 +1431,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let (x, y) = (Disjoint::new(&mut recon.x), Disjoint::new(&mut recon.y));
         let ctx = Ctx::<L, false, true>::new(friction, raster, state, dt);
         let (nx, tiles) = (raster.nx(), &state.tiles);
-        workers.tiles(tiles.stepped(), |_, t| {
+        workers.tiles(tiles.stepped_by_load(), |_, t| {
             let (rows, cols) = tiles.cells(t);
             for j in rows {
                 for i in cols.clone() {
@@ -1476,7 +1476,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let tiles = &state.tiles;
         let (out, friction, scratch, workers, recon) = self.outputs();
         let ctx = Ctx::<L, BN, O2>::new(friction, raster, state, dt).with_recon(recon);
-        workers.tiles(tiles.stepped(), |thread, t| {
+        workers.tiles(tiles.stepped_by_load(), |thread, t| {
             let mut s = scratch[thread].lock().expect("a thread's own scratch");
             let mut worst = (f64::INFINITY, 0usize);
             let mut drains = false;
@@ -1591,7 +1591,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         let cols = tiles.cols();
         let rows_of_tiles = tiles.count() / cols.max(1);
         let drains = |t: usize| self.tile_drains[t];
-        near.extend(tiles.stepped().iter().filter(|&&t| {
+        near.extend(tiles.stepped_by_load().iter().filter(|&&t| {
             let t = t as usize;
             let (band, col) = (t / cols, t % cols);
             drains(t)
@@ -1695,7 +1695,7 @@ impl<L: BasalFriction> HydrostaticStep2d<L> {
         };
         let run: TileRunner = &|list, f| self.workers.tiles(list, f);
         if self.friction_step.is_none() {
-            run(tiles.stepped(), &|_, t| write(tiles, t));
+            run(tiles.stepped_by_load(), &|_, t| write(tiles, t));
             tiles.mark_pending();
             return;
         }

@@ -4,9 +4,10 @@
 //! With one thread there is no pool and the work runs in order on the caller's thread
 //! (no rayon at all). With more, each stepped tile (the stages, the maps, the copy of
 //! the state: [`Workers::tiles`]) or band of rows (the diagnostics, whose sums go band
-//! by band: [`Workers::map_bands`]) is one task
-//! (`with_max_len(1)`: a thread that runs out of work steals single tasks, so the dry
-//! and wet parts of a run balance). The partition does not depend on the number of
+//! by band: [`Workers::map_bands`]) is one task. The threads of a pass over tiles take
+//! its tasks in turn from a shared counter, heavy tiles (with flow) listed first, so
+//! that the pass ends on light tiles and both threads end it together; the bands are
+//! single tasks that a thread out of work steals. The partition does not depend on the number of
 //! threads, each task writes only its own cells, and every reduction is combined in a
 //! fixed order (band order for sums) or by an order-free rule (the first minimum in
 //! cell order): the results are the same bits for 1, 2 or 4 threads. Scratch is
@@ -19,6 +20,7 @@
 
 pub use crate::state::disjoint::Disjoint;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::sync::Arc;
 
 /// The threads of one run's 2-D stages: `None` runs serially.
@@ -87,7 +89,7 @@ impl Workers {
         tile: F,
     ) -> Vec<T>
     where
-        T: Send,
+        T: Copy + Send,
         B: Fn(usize) -> T + Sync + Send,
         F: Fn(usize) + Sync + Send,
     {
@@ -98,22 +100,16 @@ impl Workers {
                 out
             }
             Some(pool) => {
-                let task = |k: usize| match k.checked_sub(bands) {
-                    None => Some(band(k)),
-                    Some(i) => {
-                        tile(tiles[i] as usize);
-                        None
+                let mut out = vec![None; bands];
+                let results = Disjoint::new(&mut out[..]);
+                in_turn(pool, bands + tiles.len(), |_, k| {
+                    match k.checked_sub(bands) {
+                        // SAFETY: entry k is this task's alone.
+                        None => unsafe { results.set(k, Some(band(k))) },
+                        Some(i) => tile(tiles[i] as usize),
                     }
-                };
-                let all: Vec<Option<T>> = pool.install(|| {
-                    (0..bands + tiles.len())
-                        .into_par_iter()
-                        .with_max_len(1)
-                        .map(task)
-                        .collect()
                 });
-                all.into_iter()
-                    .take(bands)
+                out.into_iter()
                     .map(|b| b.expect("a band's result"))
                     .collect()
             }
@@ -142,9 +138,9 @@ impl Workers {
     }
 
     /// Calls `f(thread, t)` for every tile `t` of `tiles`, `thread` < [`Self::threads`]
-    /// the index of the thread that runs it (for its scratch). Each tile is one task
-    /// (`with_max_len(1)`): the threads share the tiles wherever the flow is, and a
-    /// thread that runs out of work steals single tiles. A single tile runs on the
+    /// the index of the thread that runs it (for its scratch). Each tile is one task,
+    /// and the threads take the tiles in turn in the order of `tiles` (pass the heavy
+    /// ones first: `Tiles::stepped_by_load`), wherever the flow is. A single tile runs on the
     /// caller's thread, with no hand-off to the pool (as thread 0 outside the pool,
     /// while the pool is idle).
     pub fn tiles<F>(&self, tiles: &[u32], f: F)
@@ -157,21 +153,37 @@ impl Workers {
                 let thread = rayon::current_thread_index().unwrap_or(0);
                 tiles.iter().for_each(|&t| f(thread, t as usize))
             }
-            Some(pool) => pool.install(|| {
-                tiles
-                    .par_iter()
-                    .with_max_len(1)
-                    .for_each(|&t| f(rayon::current_thread_index().unwrap_or(0), t as usize))
-            }),
+            Some(pool) => in_turn(pool, tiles.len(), |thread, i| f(thread, tiles[i] as usize)),
         }
     }
+}
+
+/// Calls `task(thread, i)` for every i < `n` on the threads of `pool`, each thread
+/// taking the next index as it becomes free, in increasing order (a shared counter):
+/// callers list the heavy tasks first, so that a pass ends on light ones, and a
+/// thread that starts late finds the others' work already done rather than a half of
+/// the list set aside for it. `thread` is the index of the thread in the pool.
+fn in_turn(pool: &rayon::ThreadPool, n: usize, task: impl Fn(usize, usize) + Sync + Send) {
+    let next = AtomicUsize::new(0);
+    let threads = pool.current_num_threads().min(n);
+    pool.install(|| {
+        (0..threads).into_par_iter().with_max_len(1).for_each(|_| {
+            let thread = rayon::current_thread_index().unwrap_or(0);
+            loop {
+                let i = next.fetch_add(1, Relaxed);
+                if i >= n {
+                    break;
+                }
+                task(thread, i);
+            }
+        })
+    });
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::panic::{catch_unwind, AssertUnwindSafe};
-    use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 
     #[test]
     fn every_task_runs_once_and_bands_come_back_in_order() {

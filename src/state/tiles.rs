@@ -77,6 +77,9 @@ pub struct Tiles {
     stepped_flag: Vec<bool>,
     /// The stepped tiles, in increasing order.
     stepped: Vec<u32>,
+    /// The same tiles with the live ones first (each part in increasing order): the
+    /// order in which the threads take them (`numerics::workers::Workers::tiles`).
+    by_load: Vec<u32>,
     /// The stepped tiles were changed by a stage: the stepped set is to be rebuilt.
     pending: bool,
     /// The flags of the pending tiles are those of their cells as the last stage left
@@ -102,6 +105,7 @@ impl Clone for Tiles {
         self.flags.clone_from(&source.flags);
         self.stepped_flag.clone_from(&source.stepped_flag);
         self.stepped.clone_from(&source.stepped);
+        self.by_load.clone_from(&source.by_load);
         (self.pending, self.classified) = (source.pending, source.classified);
         self.every = source.every;
         self.updates = source.updates;
@@ -177,6 +181,13 @@ impl Tiles {
     /// The stepped tiles, in increasing order.
     pub fn stepped(&self) -> &[u32] {
         &self.stepped
+    }
+
+    /// The stepped tiles, those with a live cell first: the order for a pass's tasks,
+    /// the tiles with flow (the costly ones) taken first so that a pass on several
+    /// threads ends on dry tiles, cheap to share.
+    pub fn stepped_by_load(&self) -> &[u32] {
+        &self.by_load
     }
 
     /// Whether tile `t` is stepped.
@@ -256,7 +267,7 @@ impl Tiles {
         let mut flags = std::mem::take(&mut self.flags);
         let out = Disjoint::new(&mut flags[..]);
         let tiles = &*self;
-        run(&tiles.stepped, &|_, t| {
+        run(&tiles.by_load, &|_, t| {
             let bits = write(tiles, t);
             // SAFETY: entry t is this task's alone.
             unsafe { out.set(t, bits) };
@@ -293,6 +304,7 @@ impl Tiles {
             self.flags = vec![0; self.count()];
             self.stepped_flag = vec![false; self.count()];
             self.stepped.clear();
+            self.by_load.clear();
             for t in 0..self.count() {
                 self.flags[t] = self.classify(t, h, hu, hv);
             }
@@ -366,6 +378,11 @@ impl Tiles {
                 self.stepped.push(t as u32);
             }
         }
+        self.by_load.clear();
+        let live = |&&t: &&u32| self.flags[t as usize] & LIVE != 0;
+        self.by_load.extend(self.stepped.iter().filter(live));
+        self.by_load
+            .extend(self.stepped.iter().filter(|t| !live(t)));
     }
 }
 
@@ -395,6 +412,18 @@ mod tests {
         assert_eq!(one_cell(63, 31).stepped(), &[4, 5, 7]);
         // A partial tile's last column is its east edge, with no neighbour there.
         assert_eq!(one_cell(69, 39).stepped(), &[8]);
+    }
+
+    #[test]
+    fn the_tiles_by_load_are_the_stepped_ones_the_live_first() {
+        assert_eq!(one_cell(32, 20).stepped_by_load(), &[4, 3]);
+        assert_eq!(one_cell(63, 31).stepped_by_load(), &[4, 5, 7]);
+        let mut t = one_cell(63, 31);
+        t.step_every_tile();
+        let (h, z) = (vec![0.0; 70 * 40], vec![0.0; 70 * 40]);
+        t.refresh((70, 40), &h, &z, &z);
+        assert_eq!(t.stepped_by_load(), t.stepped());
+        assert_eq!(t.stepped().len(), 9);
     }
 
     #[test]
