@@ -814,3 +814,4 @@ fn similarity_solution_at_both_orders_error_against_run_time() {
         assert!(orders(&inner[1])[1] >= 0.9, "{label}: {inner:?}");
     }
 }
+
