@@ -393,7 +393,7 @@ fn paper_viscosity_breaks_the_fraction_bound_at_the_front() {
 fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (Line, Vec<f64>) {
     use granflow::numerics::friction::CoulombFrictionStep;
     use granflow::numerics::hydrostatic::HydrostaticStep;
-    use granflow::numerics::Stage;
+    use granflow::numerics::{Stage, StepClock};
     use granflow::physics::rheology::{MonolayerShear, MuI};
     use granflow::state::layered::LayeredState as State;
     let mesh = collapse(slope, x_max, cells);
@@ -419,8 +419,9 @@ fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (
             .map(|j| state.mean_velocity(j).abs() + (mesh.g_n * state.h[j]).sqrt())
             .fold(0.0, f64::max);
         let dt = (0.5 * mesh.dx / speed).min(t_end - t);
-        hyperbolic.apply(&mesh, dt, &mut state).unwrap();
-        friction.apply(&mesh, dt, &mut state).unwrap();
+        let clock = StepClock::at(t, dt);
+        hyperbolic.apply(&mesh, clock, &mut state).unwrap();
+        friction.apply(&mesh, clock, &mut state).unwrap();
         t += dt;
     }
     (mesh, state.h[1..=cells].to_vec())

@@ -800,7 +800,7 @@ fn many_short_steps_stay_stable() {
 fn film_ahead_of_a_sheared_column_keeps_its_layer_speeds_bounded() {
     use granflow::grid::{Line, LineSpec};
     use granflow::numerics::hydrostatic::HydrostaticStep;
-    use granflow::numerics::Stage;
+    use granflow::numerics::{Stage, StepClock};
     use granflow::physics::rheology::MuI;
     use granflow::scenario::Coordinates;
     use granflow::state::layered::LayeredState;
@@ -840,7 +840,8 @@ fn film_ahead_of_a_sheared_column_keeps_its_layer_speeds_bounded() {
     let mut step = HydrostaticStep::with_layers(law, cells, n);
     // CFL 0.5 on the column's fastest layer and its celerity.
     let dt = 0.5 * mesh.dx / (3.0 + (G * 0.012).sqrt());
-    step.apply(&mesh, dt, &mut state).unwrap();
+    step.apply(&mesh, StepClock::at(0.0, dt), &mut state)
+        .unwrap();
     let film = layer_velocities_of(&state, 3);
     println!("film layer velocities after one step: {film:?}");
     for u in &film {

@@ -30,7 +30,7 @@
 
 use super::projection::multilayer::SharedOperator;
 use super::viscous::MultilayerViscousStep;
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::Line;
 use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
@@ -103,11 +103,11 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for NhViscousSt
         "viscous"
     }
 
-    fn prepare(&mut self, mesh: &Line, state: &LayeredState) {
+    fn prepare(&mut self, mesh: &Line, clock: StepClock, state: &LayeredState) {
         let lagged_hu = &state.nh.as_ref().expect("non-hydrostatic state").lagged_hu;
         if !self.lagged || lagged_hu.len() != state.hu.len() {
             // The paper's freezing at tⁿ, and the first step of a lagged run.
-            self.viscous.prepare(mesh, state);
+            self.viscous.prepare(mesh, clock, state);
             return;
         }
         // tⁿ with the discharges of the last viscous solve: h is that of tⁿ (the
@@ -115,9 +115,14 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for NhViscousSt
         self.viscous.prepare_with_discharges(mesh, state, lagged_hu);
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
-        self.apply_explicit_pressure(mesh, dt, state);
-        self.viscous.apply(mesh, dt, state)?;
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
+        self.apply_explicit_pressure(mesh, clock.dt, state);
+        self.viscous.apply(mesh, clock, state)?;
         if self.lagged {
             // Copied in pieces below 2048 bytes, where glibc's `memcpy` uses its vector
             // loop rather than `rep movsb` (callgrind counts the latter per byte: 0.10 M
@@ -276,19 +281,21 @@ mod tests {
             }
             let viscous = MultilayerViscousStep::new(law(), mesh.nx, &s.l, options());
             let mut step = NhViscousStep::new(&mesh, &s.l, viscous);
-            step.prepare(&mesh, &s);
+            let clock = StepClock::at(0.0, 1e-3);
+            step.prepare(&mesh, clock, &s);
             // Remove the explicit terms' effect by comparing against them separately:
             // a uniform p in x has no horizontal force in the interior except via the
             // depth slopes, so compare only the total (friction) effect below.
-            step.apply(&mesh, 1e-3, &mut s).unwrap();
+            step.apply(&mesh, clock, &mut s).unwrap();
             s
         };
         let mut hydro = state.clone();
         hydro.nh = None;
         hydro.tracers.clear();
         let mut plain = MultilayerViscousStep::new(law(), mesh.nx, &hydro.l, options());
-        plain.prepare(&mesh, &hydro);
-        plain.apply(&mesh, 1e-3, &mut hydro).unwrap();
+        let clock = StepClock::at(0.0, 1e-3);
+        plain.prepare(&mesh, clock, &hydro);
+        plain.apply(&mesh, clock, &mut hydro).unwrap();
         let zero = run(0.0);
         // p^nh = 0: the hydrostatic step's equations (the pressures are formed per
         // interface instead of scaled from the bed, so only to round-off).
@@ -347,8 +354,9 @@ mod tests {
             NhViscousStep::new(&mesh, &state0.l, viscous).lagged(true)
         };
         let advance = |step: &mut NhViscousStep<MuI>, s: &mut LayeredState, dt: f64| {
-            step.prepare(&mesh, s);
-            step.apply(&mesh, dt, s).unwrap();
+            let clock = StepClock::at(0.0, dt);
+            step.prepare(&mesh, clock, s);
+            step.apply(&mesh, clock, s).unwrap();
         };
         let dt = 1e-3;
         let mut clean = state0.clone();

@@ -35,7 +35,7 @@ use super::split::SplitScheme;
 use super::step::DilatantOptions;
 use crate::grid::Line;
 use crate::numerics::muscl::Limiter;
-use crate::numerics::{Stage, StageError};
+use crate::numerics::{Stage, StageError, StepClock};
 use crate::physics::dilatancy::DilatantLaw;
 use crate::physics::shallow::H_DRY;
 use crate::state::DilatantState;
@@ -114,7 +114,12 @@ impl Stage<Line, DilatantState> for HeunSplit {
         "ssp_rk2"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
-        self.step(mesh, state, dt)
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut DilatantState,
+    ) -> Result<(), StageError> {
+        self.step(mesh, state, clock.dt)
     }
 }

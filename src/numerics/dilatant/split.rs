@@ -110,7 +110,7 @@ use super::step::DilatantOptions;
 use crate::grid::Line;
 use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::muscl::Limiter;
-use crate::numerics::{Stage, StageError};
+use crate::numerics::{Stage, StageError, StepClock};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
 use crate::physics::rheology::{
     depth_weighted_mu, inertial_number, BasalFriction, MonolayerShear, MuI, STATIC_ROUNDOFF,
@@ -1110,8 +1110,13 @@ impl Stage<Line, DilatantState> for SplitScheme {
         "dilatant"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
-        self.step(mesh, state, dt)
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut DilatantState,
+    ) -> Result<(), StageError> {
+        self.step(mesh, state, clock.dt)
     }
 }
 

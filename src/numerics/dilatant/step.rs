@@ -17,7 +17,7 @@ use super::reconstruction::Side;
 use super::source::{relax_fraction, DilatancyUpdate};
 use super::stabilisation::{diffuse, Viscosity};
 use crate::grid::Line;
-use crate::numerics::{Stage, StageError};
+use crate::numerics::{Stage, StageError, StepClock};
 use crate::physics::dilatancy::{phi_from_ratio, DilatantLaw};
 use crate::state::DilatantState;
 
@@ -371,8 +371,13 @@ impl Stage<Line, DilatantState> for DilatantScheme {
         "dilatant"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
-        match self.step(mesh, state, f64::NAN, dt) {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut DilatantState,
+    ) -> Result<(), StageError> {
+        match self.step(mesh, state, clock.t, clock.dt) {
             Ok(_) => Ok(()),
             Err(DilatantError::NegativeMass { cell, m, .. }) => Err(StageError::Inadmissible {
                 cell,

@@ -1023,7 +1023,7 @@ mod tests {
     use crate::numerics::banded::{assemble_rows, stencil_residual};
     use crate::numerics::projection::monolayer::{constraint_residual, MonolayerOperator};
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
-    use crate::numerics::Stage;
+    use crate::numerics::{Stage, StepClock};
 
     /// [`moving_state`] on 60 cells with cell 40 dry (its two faces carry no unknown),
     /// and the operator updated to it.
@@ -1119,7 +1119,8 @@ mod tests {
                     let before = residual(&mesh, &state);
                     assert!(before.relative() > 1e-2, "the test state must violate (9d)");
                     let mut st = stage(&mesh, &state);
-                    st.apply(&mesh, 1e-3, &mut state).unwrap();
+                    st.apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+                        .unwrap();
                     let after = residual(&mesh, &state);
                     let outflows = [left, right]
                         .iter()
@@ -1133,7 +1134,8 @@ mod tests {
                     );
                     assert!(after.relative() <= 1e-12, "N = {layers}: {after:?}");
                     // A second projection has nothing left to do.
-                    st.apply(&mesh, 1e-3, &mut state).unwrap();
+                    st.apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+                        .unwrap();
                     let dp = st.last_impulse().iter().fold(0.0f64, |m, v| m.max(v.abs()));
                     let p = state
                         .nh
@@ -1176,7 +1178,8 @@ mod tests {
                 state.fill_ghosts(&mesh);
                 let before = state.clone();
                 let mut st = stage(&mesh, &state);
-                st.apply(&mesh, 1e-3, &mut state).unwrap();
+                st.apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+                    .unwrap();
                 let pi = st.last_impulse().iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 let du = state
                     .hu
@@ -1450,6 +1453,7 @@ mod tests {
                 mesh.nx,
             );
             for step in 0..2 {
+                let clock = StepClock::at(step as f64 * 1e-3, 1e-3);
                 if step > 0 {
                     // Perturb both the same way so that the second projection has work.
                     for s in [&mut a, &mut b] {
@@ -1459,8 +1463,8 @@ mod tests {
                         s.fill_ghosts(&mesh);
                     }
                 }
-                mono.apply(&mesh, 1e-3, &mut a).unwrap();
-                stage(&mesh, &b).apply(&mesh, 1e-3, &mut b).unwrap();
+                mono.apply(&mesh, clock, &mut a).unwrap();
+                stage(&mesh, &b).apply(&mesh, clock, &mut b).unwrap();
             }
             let (na, nb) = (a.nh.as_ref().unwrap(), b.nh.as_ref().unwrap());
             let (hwa, hwb) = (a.hw(), b.hw());
@@ -1564,7 +1568,9 @@ mod tests {
                 let (mesh, mut state) = moving_state(201, layers, left, right, true);
                 let before = MultilayerOperator::kinetic_energy(&state);
                 let (hu0, hw0) = (state.hu.clone(), state.hw().to_vec());
-                stage(&mesh, &state).apply(&mesh, 1e-3, &mut state).unwrap();
+                stage(&mesh, &state)
+                    .apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+                    .unwrap();
                 let after = MultilayerOperator::kinetic_energy(&state);
                 let hw = state.hw();
                 let n = layers;
@@ -1598,7 +1604,9 @@ mod tests {
             state.hu[i * 3..i * 3 + 3].fill(0.0);
             state.hw_mut()[i * 3..i * 3 + 3].fill(0.0);
         }
-        stage(&mesh, &state).apply(&mesh, 1e-3, &mut state).unwrap();
+        stage(&mesh, &state)
+            .apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+            .unwrap();
         let p = &state.nh.as_ref().unwrap().p;
         assert_eq!(&p[0..3], &p[3..6]);
         assert_eq!(&p[60 * 3..61 * 3], &p[59 * 3..60 * 3]);
