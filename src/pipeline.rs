@@ -50,12 +50,19 @@ impl<G, S> Pipeline<G, S> {
         Ok(())
     }
 
-    /// Per-stage wall times (s), in pipeline order.
+    /// Per-stage wall times (s), in pipeline order; a stage that times its parts
+    /// ([`Stage::part_times`]) gives one entry per part.
     pub fn times(&self) -> Vec<(String, f64)> {
-        self.stages
-            .iter()
-            .zip(&self.times)
-            .map(|(s, t)| (s.name().to_string(), t.as_secs_f64()))
-            .collect()
+        let mut times = Vec::with_capacity(self.stages.len());
+        for (stage, &time) in self.stages.iter().zip(&self.times) {
+            let parts = stage.part_times();
+            if parts.is_empty() {
+                times.push((stage.name().to_string(), time.as_secs_f64()));
+            }
+            for (name, time) in parts {
+                times.push((name.to_string(), time.as_secs_f64()));
+            }
+        }
+        times
     }
 }

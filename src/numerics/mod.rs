@@ -8,6 +8,8 @@
 //! never `model/` or `scenario/`; long inner loops also read the Ctrl-C flag
 //! ([`crate::interrupt`]) and give up the step with [`StageError::Interrupted`].
 
+use std::time::Duration;
+
 pub mod banded;
 pub mod bed_normal;
 pub mod dilatant;
@@ -127,4 +129,10 @@ pub trait Stage<G, S>: Send {
     /// Advances `state` by `clock.dt`. On error the state may be left part-way: the run
     /// loop restores the state of tⁿ before it retries or fails.
     fn apply(&mut self, grid: &G, clock: StepClock, state: &mut S) -> Result<(), StageError>;
+    /// The stage's wall time in named parts, for a stage made of steps worth timing
+    /// apart (the steps 2 and 3 of the N-layer non-hydrostatic model): the pipeline
+    /// reports these instead of its own timer of the stage. The default: none.
+    fn part_times(&self) -> Vec<(&'static str, Duration)> {
+        Vec::new()
+    }
 }

@@ -291,7 +291,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
 
     /// [`Stage::prepare`] with the discharges `hu` in place of `state.hu` (h, the layer
     /// fractions and p^nh are those of `state`): the lagged freezing of
-    /// [`crate::numerics::nh_multilayer::NhViscousStep`].
+    /// [`crate::numerics::nh_multilayer::NhViscousProjection`].
     pub fn prepare_with_discharges(&mut self, mesh: &Line, state: &LayeredState, hu: &[f64]) {
         debug_assert_eq!(state.layers, self.layers);
         debug_assert_eq!(hu.len(), state.hu.len());
