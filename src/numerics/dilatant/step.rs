@@ -9,8 +9,10 @@
 //! Invariants, checked after every sub-step: φh ≥ 0 and 0 < φ < 1 in every cell. The
 //! finite-volume step keeps φh ≥ 0 under the CFL condition (Theorem B.1 iv) and φ ≥
 //! its minimum (viii), but not φ ≤ its maximum; a violation is returned as a
-//! [`DilatantError`] naming the cell, x and t, and the state is not modified. φh
-//! below zero by round-off only (|φh| ≤ 1e-14 × the neighbouring φh) is set to 0.
+//! [`DilatantError`] naming the cell, x and t. [`DilatantScheme::step`], for a driver
+//! of its own, then leaves the state as it was; the stage of a run does not copy it,
+//! since the run loop restores the state of tⁿ. φh below zero by round-off only
+//! (|φh| ≤ 1e-14 × the neighbouring φh) is set to 0.
 
 use super::flux::{interface_flux, total_topography_jump, FaceGrid, FluxOptions};
 use super::reconstruction::Side;
@@ -109,7 +111,7 @@ pub struct DilatantScheme {
     drive: Vec<f64>,
     rate: Vec<f64>,
     scratch: Vec<f64>,
-    /// (m, q, w) at t^n, restored when a step fails.
+    /// (m, q, w) at t^n, restored when a [`step`](Self::step) fails.
     backup: [Vec<f64>; 3],
 }
 
@@ -140,7 +142,8 @@ impl DilatantScheme {
         }
     }
 
-    /// Advances `s` from t to t + dt. On error `s` is left as it was at t.
+    /// Advances `s` from t to t + dt. On error `s` is left as it was at t (for a driver
+    /// without the run loop; the [`Stage`] advances without the copy).
     pub fn step(
         &mut self,
         mesh: &Line,
@@ -377,7 +380,8 @@ impl Stage<Line, DilatantState> for DilatantScheme {
         clock: StepClock,
         state: &mut DilatantState,
     ) -> Result<(), StageError> {
-        match self.step(mesh, state, clock.t, clock.dt) {
+        // On error the run loop restores the state of tⁿ: no copy of it here.
+        match self.advance(mesh, state, clock.t, clock.dt) {
             Ok(_) => Ok(()),
             Err(DilatantError::NegativeMass { cell, m, .. }) => Err(StageError::Inadmissible {
                 cell,
