@@ -7,8 +7,11 @@
 //!
 //!   U^{n+1} = U^{n+2/3} + Δt 𝒯(p̃),   𝒞(U^{n+1}) = 0   at every face.
 //!
-//! The unknown is the impulse Π = Δt p̃, so the matrix does not depend on Δt. The stage
-//! is generic over two parts, so the multilayer model (Escalante et al. 2023) reuses it:
+//! The unknown is the impulse Π = Δt p̃, so the matrix does not depend on Δt. A
+//! projection has two parts ([`ProjectionStage`] runs any pair as a stage: the
+//! monolayer's; the N-layer model of Escalante et al. 2023 runs its pair inside the
+//! stage of its steps 2 and 3, [`super::nh_multilayer`], whose explicit terms use the
+//! same operator):
 //!
 //! - a [`ProjectionOperator`]: the discrete constraint and the discrete correction of
 //!   one model. It forms A Π = −𝒞(U^{n+2/3}), one block of unknowns per face (m = 1 for
@@ -103,8 +106,8 @@ pub trait ProjectionOperator<G, S>: PressureBlocks + Send + std::fmt::Debug {
     /// Applies the correction of the impulses `pi` to the discharges (hu, hw) of
     /// `state` (h has not changed since [`solve`](Self::solve)), and advances the
     /// pressure, p ← p + Π/Δt_p, resetting it to 0 on faces without a constraint.
-    /// `dt_p` is the step of the rate ([`ProjectionStage`]: the step taken, or the full
-    /// step when the step taken was shortened to land on an output time).
+    /// `dt_p` is the step of the rate ([`StepClock::rate_step`]: the step taken, or the
+    /// full step when the step taken was shortened to land on an output time).
     fn correct(&mut self, grid: &G, state: &mut S, pi: &[f64], dt_p: f64);
 }
 
