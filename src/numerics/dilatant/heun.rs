@@ -69,12 +69,10 @@ impl HeunSplit {
         }
     }
 
-    /// Advances `s` by `dt`; on error `s` is as it was.
+    /// Advances `s` by `dt`; on error `s` is as it was (for a driver without the run
+    /// loop: the stage of a run leaves that to the run loop).
     pub fn step(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
-        self.h0.copy_from_slice(&s.h);
-        self.hu0.copy_from_slice(&s.hu);
-        self.phi0.copy_from_slice(&s.phi);
-        let result = self.stages(mesh, s, dt);
+        let result = self.heun(mesh, s, dt);
         if result.is_err() {
             s.h.copy_from_slice(&self.h0);
             s.hu.copy_from_slice(&self.hu0);
@@ -83,8 +81,12 @@ impl HeunSplit {
         result
     }
 
-    fn stages(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
-        self.scheme.step(mesh, s, dt)?;
+    /// Saves Uⁿ (the average needs it) and runs both stages; on error `s` is part-way.
+    fn heun(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
+        self.h0.copy_from_slice(&s.h);
+        self.hu0.copy_from_slice(&s.hu);
+        self.phi0.copy_from_slice(&s.phi);
+        self.scheme.split_step(mesh, s, dt)?;
         self.scheme.hyperbolic_step(mesh, s, dt)?;
         self.average(mesh, s);
         self.scheme.cell_step(mesh, s, 0.5 * dt)
@@ -120,6 +122,7 @@ impl Stage<Line, DilatantState> for HeunSplit {
         clock: StepClock,
         state: &mut DilatantState,
     ) -> Result<(), StageError> {
-        self.step(mesh, state, clock.dt)
+        // On error the run loop restores the state of tⁿ.
+        self.heun(mesh, state, clock.dt)
     }
 }
