@@ -28,7 +28,7 @@ use granflow::numerics::dilatant::split::SplitScheme;
 use granflow::numerics::dilatant::step::{DilatantOptions, DilatantScheme};
 use granflow::numerics::friction::CoulombFrictionStep;
 use granflow::numerics::hydrostatic::HydrostaticStep;
-use granflow::numerics::Stage;
+use granflow::numerics::{Stage, StepClock};
 use granflow::physics::dilatancy::DilatantLaw;
 use granflow::physics::rheology::{MonolayerShear, MuI};
 use granflow::physics::shallow::velocity;
@@ -47,6 +47,8 @@ const MU_I: MuI = MuI {
 
 struct SavageHutter {
     state: State,
+    /// Time of the state.
+    t: f64,
     hyperbolic: HydrostaticStep<MuI>,
     friction: CoulombFrictionStep<MuI>,
 }
@@ -57,9 +59,10 @@ impl SavageHutter {
         let speed = (1..=mesh.nx)
             .map(|j| s.mean_velocity(j).abs() + (mesh.g_n * s.h[j]).sqrt())
             .fold(0.0, f64::max);
-        let dt = 0.5 * mesh.dx / speed;
-        self.hyperbolic.apply(mesh, dt, &mut self.state).unwrap();
-        self.friction.apply(mesh, dt, &mut self.state).unwrap();
+        let clock = StepClock::at(self.t, 0.5 * mesh.dx / speed);
+        self.t += clock.dt;
+        self.hyperbolic.apply(mesh, clock, &mut self.state).unwrap();
+        self.friction.apply(mesh, clock, &mut self.state).unwrap();
     }
 }
 
@@ -117,6 +120,7 @@ impl SavageHutter {
     fn new(mesh: &Line, h: &[f64]) -> Self {
         SavageHutter {
             state: State::from_profiles(mesh, &[1.0], h, &vec![0.0; mesh.nx]),
+            t: 0.0,
             hyperbolic: HydrostaticStep::new(MU_I, mesh.nx),
             friction: CoulombFrictionStep::new(MU_I),
         }

@@ -25,7 +25,7 @@ use granflow::model::tracker::Tracker;
 use granflow::model::Model;
 use granflow::numerics::hydrostatic_2d::HydrostaticStep2d;
 use granflow::numerics::workers::Workers;
-use granflow::numerics::Stage;
+use granflow::numerics::{Stage, StepClock};
 use granflow::output::memory::MemorySink;
 use granflow::physics::rheology::{Coulomb, FrictionLaw};
 use granflow::physics::Material;
@@ -62,6 +62,11 @@ fn dt(r: &Raster2d) -> f64 {
     0.4 * r.dx() / ((9.81f64 * 0.5).sqrt() + 1.0)
 }
 
+/// Step `k` of Δt = [`dt`].
+fn step_clock(r: &Raster2d, k: usize) -> StepClock {
+    StepClock::at(k as f64 * dt(r), dt(r))
+}
+
 /// Seconds per step of `stage` (best of three blocks of `steps` steps from a state
 /// that has flowed 10 steps).
 fn time_stage(
@@ -74,8 +79,8 @@ fn time_stage(
     for _ in 0..3 {
         let mut s = s0.clone();
         let start = Instant::now();
-        for _ in 0..steps {
-            stage.apply(r, dt(r), &mut s).unwrap();
+        for k in 0..steps {
+            stage.apply(r, step_clock(r, k), &mut s).unwrap();
         }
         best = best.min(start.elapsed().as_secs_f64() / steps as f64);
     }
@@ -122,8 +127,8 @@ fn time_run_step(
     for _ in 0..3 {
         let mut s = s0.clone();
         let start = Instant::now();
-        for _ in 0..steps {
-            pipe.advance(r, dt(r), &mut s).unwrap();
+        for k in 0..steps {
+            pipe.advance(r, step_clock(r, k), &mut s).unwrap();
         }
         stages_only = stages_only.min(start.elapsed().as_secs_f64() / steps as f64);
         let mut s = s0.clone();
@@ -136,7 +141,7 @@ fn time_run_step(
             model.save_state(&mut backup, &s);
             t[0] += clock.elapsed().as_secs_f64();
             let clock = Instant::now();
-            pipe.advance(r, dt(r), &mut s).unwrap();
+            pipe.advance(r, step_clock(r, k), &mut s).unwrap();
             t[1] += clock.elapsed().as_secs_f64();
             let clock = Instant::now();
             let d = model.diagnose(r, &s);
@@ -169,8 +174,8 @@ fn main() {
     for n in [256, 1024] {
         let (r, mut s) = setup(n);
         let mut pipe = granular_2d::pipeline(&friction, &material, &r, 1).unwrap();
-        for _ in 0..10 {
-            pipe.advance(&r, dt(&r), &mut s).unwrap();
+        for k in 0..10 {
+            pipe.advance(&r, step_clock(&r, k), &mut s).unwrap();
         }
         let steps = if n > 512 { 10 } else { 100 };
         let mut step1 = HydrostaticStep2d::new(law, &r, Workers::serial());
@@ -224,7 +229,7 @@ fn main() {
         let mut maps = RasterMaps::new(n * n, 1e-3, 1550.0).with_workers(workers);
         maps.observe(&r, &s, 0.0);
         for k in 0..steps {
-            pipe.advance(&r, dt(&r), &mut s).unwrap();
+            pipe.advance(&r, step_clock(&r, k), &mut s).unwrap();
             maps.observe(&r, &s, (k + 1) as f64 * dt(&r));
         }
         let mut t_write = f64::INFINITY;

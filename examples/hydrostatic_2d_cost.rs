@@ -25,7 +25,7 @@ use granflow::grid::{BoundaryKind, Coordinates, Raster2d, RasterSpec, Sides};
 use granflow::model::granular_2d;
 use granflow::numerics::hydrostatic_2d::HydrostaticStep2d;
 use granflow::numerics::workers::Workers;
-use granflow::numerics::Stage;
+use granflow::numerics::{Stage, StepClock};
 use granflow::physics::rheology::{Coulomb, FrictionLaw};
 use granflow::physics::Material;
 use granflow::state::State2d;
@@ -103,10 +103,11 @@ fn main() {
             signal = signal.max(u.abs().max(v.abs()) + (g_n * h.max(0.0)).sqrt());
         }
         let dt = 0.5 * length / signal;
+        let clock = StepClock::at(t, dt);
         if let Some(pipeline) = pipeline.as_mut() {
-            pipeline.advance(&raster, dt, &mut state).expect("step");
+            pipeline.advance(&raster, clock, &mut state).expect("step");
         } else {
-            hyperbolic.apply(&raster, dt, &mut state).expect("step");
+            hyperbolic.apply(&raster, clock, &mut state).expect("step");
         }
         t += dt;
     }

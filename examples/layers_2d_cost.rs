@@ -18,7 +18,7 @@ use granflow::numerics::layers_2d::LayersStep2d;
 use granflow::numerics::viscous::{BasalCondition, Regularization, ViscosityTime, ViscousOptions};
 use granflow::numerics::viscous_2d::ViscousColumns2d;
 use granflow::numerics::workers::Workers;
-use granflow::numerics::Stage;
+use granflow::numerics::{Stage, StepClock};
 use granflow::physics::rheology::{MonolayerShear, MuI};
 use granflow::state::layered_raster::LayeredRaster;
 use granflow::state::State2d;
@@ -84,7 +84,8 @@ fn main() {
         shear: MonolayerShear::Bagnold,
     };
     let cells = (n * n) as f64;
-    let dt = 1e-4;
+    // One step of 0.1 ms from the initial state, repeated.
+    let clock = StepClock::at(0.0, 1e-4);
     let h = vec![0.05; n * n];
 
     let mut mono = HydrostaticStep2d::new(law, &raster, Workers::serial());
@@ -93,7 +94,7 @@ fn main() {
     let mono_time = best_of_three(steps, || {
         state.clone_from(&initial);
         state.touch();
-        mono.apply(&raster, dt, &mut state).unwrap();
+        mono.apply(&raster, clock, &mut state).unwrap();
     }) / cells;
     let mono_bytes = 24.0 + mono.bytes_per_cell();
     println!("{n} × {n} cells, {steps} steps, one thread");
@@ -118,7 +119,7 @@ fn main() {
         let mut step = LayersStep2d::new(law, &raster, &l, Workers::serial());
         let hyp = best_of_three(steps, || {
             state.clone_from(&initial);
-            step.apply(&raster, dt, &mut state).unwrap();
+            step.apply(&raster, clock, &mut state).unwrap();
         }) / cells;
         let mut bytes = 8.0 * (1 + 2 * layers) as f64 + step.bytes_per_cell();
         let visc = if layers > 1 {
@@ -133,8 +134,8 @@ fn main() {
             bytes += visc.bytes_per_cell();
             best_of_three(steps, || {
                 state.clone_from(&initial);
-                visc.prepare(&raster, &state);
-                visc.apply(&raster, dt, &mut state).unwrap();
+                visc.prepare(&raster, clock, &state);
+                visc.apply(&raster, clock, &mut state).unwrap();
             }) / cells
         } else {
             0.0

@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use crate::numerics::{Stage, StageError};
+use crate::numerics::{Stage, StageError, StepClock};
 
 /// The stages of one model's time step on grid `G`, acting on state `S`, with their
 /// accumulated wall times.
@@ -31,44 +31,38 @@ impl<G, S> Pipeline<G, S> {
         self.stages.iter().map(|s| s.name()).collect()
     }
 
-    /// Advances `state` by `dt`: every stage's `prepare` with the state at t^n, then
-    /// every stage's `apply` in order. On error the state is part-way through the step
-    /// (the stages before the failing one have been applied): the caller restores its
-    /// copy of the state at t^n ([`crate::simulation::Simulation::step`] does).
-    pub fn advance(&mut self, grid: &G, dt: f64, state: &mut S) -> Result<(), StageError> {
-        self.advance_shortened(grid, dt, dt, state)
-    }
-
-    /// [`advance`](Self::advance) by `dt` ≤ `dt_full`, the step the stability condition
-    /// allows, shortened to land on an output time: every stage learns `dt_full`
-    /// ([`Stage::full_step`]) before its `prepare`.
-    pub fn advance_shortened(
-        &mut self,
-        grid: &G,
-        dt: f64,
-        dt_full: f64,
-        state: &mut S,
-    ) -> Result<(), StageError> {
+    /// Advances `state` by `clock.dt`: every stage's `prepare` with the state at tⁿ,
+    /// then every stage's `apply` in order, each with `clock`. On error the state is
+    /// part-way through the step (the stages before the failing one have been applied):
+    /// the caller restores its copy of the state at tⁿ
+    /// ([`crate::simulation::Simulation::step`] does).
+    pub fn advance(&mut self, grid: &G, clock: StepClock, state: &mut S) -> Result<(), StageError> {
         for (stage, time) in self.stages.iter_mut().zip(&mut self.times) {
             let start = Instant::now();
-            stage.full_step(dt_full);
-            stage.prepare(grid, state);
+            stage.prepare(grid, clock, state);
             *time += start.elapsed();
         }
         for (stage, time) in self.stages.iter_mut().zip(&mut self.times) {
             let start = Instant::now();
-            stage.apply(grid, dt, state)?;
+            stage.apply(grid, clock, state)?;
             *time += start.elapsed();
         }
         Ok(())
     }
 
-    /// Per-stage wall times (s), in pipeline order.
+    /// Per-stage wall times (s), in pipeline order; a stage that times its parts
+    /// ([`Stage::part_times`]) gives one entry per part.
     pub fn times(&self) -> Vec<(String, f64)> {
-        self.stages
-            .iter()
-            .zip(&self.times)
-            .map(|(s, t)| (s.name().to_string(), t.as_secs_f64()))
-            .collect()
+        let mut times = Vec::with_capacity(self.stages.len());
+        for (stage, &time) in self.stages.iter().zip(&self.times) {
+            let parts = stage.part_times();
+            if parts.is_empty() {
+                times.push((stage.name().to_string(), time.as_secs_f64()));
+            }
+            for (name, time) in parts {
+                times.push((name.to_string(), time.as_secs_f64()));
+            }
+        }
+        times
     }
 }

@@ -18,7 +18,7 @@ use crate::gauges::Gauges;
 use crate::grid::Grid;
 use crate::model::tracker::Tracker;
 use crate::model::{Diagnostics, Model};
-use crate::numerics::StageError;
+use crate::numerics::{StageError, StepClock};
 use crate::output::{
     GridData, OutputError, OutputSink, RunInfo, RunSummary, Spread, StepRecord, WetCells,
 };
@@ -228,27 +228,24 @@ impl<M: Model> Simulation<M> {
         };
         // The step the stability condition allows, and the step taken: shorter when it
         // lands on an output time (stages that turn an increment into a rate use the
-        // former, `Stage::full_step`).
-        let mut dt_full = self.cfl_dt(s);
-        let mut dt = dt_full.min(dt_max);
+        // former, `StepClock::rate_step`).
+        let dt_full = self.cfl_dt(s);
+        let mut clock = StepClock::new(self.t, dt_full.min(dt_max), dt_full);
         let mut last_failure = None;
         if !std::mem::take(&mut self.saved) {
             self.model.save_state(&mut self.backup, &self.state);
         }
         for _ in 0..=MAX_RETRIES {
-            let attempt = self
-                .pipeline
-                .advance_shortened(&self.grid, dt, dt_full, &mut self.state);
+            let attempt = self.pipeline.advance(&self.grid, clock, &mut self.state);
             match attempt {
                 Ok(()) => {
                     self.steps += 1;
-                    return Ok(dt);
+                    return Ok(clock.dt);
                 }
                 Err(StageError::NegativeThickness { cell, h }) => {
                     self.state.clone_from(&self.backup);
-                    last_failure = Some((cell, h, dt));
-                    dt *= 0.5;
-                    dt_full *= 0.5;
+                    last_failure = Some((cell, h, clock.dt));
+                    clock = clock.halved();
                 }
                 Err(StageError::Inadmissible {
                     cell,
@@ -617,8 +614,13 @@ mod tests {
         fn name(&self) -> &'static str {
             "grow"
         }
-        fn apply(&mut self, _: &Line, dt: f64, s: &mut LayeredState) -> Result<(), StageError> {
-            s.h[1] += dt;
+        fn apply(
+            &mut self,
+            _: &Line,
+            clock: StepClock,
+            s: &mut LayeredState,
+        ) -> Result<(), StageError> {
+            s.h[1] += clock.dt;
             Ok(())
         }
     }
@@ -633,7 +635,12 @@ mod tests {
         fn name(&self) -> &'static str {
             "refuse"
         }
-        fn apply(&mut self, _: &Line, _: f64, _: &mut LayeredState) -> Result<(), StageError> {
+        fn apply(
+            &mut self,
+            _: &Line,
+            _: StepClock,
+            _: &mut LayeredState,
+        ) -> Result<(), StageError> {
             if self.failures > 0 {
                 self.failures -= 1;
                 return Err(self.error.clone());
@@ -651,7 +658,12 @@ mod tests {
         fn name(&self) -> &'static str {
             "give_up"
         }
-        fn apply(&mut self, _: &Line, _: f64, _: &mut LayeredState) -> Result<(), StageError> {
+        fn apply(
+            &mut self,
+            _: &Line,
+            _: StepClock,
+            _: &mut LayeredState,
+        ) -> Result<(), StageError> {
             if self.accepted == 0 {
                 return Err(StageError::Interrupted);
             }

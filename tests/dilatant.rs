@@ -388,12 +388,49 @@ fn paper_viscosity_breaks_the_fraction_bound_at_the_front() {
     .unwrap();
 }
 
+/// The same refusal in a run: the Appendix B stage does not copy the state it advances,
+/// and the run loop, which restores the state of tⁿ, fails the run with the state of
+/// the last accepted step, naming the fraction.
+#[test]
+fn a_step_refused_by_the_appendix_b_stage_leaves_the_state_before_it() {
+    use granflow::simulation::RunError;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let sets: Vec<String> = [
+        "domain.slope_deg=0",
+        "domain.x_max=1.8",
+        "domain.cells=200",
+        "dilatancy.scheme=\"appendix_b\"",
+        "dilatancy.xi=[2.0, 2.0, 5.0]",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let file = dir.join("scenarios").join("dilatancy_dense.toml");
+    let scn = granflow::scenario::load_file(&file, &sets).unwrap();
+    let mut sim = granflow::setup::build_dilatant(&scn);
+    for _ in 0..1000 {
+        let before = sim.state.clone();
+        match sim.step(f64::INFINITY) {
+            Ok(dt) => sim.t += dt,
+            Err(RunError::Solver(failure)) => {
+                println!("{failure}");
+                assert!(failure.to_string().contains("volume fraction"), "{failure}");
+                assert!(sim.steps > 0);
+                assert!(sim.state == before, "the state of the last accepted step");
+                return;
+            }
+            Err(e) => panic!("{e}"),
+        }
+    }
+    panic!("expected a step refused on φ ≥ 1 by t = {} s", sim.t);
+}
+
 /// The existing Savage–Hutter μ(I) monolayer (src/numerics/hydrostatic.rs +
 /// friction.rs) on the same collapse, to t_end: returns the thickness per cell.
 fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (Line, Vec<f64>) {
     use granflow::numerics::friction::CoulombFrictionStep;
     use granflow::numerics::hydrostatic::HydrostaticStep;
-    use granflow::numerics::Stage;
+    use granflow::numerics::{Stage, StepClock};
     use granflow::physics::rheology::{MonolayerShear, MuI};
     use granflow::state::layered::LayeredState as State;
     let mesh = collapse(slope, x_max, cells);
@@ -419,8 +456,9 @@ fn savage_hutter_collapse(slope: f64, x_max: f64, cells: usize, t_end: f64) -> (
             .map(|j| state.mean_velocity(j).abs() + (mesh.g_n * state.h[j]).sqrt())
             .fold(0.0, f64::max);
         let dt = (0.5 * mesh.dx / speed).min(t_end - t);
-        hyperbolic.apply(&mesh, dt, &mut state).unwrap();
-        friction.apply(&mesh, dt, &mut state).unwrap();
+        let clock = StepClock::at(t, dt);
+        hyperbolic.apply(&mesh, clock, &mut state).unwrap();
+        friction.apply(&mesh, clock, &mut state).unwrap();
         t += dt;
     }
     (mesh, state.h[1..=cells].to_vec())

@@ -17,7 +17,7 @@ use granflow::numerics::viscous::{
 };
 use granflow::numerics::viscous_2d::ViscousColumns2d;
 use granflow::numerics::workers::Workers;
-use granflow::numerics::Stage;
+use granflow::numerics::{Stage, StepClock};
 use granflow::physics::rheology::{MonolayerShear, MuI};
 use granflow::state::layered_raster::LayeredRaster;
 use granflow::state::LayeredState;
@@ -141,20 +141,21 @@ fn check(case: &Case, n: usize, transposed: bool, threads: usize, opts: Option<V
         static_threshold: 1e-3,
         rest_speed: 0.0,
     };
-    let mut moved = 0.0f64;
+    let (mut moved, mut t) = (0.0f64, 0.0);
     for step in 0..case.steps {
         let speed = model.diagnose(&line, &state).signal_speed;
         assert!(speed > 0.0);
-        let dt = 0.3 * line.dx / speed;
+        let clock = StepClock::at(t, 0.3 * line.dx / speed);
+        t += clock.dt;
         if let (Some(v1), Some(v2)) = (&mut visc_1d, &mut visc_2d) {
-            v1.prepare(&line, &state);
-            v2.prepare(&r, &state_2d);
+            v1.prepare(&line, clock, &state);
+            v2.prepare(&r, clock, &state_2d);
         }
-        step_1d.apply(&line, dt, &mut state).unwrap();
-        step_2d.apply(&r, dt, &mut state_2d).unwrap();
+        step_1d.apply(&line, clock, &mut state).unwrap();
+        step_2d.apply(&r, clock, &mut state_2d).unwrap();
         if let (Some(v1), Some(v2)) = (&mut visc_1d, &mut visc_2d) {
-            v1.apply(&line, dt, &mut state).unwrap();
-            v2.apply(&r, dt, &mut state_2d).unwrap();
+            v1.apply(&line, clock, &mut state).unwrap();
+            v2.apply(&r, clock, &mut state_2d).unwrap();
         }
         for k in 0..nx * ny {
             let c = along(k) + 1;
@@ -280,12 +281,12 @@ fn viscous_runs_over_an_erodible_bed_reproduce_the_line_bit_for_bit() {
 fn step_2d(
     r: &Raster2d,
     (hyp, visc): (&mut LayersStep2d<MuI>, &mut ViscousColumns2d<MuI>),
-    dt: f64,
+    clock: StepClock,
     state: &mut LayeredRaster,
 ) {
-    visc.prepare(r, state);
-    hyp.apply(r, dt, state).unwrap();
-    visc.apply(r, dt, state).unwrap();
+    visc.prepare(r, clock, state);
+    hyp.apply(r, clock, state).unwrap();
+    visc.apply(r, clock, state).unwrap();
 }
 
 /// Relative L1 error of `u` against `exact`.
@@ -381,7 +382,7 @@ fn bagnold_2d(n: usize, angle_deg: f64, t_end: f64) -> (f64, f64, f64) {
     while t < t_end {
         let speed = layers_2d::signal_speed(&r, &state);
         let dt = (0.5 * dx / speed).min(t_end - t);
-        step_2d(&r, (&mut hyp, &mut visc), dt, &mut state);
+        step_2d(&r, (&mut hyp, &mut visc), StepClock::at(t, dt), &mut state);
         t += dt;
     }
     let g_n = r.g_n;
@@ -436,9 +437,10 @@ fn bagnold_line(n: usize, t_end: f64) -> f64 {
     while t < t_end {
         let speed = model.diagnose(&line, &state).signal_speed;
         let dt = (0.5 * line.dx / speed).min(t_end - t);
-        visc.prepare(&line, &state);
-        hyp.apply(&line, dt, &mut state).unwrap();
-        visc.apply(&line, dt, &mut state).unwrap();
+        let clock = StepClock::at(t, dt);
+        visc.prepare(&line, clock, &state);
+        hyp.apply(&line, clock, &mut state).unwrap();
+        visc.apply(&line, clock, &mut state).unwrap();
         t += dt;
     }
     let h = state.h[1];
@@ -527,8 +529,9 @@ fn mass_below_repose_on_a_random_bed_stays_at_rest_with_layers() {
                 ..viscous(BasalCondition::Coulomb)
             };
             let mut visc = ViscousColumns2d::new(law, &r, &l, opts, Workers::serial());
-            for _ in 0..200 {
-                step_2d(&r, (&mut hyp, &mut visc), dt, &mut state);
+            for k in 0..200 {
+                let clock = StepClock::at(k as f64 * dt, dt);
+                step_2d(&r, (&mut hyp, &mut visc), clock, &mut state);
             }
             let dh = state
                 .h

@@ -4,12 +4,15 @@
 
 use std::path::Path;
 
+use granflow::grid::Line;
 use granflow::model::granular::Granular;
 use granflow::numerics::projection::multilayer::MultilayerOperator;
+use granflow::numerics::{Stage, StageError, StepClock};
 use granflow::output::memory::MemorySink;
 use granflow::scenario::load_file;
 use granflow::setup::build_granular;
 use granflow::simulation::Simulation;
+use granflow::state::LayeredState;
 
 type Sim = Simulation<Granular>;
 
@@ -267,6 +270,77 @@ fn hydrostatic_switch_gives_the_hydrostatic_multilayer_model_bit_for_bit() {
         sim.steps
     );
     assert_eq!(hash, HYDROSTATIC_FINGERPRINT);
+}
+
+/// Steps 2 and 3 are one stage, whose wall time is reported in two parts under the
+/// names of the two steps (`time_viscous_s`, `time_projection_s`).
+#[test]
+fn viscous_and_projection_steps_are_one_stage_timed_in_two_parts() {
+    let mut sim = build(
+        "nh_multilayer_collapse.toml",
+        &["domain.cells=60", "model.layers=3", "time.t_end=0.02"],
+    );
+    assert_eq!(sim.stage_names(), ["hyperbolic", "viscous+projection"]);
+    run(&mut sim);
+    let times = sim.stage_times();
+    let names: Vec<&str> = times.iter().map(|(name, _)| name.as_str()).collect();
+    assert_eq!(names, ["hyperbolic", "viscous", "projection"]);
+    assert!(times.iter().all(|&(_, t)| t > 0.0), "{times:?}");
+}
+
+/// Gives up the `at`-th step attempt it sees (counting from 1) as on Ctrl-C, after
+/// the stages before it changed the state.
+struct GiveUp {
+    at: usize,
+    attempts: usize,
+}
+
+impl Stage<Line, LayeredState> for GiveUp {
+    fn name(&self) -> &'static str {
+        "give_up"
+    }
+
+    fn apply(&mut self, _: &Line, _: StepClock, _: &mut LayeredState) -> Result<(), StageError> {
+        self.attempts += 1;
+        if self.attempts == self.at {
+            return Err(StageError::Interrupted);
+        }
+        Ok(())
+    }
+}
+
+/// An attempt given up after the non-hydrostatic stage ran (it wrote h u_α, h w_α, p and
+/// the lagged discharges of the next step's viscosities) leaves no trace: the run
+/// loop's copy of the state of tⁿ holds everything that decides the next step, and the
+/// step taken again gives the bits of a run that never made the attempt.
+#[test]
+fn a_step_attempt_given_up_leaves_no_trace() {
+    let sets = [
+        "domain.cells=80",
+        "model.layers=3",
+        "rheology.viscosity=\"lagged\"",
+    ];
+    let mut clean = build("nh_multilayer_collapse.toml", &sets);
+    let mut retried = build("nh_multilayer_collapse.toml", &sets);
+    retried.push_stage(Box::new(GiveUp { at: 6, attempts: 0 }));
+    let mut given_up = 0;
+    for _ in 0..12 {
+        let dt = clean.step(f64::INFINITY).expect("step");
+        clean.t += dt;
+        let mut dt_retried = retried.step(f64::INFINITY).expect("step");
+        if dt_retried == 0.0 {
+            given_up += 1;
+            assert!(!retried.state.nh.as_ref().unwrap().lagged_hu.is_empty());
+            dt_retried = retried.step(f64::INFINITY).expect("step");
+        }
+        retried.t += dt_retried;
+        assert_eq!(dt_retried.to_bits(), dt.to_bits());
+        assert!(retried.state == clean.state, "t = {}", clean.t);
+    }
+    assert_eq!(given_up, 1);
+    let nh = clean.state.nh.as_ref().unwrap();
+    assert_eq!(nh.lagged_hu.len(), clean.state.hu.len(), "lagged run");
+    assert!(nh.p.iter().any(|&p| p != 0.0));
 }
 
 #[test]

@@ -9,6 +9,7 @@ use super::terrain_2d::{material, raster, run_until, tan_deg};
 use granflow::grid::{BoundaryKind, Coordinates, Grid, Raster2d, Sides};
 use granflow::model::granular_2d;
 use granflow::numerics::muscl::Limiter;
+use granflow::numerics::StepClock;
 use granflow::physics::rheology::FrictionLaw;
 use granflow::state::State2d;
 
@@ -441,7 +442,7 @@ fn cone_collapse(n: usize, mu: f64) -> (Raster2d, State2d, f64, f64) {
     while t < 3.0 {
         let dt =
             0.45 * r.cfl_length() / granflow::model::Model::diagnose(&model, &r, &s).signal_speed;
-        p.advance(&r, dt, &mut s).unwrap();
+        p.advance(&r, StepClock::at(t, dt), &mut s).unwrap();
         t += dt;
         let at_rest = s.hu.iter().chain(&s.hv).all(|&q| q == 0.0);
         if at_rest && rest_since.is_nan() {
@@ -666,9 +667,9 @@ fn energy_line_run(dx: f64, mu: f64, frame: Coordinates, curvature: bool) -> Ene
     let mut t = 0.0;
     loop {
         let speed = granflow::model::Model::diagnose(&model, &r, &s).signal_speed;
-        p.advance(&r, 0.45 * r.cfl_length() / speed, &mut s)
-            .unwrap();
-        t += 0.45 * r.cfl_length() / speed;
+        let clock = StepClock::at(t, 0.45 * r.cfl_length() / speed);
+        p.advance(&r, clock, &mut s).unwrap();
+        t += clock.dt;
         let at_rest = (0..cells).all(|k| s.h[k] <= film || (s.hu[k] == 0.0 && s.hv[k] == 0.0));
         if at_rest || t > 10.0 {
             break;

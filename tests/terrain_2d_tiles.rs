@@ -5,7 +5,7 @@
 
 use granflow::grid::{BoundaryKind, Coordinates, Grid, Raster2d, RasterSpec, Sides};
 use granflow::model::granular_2d;
-use granflow::numerics::{Stage, StageError};
+use granflow::numerics::{Stage, StageError, StepClock};
 use granflow::output::memory::MemorySink;
 use granflow::physics::rheology::FrictionLaw;
 use granflow::physics::Material;
@@ -23,7 +23,7 @@ impl Stage<Raster2d, State2d> for Refuses {
         "refuses"
     }
 
-    fn apply(&mut self, _: &Raster2d, _: f64, _: &mut State2d) -> Result<(), StageError> {
+    fn apply(&mut self, _: &Raster2d, _: StepClock, _: &mut State2d) -> Result<(), StageError> {
         self.calls += 1;
         if self.calls % 6 == 5 {
             return Err(StageError::NegativeThickness { cell: 0, h: -1.0 });
@@ -195,7 +195,7 @@ fn a_flow_across_tile_edges_gives_the_full_sweeps_bits_at_every_step() {
         let mut p_full = granular_2d::pipeline(&law, &material, &raster, 1).unwrap();
         let mut p_tiled = granular_2d::pipeline(&law, &material, &raster, threads).unwrap();
         let (mut least, mut most) = (1.0f64, 0.0f64);
-        let mut backup = tiled.clone();
+        let (mut backup, mut t) = (tiled.clone(), 0.0);
         for step in 0..400 {
             // The run loop's copy of the state of t^n (only the tiles the last step
             // changed are copied) equals the state.
@@ -205,9 +205,10 @@ fn a_flow_across_tile_edges_gives_the_full_sweeps_bits_at_every_step() {
                 "the copy of the state before step {step} differs from it"
             );
             let d = granflow::model::Model::diagnose(&model, &raster, &full);
-            let dt = 0.45 * raster.cfl_length() / d.signal_speed;
-            p_full.advance(&raster, dt, &mut full).unwrap();
-            p_tiled.advance(&raster, dt, &mut tiled).unwrap();
+            let clock = StepClock::at(t, 0.45 * raster.cfl_length() / d.signal_speed);
+            t += clock.dt;
+            p_full.advance(&raster, clock, &mut full).unwrap();
+            p_tiled.advance(&raster, clock, &mut tiled).unwrap();
             assert!(
                 same_state(&full, &tiled),
                 "step {step} on {threads} threads differs from the full sweep"

@@ -517,6 +517,7 @@ unsafe fn copy_tile(
 mod tests {
     use super::*;
     use crate::grid::{BoundaryKind, Coordinates, RasterSpec, Sides};
+    use crate::numerics::StepClock;
 
     /// A 70 × 40 raster (3 × 3 tiles) on a plane of 30° with a wavy bed, walls west
     /// and south and outflow east and north, in `coordinates`, with a cone released
@@ -590,13 +591,14 @@ mod tests {
                 ];
                 let (mut a, mut b) = (s0.clone(), s0);
                 let model = Granular2d::new(&raster, 1e-3);
-                let mut stepped = Vec::new();
+                let (mut stepped, mut t) = (Vec::new(), 0.0);
                 for step in 0..150 {
                     let s = model.diagnose(&raster, &a).signal_speed;
-                    let dt = 0.4 * raster.dx().min(raster.dy()) / s;
-                    fused[0].apply(&raster, dt, &mut a).unwrap();
+                    let clock = StepClock::at(t, 0.4 * raster.dx().min(raster.dy()) / s);
+                    t += clock.dt;
+                    fused[0].apply(&raster, clock, &mut a).unwrap();
                     for stage in &mut apart {
-                        stage.apply(&raster, dt, &mut b).unwrap();
+                        stage.apply(&raster, clock, &mut b).unwrap();
                     }
                     assert!(
                         same_bits(&a, &b),
@@ -632,12 +634,13 @@ mod tests {
             // The first copy is whole (unknown tiles), the later ones of stepped tiles.
             let mut backup = state.clone();
             backup.h.fill(7.0);
-            for _ in 0..40 {
+            for k in 0..40 {
                 let d = model.diagnose_and_save(&raster, &state, &mut backup);
                 let plain = model.diagnose(&raster, &state);
                 assert_eq!(format!("{d:?}"), format!("{plain:?}"));
                 assert!(same_bits(&backup, &state));
-                stage[0].apply(&raster, 1e-3, &mut state).unwrap();
+                let clock = StepClock::at(k as f64 * 1e-3, 1e-3);
+                stage[0].apply(&raster, clock, &mut state).unwrap();
             }
         }
     }

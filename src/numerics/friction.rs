@@ -22,7 +22,7 @@
 //! centrifugal term dropped with `domain.curvature = false`), and scales H u.
 
 use super::friction_2d::bed_normal_friction;
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::Line;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
@@ -44,7 +44,13 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for CoulombFrictionStep<L> {
         "friction"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
+        let dt = clock.dt;
         debug_assert_eq!(state.layers, 1);
         let g_n = mesh.g_n;
         let nx = mesh.nx;
@@ -80,7 +86,13 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for BedNormalFrictionStep<L> {
         "friction"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
+        let dt = clock.dt;
         debug_assert_eq!(state.layers, 1);
         let m = mesh.metric().expect("a bed-normal line");
         let nx = mesh.nx;

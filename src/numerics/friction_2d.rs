@@ -26,7 +26,7 @@
 //! velocity, so it scales u and keeps its direction.
 
 use super::workers::{Disjoint, Workers};
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::{BedMetric, Raster2d};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
@@ -152,7 +152,13 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for FrictionStep2d<L> {
     /// Over the stepped tiles only (`state::tiles`), one task per tile: a cell outside
     /// them holds no discharge, which the friction leaves as it is. The tiles it wrote
     /// are pending (a discharge it stops may leave a tile with no live cell).
-    fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        raster: &Raster2d,
+        clock: StepClock,
+        state: &mut State2d,
+    ) -> Result<(), StageError> {
+        let dt = clock.dt;
         state.ensure_tiles(raster.nx(), raster.ny());
         let State2d { h, hu, hv, tiles } = state;
         let (h, tiles) = (&*h, &*tiles);

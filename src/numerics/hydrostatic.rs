@@ -158,7 +158,7 @@ use super::face::{
 };
 use super::muscl::{self, Limiter};
 use super::tracer::TracerTransport;
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::{BoundaryKind, Line};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
@@ -888,9 +888,14 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for HydrostaticStep<L> {
         "hyperbolic"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
         let law = self.law;
-        self.apply_with_friction(mesh, dt, state, &law)
+        self.apply_with_friction(mesh, clock.dt, state, &law)
     }
 }
 

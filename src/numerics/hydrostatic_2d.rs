@@ -81,7 +81,7 @@ use super::muscl::Limiter;
 use super::muscl_2d::{self, AxisSlopes, Mean, Reconstruction};
 use super::workers::Disjoint;
 use super::workers::Workers;
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::raster::BAND_ROWS;
 use crate::grid::{BedMetric, BoundaryKind, Raster2d};
 use crate::physics::rheology::BasalFriction;
@@ -1636,7 +1636,13 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for HydrostaticStep2d<L> {
         }
     }
 
-    fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        raster: &Raster2d,
+        clock: StepClock,
+        state: &mut State2d,
+    ) -> Result<(), StageError> {
+        let dt = clock.dt;
         let nx = raster.nx();
         let workers = &self.workers;
         state.refresh_tiles_on(nx, raster.ny(), &|tiles, f| workers.tiles(tiles, f));

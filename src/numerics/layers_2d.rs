@@ -55,7 +55,7 @@ use super::face::{
 };
 use super::hydrostatic::{carried_exchange_terms, exchange_terms, Fractions};
 use super::workers::{Disjoint, Workers};
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::{BoundaryKind, Coordinates, Raster2d};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{sheared_celerity, velocity, H_DRY};
@@ -691,9 +691,10 @@ impl<L: BasalFriction> Stage<Raster2d, LayeredRaster> for LayersStep2d<L> {
     fn apply(
         &mut self,
         raster: &Raster2d,
-        dt: f64,
+        clock: StepClock,
         state: &mut LayeredRaster,
     ) -> Result<(), StageError> {
+        let dt = clock.dt;
         debug_assert_eq!(state.layers, self.layers);
         self.fill_views(raster, dt, state);
         self.sweep(raster, dt, state, false);

@@ -29,7 +29,7 @@
 
 use super::bed_normal::{self, FaceFlux, FaceSide};
 use super::face::{drained_fraction, Side};
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::{BedMetric, Line};
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::{velocity, H_DRY};
@@ -165,7 +165,13 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for BedNormalLineStep<L> {
         "hyperbolic"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
+        let dt = clock.dt;
         debug_assert_eq!(state.layers, 1);
         let m = mesh.metric().expect("a bed-normal line");
         let nx = mesh.nx;

@@ -34,7 +34,7 @@
 //!
 //! **Shortened steps.** The projection takes the rate of its impulse over the full step
 //! when the step was shortened to land on an output time (`projection`, "Shortened
-//! steps"); the full step is passed on before each stage, halved for the second.
+//! steps"): each R gets the step's clock, halved for the second.
 //!
 //! **At rest** (u = 0, w = 0, p = 0): the first stage returns Uⁿ exactly (the first-
 //! order step does), the second is that of [`super::ssp_rk2`] (the average holds
@@ -56,7 +56,7 @@
 
 use super::hydrostatic::HydrostaticStep;
 use super::muscl::Limiter;
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::Line;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
@@ -67,8 +67,6 @@ pub struct NhHeun<L: BasalFriction> {
     hyperbolic: HydrostaticStep<L>,
     /// R: step 2 and the projection, applied in order after the hyperbolic step.
     rest: Vec<Box<dyn Stage<Line, LayeredState>>>,
-    /// The step the stability condition allowed for this attempt (0: not given).
-    dt_full: f64,
     /// Uⁿ: h, the layer discharges and each tracer, with ghosts.
     h0: Vec<f64>,
     hu0: Vec<f64>,
@@ -95,25 +93,22 @@ impl<L: BasalFriction> NhHeun<L> {
         NhHeun {
             hyperbolic: HydrostaticStep::second_order_with_layers(law, nx, layers, limiter),
             rest,
-            dt_full: 0.0,
             h0: vec![0.0; nx + 2],
             hu0: vec![0.0; (nx + 2) * layers],
             tracers0: Vec::new(),
         }
     }
 
-    /// One first-order-in-structure split step of length `dt` after the hyperbolic
-    /// one: R_dt, with the full step `dt_full` passed on to each stage.
+    /// One first-order-in-structure split step of length `clock.dt` after the
+    /// hyperbolic one: R_dt.
     fn rest(
         &mut self,
         mesh: &Line,
-        dt: f64,
-        dt_full: f64,
+        clock: StepClock,
         state: &mut LayeredState,
     ) -> Result<(), StageError> {
         for stage in &mut self.rest {
-            stage.full_step(dt_full);
-            stage.apply(mesh, dt, state)?;
+            stage.apply(mesh, clock, state)?;
         }
         Ok(())
     }
@@ -154,24 +149,24 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for NhHeun<L> {
         "nh_heun"
     }
 
-    fn prepare(&mut self, mesh: &Line, state: &LayeredState) {
+    fn prepare(&mut self, mesh: &Line, clock: StepClock, state: &LayeredState) {
         // Coefficients frozen at tⁿ (the μ(I) viscous step) serve both stages.
         for stage in &mut self.rest {
-            stage.prepare(mesh, state);
+            stage.prepare(mesh, clock, state);
         }
     }
 
-    fn full_step(&mut self, dt_full: f64) {
-        self.dt_full = dt_full;
-    }
-
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
-        let dt_full = std::mem::take(&mut self.dt_full);
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
         self.save(state);
-        self.hyperbolic.apply(mesh, dt, state)?;
-        self.rest(mesh, dt, dt_full, state)?;
-        self.hyperbolic.apply(mesh, dt, state)?;
+        self.hyperbolic.apply(mesh, clock, state)?;
+        self.rest(mesh, clock, state)?;
+        self.hyperbolic.apply(mesh, clock, state)?;
         self.average(mesh, state);
-        self.rest(mesh, 0.5 * dt, 0.5 * dt_full, state)
+        self.rest(mesh, clock.halved(), state)
     }
 }

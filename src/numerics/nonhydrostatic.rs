@@ -21,7 +21,7 @@
 //! grains are lifted) gives no friction.
 
 use super::projection::monolayer::{cell_coefficients, doubled_bed};
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::Line;
 use crate::physics::rheology::BasalFriction;
 use crate::physics::shallow::H_DRY;
@@ -48,7 +48,13 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for NhFrictionStep<L> {
         "friction"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
+        let dt = clock.dt;
         debug_assert_eq!(state.layers, 1);
         let g_n = mesh.g_n;
         let inv_dx = 1.0 / mesh.dx;

@@ -47,7 +47,7 @@ use super::hydrostatic_2d::HydrostaticStep2d;
 use super::muscl::Limiter;
 use super::viscous::{MultilayerViscousStep, ViscousOptions};
 use super::workers::Workers;
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::{Line, Raster2d};
 use crate::physics::rheology::{BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
@@ -80,20 +80,25 @@ impl<L: BasalFriction> Stage<Line, LayeredState> for HeunSplitting<L> {
         "ssp_rk2"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
         debug_assert_eq!(state.layers, 1);
         self.h0.copy_from_slice(&state.h);
         self.hu0.copy_from_slice(&state.hu);
-        self.hyperbolic.apply(mesh, dt, state)?;
-        self.friction.apply(mesh, dt, state)?;
-        self.hyperbolic.apply(mesh, dt, state)?;
+        self.hyperbolic.apply(mesh, clock, state)?;
+        self.friction.apply(mesh, clock, state)?;
+        self.hyperbolic.apply(mesh, clock, state)?;
         let cells = state.h.iter_mut().zip(state.hu.iter_mut());
         for ((h, q), (h0, q0)) in cells.zip(self.h0.iter().zip(&self.hu0)) {
             *h = 0.5 * (*h0 + *h);
             *q = if *h <= H_DRY { 0.0 } else { 0.5 * (*q0 + *q) };
         }
         state.fill_ghosts(mesh);
-        self.friction.apply(mesh, 0.5 * dt, state)
+        self.friction.apply(mesh, clock.halved(), state)
     }
 }
 
@@ -178,7 +183,12 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for Heun2d<L> {
         "ssp_rk2"
     }
 
-    fn apply(&mut self, raster: &Raster2d, dt: f64, state: &mut State2d) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        raster: &Raster2d,
+        clock: StepClock,
+        state: &mut State2d,
+    ) -> Result<(), StageError> {
         let (nx, ny) = (raster.nx(), raster.ny());
         state.refresh_tiles(nx, ny);
         self.in_first = vec![false; state.tiles.count()];
@@ -188,8 +198,8 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for Heun2d<L> {
             self.in_first[t] = true;
             self.save(state, t);
         }
-        self.hyperbolic.apply(raster, dt, state)?;
-        self.friction.apply(raster, dt, state)?;
+        self.hyperbolic.apply(raster, clock, state)?;
+        self.friction.apply(raster, clock, state)?;
         state.refresh_tiles(nx, ny);
         let second = state.tiles.stepped().to_vec();
         for &t in &second {
@@ -197,7 +207,7 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for Heun2d<L> {
                 self.save(state, t as usize);
             }
         }
-        self.hyperbolic.apply(raster, dt, state)?;
+        self.hyperbolic.apply(raster, clock, state)?;
         let mut left = false;
         let mut in_second = vec![false; state.tiles.count()];
         for &t in &second {
@@ -211,14 +221,14 @@ impl<L: BasalFriction> Stage<Raster2d, State2d> for Heun2d<L> {
             }
         }
         if !left {
-            return self.friction.apply(raster, 0.5 * dt, state);
+            return self.friction.apply(raster, clock.halved(), state);
         }
         // The average changed tiles outside the stepped set S₂: the friction steps every
         // tile with a live cell, and the tiles are left unknown, so that the run loop's
         // copy of the state and the next step see every cell.
         state.tiles.touch();
         state.refresh_tiles(nx, ny);
-        let done = self.friction.apply(raster, 0.5 * dt, state);
+        let done = self.friction.apply(raster, clock.halved(), state);
         state.tiles.touch();
         done
     }
@@ -255,15 +265,16 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for HeunLayers<
         "ssp_rk2"
     }
 
-    fn prepare(&mut self, mesh: &Line, state: &LayeredState) {
-        self.viscous.prepare(mesh, state);
+    fn prepare(&mut self, mesh: &Line, clock: StepClock, state: &LayeredState) {
+        self.viscous.prepare(mesh, clock, state);
     }
 
-    fn full_step(&mut self, dt_full: f64) {
-        self.viscous.full_step(dt_full);
-    }
-
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
         let n = state.layers;
         self.h0.copy_from_slice(&state.h);
         self.hu0.copy_from_slice(&state.hu);
@@ -271,9 +282,9 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for HeunLayers<
         for (saved, t) in self.tracers0.iter_mut().zip(&state.tracers) {
             saved.clone_from(&t.q);
         }
-        self.hyperbolic.apply(mesh, dt, state)?;
-        self.viscous.apply(mesh, dt, state)?;
-        self.hyperbolic.apply(mesh, dt, state)?;
+        self.hyperbolic.apply(mesh, clock, state)?;
+        self.viscous.apply(mesh, clock, state)?;
+        self.hyperbolic.apply(mesh, clock, state)?;
         for (j, (h, h0)) in state.h.iter_mut().zip(&self.h0).enumerate() {
             *h = 0.5 * (*h0 + *h);
             let (q, q0) = (
@@ -290,6 +301,6 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for HeunLayers<
             }
         }
         state.fill_ghosts(mesh);
-        self.viscous.apply(mesh, 0.5 * dt, state)
+        self.viscous.apply(mesh, clock.halved(), state)
     }
 }

@@ -320,7 +320,7 @@ impl TracerTransport {
 mod tests {
     use crate::grid::{BoundaryKind, Coordinates, Line, LineSpec};
     use crate::numerics::hydrostatic::HydrostaticStep;
-    use crate::numerics::Stage;
+    use crate::numerics::{Stage, StepClock};
     use crate::physics::rheology::Coulomb;
     use crate::state::layered::LayeredState;
     use std::f64::consts::PI;
@@ -367,7 +367,7 @@ mod tests {
     fn step(mesh: &Line, s: &mut LayeredState, dt: f64) {
         // μ = 0: no Coulomb-aware diffusion, so that only the transport acts on hw.
         let mut hyp = HydrostaticStep::with_layers(Coulomb { mu: 0.0 }, NX, N);
-        hyp.apply(mesh, dt, s).unwrap();
+        hyp.apply(mesh, StepClock::at(0.0, dt), s).unwrap();
     }
 
     /// The AVX2 build of the transport gives the bits of the portable one (wet and

@@ -63,7 +63,7 @@
 //! coefficients from the state after step 1.
 
 use super::viscous_columns::{column_fractions, eliminate_down, substitute_up, ColumnRheology};
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::Line;
 use crate::physics::rheology::coulomb_update;
 use crate::physics::rheology::{BasalFriction, LocalFriction};
@@ -291,7 +291,7 @@ impl<L: BasalFriction + LocalFriction> MultilayerViscousStep<L> {
 
     /// [`Stage::prepare`] with the discharges `hu` in place of `state.hu` (h, the layer
     /// fractions and p^nh are those of `state`): the lagged freezing of
-    /// [`crate::numerics::nh_multilayer::NhViscousStep`].
+    /// [`crate::numerics::nh_multilayer::NhViscousProjection`].
     pub fn prepare_with_discharges(&mut self, mesh: &Line, state: &LayeredState, hu: &[f64]) {
         debug_assert_eq!(state.layers, self.layers);
         debug_assert_eq!(hu.len(), state.hu.len());
@@ -583,11 +583,17 @@ impl<L: BasalFriction + LocalFriction> Stage<Line, LayeredState> for MultilayerV
         "viscous"
     }
 
-    fn prepare(&mut self, mesh: &Line, state: &LayeredState) {
+    fn prepare(&mut self, mesh: &Line, _: StepClock, state: &LayeredState) {
         self.prepare_with_discharges(mesh, state, &state.hu);
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut LayeredState) -> Result<(), StageError> {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut LayeredState,
+    ) -> Result<(), StageError> {
+        let dt = clock.dt;
         let n = self.layers;
         let g_n = mesh.g_n;
         let implicit = match self.opts.viscosity {
@@ -1128,11 +1134,12 @@ mod tests {
             }
         }
         let mut step = MultilayerViscousStep::new(law, 3, &l, options(BasalCondition::NoSlip));
-        step.prepare(&m, &state);
         let dt = 0.01;
+        let clock = StepClock::at(0.0, dt);
+        step.prepare(&m, clock, &state);
         let frozen = step.frozen[2 * n..3 * n].to_vec();
         let q0: Vec<f64> = state.hu[2 * n..3 * n].to_vec();
-        step.apply(&m, dt, &mut state).unwrap();
+        step.apply(&m, clock, &mut state).unwrap();
 
         let mut a = vec![vec![0.0; n]; n];
         let mut b = vec![0.0; n];
@@ -1180,10 +1187,11 @@ mod tests {
                 state.hu[2 * 4 + a] = h0 * speed * (1.0 + a as f64);
             }
             let mut step = MultilayerViscousStep::new(law, 3, &l, options(BasalCondition::Coulomb));
-            step.prepare(&m, &state);
-            let before: f64 = (0..4).map(|a| l[a] * state.hu[2 * 4 + a]).sum();
             let dt = 0.01;
-            step.apply(&m, dt, &mut state).unwrap();
+            let clock = StepClock::at(0.0, dt);
+            step.prepare(&m, clock, &state);
+            let before: f64 = (0..4).map(|a| l[a] * state.hu[2 * 4 + a]).sum();
+            step.apply(&m, clock, &mut state).unwrap();
             let after: f64 = (0..4).map(|a| l[a] * state.hu[2 * 4 + a]).sum();
             if stops {
                 assert_eq!(state.hu[2 * 4], 0.0, "the bottom layer stops");
@@ -1333,9 +1341,10 @@ mod tests {
                         ..options(basal)
                     };
                     let mut step = MultilayerViscousStep::new(law, 3, &l, opts);
-                    step.prepare(&m, &state);
+                    let clock = StepClock::at(0.0, dt);
+                    step.prepare(&m, clock, &state);
                     let q0 = state.hu[2 * n..3 * n].to_vec();
-                    step.apply(&m, dt, &mut state).unwrap();
+                    step.apply(&m, clock, &mut state).unwrap();
                     let u: Vec<f64> = state.hu[2 * n..3 * n].iter().map(|q| q / h0).collect();
                     let res = residual_at_new_speed(
                         &law,
@@ -1401,12 +1410,13 @@ mod tests {
         state.hu[2 * 2 + 1] = h0 * 1.8e-7;
         let q_mean = 0.25 * state.hu[2 * 2] + 0.75 * state.hu[2 * 2 + 1];
         let mut step = MultilayerViscousStep::new(law, 3, &l, options(BasalCondition::Coulomb));
-        step.prepare(&m, &state);
-        step.apply(&m, dt, &mut state).unwrap();
+        let clock = StepClock::at(0.0, dt);
+        step.prepare(&m, clock, &state);
+        step.apply(&m, clock, &mut state).unwrap();
         let mut mono = LayeredState::from_profiles(&m, &[1.0], &[h0; 3], &[0.0; 3]);
         mono.hu[2] = q_mean;
         CoulombFrictionStep::new(law)
-            .apply(&m, dt, &mut mono)
+            .apply(&m, clock, &mut mono)
             .unwrap();
         println!(
             "film {h0:e} m at {:.4} m/s: leaves at {:.6e} m/s (monolayer {:.6e})",
@@ -1430,8 +1440,9 @@ mod tests {
         state.hu[2 * 2] = h0 * 1.0;
         state.hu[2 * 2 + 1] = h0 * 3.0;
         let mut step = MultilayerViscousStep::new(law, 3, &l, options(BasalCondition::Coulomb));
-        step.prepare(&m, &state);
-        step.apply(&m, 1e-3, &mut state).unwrap();
+        let clock = StepClock::at(0.0, 1e-3);
+        step.prepare(&m, clock, &state);
+        step.apply(&m, clock, &mut state).unwrap();
         let expected = coulomb_update(h0 * 2.0, 1e-3 * 0.1 * m.g_n * h0);
         assert_eq!(state.hu[2 * 2], expected);
         assert_eq!(state.hu[2 * 2 + 1], expected);

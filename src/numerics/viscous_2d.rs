@@ -32,7 +32,7 @@ use super::friction_2d::vector_friction;
 use super::viscous::{BasalCondition, ViscosityTime, ViscousOptions, THIN_LAYER};
 use super::viscous_columns::{column_fractions, eliminate_down, substitute_up, ColumnRheology};
 use super::workers::{Disjoint, Workers};
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 use crate::grid::Raster2d;
 use crate::physics::rheology::{coulomb_update, BasalFriction, LocalFriction};
 use crate::physics::shallow::H_DRY;
@@ -256,7 +256,7 @@ impl<L: BasalFriction + LocalFriction> Stage<Raster2d, LayeredRaster> for Viscou
         "viscous"
     }
 
-    fn prepare(&mut self, raster: &Raster2d, state: &LayeredRaster) {
+    fn prepare(&mut self, raster: &Raster2d, _: StepClock, state: &LayeredRaster) {
         let n = self.layers;
         let ctx = Ctx::new(self.law, self.opts, &self.fractions, &state.l, raster.g_n);
         let nx = raster.nx();
@@ -292,9 +292,10 @@ impl<L: BasalFriction + LocalFriction> Stage<Raster2d, LayeredRaster> for Viscou
     fn apply(
         &mut self,
         raster: &Raster2d,
-        dt: f64,
+        clock: StepClock,
         state: &mut LayeredRaster,
     ) -> Result<(), StageError> {
+        let dt = clock.dt;
         let n = self.layers;
         let ctx = Ctx::new(self.law, self.opts, &self.fractions, &state.l, raster.g_n);
         let (nx, g_n, law, l) = (raster.nx(), raster.g_n, self.law, &state.l);

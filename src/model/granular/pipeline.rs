@@ -7,16 +7,14 @@
 
 use crate::grid::Line;
 use crate::model::granular::config::{MultilayerSpec, Pressure};
-use crate::numerics::banded::BandedCholesky;
 use crate::numerics::friction::{BedNormalFrictionStep, CoulombFrictionStep};
 use crate::numerics::hydrostatic::HydrostaticStep;
 use crate::numerics::line_bed_normal::BedNormalLineStep;
 use crate::numerics::muscl::Limiter;
 use crate::numerics::nh_heun::NhHeun;
-use crate::numerics::nh_multilayer::NhViscousStep;
+use crate::numerics::nh_multilayer::NhViscousProjection;
 use crate::numerics::nonhydrostatic::NhFrictionStep;
 use crate::numerics::projection::monolayer::MonolayerOperator;
-use crate::numerics::projection::multilayer::SharedOperator;
 use crate::numerics::projection::{ProjectionStage, ThomasSolver};
 use crate::numerics::ssp_rk2::{HeunLayers, HeunSplitting};
 use crate::numerics::viscous::{MultilayerViscousStep, ViscosityTime};
@@ -111,7 +109,7 @@ impl WithLaw for Stages<'_> {
 
 /// Steps 2 and 3 of a non-hydrostatic run, after the hyperbolic step: the explicit pⁿ
 /// terms with the friction (N = 1) or the μ(I) viscous step (N > 1), then the
-/// projection.
+/// projection (for N > 1 one stage, which owns the projection's operator).
 fn non_hydrostatic_rest<L: BasalFriction + LocalFriction + 'static>(
     law: L,
     mesh: &Line,
@@ -129,20 +127,12 @@ fn non_hydrostatic_rest<L: BasalFriction + LocalFriction + 'static>(
         ];
     }
     // Escalante et al. 2023, §4: explicit p^n and the μ(I) viscous step with the total
-    // pressures, then the exact N-layer projection.
-    let opts = spec.viscous_options();
-    let viscous = MultilayerViscousStep::new(law, nx, l, opts);
-    // One operator for the explicit pⁿ terms and the projection.
-    let operator = SharedOperator::new(mesh, l);
+    // pressures, then the exact N-layer projection, one stage with one operator.
+    let viscous = MultilayerViscousStep::new(law, nx, l, spec.viscous_options());
     let lagged = spec.viscosity == ViscosityTime::Lagged;
-    vec![
-        Box::new(NhViscousStep::with_operator(mesh, operator.clone(), viscous).lagged(lagged)),
-        Box::new(ProjectionStage::new(
-            operator,
-            BandedCholesky::new(l.len(), nx + 1),
-            nx,
-        )),
-    ]
+    vec![Box::new(
+        NhViscousProjection::new(mesh, l, viscous).lagged(lagged),
+    )]
 }
 
 /// The pipeline of a granular run with friction law `law`.

@@ -35,7 +35,7 @@ use super::split::SplitScheme;
 use super::step::DilatantOptions;
 use crate::grid::Line;
 use crate::numerics::muscl::Limiter;
-use crate::numerics::{Stage, StageError};
+use crate::numerics::{Stage, StageError, StepClock};
 use crate::physics::dilatancy::DilatantLaw;
 use crate::physics::shallow::H_DRY;
 use crate::state::DilatantState;
@@ -69,12 +69,10 @@ impl HeunSplit {
         }
     }
 
-    /// Advances `s` by `dt`; on error `s` is as it was.
+    /// Advances `s` by `dt`; on error `s` is as it was (for a driver without the run
+    /// loop: the stage of a run leaves that to the run loop).
     pub fn step(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
-        self.h0.copy_from_slice(&s.h);
-        self.hu0.copy_from_slice(&s.hu);
-        self.phi0.copy_from_slice(&s.phi);
-        let result = self.stages(mesh, s, dt);
+        let result = self.heun(mesh, s, dt);
         if result.is_err() {
             s.h.copy_from_slice(&self.h0);
             s.hu.copy_from_slice(&self.hu0);
@@ -83,8 +81,12 @@ impl HeunSplit {
         result
     }
 
-    fn stages(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
-        self.scheme.step(mesh, s, dt)?;
+    /// Saves Uⁿ (the average needs it) and runs both stages; on error `s` is part-way.
+    fn heun(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
+        self.h0.copy_from_slice(&s.h);
+        self.hu0.copy_from_slice(&s.hu);
+        self.phi0.copy_from_slice(&s.phi);
+        self.scheme.split_step(mesh, s, dt)?;
         self.scheme.hyperbolic_step(mesh, s, dt)?;
         self.average(mesh, s);
         self.scheme.cell_step(mesh, s, 0.5 * dt)
@@ -114,7 +116,13 @@ impl Stage<Line, DilatantState> for HeunSplit {
         "ssp_rk2"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
-        self.step(mesh, state, dt)
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut DilatantState,
+    ) -> Result<(), StageError> {
+        // On error the run loop restores the state of tⁿ.
+        self.heun(mesh, state, clock.dt)
     }
 }

@@ -101,7 +101,9 @@
 //!
 //! Errors: a step that would make h negative is refused as the Savage–Hutter one is
 //! (the run retries with a smaller Δt); φ outside (0, 1) after a sub-step is an error
-//! naming the place and the stage. Either way the state is left as it was at t^n.
+//! naming the place and the stage. [`SplitScheme::step`], for a driver of its own,
+//! then leaves the state as it was at tⁿ; the stage of a run leaves it part-way, to
+//! the run loop, which restores the state of tⁿ.
 
 use super::flux::proj_friction;
 use super::source::relax_towards;
@@ -110,7 +112,7 @@ use super::step::DilatantOptions;
 use crate::grid::Line;
 use crate::numerics::hydrostatic::{FaceFriction, HydrostaticStep};
 use crate::numerics::muscl::Limiter;
-use crate::numerics::{Stage, StageError};
+use crate::numerics::{Stage, StageError, StepClock};
 use crate::physics::dilatancy::{phi_from_ratio, phi_power, DilatantLaw};
 use crate::physics::rheology::{
     depth_weighted_mu, inertial_number, BasalFriction, MonolayerShear, MuI, STATIC_ROUNDOFF,
@@ -129,8 +131,9 @@ pub struct SplitScheme {
     phi_new: Vec<f64>,
     /// φ that each cell's outgoing mass carries in the transport (nx + 2).
     phi_donor: Vec<f64>,
-    /// (h, hv) at t^n, restored when a later sub-step fails.
-    backup: [Vec<f64>; 2],
+    /// (h, hv) at tⁿ, which the sub-steps read (and [`step`](Self::step) restores
+    /// when one fails).
+    start: [Vec<f64>; 2],
     /// Stabilisation (K > 0, ξ ≠ 0): per face drive max(0, vΔz), set on the active
     /// faces only (nx + 1); the runs of consecutive active faces (first, last) in
     /// increasing order; (φh, φhv, φ^α h) (nx + 2).
@@ -489,7 +492,7 @@ impl SplitScheme {
             hyperbolic: HydrostaticStep::new(reconstruction_law(&law, phi_ref), nx),
             phi_new: vec![0.0; nx + 2],
             phi_donor: vec![0.0; nx + 2],
-            backup: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
+            start: [vec![0.0; nx + 2], vec![0.0; nx + 2]],
             drive: vec![0.0; nx + 1],
             active: Vec::with_capacity(nx + 1),
             mu: vec![0.0; nx + 2],
@@ -524,33 +527,51 @@ impl SplitScheme {
         scheme
     }
 
-    /// Advances `s` by `dt`; on error `s` is as it was.
+    /// Advances `s` by `dt`; on error `s` is as it was (for a driver without the run
+    /// loop: the stage of a run advances with [`split_step`](Self::split_step)).
     pub fn step(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
-        self.guarded(s, |scheme, s| scheme.advance(mesh, s, dt))
+        let result = self.split_step(mesh, s, dt);
+        if result.is_err() {
+            // φ was not touched.
+            s.h.copy_from_slice(&self.start[0]);
+            s.hu.copy_from_slice(&self.start[1]);
+        }
+        result
     }
 
-    /// Steps 1–2 alone (the hyperbolic step and the φ transport, H_Δt of
-    /// [`super::heun`]); on error `s` is as it was.
-    pub fn hyperbolic_step(
+    /// Steps 1–4; on error `s` is part-way (φ untouched).
+    pub(super) fn split_step(
         &mut self,
         mesh: &Line,
         s: &mut DilatantState,
         dt: f64,
     ) -> Result<(), StageError> {
-        self.guarded(s, |scheme, s| {
+        self.run_from_start(s, |scheme, s| scheme.advance(mesh, s, dt))
+    }
+
+    /// Steps 1–2 alone (the hyperbolic step and the φ transport, H_Δt of
+    /// [`super::heun`]); on error `s` is part-way (φ untouched).
+    pub(super) fn hyperbolic_step(
+        &mut self,
+        mesh: &Line,
+        s: &mut DilatantState,
+        dt: f64,
+    ) -> Result<(), StageError> {
+        self.run_from_start(s, |scheme, s| {
             scheme.hyperbolic_and_transport(mesh, s, dt).map(|_| ())
         })
     }
 
     /// Steps 3–4 alone (friction, dilatancy and stabilisation, C_Δt of
-    /// [`super::heun`]) on the state's (h, hv, φ); on error `s` is as it was.
-    pub fn cell_step(
+    /// [`super::heun`]) on the state's (h, hv, φ); on error `s` is part-way (φ
+    /// untouched).
+    pub(super) fn cell_step(
         &mut self,
         mesh: &Line,
         s: &mut DilatantState,
         dt: f64,
     ) -> Result<(), StageError> {
-        self.guarded(s, |scheme, s| {
+        self.run_from_start(s, |scheme, s| {
             scheme.phi_new.copy_from_slice(&s.phi);
             match wet_cells(&s.h, mesh.nx) {
                 Some(wet) => scheme.cell_pass(mesh, s, dt, wet),
@@ -559,21 +580,18 @@ impl SplitScheme {
         })
     }
 
-    /// Runs `sub_steps` on (h, hv) of `s` in place with φ^{n+1} into `phi_new`, then
-    /// moves φ^{n+1} into the state; on error restores (h, hv) (φ was not touched).
-    fn guarded(
+    /// Runs `sub_steps` on (h, hv) of `s` in place, with (h, hv) of its start in
+    /// `start` and φ^{n+1} into `phi_new`, then moves φ^{n+1} into the state.
+    fn run_from_start(
         &mut self,
         s: &mut DilatantState,
         sub_steps: impl FnOnce(&mut Self, &mut DilatantState) -> Result<(), StageError>,
     ) -> Result<(), StageError> {
-        self.backup[0].copy_from_slice(&s.h);
-        self.backup[1].copy_from_slice(&s.hu);
+        self.start[0].copy_from_slice(&s.h);
+        self.start[1].copy_from_slice(&s.hu);
         let result = sub_steps(self, s);
         if result.is_ok() {
             std::mem::swap(&mut self.phi_new, &mut s.phi);
-        } else {
-            s.h.copy_from_slice(&self.backup[0]);
-            s.hu.copy_from_slice(&self.backup[1]);
         }
         result
     }
@@ -589,7 +607,7 @@ impl SplitScheme {
 
     /// Steps 1–2 on (h, hv) of `s` in place, φ after the transport into `phi_new`
     /// (`s.phi` keeps φ^n); returns the cells that hold mass after them (`None`: none
-    /// does). Needs h^n in `backup[0]`.
+    /// does). Needs h^n in `start[0]`.
     fn hyperbolic_and_transport(
         &mut self,
         mesh: &Line,
@@ -607,19 +625,19 @@ impl SplitScheme {
             let law = reconstruction_law(&self.law, self.phi_ref);
             let faces = IncompressibleFaces {
                 law: &law,
-                h: &self.backup[0],
+                h: &self.start[0],
                 phi: &s.phi,
                 cut: &self.cut,
             };
             self.hyperbolic
                 .advance_monolayer(mesh, dt, &mut s.h, &mut s.hu, &faces)?;
         } else {
-            // μ_eff with the smaller φ of each face's two cells at t^n; backup[0]
+            // μ_eff with the smaller φ of each face's two cells at t^n; start[0]
             // holds h at t^n.
             let faces = DilatantFaces {
                 law: &self.law,
                 h_thin: self.opt.h_thin,
-                h: &self.backup[0],
+                h: &self.start[0],
                 phi: &s.phi,
                 cut: &self.cut,
             };
@@ -629,7 +647,7 @@ impl SplitScheme {
         let r = dt / mesh.dx;
         if self.limiter.is_some() {
             // The interior force −g_c h ∂_x ζ of the reconstructed cells, with h^n.
-            let (h_old, g_c, nx) = (&self.backup[0], mesh.g_n, mesh.nx);
+            let (h_old, g_c, nx) = (&self.start[0], mesh.g_n, mesh.nx);
             let cells = s.h[1..=nx].iter().zip(&mut s.hu[1..=nx]);
             for ((h, q), (h_old, rise)) in
                 cells.zip(h_old[1..=nx].iter().zip(&self.interior[1..=nx]))
@@ -645,15 +663,15 @@ impl SplitScheme {
         let Some(wet) = wet_cells(&s.h, mesh.nx) else {
             return Ok(None);
         };
-        // h^n (backup[0]) lent to the transport without a copy.
-        let h_old = std::mem::take(&mut self.backup[0]);
+        // h^n (start[0]) lent to the transport without a copy.
+        let h_old = std::mem::take(&mut self.start[0]);
         let moved = match self.limiter {
             None => self.transport(&h_old, &s.h, &s.phi, r, wet.clone()),
             Some(limiter) => {
                 self.transport_second_order(&h_old, &s.h, &s.phi, r, wet.clone(), limiter)
             }
         };
-        self.backup[0] = h_old;
+        self.start[0] = h_old;
         moved?;
         fill_fraction_ghosts(&mut self.phi_new);
         Ok(Some(wet))
@@ -675,7 +693,7 @@ impl SplitScheme {
     /// keeps the order-1 faces.
     fn split_potential(&mut self, mesh: &Line, dt: f64, phi: &[f64], limiter: Limiter) {
         let nx = mesh.nx;
-        let (h, hu) = (&self.backup[0], &self.backup[1]);
+        let (h, hu) = (&self.start[0], &self.start[1]);
         let law = reconstruction_law(&self.law, self.phi_ref);
         let g_c = mesh.g_n;
         // Per cell the half rise (NaN where not reconstructed), in `interior` first.
@@ -1110,8 +1128,14 @@ impl Stage<Line, DilatantState> for SplitScheme {
         "dilatant"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
-        self.step(mesh, state, dt)
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut DilatantState,
+    ) -> Result<(), StageError> {
+        // On error the run loop restores the state of tⁿ.
+        self.split_step(mesh, state, clock.dt)
     }
 }
 

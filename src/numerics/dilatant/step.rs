@@ -9,15 +9,17 @@
 //! Invariants, checked after every sub-step: φh ≥ 0 and 0 < φ < 1 in every cell. The
 //! finite-volume step keeps φh ≥ 0 under the CFL condition (Theorem B.1 iv) and φ ≥
 //! its minimum (viii), but not φ ≤ its maximum; a violation is returned as a
-//! [`DilatantError`] naming the cell, x and t, and the state is not modified. φh
-//! below zero by round-off only (|φh| ≤ 1e-14 × the neighbouring φh) is set to 0.
+//! [`DilatantError`] naming the cell, x and t. [`DilatantScheme::step`], for a driver
+//! of its own, then leaves the state as it was; the stage of a run does not copy it,
+//! since the run loop restores the state of tⁿ. φh below zero by round-off only
+//! (|φh| ≤ 1e-14 × the neighbouring φh) is set to 0.
 
 use super::flux::{interface_flux, total_topography_jump, FaceGrid, FluxOptions};
 use super::reconstruction::Side;
 use super::source::{relax_fraction, DilatancyUpdate};
 use super::stabilisation::{diffuse, Viscosity};
 use crate::grid::Line;
-use crate::numerics::{Stage, StageError};
+use crate::numerics::{Stage, StageError, StepClock};
 use crate::physics::dilatancy::{phi_from_ratio, DilatantLaw};
 use crate::state::DilatantState;
 
@@ -109,7 +111,7 @@ pub struct DilatantScheme {
     drive: Vec<f64>,
     rate: Vec<f64>,
     scratch: Vec<f64>,
-    /// (m, q, w) at t^n, restored when a step fails.
+    /// (m, q, w) at t^n, restored when a [`step`](Self::step) fails.
     backup: [Vec<f64>; 3],
 }
 
@@ -140,7 +142,8 @@ impl DilatantScheme {
         }
     }
 
-    /// Advances `s` from t to t + dt. On error `s` is left as it was at t.
+    /// Advances `s` from t to t + dt. On error `s` is left as it was at t (for a driver
+    /// without the run loop; the [`Stage`] advances without the copy).
     pub fn step(
         &mut self,
         mesh: &Line,
@@ -371,8 +374,14 @@ impl Stage<Line, DilatantState> for DilatantScheme {
         "dilatant"
     }
 
-    fn apply(&mut self, mesh: &Line, dt: f64, state: &mut DilatantState) -> Result<(), StageError> {
-        match self.step(mesh, state, f64::NAN, dt) {
+    fn apply(
+        &mut self,
+        mesh: &Line,
+        clock: StepClock,
+        state: &mut DilatantState,
+    ) -> Result<(), StageError> {
+        // On error the run loop restores the state of tⁿ: no copy of it here.
+        match self.advance(mesh, state, clock.t, clock.dt) {
             Ok(_) => Ok(()),
             Err(DilatantError::NegativeMass { cell, m, .. }) => Err(StageError::Inadmissible {
                 cell,

@@ -7,8 +7,11 @@
 //!
 //!   U^{n+1} = U^{n+2/3} + Δt 𝒯(p̃),   𝒞(U^{n+1}) = 0   at every face.
 //!
-//! The unknown is the impulse Π = Δt p̃, so the matrix does not depend on Δt. The stage
-//! is generic over two parts, so the multilayer model (Escalante et al. 2023) reuses it:
+//! The unknown is the impulse Π = Δt p̃, so the matrix does not depend on Δt. A
+//! projection has two parts ([`ProjectionStage`] runs any pair as a stage: the
+//! monolayer's; the N-layer model of Escalante et al. 2023 runs its pair inside the
+//! stage of its steps 2 and 3, [`super::nh_multilayer`], whose explicit terms use the
+//! same operator):
 //!
 //! - a [`ProjectionOperator`]: the discrete constraint and the discrete correction of
 //!   one model. It forms A Π = −𝒞(U^{n+2/3}), one block of unknowns per face (m = 1 for
@@ -32,7 +35,7 @@
 //! al. 2023, §5.4 with snapshots every 4 ms failed after a step of 3.4 µs (Π/Δt = 39
 //! where |p| ≤ 0.35 m²/s² elsewhere). So the pressure of a shortened step is p^n +
 //! Π/Δt_full, with Δt_full the step the CFL condition allowed
-//! ([`Stage::full_step`]): it is the paper's for a step of full length, and a step
+//! ([`StepClock::rate_step`]): it is the paper's for a step of full length, and a step
 //! shortened towards 0 leaves the pressure as it was. A pressure that evolves smoothly
 //! then lags by at most one step's increment, which the next projection restores
 //! (the increment is incremental), an O(Δt) error as the splitting's own.
@@ -46,7 +49,7 @@ pub mod monolayer;
 pub mod multilayer;
 
 use super::linalg::{thomas_rows, PressureRows, ScalarRow};
-use super::{Stage, StageError};
+use super::{Stage, StageError, StepClock};
 
 /// Solves the (block-)tridiagonal pressure system of one projection, given row by row.
 pub trait PressureSolver: Send + std::fmt::Debug {
@@ -103,35 +106,9 @@ pub trait ProjectionOperator<G, S>: PressureBlocks + Send + std::fmt::Debug {
     /// Applies the correction of the impulses `pi` to the discharges (hu, hw) of
     /// `state` (h has not changed since [`solve`](Self::solve)), and advances the
     /// pressure, p ← p + Π/Δt_p, resetting it to 0 on faces without a constraint.
-    /// `dt_p` is the step of the rate ([`ProjectionStage`]: the step taken, or the full
-    /// step when the step taken was shortened to land on an output time).
+    /// `dt_p` is the step of the rate ([`StepClock::rate_step`]: the step taken, or the
+    /// full step when the step taken was shortened to land on an output time).
     fn correct(&mut self, grid: &G, state: &mut S, pi: &[f64], dt_p: f64);
-}
-
-/// The full step of the current step attempt ([`Stage::full_step`]) for a stage that
-/// turns its impulse Π into a pressure: a step shortened to land on an output time
-/// takes the rate over the full step (module documentation, "Shortened steps").
-#[derive(Debug, Clone, Copy, Default)]
-pub struct FullStep(f64);
-
-impl FullStep {
-    /// Records the full step of the attempt about to be applied.
-    pub fn set(&mut self, dt_full: f64) {
-        self.0 = dt_full;
-    }
-
-    /// The step to divide the impulse of a step of length `dt` by: the full step when
-    /// `dt` was shortened from it, else `dt` (also when no full step was given, or it
-    /// is infinite: a mass at rest is no step to take a rate over). Forgets the full
-    /// step, which holds for one attempt.
-    pub fn pressure_step(&mut self, dt: f64) -> f64 {
-        let dt_full = std::mem::take(&mut self.0);
-        if dt_full > dt && dt_full.is_finite() {
-            dt_full
-        } else {
-            dt
-        }
-    }
 }
 
 /// The "projection" stage: form and solve the pressure system, correct.
@@ -140,7 +117,6 @@ pub struct ProjectionStage<O: PressureBlocks, P: PressureSolver<Row = O::Row>> {
     operator: O,
     solver: P,
     pi: Vec<f64>,
-    dt_full: FullStep,
 }
 
 impl<O: PressureBlocks, P: PressureSolver<Row = O::Row>> ProjectionStage<O, P> {
@@ -151,7 +127,6 @@ impl<O: PressureBlocks, P: PressureSolver<Row = O::Row>> ProjectionStage<O, P> {
             operator,
             solver,
             pi: vec![0.0; (nx + 1) * m],
-            dt_full: FullStep::default(),
         }
     }
 
@@ -170,15 +145,11 @@ where
         "projection"
     }
 
-    fn full_step(&mut self, dt_full: f64) {
-        self.dt_full.set(dt_full);
-    }
-
-    fn apply(&mut self, grid: &G, dt: f64, state: &mut S) -> Result<(), StageError> {
+    fn apply(&mut self, grid: &G, clock: StepClock, state: &mut S) -> Result<(), StageError> {
         self.operator
             .solve(grid, state, &mut self.solver, &mut self.pi);
-        let dt_p = self.dt_full.pressure_step(dt);
-        self.operator.correct(grid, state, &self.pi, dt_p);
+        self.operator
+            .correct(grid, state, &self.pi, clock.rate_step());
         Ok(())
     }
 }

@@ -399,7 +399,7 @@ mod tests {
     use crate::grid::LineSpec;
     use crate::numerics::linalg::thomas;
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
-    use crate::numerics::Stage;
+    use crate::numerics::{Stage, StepClock};
 
     /// A wet, moving state on a curved bed (Cartesian, walls): every face constrained.
     fn moving_state(cells: usize) -> (Line, LayeredState) {
@@ -433,13 +433,17 @@ mod tests {
             ThomasSolver::default(),
             mesh.nx,
         );
-        stage.apply(&mesh, 1e-3, &mut state).unwrap();
+        stage
+            .apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+            .unwrap();
         let after = constraint_residual(&mesh, &state);
         assert_eq!(after.faces, mesh.nx + 1);
         assert!(after.relative() < 1e-12, "{after:?}");
         // A second projection has nothing left to do.
         let p = state.nh.as_ref().unwrap().p.clone();
-        stage.apply(&mesh, 1e-3, &mut state).unwrap();
+        stage
+            .apply(&mesh, StepClock::at(1e-3, 1e-3), &mut state)
+            .unwrap();
         let dp = stage
             .last_impulse()
             .iter()
@@ -470,7 +474,9 @@ mod tests {
                 mesh.nx,
             );
             let (hu0, hw0) = (state.hu.clone(), state.hw().to_vec());
-            stage.apply(&mesh, 1e-3, &mut state).unwrap();
+            stage
+                .apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+                .unwrap();
             let after = kinetic_energy(&state, mesh.nx);
             let removed: f64 = (1..=mesh.nx)
                 .map(|i| {

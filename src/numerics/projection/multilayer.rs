@@ -68,7 +68,6 @@
 //! face's constraint (same for N = 1 with a dry edge, 3 % apart on a wet one).
 
 use std::ops::Range;
-use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::monolayer::{doubled_bed, face_depth, wet_threshold, ConstraintResidual};
 use super::{PressureBlocks, PressureSolver, ProjectionOperator};
@@ -111,8 +110,6 @@ pub struct MultilayerOperator {
     /// Faces that may carry an unknown (span of the mass) at the last update.
     span: Range<usize>,
     nx: usize,
-    /// The thickness of the last update (its coefficients depend on nothing else).
-    h_last: Vec<f64>,
     /// 1/(l_α h_i) per cell and layer (cell-major, as `coef`), for the cells of the
     /// span at the last update: M⁻¹ of the system, computed once per step.
     inv_m: Vec<f64>,
@@ -142,7 +139,6 @@ impl MultilayerOperator {
             merged_right: false,
             span: 0..0,
             nx: mesh.nx,
-            h_last: Vec::with_capacity(mesh.nx + 2),
             inv_m: vec![0.0; (mesh.nx + 2) * n],
             inv_l: l.iter().map(|&l| 1.0 / l).collect(),
         }
@@ -163,7 +159,6 @@ impl MultilayerOperator {
         }
         self.two_b[0] = self.two_b[1];
         self.two_b[nx + 1] = self.two_b[nx];
-        self.h_last.clear();
     }
 
     /// Whether face f carries unknowns at the last [`update`](Self::update) (a wet
@@ -185,9 +180,9 @@ impl MultilayerOperator {
     }
 
     /// Recomputes the wet faces and the coefficients of 𝒯 from the thickness of
-    /// `state` (module documentation). Nothing to do when h is bit for bit that of
-    /// the last update (steps 2 and 3 of a time step share an operator,
-    /// [`SharedOperator`], and h does not change in between).
+    /// `state` (module documentation); they depend on nothing else, so steps 2 and 3
+    /// of a time step, between which h does not change, compute them once
+    /// ([`crate::numerics::nh_multilayer`]).
     pub fn update(&mut self, mesh: &Line, state: &LayeredState) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
@@ -213,17 +208,6 @@ impl MultilayerOperator {
         let (nx, n) = (self.nx, self.layers);
         debug_assert_eq!(state.layers, n);
         let h = &state.h[..];
-        let same = self.h_last.len() == h.len()
-            && self
-                .h_last
-                .iter()
-                .zip(h)
-                .all(|(a, b)| a.to_bits() == b.to_bits());
-        if same {
-            return;
-        }
-        self.h_last.clear();
-        self.h_last.extend_from_slice(h);
         let h_min = self.h_min;
         for k in 0..=nx {
             self.wet[k] = h[k] > h_min && h[k + 1] > h_min;
@@ -965,46 +949,6 @@ impl ProjectionOperator<Line, LayeredState> for MultilayerOperator {
     }
 }
 
-/// One [`MultilayerOperator`] used by the explicit pressure terms of step 2
-/// (`nh_multilayer.rs`) and by the projection of step 3: h does not change between
-/// them, so its coefficients are computed once per time step.
-#[derive(Debug, Clone)]
-pub struct SharedOperator(pub Arc<Mutex<MultilayerOperator>>);
-
-impl SharedOperator {
-    pub fn new(mesh: &Line, l: &[f64]) -> Self {
-        SharedOperator(Arc::new(Mutex::new(MultilayerOperator::new(mesh, l))))
-    }
-
-    pub fn lock(&self) -> MutexGuard<'_, MultilayerOperator> {
-        self.0.lock().expect("operator lock")
-    }
-}
-
-impl PressureBlocks for SharedOperator {
-    type Row = StencilRow;
-
-    fn block(&self) -> usize {
-        self.lock().layers
-    }
-}
-
-impl ProjectionOperator<Line, LayeredState> for SharedOperator {
-    fn solve<S: PressureSolver<Row = StencilRow>>(
-        &mut self,
-        mesh: &Line,
-        state: &LayeredState,
-        solver: &mut S,
-        pi: &mut [f64],
-    ) {
-        self.lock().solve(mesh, state, solver, pi);
-    }
-
-    fn correct(&mut self, mesh: &Line, state: &mut LayeredState, pi: &[f64], dt_p: f64) {
-        self.lock().correct(mesh, state, pi, dt_p);
-    }
-}
-
 /// [`BandedCholesky`] as the projection's pressure solver.
 impl PressureSolver for BandedCholesky {
     type Row = StencilRow;
@@ -1023,7 +967,7 @@ mod tests {
     use crate::numerics::banded::{assemble_rows, stencil_residual};
     use crate::numerics::projection::monolayer::{constraint_residual, MonolayerOperator};
     use crate::numerics::projection::{ProjectionStage, ThomasSolver};
-    use crate::numerics::Stage;
+    use crate::numerics::{Stage, StepClock};
 
     /// [`moving_state`] on 60 cells with cell 40 dry (its two faces carry no unknown),
     /// and the operator updated to it.
@@ -1119,7 +1063,8 @@ mod tests {
                     let before = residual(&mesh, &state);
                     assert!(before.relative() > 1e-2, "the test state must violate (9d)");
                     let mut st = stage(&mesh, &state);
-                    st.apply(&mesh, 1e-3, &mut state).unwrap();
+                    st.apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+                        .unwrap();
                     let after = residual(&mesh, &state);
                     let outflows = [left, right]
                         .iter()
@@ -1133,7 +1078,8 @@ mod tests {
                     );
                     assert!(after.relative() <= 1e-12, "N = {layers}: {after:?}");
                     // A second projection has nothing left to do.
-                    st.apply(&mesh, 1e-3, &mut state).unwrap();
+                    st.apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+                        .unwrap();
                     let dp = st.last_impulse().iter().fold(0.0f64, |m, v| m.max(v.abs()));
                     let p = state
                         .nh
@@ -1176,7 +1122,8 @@ mod tests {
                 state.fill_ghosts(&mesh);
                 let before = state.clone();
                 let mut st = stage(&mesh, &state);
-                st.apply(&mesh, 1e-3, &mut state).unwrap();
+                st.apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+                    .unwrap();
                 let pi = st.last_impulse().iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 let du = state
                     .hu
@@ -1450,6 +1397,7 @@ mod tests {
                 mesh.nx,
             );
             for step in 0..2 {
+                let clock = StepClock::at(step as f64 * 1e-3, 1e-3);
                 if step > 0 {
                     // Perturb both the same way so that the second projection has work.
                     for s in [&mut a, &mut b] {
@@ -1459,8 +1407,8 @@ mod tests {
                         s.fill_ghosts(&mesh);
                     }
                 }
-                mono.apply(&mesh, 1e-3, &mut a).unwrap();
-                stage(&mesh, &b).apply(&mesh, 1e-3, &mut b).unwrap();
+                mono.apply(&mesh, clock, &mut a).unwrap();
+                stage(&mesh, &b).apply(&mesh, clock, &mut b).unwrap();
             }
             let (na, nb) = (a.nh.as_ref().unwrap(), b.nh.as_ref().unwrap());
             let (hwa, hwb) = (a.hw(), b.hw());
@@ -1564,7 +1512,9 @@ mod tests {
                 let (mesh, mut state) = moving_state(201, layers, left, right, true);
                 let before = MultilayerOperator::kinetic_energy(&state);
                 let (hu0, hw0) = (state.hu.clone(), state.hw().to_vec());
-                stage(&mesh, &state).apply(&mesh, 1e-3, &mut state).unwrap();
+                stage(&mesh, &state)
+                    .apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+                    .unwrap();
                 let after = MultilayerOperator::kinetic_energy(&state);
                 let hw = state.hw();
                 let n = layers;
@@ -1598,7 +1548,9 @@ mod tests {
             state.hu[i * 3..i * 3 + 3].fill(0.0);
             state.hw_mut()[i * 3..i * 3 + 3].fill(0.0);
         }
-        stage(&mesh, &state).apply(&mesh, 1e-3, &mut state).unwrap();
+        stage(&mesh, &state)
+            .apply(&mesh, StepClock::at(0.0, 1e-3), &mut state)
+            .unwrap();
         let p = &state.nh.as_ref().unwrap().p;
         assert_eq!(&p[0..3], &p[3..6]);
         assert_eq!(&p[60 * 3..61 * 3], &p[59 * 3..60 * 3]);

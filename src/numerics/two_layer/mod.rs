@@ -348,11 +348,11 @@ impl crate::numerics::Stage<CurvedLine, TwoLayerState> for TwoLayerStage {
     fn apply(
         &mut self,
         grid: &CurvedLine,
-        dt: f64,
+        clock: crate::numerics::StepClock,
         state: &mut TwoLayerState,
     ) -> Result<(), crate::numerics::StageError> {
         // Both sub-steps keep H ≥ 0 by construction (draining limiter): no retry needed.
-        self.solver.step_with(grid, state, dt);
+        self.solver.step_with(grid, state, clock.dt);
         Ok(())
     }
 }

@@ -59,8 +59,8 @@ pub mod grains;
 use super::banded::BandedCholesky;
 use super::projection::monolayer::wet_threshold;
 use super::projection::multilayer::MultilayerOperator;
-use super::projection::{FullStep, PressureSolver, ProjectionOperator};
-use super::{Stage, StageError};
+use super::projection::{PressureSolver, ProjectionOperator};
+use super::{Stage, StageError, StepClock};
 use crate::grid::CurvedLine;
 use crate::physics::two_layer::H_DRY_TWO_LAYER;
 use crate::state::layered::{fill_tracer_ghosts, LayeredState, Tracer, HW};
@@ -432,7 +432,7 @@ fn advect(left: f64, here: f64, right: f64, c_up: f64, c_down: f64) -> f64 {
 /// The projection as the second stage of a submarine run with non-hydrostatic water.
 ///
 /// A step shortened to land on an output time stores p = Π/Δt_full, Δt_full the step
-/// the CFL condition allowed ([`Stage::full_step`]), as the granular projections do
+/// the CFL condition allowed ([`StepClock::rate_step`]), as the granular projections do
 /// ([`super::projection`], "Shortened steps"): Π does not shrink with Δt where the
 /// two-layer step changes the grains' discharge by an amount that does not (grains
 /// stopped or started by the Coulomb rule under the water, which the coupled
@@ -442,16 +442,12 @@ fn advect(left: f64, here: f64, right: f64, c_up: f64, c_down: f64) -> f64 {
 #[derive(Debug)]
 pub struct WaterProjectionStage {
     pub projection: WaterProjection,
-    dt_full: FullStep,
 }
 
 impl WaterProjectionStage {
     /// The stage of `projection`.
     pub fn new(projection: WaterProjection) -> Self {
-        WaterProjectionStage {
-            projection,
-            dt_full: FullStep::default(),
-        }
+        WaterProjectionStage { projection }
     }
 }
 
@@ -460,22 +456,18 @@ impl Stage<CurvedLine, TwoLayerState> for WaterProjectionStage {
         "water_projection"
     }
 
-    fn prepare(&mut self, grid: &CurvedLine, state: &TwoLayerState) {
+    fn prepare(&mut self, grid: &CurvedLine, _: StepClock, state: &TwoLayerState) {
         self.projection.record_bottom(grid, state);
-    }
-
-    fn full_step(&mut self, dt_full: f64) {
-        self.dt_full.set(dt_full);
     }
 
     fn apply(
         &mut self,
         grid: &CurvedLine,
-        dt: f64,
+        clock: StepClock,
         state: &mut TwoLayerState,
     ) -> Result<(), StageError> {
-        let dt_p = self.dt_full.pressure_step(dt);
-        self.projection.project_storing(grid, state, dt, dt_p);
+        self.projection
+            .project_storing(grid, state, clock.dt, clock.rate_step());
         Ok(())
     }
 }
