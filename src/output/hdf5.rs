@@ -460,7 +460,7 @@ impl OutputSink for Hdf5Sink {
             )));
         }
         let raster = match &info.raster {
-            Some(r) => Some(raster_geometry(r.nx, r.ny, grid).map_err(|e| self.err(e))?),
+            Some(_) => Some(raster_geometry(grid).map_err(|e| self.err(e))?),
             None => None,
         };
         let file = self.create_file()?;
@@ -675,14 +675,14 @@ impl Drop for Hdf5Sink {
 }
 
 /// The raster of a run: (nx, ny), the lower-left corner and the spacing, from the
-/// cell centres handed to `begin` (row-major x and y of every cell).
+/// grid's spec, checked against the cell centres handed to `begin` (row-major x and y
+/// of every cell).
 #[allow(clippy::type_complexity)]
-fn raster_geometry(
-    nx: usize,
-    ny: usize,
-    grid: &GridData,
-) -> Result<((usize, usize), (f64, f64), (f64, f64)), String> {
-    let cells = grid.x.len();
+fn raster_geometry(grid: &GridData) -> Result<((usize, usize), (f64, f64), (f64, f64)), String> {
+    let Some(g) = grid.spec.raster() else {
+        return Err("a raster run on a grid that is not a raster".into());
+    };
+    let (nx, ny, cells) = (g.nx, g.ny, grid.x.len());
     let Some(y) = grid.y else {
         return Err("a raster run without y coordinates".into());
     };
@@ -693,10 +693,7 @@ fn raster_geometry(
             y.len()
         ));
     }
-    let dx = if nx > 1 { grid.x[1] - grid.x[0] } else { 1.0 };
-    let dy = if ny > 1 { y[nx] - y[0] } else { dx };
-    let dx = if nx > 1 { dx } else { dy };
-    Ok(((nx, ny), (grid.x[0] - 0.5 * dx, y[0] - 0.5 * dy), (dx, dy)))
+    Ok(((nx, ny), (g.x_min, g.y_min), (g.dx, g.dy)))
 }
 
 fn present(yes: bool) -> &'static str {
@@ -717,6 +714,7 @@ fn io_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::{GridSpec, LineGeometry, RasterGeometry};
 
     fn info(layers: usize) -> RunInfo {
         RunInfo {
@@ -732,21 +730,30 @@ mod tests {
         }
     }
 
-    /// The run information of a raster run on `nx` × `ny` cells of 1 m, without CRS.
-    fn raster_info(nx: usize, ny: usize) -> RunInfo {
+    /// The run information of a raster run.
+    fn raster_info() -> RunInfo {
         let mut raster = info(1);
         raster.raster = Some(crate::output::RasterInfo {
-            nx,
-            ny,
-            dx: 1.0,
-            dy: 1.0,
-            crs_epsg: None,
-            crs_wkt: None,
             release: None,
             wall_cells: 0,
-            geotransform: None,
         });
         raster
+    }
+
+    /// A raster of `nx` × `ny` cells of 1 m from (0, 0), without CRS.
+    fn raster_spec(nx: usize, ny: usize) -> GridSpec {
+        let (w, h) = (nx as f64, ny as f64);
+        GridSpec::Raster(RasterGeometry::of_extent(nx, ny, [0.0, w], [0.0, h]))
+    }
+
+    /// A line of `nx` cells of 1 m from 0.
+    fn line_spec(nx: usize) -> GridSpec {
+        GridSpec::Line(LineGeometry {
+            nx,
+            x_min: 0.0,
+            x_max: nx as f64,
+            dx: 1.0,
+        })
     }
 
     fn begin(path: &Path) -> Hdf5Sink {
@@ -755,6 +762,7 @@ mod tests {
         sink.begin(
             &info(2),
             &GridData {
+                spec: &line_spec(3),
                 x: &x,
                 y: None,
                 shape: None,
@@ -898,11 +906,13 @@ mod tests {
         let path = dir.path().join("raster.h5");
         let (nx, ny) = (500, 300);
         let mut sink = Hdf5Sink::create(&path).unwrap();
-        let raster = raster_info(nx, ny);
+        let raster = raster_info();
+        let spec = raster_spec(nx, ny);
         let x: Vec<f64> = (0..nx * ny).map(|k| (k % nx) as f64 + 0.5).collect();
         let y: Vec<f64> = (0..nx * ny).map(|k| (k / nx) as f64 + 0.5).collect();
         let zeros = vec![0.0; nx * ny];
         let grid = GridData {
+            spec: &spec,
             x: &x,
             y: Some(&y),
             shape: Some((ny, nx)),
@@ -978,12 +988,13 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("maps.h5");
         let mut sink = Hdf5Sink::create(&path).unwrap();
-        let raster = raster_info(3, 2);
+        let raster = raster_info();
         let x = [0.5, 1.5, 2.5, 0.5, 1.5, 2.5];
         let y = [0.5, 0.5, 0.5, 1.5, 1.5, 1.5];
         sink.begin(
             &raster,
             &GridData {
+                spec: &raster_spec(3, 2),
                 x: &x,
                 y: Some(&y),
                 shape: Some((2, 3)),

@@ -4,13 +4,16 @@
 //!
 //! The file stores fields (ny, nx) with row j = 0 at the south edge (y increasing);
 //! a [`Raster`] has row 0 at the top (north). [`north_up`] flips the rows, so cell
-//! (i, j) of the file is cell (col i, row ny − 1 − j) of the raster. The raster's
-//! top-left corner is (x₀ − Δ/2, y_{ny−1} + Δ/2) from the cell centres `/grid/x`,
-//! `/grid/y`; the cells must be square (Δx = Δy within 10⁻⁹), as GeoTIFF and ESRI
-//! ASCII grids have them.
+//! (i, j) of the file is cell (col i, row ny − 1 − j) of the raster.
 //!
-//! The CRS is the root attribute `crs` (`EPSG:n`) and/or `crs_wkt`, both strings (the
-//! HDF5 library granflow uses reads string attributes back, not numeric ones).
+//! The grid is the run's [`RasterGeometry`] as the `/grid` attributes record it (the
+//! text attribute `spec` and the CRS attributes `crs`, `crs_wkt`: the HDF5 library
+//! granflow uses reads a group's string attributes back, not its numeric ones): the
+//! raster's top-left corner is (x_min, y_max), its cell size Δx. A file written before
+//! those attributes gives the grid by its cell centres `/grid/x`, `/grid/y` (corner
+//! (x₀ − Δ/2, y_{ny−1} + Δ/2), or the root attribute `geotransform` when it is the same
+//! grid) and the CRS by the root attributes `crs`, `crs_wkt`. Either way the cells
+//! must be square (Δx = Δy within 10⁻⁹), as GeoTIFF and ESRI ASCII grids have them.
 
 use std::path::{Path, PathBuf};
 
@@ -18,6 +21,8 @@ use rust_hdf5::H5File;
 
 use super::ResultsError;
 use crate::gis::{Crs, Raster};
+pub use crate::grid::spec::north_up;
+use crate::grid::RasterGeometry;
 
 /// Most cells (and values of one axis) a run file may declare: the largest raster
 /// domain of a run (`domain.cells`, 10⁷). A larger size is a damaged or crafted file,
@@ -30,6 +35,7 @@ pub struct RunFile {
     file: H5File,
     nx: usize,
     ny: usize,
+    geometry: RasterGeometry,
     grid: Raster,
     times: Vec<f64>,
     coordinates: String,
@@ -105,49 +111,32 @@ impl RunFile {
                 "the cell centres /grid/x, /grid/y are not all finite".into()
             ));
         }
-        // An axis of one cell has no spacing between centres: the cell size is the
-        // axis' `spacing` attribute (files without it cannot be placed).
-        let stored = |name: &str| -> Option<f64> {
-            let ds = file.dataset(name).ok()?;
-            let attr = ds.attr("spacing").ok()?;
-            attr.read_numeric::<f64>().ok()
+        let on_grid = |name: &str| root.group("grid").ok()?.attr_string(name).ok();
+        let geometry = match on_grid("spec") {
+            Some(text) => {
+                let crs = crs_of(|name| on_grid(name));
+                let g = RasterGeometry::from_text(&text, crs).ok_or_else(|| {
+                    bad(format!("the /grid attribute spec = {text:?} is not a raster's"))
+                })?;
+                if (g.nx, g.ny) != (nx, ny) {
+                    return Err(bad(format!(
+                        "/grid says {} x {} cells, /grid/x and /grid/y have {nx} and {ny}",
+                        g.nx, g.ny
+                    )));
+                }
+                g
+            }
+            None => geometry_of_centres(&file, &x, &y).map_err(bad)?,
         };
-        let axis_step = |axis: &[f64], name: &str, what: &str| {
-            spacing(axis).or_else(|| stored(name)).ok_or_else(|| {
-                bad(format!(
-                    "one {what} and no `spacing` attribute on /{name}: the cell size along \
-                     it is unknown (a file of an older granflow)"
-                ))
-            })
-        };
-        let dx = axis_step(&x, "grid/x", "column")?;
-        let dy = axis_step(&y, "grid/y", "row")?;
+        let (dx, dy) = (geometry.dx, geometry.dy);
         if !(dx > 0.0 && dy > 0.0) || (dx - dy).abs() > 1e-9 * dx.max(dy) {
             return Err(bad(format!(
                 "cells are not square (dx = {dx}, dy = {dy}): GeoTIFF and ESRI ASCII grids need \
                  square cells; run with domain.cells = [nx, ny] in the ratio of the extents"
             )));
         }
-        let mut crs = match root.attr_string("crs_wkt") {
-            Ok(wkt) => Crs::from_wkt(&wkt),
-            Err(_) => Crs::unknown(),
-        };
-        if let Some(code) = root
-            .attr_string("crs")
-            .ok()
-            .and_then(|s| s.strip_prefix("EPSG:").and_then(|c| c.parse::<u32>().ok()))
-        {
-            crs.epsg = Some(code);
-        }
-        let mut grid = Raster::filled(nx, ny, x[0] - 0.5 * dx, y[ny - 1] + 0.5 * dy, dx, 0.0);
-        if let Some([x_left, d, y_top]) = root
-            .attr_string("geotransform")
-            .ok()
-            .and_then(|t| exact_grid(&t, &grid))
-        {
-            (grid.x_left, grid.cell_size, grid.y_top) = (x_left, d, y_top);
-        }
-        grid.crs = crs;
+        let mut grid = Raster::filled(nx, ny, geometry.x_min, geometry.y_max, dx, 0.0);
+        grid.crs = geometry.crs.clone();
         let times = read("snapshots/t")?;
         let coordinates = root.attr_string("coordinates").unwrap_or_default();
         Ok(RunFile {
@@ -155,6 +144,7 @@ impl RunFile {
             file,
             nx,
             ny,
+            geometry,
             grid,
             times,
             coordinates,
@@ -164,6 +154,12 @@ impl RunFile {
     /// The file's path.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// The run's grid as the file records it: the `/grid` attributes, or in a file
+    /// written before them, what the cell centres and root attributes give.
+    pub fn geometry(&self) -> &RasterGeometry {
+        &self.geometry
     }
 
     /// The grid (values 0, no nodata) with the run's georeferencing and CRS.
@@ -241,10 +237,67 @@ impl RunFile {
     }
 }
 
+/// The CRS of the attributes `crs_wkt` and `crs` (`EPSG:n`) that `attr` reads.
+fn crs_of(attr: impl Fn(&str) -> Option<String>) -> Crs {
+    let mut crs = attr("crs_wkt").map_or_else(Crs::unknown, |wkt| Crs::from_wkt(&wkt));
+    if let Some(code) = attr("crs")
+        .and_then(|s| s.strip_prefix("EPSG:").and_then(|c| c.parse::<u32>().ok()))
+    {
+        crs.epsg = Some(code);
+    }
+    crs
+}
+
+/// The grid of a file written before the `/grid` attributes: the cell size from the
+/// centres `x`, `y` (or an axis' `spacing` attribute when it has one cell), the edges
+/// half a cell beyond the outer centres, unless the root attribute `geotransform`
+/// gives the same grid exactly; the CRS of the root attributes.
+fn geometry_of_centres(file: &H5File, x: &[f64], y: &[f64]) -> Result<RasterGeometry, String> {
+    let (nx, ny) = (x.len(), y.len());
+    // An axis of one cell has no spacing between centres: the cell size is the
+    // axis' `spacing` attribute (files without it cannot be placed).
+    let stored = |name: &str| -> Option<f64> {
+        let ds = file.dataset(name).ok()?;
+        let attr = ds.attr("spacing").ok()?;
+        attr.read_numeric::<f64>().ok()
+    };
+    let axis_step = |axis: &[f64], name: &str, what: &str| {
+        spacing(axis).or_else(|| stored(name)).ok_or_else(|| {
+            format!(
+                "one {what} and no `spacing` attribute on /{name}: the cell size along \
+                 it is unknown (a file of an older granflow)"
+            )
+        })
+    };
+    let dx = axis_step(x, "grid/x", "column")?;
+    let dy = axis_step(y, "grid/y", "row")?;
+    let root = file.root_group();
+    let mut g = RasterGeometry {
+        nx,
+        ny,
+        x_min: x[0] - 0.5 * dx,
+        x_max: x[nx - 1] + 0.5 * dx,
+        y_min: y[0] - 0.5 * dy,
+        y_max: y[ny - 1] + 0.5 * dy,
+        dx,
+        dy,
+        crs: crs_of(|name| root.attr_string(name).ok()),
+    };
+    if let Some([x_left, d, y_top]) = root
+        .attr_string("geotransform")
+        .ok()
+        .and_then(|t| exact_grid(&t, &g))
+    {
+        (g.x_min, g.y_max, g.dx, g.dy) = (x_left, y_top, d, d);
+        (g.x_max, g.y_min) = (x_left + nx as f64 * d, y_top - ny as f64 * d);
+    }
+    Ok(g)
+}
+
 /// The DEM's grid from the `geotransform` attribute (`x₀ Δ 0 y₀ 0 −Δ`, exact doubles)
 /// as (x₀, Δ, y₀), when it is that of `grid` (from the cell centres) to 10⁻⁶ of a cell:
 /// the centres give the grid only to rounding.
-fn exact_grid(text: &str, grid: &Raster) -> Option<[f64; 3]> {
+fn exact_grid(text: &str, grid: &RasterGeometry) -> Option<[f64; 3]> {
     let v: Vec<f64> = text
         .split_whitespace()
         .map(str::parse)
@@ -253,24 +306,12 @@ fn exact_grid(text: &str, grid: &Raster) -> Option<[f64; 3]> {
     let &[x0, d, rx, y0, ry, minus_d] = v.as_slice() else {
         return None;
     };
-    let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * grid.cell_size;
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * grid.dx;
     (rx == 0.0
         && ry == 0.0
         && minus_d == -d
-        && close(d, grid.cell_size)
-        && close(x0, grid.x_left)
-        && close(y0, grid.y_top))
+        && close(d, grid.dx)
+        && close(x0, grid.x_min)
+        && close(y0, grid.y_max))
     .then_some([x0, d, y0])
-}
-
-/// The values of a (ny, nx) field stored south row first, reordered north row first
-/// (the order of a [`Raster`]); the same flip takes a raster's values back to the
-/// file's order.
-pub fn north_up<T: Copy>(values: &[T], nx: usize, ny: usize) -> Vec<T> {
-    debug_assert_eq!(values.len(), nx * ny);
-    let mut out = Vec::with_capacity(nx * ny);
-    for row in values.chunks(nx).rev() {
-        out.extend_from_slice(row);
-    }
-    out
 }
