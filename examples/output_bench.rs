@@ -51,7 +51,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     sink.begin(
         &info,
         &GridData {
-            spec: &GridSpec::Line(LineGeometry::of_extent(nx, -0.005, (nx as f64 - 0.5) * 0.01)),
+            spec: &GridSpec::Line(LineGeometry::of_extent(
+                nx,
+                -0.005,
+                (nx as f64 - 0.5) * 0.01,
+            )),
             x: &x,
             y: None,
             shape: None,

@@ -10,11 +10,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use granflow::grid::{GridSpec, LineGeometry};
 use granflow::output::{
     create_run_sinks, front_csv_path, FrontCsvSink, GridData, Hdf5Sink, OutputSink, RunInfo,
     RunSummary, SnapshotView, StepRecord, FORMAT_VERSION,
 };
-use granflow::grid::{GridSpec, LineGeometry};
 use rust_hdf5::H5File;
 
 const DX: f64 = 0.5;

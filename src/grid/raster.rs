@@ -264,12 +264,8 @@ impl Raster2d {
             }
             z.copy_from_slice(&b_ghost);
         }
-        let geometry = RasterGeometry::of_extent(
-            nx,
-            ny,
-            [spec.x_min, spec.x_max],
-            [spec.y_min, spec.y_max],
-        );
+        let geometry =
+            RasterGeometry::of_extent(nx, ny, [spec.x_min, spec.x_max], [spec.y_min, spec.y_max]);
         Ok(Raster2d {
             geometry,
             spec,

@@ -117,7 +117,11 @@ impl RasterGeometry {
         let [nx, ny, rest @ ..] = words.as_slice() else {
             return None;
         };
-        let v: Vec<f64> = rest.iter().map(|w| w.parse()).collect::<Result<_, _>>().ok()?;
+        let v: Vec<f64> = rest
+            .iter()
+            .map(|w| w.parse())
+            .collect::<Result<_, _>>()
+            .ok()?;
         let &[x_min, x_max, y_min, y_max, dx, dy] = v.as_slice() else {
             return None;
         };
@@ -174,9 +178,18 @@ mod tests {
         };
         let back = RasterGeometry::from_text(&g.to_text(), Crs::from_epsg(2056)).unwrap();
         assert_eq!(back, g);
-        assert_eq!(RasterGeometry::from_text("7 3 0 1 0 1 0.1", Crs::unknown()), None);
-        assert_eq!(RasterGeometry::from_text("0 3 0 1 0 1 0.1 0.1", Crs::unknown()), None);
-        assert_eq!(RasterGeometry::from_text("7 3 1 0 0 1 0.1 0.1", Crs::unknown()), None);
+        assert_eq!(
+            RasterGeometry::from_text("7 3 0 1 0 1 0.1", Crs::unknown()),
+            None
+        );
+        assert_eq!(
+            RasterGeometry::from_text("0 3 0 1 0 1 0.1 0.1", Crs::unknown()),
+            None
+        );
+        assert_eq!(
+            RasterGeometry::from_text("7 3 1 0 0 1 0.1 0.1", Crs::unknown()),
+            None
+        );
     }
 
     #[test]

@@ -116,7 +116,9 @@ impl RunFile {
             Some(text) => {
                 let crs = crs_of(|name| on_grid(name));
                 let g = RasterGeometry::from_text(&text, crs).ok_or_else(|| {
-                    bad(format!("the /grid attribute spec = {text:?} is not a raster's"))
+                    bad(format!(
+                        "the /grid attribute spec = {text:?} is not a raster's"
+                    ))
                 })?;
                 if (g.nx, g.ny) != (nx, ny) {
                     return Err(bad(format!(
@@ -240,8 +242,8 @@ impl RunFile {
 /// The CRS of the attributes `crs_wkt` and `crs` (`EPSG:n`) that `attr` reads.
 fn crs_of(attr: impl Fn(&str) -> Option<String>) -> Crs {
     let mut crs = attr("crs_wkt").map_or_else(Crs::unknown, |wkt| Crs::from_wkt(&wkt));
-    if let Some(code) = attr("crs")
-        .and_then(|s| s.strip_prefix("EPSG:").and_then(|c| c.parse::<u32>().ok()))
+    if let Some(code) =
+        attr("crs").and_then(|s| s.strip_prefix("EPSG:").and_then(|c| c.parse::<u32>().ok()))
     {
         crs.epsg = Some(code);
     }
@@ -314,4 +316,108 @@ fn exact_grid(text: &str, grid: &RasterGeometry) -> Option<[f64; 3]> {
         && close(x0, grid.x_min)
         && close(y0, grid.y_max))
     .then_some([x0, d, y0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A raster run file of `geometry` with only what [`RunFile::open`] reads: the
+    /// cell centres, one snapshot time, the root attributes `old` (a file written
+    /// before the `/grid` attributes) and, when `spec`, the `/grid` attributes.
+    fn write(path: &Path, geometry: &RasterGeometry, old: &[(&str, String)], spec: bool) {
+        let file = H5File::options().no_locking().create(path).unwrap();
+        file.set_attr_string("granflow_version", "test").unwrap();
+        file.set_attr_string("grid", "raster").unwrap();
+        for (name, value) in old {
+            file.set_attr_string(name, value).unwrap();
+        }
+        let g = file.create_group("grid").unwrap();
+        let centre = |min: f64, d: f64, k: usize| min + (k as f64 + 0.5) * d;
+        let x: Vec<f64> = (0..geometry.nx)
+            .map(|i| centre(geometry.x_min, geometry.dx, i))
+            .collect();
+        let y: Vec<f64> = (0..geometry.ny)
+            .map(|j| centre(geometry.y_min, geometry.dy, j))
+            .collect();
+        for (name, data) in [("x", &x), ("y", &y)] {
+            let ds = g
+                .new_dataset::<f64>()
+                .shape([data.len()])
+                .create(name)
+                .unwrap();
+            ds.write_raw(data).unwrap();
+        }
+        if spec {
+            g.set_attr_string("spec", &geometry.to_text()).unwrap();
+            g.set_attr_string("crs", "EPSG:2056").unwrap();
+        }
+        let s = file.create_group("snapshots").unwrap();
+        let t = s.new_dataset::<f64>().shape([1]).create("t").unwrap();
+        t.write_raw(&[0.0]).unwrap();
+        file.close().unwrap();
+    }
+
+    /// A DEM's grid whose edges the cell centres give only to rounding.
+    fn dem() -> RasterGeometry {
+        let (x_left, y_top, d, nx, ny) = (2_600_123.37, 1_200_456.91, 0.3, 13, 9);
+        RasterGeometry {
+            nx,
+            ny,
+            x_min: x_left,
+            x_max: x_left + nx as f64 * d,
+            y_min: y_top - ny as f64 * d,
+            y_max: y_top,
+            dx: d,
+            dy: d,
+            crs: Crs::from_epsg(2056),
+        }
+    }
+
+    fn header(r: &Raster) -> (usize, usize, f64, f64, f64, Option<u32>) {
+        (r.nx, r.ny, r.x_left, r.y_top, r.cell_size, r.crs.epsg)
+    }
+
+    #[test]
+    fn the_grid_of_the_grid_attributes_is_the_runs_exactly() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("new.h5");
+        let g = dem();
+        write(&path, &g, &[], true);
+        let run = RunFile::open(&path).unwrap();
+        assert_eq!(run.geometry(), &g);
+        let want = (13, 9, g.x_min, g.y_max, g.dx, Some(2056));
+        assert_eq!(header(run.grid()), want);
+    }
+
+    #[test]
+    fn a_file_without_the_grid_attributes_gives_the_grid_as_before() {
+        let dir = tempfile::tempdir().unwrap();
+        let g = dem();
+        // With the DEM's geotransform: the DEM's grid exactly.
+        let path = dir.path().join("dem.h5");
+        let transform = format!("{} {} 0 {} 0 {}", g.x_min, g.dx, g.y_max, -g.dx);
+        let old = [
+            ("crs", "EPSG:2056".to_string()),
+            ("geotransform", transform),
+        ];
+        write(&path, &g, &old, false);
+        let run = RunFile::open(&path).unwrap();
+        assert_eq!(
+            header(run.grid()),
+            (13, 9, g.x_min, g.y_max, g.dx, Some(2056))
+        );
+        // Without: half a cell beyond the outer centres, the cell size from their spacing.
+        let path = dir.path().join("keys.h5");
+        write(&path, &g, &[], false);
+        let run = RunFile::open(&path).unwrap();
+        let x = |i: usize| g.x_min + (i as f64 + 0.5) * g.dx;
+        let y = |j: usize| g.y_min + (j as f64 + 0.5) * g.dy;
+        let dx = (x(12) - x(0)) / 12.0;
+        let dy = (y(8) - y(0)) / 8.0;
+        assert_eq!(
+            header(run.grid()),
+            (13, 9, x(0) - 0.5 * dx, y(8) + 0.5 * dy, dx, None)
+        );
+    }
 }
