@@ -686,11 +686,12 @@ fn raster_geometry(grid: &GridData) -> Result<((usize, usize), (f64, f64), (f64,
     let Some(y) = grid.y else {
         return Err("a raster run without y coordinates".into());
     };
-    if nx == 0 || ny == 0 || nx * ny != cells || y.len() != cells {
+    if nx == 0 || ny == 0 || nx * ny != cells || y.len() != cells || grid.shape != Some((ny, nx)) {
         return Err(format!(
-            "bad raster: {nx} × {ny} cells but x, y have {} and {} values",
+            "bad raster: {nx} × {ny} cells but x, y have {} and {} values of shape {:?}",
             cells,
-            y.len()
+            y.len(),
+            grid.shape
         ));
     }
     Ok(((nx, ny), (g.x_min, g.y_min), (g.dx, g.dy)))
@@ -772,6 +773,54 @@ mod tests {
         )
         .unwrap();
         sink
+    }
+
+    /// The grid's spec is written as `/grid` attributes: its kind, and on a raster the
+    /// text that reads back to the same geometry and the CRS; a raster spec whose cells
+    /// are not the grid's is refused.
+    #[test]
+    fn the_grid_spec_is_written_as_attributes_of_grid() {
+        let dir = tempfile::tempdir().unwrap();
+        let line = dir.path().join("line.h5");
+        drop(begin(&line));
+        let file = H5File::open(&line).unwrap();
+        let grid = file.root_group().group("grid").unwrap();
+        assert_eq!(grid.attr_string("kind").unwrap(), "line");
+        assert!(grid.attr_string("spec").is_err());
+
+        let path = dir.path().join("raster.h5");
+        let mut geometry = RasterGeometry::of_extent(3, 2, [600_000.1, 600_000.4], [-0.3, -0.1]);
+        geometry.crs = crate::gis::Crs::from_epsg(32632);
+        let spec = GridSpec::Raster(geometry.clone());
+        let x = [0.5, 1.5, 2.5, 0.5, 1.5, 2.5];
+        let y = [0.5, 0.5, 0.5, 1.5, 1.5, 1.5];
+        let mut grid = GridData {
+            spec: &spec,
+            x: &x,
+            y: Some(&y),
+            shape: Some((2, 3)),
+            b: &[0.0; 6],
+            h_bed: &[0.0; 6],
+        };
+        Hdf5Sink::create(&path)
+            .unwrap()
+            .begin(&raster_info(), &grid)
+            .unwrap();
+        let file = H5File::open(&path).unwrap();
+        let g = file.root_group().group("grid").unwrap();
+        assert_eq!(g.attr_string("kind").unwrap(), "raster");
+        assert_eq!(g.attr_string("crs").unwrap(), "EPSG:32632");
+        let text = g.attr_string("spec").unwrap();
+        let back = RasterGeometry::from_text(&text, geometry.crs.clone());
+        assert_eq!(back, Some(geometry));
+
+        let wrong = raster_spec(2, 3);
+        grid.spec = &wrong;
+        let e = Hdf5Sink::create(&dir.path().join("wrong.h5"))
+            .unwrap()
+            .begin(&raster_info(), &grid)
+            .unwrap_err();
+        assert!(e.to_string().contains("bad raster"), "{e}");
     }
 
     fn view<'a>(t: f64, data: &'a [f64], extra: &'a [CellField<'a>]) -> SnapshotView<'a> {
