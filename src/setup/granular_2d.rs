@@ -8,8 +8,7 @@
 //! Everything that can be wrong with the scenario was refused by its validation.
 
 use crate::grid::raster::{Raster2d, RasterSpec, Sides};
-use crate::grid::Grid;
-use crate::grid::RasterGeometry;
+use crate::grid::{Grid, RasterGeometry};
 use crate::model::granular_2d::{pipeline_of_order, pipeline_with_zones_of_order, Granular2d};
 use crate::model::layers_2d::{self, LayeredMaps, Layers2d};
 use crate::model::raster_maps::RasterMaps;
