@@ -8,6 +8,7 @@
 
 use std::time::{Duration, Instant};
 
+use granflow::grid::{GridSpec, LineGeometry};
 use granflow::output::{
     GridData, Hdf5Sink, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
 };
@@ -50,6 +51,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     sink.begin(
         &info,
         &GridData {
+            spec: &GridSpec::Line(LineGeometry::of_extent(
+                nx,
+                -0.005,
+                (nx as f64 - 0.5) * 0.01,
+            )),
             x: &x,
             y: None,
             shape: None,

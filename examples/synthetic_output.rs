@@ -8,6 +8,7 @@
 
 use std::path::PathBuf;
 
+use granflow::grid::{GridSpec, LineGeometry};
 use granflow::output::{
     create_run_sinks, GridData, OutputSink, RunInfo, RunSummary, SnapshotView, StepRecord,
 };
@@ -86,6 +87,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     sink.begin(
         &info,
         &GridData {
+            spec: &GridSpec::Line(LineGeometry::of_extent(nx, 0.0, nx as f64 * dx)),
             x: &x,
             y: None,
             shape: None,

@@ -323,7 +323,9 @@ impl<M: Model> Simulation<M> {
         progress: &mut (dyn FnMut(Progress) + Send),
     ) -> Result<RunSummary, RunError> {
         let wall = Instant::now();
+        let spec = self.grid.grid_spec();
         let grid = GridData {
+            spec: &spec,
             x: self.grid.axis(0),
             y: (self.grid.axis_names().len() > 1).then(|| self.grid.axis(1)),
             shape: self.grid.shape(),

@@ -10,6 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use granflow::grid::{GridSpec, LineGeometry};
 use granflow::output::{
     create_run_sinks, front_csv_path, FrontCsvSink, GridData, Hdf5Sink, OutputSink, RunInfo,
     RunSummary, SnapshotView, StepRecord, FORMAT_VERSION,
@@ -114,7 +115,9 @@ impl Synth {
 
     fn begin(&self, sink: &mut impl OutputSink) {
         let (x, b, h_bed) = (self.x(), self.b(), self.h_bed());
+        let spec = GridSpec::Line(LineGeometry::of_extent(self.nx, 0.0, self.nx as f64 * DX));
         let grid = GridData {
+            spec: &spec,
             x: &x,
             y: None,
             shape: None,
@@ -747,6 +750,7 @@ fn the_checker_refuses_non_finite_diagnostics_and_snapshots() {
             raster: None,
         };
         let grid = GridData {
+            spec: &GridSpec::Line(LineGeometry::of_extent(2, 0.0, 1.0)),
             x: &x,
             y: None,
             b: &[0.0; 2],

@@ -157,6 +157,96 @@ fn exported_maps_have_the_runs_grid_crs_and_values() {
     assert_eq!(ppr[k], 0.62 * 2500.0 * pfv[k] * pfv[k]);
 }
 
+/// A DEM whose origin and cell size are not binary fractions (CH1903+ / LV95): the
+/// run's `/grid` attributes record its grid and CRS exactly, and the GeoTIFF and ESRI
+/// ASCII grids exported from the run are on that very grid (the ASCII grid as the
+/// DEM itself is in that format).
+#[test]
+fn the_grid_goes_unchanged_from_the_dem_to_the_file_and_the_exports() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (x_left, y_top, cell) = (2_600_123.37, 1_200_456.91, 0.3);
+    let mut dem = Raster::filled(13, 9, x_left, y_top, cell, 0.0);
+    for row in 0..9 {
+        for col in 0..13 {
+            let i = dem.index(col, row);
+            dem.values[i] = 500.0 - 0.1 * col as f64;
+        }
+    }
+    dem.crs = Crs::from_epsg(2056);
+    geotiff::write(&dem, &d.join("dem.tif"), WriteOptions::default()).unwrap();
+    let scenario = r#"[domain]
+coordinates = "cartesian"
+
+[bed]
+b = { raster = "dem.tif" }
+
+[rheology]
+law = "coulomb"
+mu_deg = 15.0
+
+[initial]
+h = "if((x - 2600125.3)^2 + (y - 1200455.5)^2 < 0.7^2, 0.3, 0)"
+
+[time]
+t_end = 0.5
+
+[output]
+every = 0.25
+"#;
+    let h5 = run(d, "lv95", scenario, &[]);
+    let file = H5File::open(&h5).unwrap();
+    let grid = file.root_group().group("grid").unwrap();
+    assert_eq!(grid.attr_string("kind").unwrap(), "raster");
+    assert_eq!(grid.attr_string("crs").unwrap(), "EPSG:2056");
+    let spec = grid.attr_string("spec").unwrap();
+    let words: Vec<&str> = spec.split_whitespace().collect();
+    assert_eq!(words[..2], ["13", "9"], "{spec}");
+    let numbers: Vec<f64> = words[2..].iter().map(|w| w.parse().unwrap()).collect();
+    assert_eq!(numbers[0], x_left, "{spec}");
+    assert_eq!(numbers[3], y_top, "{spec}");
+    assert_eq!(numbers[4..], [cell, cell], "{spec}");
+    drop(file);
+
+    let out = d.join("out");
+    let (o, r) = (out.to_str().unwrap(), h5.to_str().unwrap());
+    assert_success(&export(&[r, "-o", o]));
+    assert_success(&export(&[r, "--format", "asc", "-o", o]));
+    let tif = geotiff::read(&out.join("lv95_pft.tif")).unwrap();
+    assert_eq!((tif.nx, tif.ny), (13, 9));
+    assert_eq!(
+        (tif.x_left, tif.y_top, tif.cell_size),
+        (x_left, y_top, cell)
+    );
+    assert_eq!(tif.crs.epsg, Some(2056));
+    asc::write(&dem, &d.join("dem.asc")).unwrap();
+    let want = asc::read(&d.join("dem.asc")).unwrap();
+    let grid = asc::read(&out.join("lv95_pft.asc")).unwrap();
+    assert_eq!((grid.nx, grid.ny), (13, 9));
+    assert_eq!(
+        (grid.x_left, grid.y_top, grid.cell_size),
+        (want.x_left, want.y_top, want.cell_size)
+    );
+    assert_eq!(grid.crs.epsg, Some(2056));
+}
+
+/// A domain given by its keys: the exported raster's corner is (x_min, y_max) of the
+/// scenario and its cell size (x_max − x_min)/nx, as the run computed them (not
+/// rebuilt from the cell centres).
+#[test]
+fn a_domain_of_keys_is_exported_on_the_scenarios_edges() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let h5 = run(d, "radial", RADIAL, &[]);
+    let out = d.join("out");
+    let (o, r) = (out.to_str().unwrap(), h5.to_str().unwrap());
+    assert_success(&export(&[r, "-o", o]));
+    let tif = geotiff::read(&out.join("radial_pft.tif")).unwrap();
+    assert_eq!((tif.nx, tif.ny), (24, 16));
+    assert_eq!((tif.x_left, tif.y_top), (-1.2, 0.8));
+    assert_eq!(tif.cell_size, (1.2 - -1.2) / 24.0);
+}
+
 /// The GDAL_METADATA tag (42112) of a GeoTIFF, if it has one.
 fn gdal_metadata(path: &Path) -> Option<String> {
     let file = std::io::BufReader::new(fs::File::open(path).unwrap());

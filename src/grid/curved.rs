@@ -147,6 +147,9 @@ impl Grid for CurvedLine {
     fn cfl_length(&self) -> f64 {
         self.line.cfl_length()
     }
+    fn grid_spec(&self) -> super::GridSpec {
+        self.line.grid_spec()
+    }
     fn has_outflow(&self) -> bool {
         self.line.has_outflow()
     }

@@ -13,7 +13,7 @@
 //!
 //! Arrays carry one ghost cell on each side: index 0 and nx + 1.
 
-use super::{BedMetric, BoundaryKind, Coordinates, Grid, Point, Stencil};
+use super::{BedMetric, BoundaryKind, Coordinates, Grid, GridSpec, LineGeometry, Point, Stencil};
 use crate::physics::GRAVITY;
 
 /// A uniform 1-D grid of nx cells with its bed, potential and boundary kinds: the grid
@@ -229,6 +229,15 @@ impl Grid for Line {
 
     fn cfl_length(&self) -> f64 {
         self.dx
+    }
+
+    fn grid_spec(&self) -> GridSpec {
+        GridSpec::Line(LineGeometry {
+            nx: self.nx,
+            x_min: self.x_min,
+            x_max: self.x_max(),
+            dx: self.dx,
+        })
     }
 }
 

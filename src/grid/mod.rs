@@ -15,17 +15,22 @@
 //! - [`Raster2d`] ([`raster`]): the uniform 2-D raster of the 2-D Savage–Hutter model,
 //!   row-major cells grouped in bands of whole rows (the tiles of its stages), with the
 //!   bed's metric ([`BedMetric`], [`bed_metric`]) in the bed-normal frame.
+//!
+//! What a grid is on the map (its extent, cell sizes and, on a raster, its CRS) is one
+//! value, [`GridSpec`] ([`spec`]), which the output carries to `/grid` unchanged.
 
 pub mod bed_metric;
 pub mod curved;
 pub mod line;
 pub mod raster;
+pub mod spec;
 
 pub use bed_metric::BedMetric;
 
 pub use curved::CurvedLine;
 pub use line::{Line, LineSpec};
 pub use raster::{Raster2d, RasterSpec, Sides};
+pub use spec::{GridSpec, LineGeometry, RasterGeometry};
 
 /// Frame in which the shallow model is written (Garres-Díaz et al. 2021, §4.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -153,6 +158,8 @@ pub trait Grid: Send + 'static {
     fn locate(&self, p: Point) -> Stencil;
     /// Length in the CFL condition Δt ≤ CFL · length / speed (Δx on a line).
     fn cfl_length(&self) -> f64;
+    /// The grid's extent, cell sizes and CRS (`/grid` attributes).
+    fn grid_spec(&self) -> GridSpec;
     /// (ny, nx) of a raster, whose per-cell arrays are row-major; `None` on a line.
     fn shape(&self) -> Option<(usize, usize)> {
         None

@@ -28,7 +28,7 @@
 //! own cells; a decomposition across machines would exchange those halos. Which tiles
 //! a step visits is the state's (`state::tiles`).
 
-use super::{BedMetric, BoundaryKind, Coordinates, Grid, Point, Stencil};
+use super::{BedMetric, BoundaryKind, Coordinates, Grid, GridSpec, Point, RasterGeometry, Stencil};
 use crate::physics::GRAVITY;
 use std::ops::Range;
 
@@ -122,6 +122,9 @@ pub struct Raster2d {
     walls: Vec<bool>,
     /// The bed's gradient, cos θ and curvature in the bed-normal frame, else `None`.
     metric: Option<BedMetric>,
+    /// Where the raster is on the map: the extent of `spec` without CRS, or the
+    /// scenario's ([`Raster2d::georeferenced`]).
+    geometry: RasterGeometry,
 }
 
 impl Raster2d {
@@ -261,7 +264,10 @@ impl Raster2d {
             }
             z.copy_from_slice(&b_ghost);
         }
+        let geometry =
+            RasterGeometry::of_extent(nx, ny, [spec.x_min, spec.x_max], [spec.y_min, spec.y_max]);
         Ok(Raster2d {
+            geometry,
             spec,
             dx,
             dy,
@@ -275,6 +281,21 @@ impl Raster2d {
             walls,
             metric,
         })
+    }
+
+    /// The raster placed on the map by `geometry` (the scenario's: a DEM's grid exactly
+    /// as read, with its CRS); the cells stay those of the [`RasterSpec`]. Refuses a
+    /// geometry of another number of cells.
+    pub fn georeferenced(mut self, geometry: RasterGeometry) -> Result<Raster2d, String> {
+        let (nx, ny) = (self.spec.nx, self.spec.ny);
+        if (geometry.nx, geometry.ny) != (nx, ny) {
+            return Err(format!(
+                "a geometry of {} × {} cells for a raster of {nx} × {ny}",
+                geometry.nx, geometry.ny
+            ));
+        }
+        self.geometry = geometry;
+        Ok(self)
     }
 
     /// The slope θ (radians) of the reference plane of the local frame; 0 in the frames
@@ -444,6 +465,10 @@ impl Grid for Raster2d {
 
     fn cfl_length(&self) -> f64 {
         self.dx.min(self.dy)
+    }
+
+    fn grid_spec(&self) -> GridSpec {
+        GridSpec::Raster(self.geometry.clone())
     }
 }
 

@@ -460,7 +460,7 @@ impl OutputSink for Hdf5Sink {
             )));
         }
         let raster = match &info.raster {
-            Some(r) => Some(raster_geometry(r.nx, r.ny, grid).map_err(|e| self.err(e))?),
+            Some(_) => Some(raster_geometry(grid).map_err(|e| self.err(e))?),
             None => None,
         };
         let file = self.create_file()?;
@@ -675,28 +675,26 @@ impl Drop for Hdf5Sink {
 }
 
 /// The raster of a run: (nx, ny), the lower-left corner and the spacing, from the
-/// cell centres handed to `begin` (row-major x and y of every cell).
+/// grid's spec, checked against the cell centres handed to `begin` (row-major x and y
+/// of every cell).
 #[allow(clippy::type_complexity)]
-fn raster_geometry(
-    nx: usize,
-    ny: usize,
-    grid: &GridData,
-) -> Result<((usize, usize), (f64, f64), (f64, f64)), String> {
-    let cells = grid.x.len();
+fn raster_geometry(grid: &GridData) -> Result<((usize, usize), (f64, f64), (f64, f64)), String> {
+    let Some(g) = grid.spec.raster() else {
+        return Err("a raster run on a grid that is not a raster".into());
+    };
+    let (nx, ny, cells) = (g.nx, g.ny, grid.x.len());
     let Some(y) = grid.y else {
         return Err("a raster run without y coordinates".into());
     };
-    if nx == 0 || ny == 0 || nx * ny != cells || y.len() != cells {
+    if nx == 0 || ny == 0 || nx * ny != cells || y.len() != cells || grid.shape != Some((ny, nx)) {
         return Err(format!(
-            "bad raster: {nx} × {ny} cells but x, y have {} and {} values",
+            "bad raster: {nx} × {ny} cells but x, y have {} and {} values of shape {:?}",
             cells,
-            y.len()
+            y.len(),
+            grid.shape
         ));
     }
-    let dx = if nx > 1 { grid.x[1] - grid.x[0] } else { 1.0 };
-    let dy = if ny > 1 { y[nx] - y[0] } else { dx };
-    let dx = if nx > 1 { dx } else { dy };
-    Ok(((nx, ny), (grid.x[0] - 0.5 * dx, y[0] - 0.5 * dy), (dx, dy)))
+    Ok(((nx, ny), (g.x_min, g.y_min), (g.dx, g.dy)))
 }
 
 fn present(yes: bool) -> &'static str {
@@ -717,6 +715,7 @@ fn io_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::{GridSpec, LineGeometry, RasterGeometry};
 
     fn info(layers: usize) -> RunInfo {
         RunInfo {
@@ -732,21 +731,30 @@ mod tests {
         }
     }
 
-    /// The run information of a raster run on `nx` × `ny` cells of 1 m, without CRS.
-    fn raster_info(nx: usize, ny: usize) -> RunInfo {
+    /// The run information of a raster run.
+    fn raster_info() -> RunInfo {
         let mut raster = info(1);
         raster.raster = Some(crate::output::RasterInfo {
-            nx,
-            ny,
-            dx: 1.0,
-            dy: 1.0,
-            crs_epsg: None,
-            crs_wkt: None,
             release: None,
             wall_cells: 0,
-            geotransform: None,
         });
         raster
+    }
+
+    /// A raster of `nx` × `ny` cells of 1 m from (0, 0), without CRS.
+    fn raster_spec(nx: usize, ny: usize) -> GridSpec {
+        let (w, h) = (nx as f64, ny as f64);
+        GridSpec::Raster(RasterGeometry::of_extent(nx, ny, [0.0, w], [0.0, h]))
+    }
+
+    /// A line of `nx` cells of 1 m from 0.
+    fn line_spec(nx: usize) -> GridSpec {
+        GridSpec::Line(LineGeometry {
+            nx,
+            x_min: 0.0,
+            x_max: nx as f64,
+            dx: 1.0,
+        })
     }
 
     fn begin(path: &Path) -> Hdf5Sink {
@@ -755,6 +763,7 @@ mod tests {
         sink.begin(
             &info(2),
             &GridData {
+                spec: &line_spec(3),
                 x: &x,
                 y: None,
                 shape: None,
@@ -764,6 +773,54 @@ mod tests {
         )
         .unwrap();
         sink
+    }
+
+    /// The grid's spec is written as `/grid` attributes: its kind, and on a raster the
+    /// text that reads back to the same geometry and the CRS; a raster spec whose cells
+    /// are not the grid's is refused.
+    #[test]
+    fn the_grid_spec_is_written_as_attributes_of_grid() {
+        let dir = tempfile::tempdir().unwrap();
+        let line = dir.path().join("line.h5");
+        drop(begin(&line));
+        let file = H5File::open(&line).unwrap();
+        let grid = file.root_group().group("grid").unwrap();
+        assert_eq!(grid.attr_string("kind").unwrap(), "line");
+        assert!(grid.attr_string("spec").is_err());
+
+        let path = dir.path().join("raster.h5");
+        let mut geometry = RasterGeometry::of_extent(3, 2, [600_000.1, 600_000.4], [-0.3, -0.1]);
+        geometry.crs = crate::gis::Crs::from_epsg(32632);
+        let spec = GridSpec::Raster(geometry.clone());
+        let x = [0.5, 1.5, 2.5, 0.5, 1.5, 2.5];
+        let y = [0.5, 0.5, 0.5, 1.5, 1.5, 1.5];
+        let mut grid = GridData {
+            spec: &spec,
+            x: &x,
+            y: Some(&y),
+            shape: Some((2, 3)),
+            b: &[0.0; 6],
+            h_bed: &[0.0; 6],
+        };
+        Hdf5Sink::create(&path)
+            .unwrap()
+            .begin(&raster_info(), &grid)
+            .unwrap();
+        let file = H5File::open(&path).unwrap();
+        let g = file.root_group().group("grid").unwrap();
+        assert_eq!(g.attr_string("kind").unwrap(), "raster");
+        assert_eq!(g.attr_string("crs").unwrap(), "EPSG:32632");
+        let text = g.attr_string("spec").unwrap();
+        let back = RasterGeometry::from_text(&text, geometry.crs.clone());
+        assert_eq!(back, Some(geometry));
+
+        let wrong = raster_spec(2, 3);
+        grid.spec = &wrong;
+        let e = Hdf5Sink::create(&dir.path().join("wrong.h5"))
+            .unwrap()
+            .begin(&raster_info(), &grid)
+            .unwrap_err();
+        assert!(e.to_string().contains("bad raster"), "{e}");
     }
 
     fn view<'a>(t: f64, data: &'a [f64], extra: &'a [CellField<'a>]) -> SnapshotView<'a> {
@@ -898,11 +955,13 @@ mod tests {
         let path = dir.path().join("raster.h5");
         let (nx, ny) = (500, 300);
         let mut sink = Hdf5Sink::create(&path).unwrap();
-        let raster = raster_info(nx, ny);
+        let raster = raster_info();
+        let spec = raster_spec(nx, ny);
         let x: Vec<f64> = (0..nx * ny).map(|k| (k % nx) as f64 + 0.5).collect();
         let y: Vec<f64> = (0..nx * ny).map(|k| (k / nx) as f64 + 0.5).collect();
         let zeros = vec![0.0; nx * ny];
         let grid = GridData {
+            spec: &spec,
             x: &x,
             y: Some(&y),
             shape: Some((ny, nx)),
@@ -978,12 +1037,13 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("maps.h5");
         let mut sink = Hdf5Sink::create(&path).unwrap();
-        let raster = raster_info(3, 2);
+        let raster = raster_info();
         let x = [0.5, 1.5, 2.5, 0.5, 1.5, 2.5];
         let y = [0.5, 0.5, 0.5, 1.5, 1.5, 1.5];
         sink.begin(
             &raster,
             &GridData {
+                spec: &raster_spec(3, 2),
                 x: &x,
                 y: Some(&y),
                 shape: Some((2, 3)),

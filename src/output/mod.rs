@@ -19,6 +19,8 @@ use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
+use crate::grid::GridSpec;
+
 pub use csv::{front_csv_path, FrontCsvSink};
 pub use gauges::{gauge_csv_path, GaugeCsvSink};
 pub use hdf5::Hdf5Sink;
@@ -81,26 +83,14 @@ pub struct RunInfo {
     pub raster: Option<RasterInfo>,
 }
 
-/// The shape and coordinate reference system of a raster run's grid.
+/// What a raster run's output records besides its grid (whose geometry and CRS are
+/// [`GridData::spec`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RasterInfo {
-    pub nx: usize,
-    pub ny: usize,
-    /// Cell sizes along x and y (m): an axis of one cell has no spacing to read from
-    /// its centres.
-    pub dx: f64,
-    pub dy: f64,
-    /// EPSG code of the input rasters, when known.
-    pub crs_epsg: Option<u32>,
-    /// WKT of the input rasters (their `.prj`), when known.
-    pub crs_wkt: Option<String>,
     /// The volumes of a release polygon, when the initial thickness is one.
     pub release: Option<ReleaseVolumes>,
     /// Number of wall cells (nodata cells of the DEM).
     pub wall_cells: usize,
-    /// (x of the west edge, y of the north edge, cell size) of the DEM the grid is,
-    /// exactly as read; `None` for a grid given by the scenario's keys.
-    pub geotransform: Option<[f64; 3]>,
 }
 
 /// The volumes of a rasterised release polygon (m³), `/summary` attributes
@@ -114,6 +104,9 @@ pub struct ReleaseVolumes {
 /// Static grid data, `/grid`.
 #[derive(Debug, Clone, Copy)]
 pub struct GridData<'a> {
+    /// The grid's extent, cell sizes and CRS, as the scenario gave them: the `/grid`
+    /// attributes (and, on a raster, the root attributes `nx`, `dx`, `crs`, …).
+    pub spec: &'a GridSpec,
     /// Cell centres (nx), every cell's x on a raster (nx·ny, row-major).
     pub x: &'a [f64],
     /// Every cell's y on a raster (nx·ny, row-major); `None` on a line.

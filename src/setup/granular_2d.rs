@@ -8,7 +8,7 @@
 //! Everything that can be wrong with the scenario was refused by its validation.
 
 use crate::grid::raster::{Raster2d, RasterSpec, Sides};
-use crate::grid::Grid;
+use crate::grid::{Grid, RasterGeometry};
 use crate::model::granular_2d::{pipeline_of_order, pipeline_with_zones_of_order, Granular2d};
 use crate::model::layers_2d::{self, LayeredMaps, Layers2d};
 use crate::model::raster_maps::RasterMaps;
@@ -42,12 +42,32 @@ pub fn scenario_raster(scn: &Scenario) -> Raster2d {
         slope_deg: d.slope_deg,
     };
     let raster = Raster2d::with_walls(spec, scn.sampled.b.clone(), scn.sampled.wall.clone())
+        .and_then(|r| r.georeferenced(raster_geometry(scn)))
         .unwrap_or_else(|e| panic!("a validated raster domain was refused: {e}"));
     if d.curvature {
         raster
     } else {
         raster.without_friction_curvature()
     }
+}
+
+/// Where the scenario's raster is on the map: the edges of `[domain]`, with the cell
+/// size of the DEM exactly as read when the domain is a DEM's grid, and the CRS of its
+/// raster files.
+fn raster_geometry(scn: &Scenario) -> RasterGeometry {
+    let d = &scn.domain;
+    let plane = d.plane.as_ref().expect("a raster domain");
+    let mut g = RasterGeometry::of_extent(
+        d.cells,
+        plane.ny,
+        [d.x_min, d.x_max],
+        [plane.y_min, plane.y_max],
+    );
+    if let Some([_, _, cell]) = plane.geotransform {
+        (g.dx, g.dy) = (cell, cell);
+    }
+    g.crs = plane.crs.clone();
+    g
 }
 
 /// The initial thickness per cell (the erodible bed under the flow included) and the
@@ -78,21 +98,13 @@ fn initial_thickness(scn: &Scenario, grid: &Raster2d) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// What the output file records of the raster.
-fn raster_info(scn: &Scenario, grid: &Raster2d) -> RasterInfo {
-    let plane = scn.domain.plane.as_ref().expect("a raster domain");
+fn raster_info(scn: &Scenario) -> RasterInfo {
     RasterInfo {
-        nx: grid.nx(),
-        ny: grid.ny(),
-        dx: grid.dx(),
-        dy: grid.dy(),
-        crs_epsg: plane.crs.epsg,
-        crs_wkt: plane.crs.wkt.clone(),
         release: scn.release.as_ref().map(|r| ReleaseVolumes {
             volume: r.volume,
             volume_on_walls: r.volume_on_walls,
         }),
         wall_cells: scn.sampled.wall.iter().filter(|&&w| w).count(),
-        geotransform: plane.geotransform,
     }
 }
 
@@ -142,7 +154,7 @@ pub fn build(scn: &Scenario, threads: usize) -> Simulation<Granular2d> {
         }
     };
     let mut info = run_info(scn, "hydrostatic", 1);
-    info.raster = Some(raster_info(scn, &grid));
+    info.raster = Some(raster_info(scn));
     let rules = stop_rules(scn, &grid);
     let cells = grid.nx() * grid.ny();
     let maps = raster_maps(scn, cells, erodible, workers);
@@ -175,7 +187,7 @@ pub fn build_layers(scn: &Scenario, threads: usize) -> Simulation<Layers2d> {
         workers.clone(),
     );
     let mut info = run_info(scn, "hydrostatic", l.len());
-    info.raster = Some(raster_info(scn, &grid));
+    info.raster = Some(raster_info(scn));
     let rules = stop_rules(scn, &grid);
     let cells = grid.nx() * grid.ny();
     let maps = LayeredMaps::new(raster_maps(scn, cells, erodible, workers));

@@ -4,6 +4,7 @@
 
 use rust_hdf5::{DatatypeMessage, H5Dataset, H5File, H5Group, VarLenUnicode};
 
+use crate::grid::{GridSpec, RasterGeometry};
 use crate::output::{
     CellField, GaugeRecord, GridData, RasterInfo, RunInfo, RunMaps, RunSummary, SnapshotView,
     StepRecord, FORMAT_VERSION,
@@ -44,6 +45,7 @@ pub(super) fn write_layout(
     }
 
     let g = file.create_group("grid")?;
+    spec_attributes(&g, grid.spec)?;
     for (name, data) in [("x", grid.x), ("b", grid.b), ("h_bed", grid.h_bed)] {
         let ds = g.new_dataset::<f64>().shape([data.len()]).create(name)?;
         ds.write_raw(data)?;
@@ -109,6 +111,52 @@ fn step_groups(
     Ok(())
 }
 
+/// The grid's spec as attributes of `/grid` (docs/output-format.md, "`/grid`"): `kind`,
+/// the numbers of the geometry, on a raster its CRS and the text `spec` that granflow
+/// reads back.
+fn spec_attributes(g: &H5Group, spec: &GridSpec) -> rust_hdf5::Result<()> {
+    match spec {
+        GridSpec::Line(l) => {
+            g.set_attr_string("kind", "line")?;
+            g.set_attr_numeric("nx", &(l.nx as i64))?;
+            for (name, value) in [("x_min", l.x_min), ("x_max", l.x_max), ("dx", l.dx)] {
+                g.set_attr_numeric(name, &value)?;
+            }
+        }
+        GridSpec::Raster(r) => {
+            g.set_attr_string("kind", "raster")?;
+            g.set_attr_numeric("nx", &(r.nx as i64))?;
+            g.set_attr_numeric("ny", &(r.ny as i64))?;
+            for (name, value) in [
+                ("x_min", r.x_min),
+                ("x_max", r.x_max),
+                ("y_min", r.y_min),
+                ("y_max", r.y_max),
+                ("dx", r.dx),
+                ("dy", r.dy),
+            ] {
+                g.set_attr_numeric(name, &value)?;
+            }
+            crs_attributes(g, r)?;
+            g.set_attr_string("spec", &r.to_text())?;
+        }
+    }
+    Ok(())
+}
+
+/// `crs_epsg`, `crs` (the same code as text, `EPSG:n`, which every HDF5 reader,
+/// rust-hdf5 among them, reads back) and `crs_wkt`, those known.
+fn crs_attributes(g: &H5Group, r: &RasterGeometry) -> rust_hdf5::Result<()> {
+    if let Some(code) = r.crs.epsg {
+        g.set_attr_numeric("crs_epsg", &(code as i64))?;
+        g.set_attr_string("crs", &format!("EPSG:{code}"))?;
+    }
+    if let Some(wkt) = &r.crs.wkt {
+        g.set_attr_string("crs_wkt", wkt)?;
+    }
+    Ok(())
+}
+
 /// The per-step datasets of a raster run: volumes in m³, energies in m⁵/s².
 const RASTER_STEP_DATASETS: [(&str, &str); 7] = [
     ("diagnostics/t", "s"),
@@ -129,32 +177,27 @@ fn write_raster_layout(
     r: &RasterInfo,
     grid: &GridData,
 ) -> rust_hdf5::Result<()> {
-    let (nx, ny) = (r.nx, r.ny);
+    let spec = grid.spec.raster().expect("a raster run's grid is a raster");
+    let (nx, ny) = (spec.nx, spec.ny);
     let ys = grid.y.unwrap_or(grid.x);
     let x: Vec<f64> = grid.x[..nx].to_vec();
     let y: Vec<f64> = (0..ny).map(|j| ys[j * nx]).collect();
     file.set_attr_string("grid", "raster")?;
     file.set_attr_numeric("nx", &(nx as i64))?;
     file.set_attr_numeric("ny", &(ny as i64))?;
-    file.set_attr_numeric("dx", &r.dx)?;
-    file.set_attr_numeric("dy", &r.dy)?;
-    if let Some(code) = r.crs_epsg {
-        file.set_attr_numeric("crs_epsg", &(code as i64))?;
-        // The same code as text, which every HDF5 reader (rust-hdf5 among them)
-        // reads back.
-        file.set_attr_string("crs", &format!("EPSG:{code}"))?;
-    }
-    if let Some(wkt) = &r.crs_wkt {
-        file.set_attr_string("crs_wkt", wkt)?;
-    }
-    if let Some([x_left, y_top, d]) = r.geotransform {
+    file.set_attr_numeric("dx", &spec.dx)?;
+    file.set_attr_numeric("dy", &spec.dy)?;
+    crs_attributes(&file.root_group(), spec)?;
+    if spec.dx == spec.dy {
         // GDAL's order (x₀, Δx, 0, y₀, 0, −Δy), each number in the shortest text that
-        // reads back to the same double: the DEM's grid exactly, which /grid/x, /grid/y
-        // (cell centres) give only to rounding.
-        file.set_attr_string("geotransform", &format!("{x_left} {d} 0 {y_top} 0 {}", -d))?;
+        // reads back to the same double: the grid exactly, which /grid/x, /grid/y (cell
+        // centres) give only to rounding.
+        let (x0, y0, d) = (spec.x_min, spec.y_max, spec.dx);
+        file.set_attr_string("geotransform", &format!("{x0} {d} 0 {y0} 0 {}", -d))?;
     }
     let g = file.create_group("grid")?;
-    for (name, data, spacing) in [("x", &x, r.dx), ("y", &y, r.dy)] {
+    spec_attributes(&g, grid.spec)?;
+    for (name, data, spacing) in [("x", &x, spec.dx), ("y", &y, spec.dy)] {
         let ds = g.new_dataset::<f64>().shape([data.len()]).create(name)?;
         ds.write_raw(data)?;
         units(&ds, "m")?;

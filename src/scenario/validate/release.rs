@@ -27,6 +27,7 @@ use super::super::{CoverageRule, Domain, ReleaseSummary, Sampled, ThicknessIs};
 use super::check::*;
 use crate::gis::release::{self as polygons, ReleaseAreas, ThicknessSource};
 use crate::gis::Raster;
+use crate::grid::spec::north_up;
 
 /// Largest accepted polygon file (bytes): a bound, so that a wrong path is refused at
 /// once instead of read until memory runs out.
@@ -271,12 +272,10 @@ pub(super) fn rasterise(
     grid.nodata = Some(f64::NAN);
     grid.crs = plane.crs.clone();
     let wall = |k: usize| !sampled.wall.is_empty() && sampled.wall[k];
-    for j in 0..ny {
-        for i in 0..nx {
-            let k = j * nx + i;
-            grid.values[(ny - 1 - j) * nx + i] = if wall(k) { f64::NAN } else { sampled.b[k] };
-        }
-    }
+    let bed: Vec<f64> = (0..nx * ny)
+        .map(|k| if wall(k) { f64::NAN } else { sampled.b[k] })
+        .collect();
+    grid.values = north_up(&bed, nx, ny);
     let release = polygons::rasterise(&keys.areas, &grid, keys.rule)
         .map_err(|e| ScenarioError::at(&polygon_key, format!("{file}: {e}")))?;
     let mut thickness = match keys.thickness_is {
@@ -296,11 +295,7 @@ pub(super) fn rasterise(
     } else {
         &mut sampled.h_bed
     };
-    for j in 0..ny {
-        for i in 0..nx {
-            target[j * nx + i] = thickness.values[(ny - 1 - j) * nx + i];
-        }
-    }
+    *target = north_up(&thickness.values, nx, ny);
     let volume = target.iter().sum::<f64>() * dx * dy;
     if volume <= 0.0 && release.volume_on_nodata > 0.0 {
         return err(
