@@ -811,8 +811,10 @@ fn similarity_solution_at_both_orders_error_against_run_time() {
             );
         }
         assert!((0..3).all(|k| l1[1][k] < l1[0][k]), "{label}: {l1:?}");
-        assert!((0..3).all(|k| inner[1][k] < inner[0][k]), "{label}: {inner:?}");
+        assert!(
+            (0..3).all(|k| inner[1][k] < inner[0][k]),
+            "{label}: {inner:?}"
+        );
         assert!(orders(&inner[1])[1] >= 0.9, "{label}: {inner:?}");
     }
 }
-
