@@ -73,18 +73,38 @@ fn export(args: &[&str]) -> std::process::Output {
     granflow().arg("export").args(args).output().unwrap()
 }
 
+/// Writes `dir/dem.tif` and returns its raster: a GeoTIFF DEM of `nx` × `ny` cells of `cell` m whose top-left corner is
+/// (`x_left`, `y_top`), in the CRS of EPSG code `epsg`, an inclined plane falling from
+/// `top` by `drop` per column eastwards.
+fn inclined_dem(
+    dir: &Path,
+    (nx, ny): (usize, usize),
+    (x_left, y_top, cell): (f64, f64, f64),
+    epsg: u32,
+    (top, drop): (f64, f64),
+) -> Raster {
+    let mut dem = Raster::filled(nx, ny, x_left, y_top, cell, 0.0);
+    for row in 0..ny {
+        for col in 0..nx {
+            let i = dem.index(col, row);
+            dem.values[i] = top - drop * col as f64;
+        }
+    }
+    dem.crs = Crs::from_epsg(epsg);
+    geotiff::write(&dem, &dir.join("dem.tif"), WriteOptions::default()).unwrap();
+    dem
+}
+
 /// A DEM in map coordinates (UTM 32N): an inclined plane of 20 × 14 cells of 10 m,
 /// as a GeoTIFF with its EPSG code, and a scenario on its grid.
 fn georeferenced_run(dir: &Path) -> PathBuf {
-    let mut dem = Raster::filled(20, 14, 600_000.0, 5_200_140.0, 10.0, 0.0);
-    for row in 0..14 {
-        for col in 0..20 {
-            let i = dem.index(col, row);
-            dem.values[i] = 1000.0 - 4.0 * col as f64;
-        }
-    }
-    dem.crs = Crs::from_epsg(32632);
-    geotiff::write(&dem, &dir.join("dem.tif"), WriteOptions::default()).unwrap();
+    inclined_dem(
+        dir,
+        (20, 14),
+        (600_000.0, 5_200_140.0, 10.0),
+        32632,
+        (1000.0, 4.0),
+    );
     let scenario = r#"[domain]
 coordinates = "cartesian"
 
@@ -166,15 +186,7 @@ fn the_grid_goes_unchanged_from_the_dem_to_the_file_and_the_exports() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let (x_left, y_top, cell) = (2_600_123.37, 1_200_456.91, 0.3);
-    let mut dem = Raster::filled(13, 9, x_left, y_top, cell, 0.0);
-    for row in 0..9 {
-        for col in 0..13 {
-            let i = dem.index(col, row);
-            dem.values[i] = 500.0 - 0.1 * col as f64;
-        }
-    }
-    dem.crs = Crs::from_epsg(2056);
-    geotiff::write(&dem, &d.join("dem.tif"), WriteOptions::default()).unwrap();
+    let dem = inclined_dem(d, (13, 9), (x_left, y_top, cell), 2056, (500.0, 0.1));
     let scenario = r#"[domain]
 coordinates = "cartesian"
 
