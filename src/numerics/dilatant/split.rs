@@ -528,7 +528,7 @@ impl SplitScheme {
     }
 
     /// Advances `s` by `dt`; on error `s` is as it was (for a driver without the run
-    /// loop: the stage of a run advances with [`split_step`](Self::split_step)).
+    /// loop: the stage of a run advances with `split_step`).
     pub fn step(&mut self, mesh: &Line, s: &mut DilatantState, dt: f64) -> Result<(), StageError> {
         let result = self.split_step(mesh, s, dt);
         if result.is_err() {
