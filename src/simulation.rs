@@ -353,7 +353,7 @@ impl<M: Model> Simulation<M> {
         };
         tally.settle(&d0, 0.0, self.config.settle_fraction);
         tally.front_end(&d0, 0.0, self.x_last());
-        let result = match self.model.workers().filter(|w| w.threads() > 1).cloned() {
+        let result = match self.model.workers().cloned() {
             Some(workers) => workers.install(|| self.run_loop(sink, progress, &mut tally, d0)),
             None => self.run_loop(sink, progress, &mut tally, d0),
         };

@@ -7,11 +7,11 @@
 //! by band: [`Workers::map_bands`]) is one task. The threads of a pass over tiles take
 //! its tasks in turn from a shared counter, heavy tiles (with flow) listed first, so
 //! that the pass ends on light tiles and both threads end it together; the bands are
-//! single tasks that a thread out of work steals. The partition does not depend on the number of
-//! threads, each task writes only its own cells, and every reduction is combined in a
-//! fixed order (band order for sums) or by an order-free rule (the first minimum in
-//! cell order): the results are the same bits for 1, 2 or 4 threads. Scratch is
-//! allocated once by the stage (per thread), so no task allocates.
+//! single tasks that a thread out of work steals. The partition does not depend on the
+//! number of threads, each task writes only its own cells, and every reduction is
+//! combined in a fixed order (band order for sums) or by an order-free rule (the first
+//! minimum in cell order): the results are the same bits for 1, 2 or 4 threads.
+//! Scratch is allocated once by the stage (per thread), so no task allocates.
 //!
 //! A raster run's time loop itself runs on one of the pool's threads
 //! ([`Workers::install`], called by the run loop through `Model::workers`): a pass
@@ -140,9 +140,9 @@ impl Workers {
     /// Calls `f(thread, t)` for every tile `t` of `tiles`, `thread` < [`Self::threads`]
     /// the index of the thread that runs it (for its scratch). Each tile is one task,
     /// and the threads take the tiles in turn in the order of `tiles` (pass the heavy
-    /// ones first: `Tiles::stepped_by_load`), wherever the flow is. A single tile runs on the
-    /// caller's thread, with no hand-off to the pool (as thread 0 outside the pool,
-    /// while the pool is idle).
+    /// ones first: `Tiles::stepped_by_load`), wherever the flow is. A single tile runs
+    /// on the caller's thread, with no hand-off to the pool (as thread 0 outside the
+    /// pool, while the pool is idle).
     pub fn tiles<F>(&self, tiles: &[u32], f: F)
     where
         F: Fn(usize, usize) + Sync + Send,

@@ -303,8 +303,6 @@ impl Tiles {
             self.rows = ny.div_ceil(BAND_ROWS);
             self.flags = vec![0; self.count()];
             self.stepped_flag = vec![false; self.count()];
-            self.stepped.clear();
-            self.by_load.clear();
             for t in 0..self.count() {
                 self.flags[t] = self.classify(t, h, hu, hv);
             }
